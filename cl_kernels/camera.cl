@@ -1,0 +1,50 @@
+/* camera.cl — camera ray generation for one sample of a range of pixels. One sample per pixel: the
+ * pixel centre (as the course does); more: stratified jitter over a strataX × strataY grid (box
+ * filter). ApertureSize > 0: thin lens focused at FocusDistance, square aperture as in the course. */
+
+inline float3 Camera_Direction(CameraParams cam, float px, float py) {
+    float su = (px / (float)cam.width);
+    float sv = (py / (float)cam.height);
+    float uc = cam.nearPlane.x + (cam.nearPlane.y - cam.nearPlane.x) * su;  /* left..right */
+    float vc = cam.nearPlane.w - (cam.nearPlane.w - cam.nearPlane.z) * sv;  /* top..bottom */
+    return uc * cam.u.xyz + vc * cam.v.xyz - cam.nearDistance * cam.w.xyz;
+}
+
+__kernel void generate_camera_rays(CameraParams cam, SceneParams scene, int firstPixel, int sample, int count,
+                                   __global PathState* paths, __global Ray* rays) {
+    int i = get_global_id(0);
+    if (i >= count) return;
+    int pixel = firstPixel + i;
+    int x = pixel % cam.width, y = pixel / cam.width;
+    RngKey key = Rng_Key(scene.seed, pixel, sample, 1u);
+    float jx = 0.5f, jy = 0.5f;
+    if (cam.spp > 1) {
+        int cell = sample % (cam.strataX * cam.strataY);
+        int sx = cell % cam.strataX, sy = cell / cam.strataX;
+        jx = ((float)sx + Rng_Uniform(key, 0)) / (float)cam.strataX;
+        jy = ((float)sy + Rng_Uniform(key, 1)) / (float)cam.strataY;
+    }
+    float3 dir = Camera_Direction(cam, (float)x + jx, (float)y + jy);
+    float3 org = cam.position.xyz;
+    if (cam.apertureSize > 0.0f && cam.focusDistance > 0.0f) {
+        float3 dn = normalize(dir);
+        float tFocus = cam.focusDistance / dot(dn, -cam.w.xyz);
+        float3 focus = org + tFocus * dn;
+        float a = (Rng_Uniform(key, 2) - 0.5f) * cam.apertureSize;
+        float b = (Rng_Uniform(key, 3) - 0.5f) * cam.apertureSize;
+        org = org + a * cam.u.xyz + b * cam.v.xyz;
+        dir = focus - org;
+    }
+    dir = normalize(dir);
+    Ray r;
+    r.origin = (float4)(org, 0.0f);
+    r.direction = (float4)(dir, INFINITY);
+    rays[i] = r;
+    PathState p;
+    p.throughput = (float4)(1.0f, 1.0f, 1.0f, 0.0f);
+    p.pixel = pixel;
+    p.sample = sample;
+    p.depth = 0;
+    p.pathId = 1u;
+    paths[i] = p;
+}

@@ -1,0 +1,85 @@
+/* common.cl — math helpers, the counter-based random number generator, sampling warps and the
+ * robust ray-origin offset shared by every kernel. No kernels here. */
+
+#define CLRT_PI 3.14159265358979323846f
+#define CLRT_INV_PI 0.31830988618379067154f
+
+inline float3 f3(float4 v) { return v.xyz; }
+inline float4 f4(float3 v, float w) { return (float4)(v, w); }
+inline float maxComponent(float3 v) { return fmax(v.x, fmax(v.y, v.z)); }
+inline float luminance(float3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
+inline int allFinite3(float3 v) { return isfinite(v.x) && isfinite(v.y) && isfinite(v.z); }
+
+/* Orthonormal basis around unit n (Duff et al. 2017, branchless). */
+inline void makeBasis(float3 n, float3* t, float3* b) {
+    float sign = n.z >= 0.0f ? 1.0f : -1.0f;
+    float a = -1.0f / (sign + n.z);
+    float c = n.x * n.y * a;
+    *t = (float3)(1.0f + sign * n.x * n.x * a, sign * c, -sign * n.x);
+    *b = (float3)(c, sign + n.y * n.y * a, -n.y);
+}
+
+/* ---- Random numbers --------------------------------------------------------------------------
+ * Counter-based: every number is a pure function of (seed, pixel, sample, pathId, dimension), so an
+ * image does not depend on how work is split over batches or devices. PCG-style 32-bit hash. */
+inline uint Rng_Hash(uint v) {
+    uint state = v * 747796405u + 2891336453u;
+    uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+typedef struct { uint key; } RngKey;
+
+inline RngKey Rng_Key(uint seed, int pixel, int sample, uint pathId) {
+    RngKey k;
+    uint h = Rng_Hash(seed ^ 0x9e3779b9u);
+    h = Rng_Hash(h ^ (uint)pixel);
+    h = Rng_Hash(h ^ (uint)sample * 0x85ebca6bu);
+    h = Rng_Hash(h ^ pathId * 0xc2b2ae35u);
+    k.key = h;
+    return k;
+}
+
+/* Uniform float in [0,1) for dimension `dim` of the stream. */
+inline float Rng_Uniform(RngKey k, uint dim) {
+    uint h = Rng_Hash(k.key ^ Rng_Hash(dim + 0x68e31da4u));
+    return (float)(h >> 8) * (1.0f / 16777216.0f);
+}
+
+/* ---- Warps ------------------------------------------------------------------------------------ */
+inline float3 Warp_CosineHemisphere(float u1, float u2) {
+    float r = sqrt(u1);
+    float phi = 2.0f * CLRT_PI * u2;
+    return (float3)(r * cos(phi), r * sin(phi), sqrt(fmax(0.0f, 1.0f - u1)));
+}
+
+inline float3 Warp_UniformHemisphere(float u1, float u2) {
+    float z = u1;
+    float r = sqrt(fmax(0.0f, 1.0f - z * z));
+    float phi = 2.0f * CLRT_PI * u2;
+    return (float3)(r * cos(phi), r * sin(phi), z);
+}
+
+/* ---- Robust ray origins (Wächter & Binder, Ray Tracing Gems ch. 6) -----------------------------
+ * Moves p off the surface along the geometric normal n (pointing to the side the new ray leaves to)
+ * by a few ULPs of p's own magnitude, so no scene-scale epsilon is needed. */
+inline float3 Ray_OffsetOrigin(float3 p, float3 n) {
+    const float originBand = 1.0f / 32.0f;
+    const float floatScale = 1.0f / 65536.0f;
+    const float intScale = 256.0f;
+    int3 ofi = convert_int3(intScale * n);
+    float3 pi;
+    pi.x = as_float(as_int(p.x) + (p.x < 0.0f ? -ofi.x : ofi.x));
+    pi.y = as_float(as_int(p.y) + (p.y < 0.0f ? -ofi.y : ofi.y));
+    pi.z = as_float(as_int(p.z) + (p.z < 0.0f ? -ofi.z : ofi.z));
+    float3 r;
+    r.x = fabs(p.x) < originBand ? p.x + floatScale * n.x : pi.x;
+    r.y = fabs(p.y) < originBand ? p.y + floatScale * n.y : pi.y;
+    r.z = fabs(p.z) < originBand ? p.z + floatScale * n.z : pi.z;
+    return r;
+}
+
+/* Replaces NaN/Inf components by 0 (radiance guard before accumulation). */
+inline float3 finiteOrZero(float3 c) {
+    return (float3)(isfinite(c.x) ? c.x : 0.0f, isfinite(c.y) ? c.y : 0.0f, isfinite(c.z) ? c.z : 0.0f);
+}

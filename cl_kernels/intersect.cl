@@ -1,0 +1,193 @@
+/* intersect.cl — ray/primitive tests and BVH traversal: watertight triangles (Woop, Benthin & Wald
+ * 2013), spheres under an affine transform with the stable quadratic of Ray Tracing Gems ch. 7, a
+ * near-first stack traversal, and the two wavefront kernels: closest hit and any hit (shadow rays). */
+
+#ifdef cl_khr_fp64
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+#define CLRT_HAVE_FP64 1
+#endif
+
+/* Per-ray constants of the watertight test: permuted axes and shear. */
+typedef struct {
+    int kx, ky, kz;
+    float sx, sy, sz;
+} RayShear;
+
+inline float comp(float3 v, int k) { return k == 0 ? v.x : (k == 1 ? v.y : v.z); }
+
+inline RayShear RayShear_Make(float3 dir) {
+    RayShear s;
+    float3 a = fabs(dir);
+    s.kz = (a.x > a.y) ? (a.x > a.z ? 0 : 2) : (a.y > a.z ? 1 : 2);
+    s.kx = s.kz + 1 == 3 ? 0 : s.kz + 1;
+    s.ky = s.kx + 1 == 3 ? 0 : s.kx + 1;
+    if (comp(dir, s.kz) < 0.0f) { int t = s.kx; s.kx = s.ky; s.ky = t; }
+    float dz = comp(dir, s.kz);
+    s.sx = comp(dir, s.kx) / dz;
+    s.sy = comp(dir, s.ky) / dz;
+    s.sz = 1.0f / dz;
+    return s;
+}
+
+/* Returns 1 and sets *t, *b1, *b2 (weights of v1, v2) for a hit with 0 < t < tMax. */
+inline int Triangle_Intersect(float3 org, RayShear s, float3 v0, float3 v1, float3 v2, float tMax,
+                              float* tOut, float* b1Out, float* b2Out) {
+    float3 A = v0 - org, B = v1 - org, C = v2 - org;
+    float Az = comp(A, s.kz), Bz = comp(B, s.kz), Cz = comp(C, s.kz);
+    float Ax = comp(A, s.kx) - s.sx * Az, Ay = comp(A, s.ky) - s.sy * Az;
+    float Bx = comp(B, s.kx) - s.sx * Bz, By = comp(B, s.ky) - s.sy * Bz;
+    float Cx = comp(C, s.kx) - s.sx * Cz, Cy = comp(C, s.ky) - s.sy * Cz;
+    float U = Cx * By - Cy * Bx;
+    float V = Ax * Cy - Ay * Cx;
+    float W = Bx * Ay - By * Ax;
+#ifdef CLRT_HAVE_FP64
+    if (U == 0.0f || V == 0.0f || W == 0.0f) {
+        /* Edge case: redo the edge functions in double so a ray through an edge or vertex is
+         * classified consistently for both triangles that share it. */
+        U = (float)((double)Cx * (double)By - (double)Cy * (double)Bx);
+        V = (float)((double)Ax * (double)Cy - (double)Ay * (double)Cx);
+        W = (float)((double)Bx * (double)Ay - (double)By * (double)Ax);
+    }
+#endif
+    if ((U < 0.0f || V < 0.0f || W < 0.0f) && (U > 0.0f || V > 0.0f || W > 0.0f)) return 0;
+    float det = U + V + W;
+    if (det == 0.0f) return 0;
+    Az *= s.sz; Bz *= s.sz; Cz *= s.sz;
+    float T = U * Az + V * Bz + W * Cz;
+    if (det < 0.0f) { T = -T; det = -det; }
+    if (T <= 0.0f || T >= tMax * det) return 0;
+    float inv = 1.0f / det;
+    *tOut = T * inv;
+    *b1Out = V * inv;
+    *b2Out = W * inv;
+    return 1;
+}
+
+inline float3 affinePoint(const __global float4* rows, float3 p) {
+    return (float3)(dot(rows[0].xyz, p) + rows[0].w, dot(rows[1].xyz, p) + rows[1].w, dot(rows[2].xyz, p) + rows[2].w);
+}
+inline float3 affineVector(const __global float4* rows, float3 v) {
+    return (float3)(dot(rows[0].xyz, v), dot(rows[1].xyz, v), dot(rows[2].xyz, v));
+}
+
+/* Sphere in object space; the ray is mapped by worldToObject (direction not renormalised, so t is
+ * the same parameter in both spaces). Stable roots: q = -(b + sign(b)·√Δ), t0 = c/q, t1 = q/a, with
+ * Δ computed from the perpendicular distance (no b² − ac cancellation). */
+inline int Sphere_Intersect(const __global Sphere* sp, float3 orgW, float3 dirW, float tMax, float* tOut) {
+    float3 o = affinePoint(sp->worldToObject, orgW);
+    float3 d = affineVector(sp->worldToObject, dirW);
+    float3 c = sp->centerRadius.xyz;
+    float r = sp->centerRadius.w;
+    float3 f = o - c;
+    float a = dot(d, d);
+    float b = dot(f, d);
+    float3 l = f - (b / a) * d;
+    float disc = a * (r * r - dot(l, l));
+    if (!(disc >= 0.0f)) return 0;
+    float cc = dot(f, f) - r * r;
+    float q = -(b + copysign(sqrt(disc), b));
+    float t0 = q != 0.0f ? cc / q : 0.0f;
+    float t1 = q / a;
+    float tn = fmin(t0, t1), tf = fmax(t0, t1);
+    if (tn > 0.0f && tn < tMax) { *tOut = tn; return 1; }
+    if (tf > 0.0f && tf < tMax) { *tOut = tf; return 1; }
+    return 0;
+}
+
+/* Slab test; returns the entry distance or INFINITY when the box is missed within [0, tMax). */
+inline float Aabb_Intersect(float4 bmin, float4 bmax, float3 org, float3 invDir, float tMax) {
+    float3 t0 = (bmin.xyz - org) * invDir;
+    float3 t1 = (bmax.xyz - org) * invDir;
+    float3 tn = fmin(t0, t1), tf = fmax(t0, t1);
+    float tEnter = fmax(fmax(tn.x, tn.y), fmax(tn.z, 0.0f));
+    float tExit = fmin(fmin(tf.x, tf.y), fmin(tf.z, tMax));
+    return tEnter <= tExit ? tEnter : INFINITY;
+}
+
+inline float3 safeInverse(float3 d) {
+    /* 1/±0 = ±inf is fine for the slab test; fmin/fmax drop the NaN of 0·inf. */
+    return (float3)(1.0f / d.x, 1.0f / d.y, 1.0f / d.z);
+}
+
+/* Traverses the BVH. anyHit = 1: stop at the first hit (shadow rays). Returns 1 on a hit. */
+inline int Bvh_Traverse(const __global BvhNode* nodes, const __global int* primRefs,
+                        const __global Triangle* tris, const __global Sphere* spheres, int numTriangles,
+                        float3 org, float3 dir, float tMax, int anyHit, Hit* hit) {
+    float3 invDir = safeInverse(dir);
+    RayShear shear = RayShear_Make(dir);
+    int stack[CLRT_BVH_STACK_SIZE];
+    int sp = 0;
+    int node = 0;
+    int found = 0;
+    if (Aabb_Intersect(nodes[0].boundsMin, nodes[0].boundsMax, org, invDir, tMax) == INFINITY) return 0;
+    for (;;) {
+        const __global BvhNode* n = &nodes[node];
+        if (n->count > 0) {
+            for (int i = 0; i < n->count; ++i) {
+                int ref = primRefs[n->first + i];
+                float t, b1 = 0.0f, b2 = 0.0f;
+                int h;
+                if (ref < numTriangles) {
+                    const __global Triangle* tri = &tris[ref];
+                    h = Triangle_Intersect(org, shear, tri->v0.xyz, tri->v1.xyz, tri->v2.xyz, tMax, &t, &b1, &b2);
+                } else {
+                    h = Sphere_Intersect(&spheres[ref - numTriangles], org, dir, tMax, &t);
+                }
+                if (h) {
+                    tMax = t;
+                    hit->t = t; hit->prim = ref; hit->u = b1; hit->v = b2;
+                    found = 1;
+                    if (anyHit) return 1;
+                }
+            }
+            if (sp == 0) break;
+            node = stack[--sp];
+            continue;
+        }
+        int left = node + 1, right = n->first;
+        float tl = Aabb_Intersect(nodes[left].boundsMin, nodes[left].boundsMax, org, invDir, tMax);
+        float tr = Aabb_Intersect(nodes[right].boundsMin, nodes[right].boundsMax, org, invDir, tMax);
+        if (tl == INFINITY && tr == INFINITY) {
+            if (sp == 0) break;
+            node = stack[--sp];
+            continue;
+        }
+        if (tl == INFINITY) { node = right; continue; }
+        if (tr == INFINITY) { node = left; continue; }
+        /* Both: visit the nearer first, push the other. */
+        int nearN = tl <= tr ? left : right;
+        int farN = tl <= tr ? right : left;
+        if (sp < CLRT_BVH_STACK_SIZE) stack[sp++] = farN;
+        node = nearN;
+    }
+    return found;
+}
+
+/* Closest hit for each ray of the queue. */
+__kernel void intersect_closest(const __global BvhNode* nodes, const __global int* primRefs,
+                                const __global Triangle* tris, const __global Sphere* spheres,
+                                int numTriangles, const __global Ray* rays, __global Hit* hits, int count) {
+    int i = get_global_id(0);
+    if (i >= count) return;
+    Ray r = rays[i];
+    Hit h;
+    h.t = -1.0f; h.prim = CLRT_INVALID; h.u = 0.0f; h.v = 0.0f;
+    float3 dir = r.direction.xyz;
+    if (allFinite3(r.origin.xyz) && allFinite3(dir) && r.direction.w > 0.0f)
+        Bvh_Traverse(nodes, primRefs, tris, spheres, numTriangles, r.origin.xyz, dir, r.direction.w, 0, &h);
+    hits[i] = h;
+}
+
+/* Any hit for each shadow ray: an occluded ray's contribution is set to zero. */
+__kernel void intersect_shadow(const __global BvhNode* nodes, const __global int* primRefs,
+                               const __global Triangle* tris, const __global Sphere* spheres,
+                               int numTriangles, __global ShadowRay* shadows, int count) {
+    int i = get_global_id(0);
+    if (i >= count) return;
+    __global ShadowRay* s = &shadows[i];
+    float4 c = s->contribution;
+    if (c.x == 0.0f && c.y == 0.0f && c.z == 0.0f) return;
+    Hit h;
+    if (Bvh_Traverse(nodes, primRefs, tris, spheres, numTriangles, s->origin.xyz, s->direction.xyz, s->origin.w, 1, &h))
+        s->contribution = (float4)(0.0f);
+}

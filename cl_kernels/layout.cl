@@ -1,0 +1,66 @@
+/* layout.cl — reports how the OpenCL compiler lays out every struct of src/shared/device_types.h, so
+ * the host can compare it with its own layout (src/cl/layout_check.cpp, tests/test_cl.cpp).
+ *
+ * The table is written ONCE, here, as the X-macro CLRT_LAYOUT_TABLE(S, M): S(T) is a struct row,
+ * M(T, m) a member row; members are listed in declaration order. The C++ host includes this file too
+ * (only the macro is visible to it; the kernel is compiled by the OpenCL compiler alone).
+ * Kernel output: out[0] = number of rows; then two ints per row:
+ *   struct row: sizeof(T), alignof(T);   member row: offsetof(T, m), sizeof(member).
+ * When a struct in device_types.h changes, update its rows here (the tests check that every struct is
+ * listed and that the listed members tile each struct exactly). */
+#ifndef CLRT_LAYOUT_TABLE
+#define CLRT_LAYOUT_TABLE(S, M)                                                                   \
+    S(BvhNode) M(BvhNode, boundsMin) M(BvhNode, boundsMax) M(BvhNode, first) M(BvhNode, count)    \
+        M(BvhNode, axis) M(BvhNode, pad0)                                                         \
+    S(Triangle) M(Triangle, v0) M(Triangle, v1) M(Triangle, v2)                                   \
+    S(TriangleShading) M(TriangleShading, n0) M(TriangleShading, n1) M(TriangleShading, n2)       \
+        M(TriangleShading, uv01) M(TriangleShading, uv2) M(TriangleShading, material)             \
+        M(TriangleShading, textureSet) M(TriangleShading, pad0) M(TriangleShading, pad1)          \
+    S(Sphere) M(Sphere, centerRadius) M(Sphere, worldToObject) M(Sphere, objectToWorld)           \
+        M(Sphere, material) M(Sphere, textureSet) M(Sphere, pad0) M(Sphere, pad1)                 \
+    S(TextureSet) M(TextureSet, texture)                                                          \
+    S(Material) M(Material, ambient) M(Material, diffuse) M(Material, specular)                   \
+        M(Material, mirror) M(Material, absorption) M(Material, phongExponent)                    \
+        M(Material, refractionIndex) M(Material, absorptionIndex) M(Material, roughness)          \
+        M(Material, kind) M(Material, pad0) M(Material, pad1) M(Material, pad2)                   \
+    S(TextureMap) M(TextureMap, blackColor) M(TextureMap, whiteColor) M(TextureMap, kind)         \
+        M(TextureMap, decal) M(TextureMap, interpolation) M(TextureMap, image)                    \
+        M(TextureMap, normalizer) M(TextureMap, bumpFactor) M(TextureMap, scale)                  \
+        M(TextureMap, offset) M(TextureMap, noiseScale) M(TextureMap, noiseAbs)                   \
+        M(TextureMap, pad0) M(TextureMap, pad1)                                                   \
+    S(ImageInfo) M(ImageInfo, offset) M(ImageInfo, width) M(ImageInfo, height) M(ImageInfo, pad0) \
+    S(Light) M(Light, position) M(Light, direction) M(Light, radiance) M(Light, edgeU)            \
+        M(Light, edgeV) M(Light, cosCoverageHalf) M(Light, cosFalloffHalf) M(Light, area)         \
+        M(Light, kind) M(Light, image) M(Light, mapping) M(Light, sampler) M(Light, distribution)  \
+    S(CameraParams) M(CameraParams, position) M(CameraParams, u) M(CameraParams, v)               \
+        M(CameraParams, w) M(CameraParams, nearPlane) M(CameraParams, nearDistance)               \
+        M(CameraParams, focusDistance) M(CameraParams, apertureSize) M(CameraParams, width)       \
+        M(CameraParams, height) M(CameraParams, spp) M(CameraParams, strataX)                     \
+        M(CameraParams, strataY)                                                                  \
+    S(SceneParams) M(SceneParams, background) M(SceneParams, ambient)                             \
+        M(SceneParams, numTriangles) M(SceneParams, numSpheres) M(SceneParams, numLights)         \
+        M(SceneParams, maxDepth) M(SceneParams, backgroundTexture) M(SceneParams, envLight)       \
+        M(SceneParams, seed) M(SceneParams, splitDepth)                                           \
+    S(Ray) M(Ray, origin) M(Ray, direction)                                                       \
+    S(Hit) M(Hit, t) M(Hit, prim) M(Hit, u) M(Hit, v)                                             \
+    S(PathState) M(PathState, throughput) M(PathState, pixel) M(PathState, sample)                \
+        M(PathState, depth) M(PathState, pathId)                                                  \
+    S(ShadowRay) M(ShadowRay, origin) M(ShadowRay, direction) M(ShadowRay, contribution)
+#endif
+
+#ifdef __OPENCL_C_VERSION__
+__kernel void layout_report(__global int* out) {
+    if (get_global_id(0) != 0) return;
+    int i = 1;
+#define CLRT_LAYOUT_S(T)                 \
+    out[i++] = (int)sizeof(T);           \
+    out[i++] = (int)__alignof__(T);
+#define CLRT_LAYOUT_M(T, m)                      \
+    out[i++] = (int)__builtin_offsetof(T, m);    \
+    out[i++] = (int)sizeof(((T*)0)->m);
+    CLRT_LAYOUT_TABLE(CLRT_LAYOUT_S, CLRT_LAYOUT_M)
+#undef CLRT_LAYOUT_S
+#undef CLRT_LAYOUT_M
+    out[0] = (i - 1) / 2;
+}
+#endif

@@ -1,0 +1,298 @@
+/* shade.cl — the shading stages of the wavefront:
+ *   shade_hits:      per path, turns a hit into a ShadingPoint (textures applied), adds the terms
+ *                    that need no shadow ray (ambient, background on a miss), and writes the
+ *                    reflection/refraction children to slots 2i and 2i+1 of the next queue;
+ *   sample_lights:   per path and light of a chunk, one shadow ray carrying its Blinn-Phong term;
+ *   gather_shadows:  adds the unoccluded shadow contributions of each path in light order;
+ *   accumulate:      adds each pixel's paths to the float image (paths of one pixel are adjacent);
+ *   compact_paths:   order-preserving compaction of the children with host-computed indices.
+ * Deterministic by construction: no float atomics, fixed summation order. */
+
+typedef struct {
+    float3 p, ng, ns, dir;
+    float2 uv;
+    int material, textureSet;
+    float t;
+    int frontFacing;
+} SurfaceHit;
+
+inline SurfaceHit Surface_FromHit(Hit h, Ray r, const __global Triangle* tris, const __global TriangleShading* shading,
+                                  const __global Sphere* spheres, int numTriangles) {
+    SurfaceHit s;
+    s.dir = r.direction.xyz;
+    s.t = h.t;
+    if (h.prim < numTriangles) {
+        const __global Triangle* tri = &tris[h.prim];
+        const __global TriangleShading* sh = &shading[h.prim];
+        float b1 = h.u, b2 = h.v, b0 = 1.0f - b1 - b2;
+        float3 v0 = tri->v0.xyz, v1 = tri->v1.xyz, v2 = tri->v2.xyz;
+        s.p = b0 * v0 + b1 * v1 + b2 * v2;
+        s.ng = normalize(cross(v1 - v0, v2 - v0));
+        float3 ns = b0 * sh->n0.xyz + b1 * sh->n1.xyz + b2 * sh->n2.xyz;
+        float l = length(ns);
+        s.ns = (l > 0.0f && isfinite(l)) ? ns / l : s.ng;
+        if (dot(s.ns, s.ng) < 0.0f) s.ns = -s.ns;
+        s.uv = b0 * sh->uv01.xy + b1 * sh->uv01.zw + b2 * sh->uv2.xy;
+        s.material = sh->material;
+        s.textureSet = sh->textureSet;
+    } else {
+        const __global Sphere* sp = &spheres[h.prim - numTriangles];
+        float3 o = affinePoint(sp->worldToObject, r.origin.xyz);
+        float3 d = affineVector(sp->worldToObject, r.direction.xyz);
+        float3 c = sp->centerRadius.xyz;
+        float rad = sp->centerRadius.w;
+        float3 nObj = normalize(o + h.t * d - c);
+        float3 pObj = c + rad * nObj;           /* re-projected onto the surface */
+        s.p = affinePoint(sp->objectToWorld, pObj);
+        /* inverse transpose of objectToWorld = transpose of worldToObject */
+        float3 nW = nObj.x * sp->worldToObject[0].xyz + nObj.y * sp->worldToObject[1].xyz + nObj.z * sp->worldToObject[2].xyz;
+        s.ng = normalize(nW);
+        s.ns = s.ng;
+        float theta = acos(clamp(nObj.y, -1.0f, 1.0f));
+        float phi = atan2(nObj.z, nObj.x);
+        s.uv = (float2)((-phi + CLRT_PI) / (2.0f * CLRT_PI), theta / CLRT_PI);
+        s.material = sp->material;
+        s.textureSet = sp->textureSet;
+    }
+    s.frontFacing = dot(s.dir, s.ng) < 0.0f;
+    return s;
+}
+
+/* Dielectric Fresnel reflectance for unit cosines (course formulas: mean of r∥² and r⊥²). */
+inline float Fresnel_Dielectric(float cosI, float cosT, float n1, float n2) {
+    float rPar = (n2 * cosI - n1 * cosT) / (n2 * cosI + n1 * cosT);
+    float rPerp = (n1 * cosI - n2 * cosT) / (n1 * cosI + n2 * cosT);
+    return 0.5f * (rPar * rPar + rPerp * rPerp);
+}
+
+/* Conductor Fresnel with refraction index n and absorption index k. */
+inline float Fresnel_Conductor(float cosI, float n, float k) {
+    float c2 = cosI * cosI, nk = n * n + k * k;
+    float rs = (nk - 2.0f * n * cosI + c2) / (nk + 2.0f * n * cosI + c2);
+    float rp = (nk * c2 - 2.0f * n * cosI + 1.0f) / (nk * c2 + 2.0f * n * cosI + 1.0f);
+    return 0.5f * (rs + rp);
+}
+
+/* Glossy perturbation of a reflected direction (course: r' = r + roughness·(ξ1·u + ξ2·v)). */
+inline float3 Glossy_Perturb(float3 r, float roughness, float u1, float u2) {
+    if (roughness <= 0.0f) return r;
+    float3 a, b;
+    makeBasis(r, &a, &b);
+    return normalize(r + roughness * ((u1 - 0.5f) * a + (u2 - 0.5f) * b));
+}
+
+inline float3 Miss_Radiance(SceneParams scene, const __global TextureMap* textures, const __global ImageInfo* images,
+                            const __global float4* texels, CameraParams cam, PathState path) {
+    if (path.depth == 0 && scene.backgroundTexture != CLRT_INVALID) {
+        int x = path.pixel % cam.width, y = path.pixel / cam.width;
+        float2 uv = (float2)(((float)x + 0.5f) / (float)cam.width, ((float)y + 0.5f) / (float)cam.height);
+        const __global TextureMap* tex = &textures[scene.backgroundTexture];
+        return Image_Lookup(texels, images[tex->image], uv.x, uv.y, tex->interpolation) * (255.0f / tex->normalizer);
+    }
+    return scene.background.xyz;
+}
+
+inline void Child_Write(__global PathState* nextPaths, __global Ray* nextRays, __global int* childValid, int slot,
+                        PathState parent, float3 weight, uint childBit, float3 org, float3 dir) {
+    PathState c = parent;
+    c.throughput = (float4)(parent.throughput.xyz * weight, 0.0f);
+    c.depth = parent.depth + 1;
+    c.pathId = parent.pathId * 2u + childBit;
+    Ray r;
+    r.origin = (float4)(org, 0.0f);
+    r.direction = (float4)(dir, INFINITY);
+    nextPaths[slot] = c;
+    nextRays[slot] = r;
+    childValid[slot] = maxComponent(c.throughput.xyz) > 0.0f && allFinite3(dir) ? 1 : 0;
+}
+
+__kernel void shade_hits(SceneParams scene, CameraParams cam, int count,
+                         const __global PathState* paths, const __global Ray* rays, const __global Hit* hits,
+                         const __global Triangle* tris, const __global TriangleShading* shading,
+                         const __global Sphere* spheres, const __global Material* materials,
+                         const __global TextureSet* textureSets, const __global TextureMap* textures,
+                         const __global ImageInfo* images, const __global float4* texels,
+                         __global ShadingPoint* points, __global float4* pathRadiance,
+                         __global PathState* nextPaths, __global Ray* nextRays, __global int* childValid) {
+    int i = get_global_id(0);
+    if (i >= count) return;
+    PathState path = paths[i];
+    Hit h = hits[i];
+    Ray ray = rays[i];
+    float3 throughput = path.throughput.xyz;
+    childValid[2 * i] = 0;
+    childValid[2 * i + 1] = 0;
+    ShadingPoint sp;
+    sp.position = (float4)(0.0f);
+    if (h.prim == CLRT_INVALID) {
+        points[i] = sp;
+        pathRadiance[i] = (float4)(throughput * Miss_Radiance(scene, textures, images, texels, cam, path), 0.0f);
+        return;
+    }
+    SurfaceHit s = Surface_FromHit(h, ray, tris, shading, spheres, scene.numTriangles);
+    Material m = materials[s.material];
+    float3 wo = -s.dir;
+    float3 ng = s.frontFacing ? s.ng : -s.ng;   /* facing the incoming ray */
+    float3 ns = s.frontFacing ? s.ns : -s.ns;
+    float3 kd = m.diffuse.xyz, ks = m.specular.xyz;
+    float3 radiance = (float3)(0.0f);
+    int replaceAll = 0;
+#ifdef CLRT_HAS_TEXTURES
+    if (s.textureSet != CLRT_INVALID) {
+        for (int k = 0; k < CLRT_MAX_TEXTURES_PER_SHAPE; ++k) {
+            int ti = textureSets[s.textureSet].texture[k];
+            if (ti == CLRT_INVALID) continue;
+            const __global TextureMap* tex = &textures[ti];
+            float3 c = Texture_Eval(tex, images, texels, s.uv, s.p);
+            switch (tex->decal) {
+            case DECAL_REPLACE_KD: kd = c; break;
+            case DECAL_BLEND_KD: kd = 0.5f * (kd + c); break;
+            case DECAL_REPLACE_KS: ks = c; break;
+            case DECAL_REPLACE_ALL: radiance = c * 255.0f; replaceAll = 1; break;
+            default: break;
+            }
+        }
+    }
+#endif
+    RngKey key = Rng_Key(scene.seed, path.pixel, path.sample, path.pathId);
+    uint dim = 4u + 32u * (uint)path.depth;
+    int canBounce = path.depth < scene.maxDepth;
+    int insideDielectric = (m.kind == MATERIAL_DIELECTRIC) && !s.frontFacing;
+
+    if (replaceAll) {
+        pathRadiance[i] = (float4)(throughput * radiance, 0.0f);
+        points[i] = sp;
+        return;
+    }
+    if (!insideDielectric) {
+        radiance += m.ambient.xyz * scene.ambient.xyz;
+        sp.position = (float4)(s.p, 1.0f);
+        sp.normal = (float4)(ns, 0.0f);
+        sp.geomNormal = (float4)(ng, 0.0f);
+        sp.wo = (float4)(wo, 0.0f);
+        sp.kd = (float4)(kd, 0.0f);
+        sp.ks = (float4)(ks, m.phongExponent);
+    }
+    points[i] = sp;
+    pathRadiance[i] = (float4)(throughput * radiance, 0.0f);
+    if (!canBounce) return;
+
+    float cosI = dot(wo, ns);
+    float3 reflDir = normalize(2.0f * cosI * ns - wo);
+    reflDir = Glossy_Perturb(reflDir, m.roughness, Rng_Uniform(key, dim), Rng_Uniform(key, dim + 1));
+    float3 reflOrg = Ray_OffsetOrigin(s.p, ng);
+    switch (m.kind) {
+#ifdef CLRT_HAS_MIRROR
+    case MATERIAL_MIRROR:
+        Child_Write(nextPaths, nextRays, childValid, 2 * i, path, m.mirror.xyz, 0u, reflOrg, reflDir);
+        break;
+#endif
+#ifdef CLRT_HAS_CONDUCTOR
+    case MATERIAL_CONDUCTOR: {
+        float fr = Fresnel_Conductor(clamp(cosI, 0.0f, 1.0f), m.refractionIndex, m.absorptionIndex);
+        Child_Write(nextPaths, nextRays, childValid, 2 * i, path, m.mirror.xyz * fr, 0u, reflOrg, reflDir);
+        break;
+    }
+#endif
+#ifdef CLRT_HAS_DIELECTRIC
+    case MATERIAL_DIELECTRIC: {
+        float3 weight = (float3)(1.0f);
+        if (insideDielectric)  /* Beer's law over the distance travelled inside */
+            weight = exp(-m.absorption.xyz * s.t);
+        float n1 = insideDielectric ? m.refractionIndex : 1.0f;
+        float n2 = insideDielectric ? 1.0f : m.refractionIndex;
+        float eta = n1 / n2;
+        float c = clamp(cosI, 0.0f, 1.0f);
+        float sin2T = eta * eta * fmax(0.0f, 1.0f - c * c);
+        float fr = 1.0f, cosT = 0.0f;
+        if (sin2T < 1.0f) {
+            cosT = sqrt(1.0f - sin2T);
+            fr = Fresnel_Dielectric(c, cosT, n1, n2);
+        }
+        float3 refrDir = normalize(-eta * wo + (eta * c - cosT) * ns);
+        float3 refrOrg = Ray_OffsetOrigin(s.p, -ng);
+        if (fr >= 1.0f) {
+            Child_Write(nextPaths, nextRays, childValid, 2 * i, path, weight, 0u, reflOrg, reflDir);
+        } else if (path.depth < scene.splitDepth) {
+            Child_Write(nextPaths, nextRays, childValid, 2 * i, path, weight * fr, 0u, reflOrg, reflDir);
+            Child_Write(nextPaths, nextRays, childValid, 2 * i + 1, path, weight * (1.0f - fr), 1u, refrOrg, refrDir);
+        } else if (Rng_Uniform(key, dim + 2) < fr) {
+            Child_Write(nextPaths, nextRays, childValid, 2 * i, path, weight, 0u, reflOrg, reflDir);
+        } else {
+            Child_Write(nextPaths, nextRays, childValid, 2 * i + 1, path, weight, 1u, refrOrg, refrDir);
+        }
+        break;
+    }
+#endif
+    default:
+        break;
+    }
+}
+
+/* One shadow ray per (path, light in [lightBegin, lightEnd)), at slot i·chunk + (l − lightBegin). */
+__kernel void sample_lights(SceneParams scene, int count, int lightBegin, int lightEnd,
+                            const __global PathState* paths, const __global ShadingPoint* points,
+                            const __global Light* lights, __global ShadowRay* shadows) {
+    int i = get_global_id(0);
+    if (i >= count) return;
+    int chunk = lightEnd - lightBegin;
+    ShadingPoint sp = points[i];
+    PathState path = paths[i];
+    RngKey key = Rng_Key(scene.seed, path.pixel, path.sample, path.pathId);
+    for (int l = lightBegin; l < lightEnd; ++l) {
+        ShadowRay sr;
+        sr.contribution = (float4)(0.0f);
+        sr.origin = (float4)(0.0f);
+        sr.direction = (float4)(0.0f, 0.0f, 1.0f, 0.0f);
+        if (sp.position.w > 0.0f) {
+            uint dim = 4u + 32u * (uint)path.depth + 8u + 2u * (uint)l;
+            float2 u = (float2)(Rng_Uniform(key, dim), Rng_Uniform(key, dim + 1));
+            float3 wi;
+            float dist;
+            float3 p = sp.position.xyz, n = sp.normal.xyz, ng = sp.geomNormal.xyz;
+            float3 e = Light_Sample(&lights[l], p, u, &wi, &dist);
+            float cosTheta = dot(n, wi);
+            if (cosTheta > 0.0f && dot(ng, wi) > 0.0f && maxComponent(e) > 0.0f) {
+                float3 hv = normalize(wi + sp.wo.xyz);
+                float spec = pow(fmax(0.0f, dot(n, hv)), sp.ks.w);
+                float3 c = path.throughput.xyz * (sp.kd.xyz * cosTheta + sp.ks.xyz * spec) * e;
+                float3 org = Ray_OffsetOrigin(p, ng);
+                float tMax = isinf(dist) ? INFINITY : length(p + dist * wi - org) * (1.0f - 1e-5f);
+                sr.origin = (float4)(org, tMax);
+                sr.direction = (float4)(wi, 0.0f);
+                sr.contribution = (float4)(finiteOrZero(c), 0.0f);
+            }
+        }
+        shadows[(size_t)i * chunk + (l - lightBegin)] = sr;
+    }
+}
+
+__kernel void gather_shadows(int count, int chunk, const __global ShadowRay* shadows, __global float4* pathRadiance) {
+    int i = get_global_id(0);
+    if (i >= count) return;
+    float4 sum = pathRadiance[i];
+    for (int l = 0; l < chunk; ++l) sum += shadows[(size_t)i * chunk + l].contribution;
+    pathRadiance[i] = sum;
+}
+
+/* Paths of one pixel are adjacent; the first of each run adds the whole run (fixed order). */
+__kernel void accumulate(int count, const __global PathState* paths, const __global float4* pathRadiance,
+                         __global float4* image) {
+    int i = get_global_id(0);
+    if (i >= count) return;
+    int pixel = paths[i].pixel;
+    if (i > 0 && paths[i - 1].pixel == pixel) return;
+    float3 sum = (float3)(0.0f);
+    for (int j = i; j < count && paths[j].pixel == pixel; ++j) sum += finiteOrZero(pathRadiance[j].xyz);
+    image[pixel] += (float4)(sum, 0.0f);
+}
+
+__kernel void compact_paths(int slots, const __global int* target, const __global PathState* nextPaths,
+                            const __global Ray* nextRays, __global PathState* paths, __global Ray* rays) {
+    int i = get_global_id(0);
+    if (i >= slots) return;
+    int t = target[i];
+    if (t < 0) return;
+    paths[t] = nextPaths[i];
+    rays[t] = nextRays[i];
+}

@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# Installs clrt's Debian build/test dependencies (when missing) and builds it into build/ (Release).
+# Usage: bash scripts/setup.sh        (run as root, or with sudo available, on Debian/Ubuntu)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+PKGS="cmake g++ make pkg-config ocl-icd-opencl-dev opencl-clhpp-headers pocl-opencl-icd libopenexr-dev libpugixml-dev catch2 libstb-dev clinfo nlohmann-json3-dev"
+missing=""
+for p in $PKGS; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"
+done
+if [ -n "$missing" ]; then
+  echo "setup: installing:$missing"
+  SUDO=""
+  [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends $missing >/dev/null
+fi
+
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build build -j"$(nproc)"

@@ -1,0 +1,46 @@
+// Bounding volume hierarchy over world-space primitives: binned SAH build on the host, flattened to
+// the device layout (dev::BvhNode, depth-first, left child next to its parent), and a plain C++
+// traversal used as the reference in tests.
+#pragma once
+#include <vector>
+
+#include "shared/device_types.h"
+#include "util/math.h"
+
+namespace clrt {
+
+struct Aabb {
+    Vec3 min{1e30f, 1e30f, 1e30f};
+    Vec3 max{-1e30f, -1e30f, -1e30f};
+    void grow(const Vec3& p) { min = vmin(min, p); max = vmax(max, p); }
+    void grow(const Aabb& b) { min = vmin(min, b.min); max = vmax(max, b.max); }
+    Vec3 centroid() const { return (min + max) * 0.5f; }
+    float surfaceArea() const {
+        Vec3 d = max - min;
+        if (d.x < 0 || d.y < 0 || d.z < 0) return 0;
+        return 2 * (d.x * d.y + d.y * d.z + d.z * d.x);
+    }
+    bool valid() const { return min.x <= max.x && min.y <= max.y && min.z <= max.z; }
+};
+
+struct BvhBuildOptions {
+    int bins = 16;            // SAH bins per axis
+    int maxLeafSize = 4;      // leaves never hold more (unless all centroids coincide)
+    float traversalCost = 1;  // SAH cost of an interior node relative to one primitive test
+};
+
+struct Bvh {
+    std::vector<dev::BvhNode> nodes;  // nodes[0] is the root
+    std::vector<int> primRefs;        // leaf ranges index this; values index the input boxes
+    float sahCost = 0;                // SAH cost of the tree (root area normalised)
+    int depth = 0;                    // levels on the longest root-to-leaf path (root alone = 1);
+                                      // always <= CLRT_BVH_STACK_SIZE - 8
+};
+
+// Builds over the given primitive boxes (one per primitive; index = primitive reference).
+// Empty input gives a single node with count 0 and inverted bounds and no primRefs: callers must
+// not traverse it (check primRefs.empty()). Boxes that are non-finite or inverted are still
+// referenced once but never widen a node. Leaves hold at most maxLeafSize primitives.
+Bvh buildBvh(const std::vector<Aabb>& primBounds, const BvhBuildOptions& opts = {});
+
+}  // namespace clrt

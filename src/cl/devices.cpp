@@ -1,0 +1,207 @@
+// devices.cpp — OpenCL device enumeration, --device spec parsing and the `clrt devices` listing.
+#include "cl/devices.h"
+
+#include <algorithm>
+#include <cctype>
+#include <sstream>
+
+#include "cl/check.h"
+#include "util/error.h"
+
+namespace clrt {
+
+namespace {
+
+std::string trim(std::string s) {
+    while (!s.empty() && (s.back() == '\0' || std::isspace((unsigned char)s.back()))) s.pop_back();
+    size_t i = 0;
+    while (i < s.size() && std::isspace((unsigned char)s[i])) ++i;
+    return s.substr(i);
+}
+
+std::string lower(std::string s) {
+    for (char& c : s) c = (char)std::tolower((unsigned char)c);
+    return s;
+}
+
+std::string platformString(cl_platform_id p, cl_platform_info what, const char* whatName) {
+    size_t n = 0;
+    checkCl(clGetPlatformInfo(p, what, 0, nullptr, &n), whatName, __FILE__, __LINE__);
+    std::string s(n, '\0');
+    checkCl(clGetPlatformInfo(p, what, n, &s[0], nullptr), whatName, __FILE__, __LINE__);
+    return trim(s);
+}
+
+std::string deviceString(cl_device_id d, cl_device_info what, const char* whatName) {
+    size_t n = 0;
+    checkCl(clGetDeviceInfo(d, what, 0, nullptr, &n), whatName, __FILE__, __LINE__);
+    std::string s(n, '\0');
+    checkCl(clGetDeviceInfo(d, what, n, &s[0], nullptr), whatName, __FILE__, __LINE__);
+    return trim(s);
+}
+
+template <class T>
+T deviceValue(cl_device_id d, cl_device_info what, const char* whatName) {
+    T v{};
+    checkCl(clGetDeviceInfo(d, what, sizeof(T), &v, nullptr), whatName, __FILE__, __LINE__);
+    return v;
+}
+
+std::string describeAll(const std::vector<DeviceInfo>& all) {
+    if (all.empty()) return "no OpenCL devices found (is an OpenCL driver / ICD installed?)";
+    std::ostringstream os;
+    os << "available devices:";
+    for (const DeviceInfo& d : all)
+        os << " [" << d.index << "] " << deviceTypeName(d.type) << " \"" << d.name << "\" (" << d.platformName
+           << ");";
+    std::string s = os.str();
+    s.pop_back();
+    return s;
+}
+
+bool isIndex(const std::string& s) {
+    return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) { return std::isdigit((unsigned char)c); });
+}
+
+}  // namespace
+
+const char* deviceTypeName(cl_device_type type) {
+    if (type & CL_DEVICE_TYPE_GPU) return "GPU";
+    if (type & CL_DEVICE_TYPE_CPU) return "CPU";
+    if (type & CL_DEVICE_TYPE_ACCELERATOR) return "ACCELERATOR";
+    if (type & CL_DEVICE_TYPE_CUSTOM) return "CUSTOM";
+    return "OTHER";
+}
+
+std::vector<DeviceInfo> listDevices() {
+    std::vector<DeviceInfo> out;
+    cl_uint numPlatforms = 0;
+    cl_int err = clGetPlatformIDs(0, nullptr, &numPlatforms);
+    if (err != CL_SUCCESS || numPlatforms == 0) {
+        // ocl-icd answers CL_PLATFORM_NOT_FOUND_KHR when there is no platform: that is an empty list.
+        if (err != CL_SUCCESS && err != -1001 /* CL_PLATFORM_NOT_FOUND_KHR */)
+            warn(clErrorMessage(err, "clGetPlatformIDs", __FILE__, __LINE__));
+        return out;
+    }
+    std::vector<cl_platform_id> platforms(numPlatforms);
+    err = clGetPlatformIDs(numPlatforms, platforms.data(), nullptr);
+    if (err != CL_SUCCESS) {
+        warn(clErrorMessage(err, "clGetPlatformIDs", __FILE__, __LINE__));
+        return out;
+    }
+    for (cl_platform_id p : platforms) {
+        std::vector<DeviceInfo> found;
+        std::string pname = "?";
+        try {
+            pname = platformString(p, CL_PLATFORM_NAME, "clGetPlatformInfo(CL_PLATFORM_NAME)");
+            cl_uint n = 0;
+            err = clGetDeviceIDs(p, CL_DEVICE_TYPE_ALL, 0, nullptr, &n);
+            if (err == CL_DEVICE_NOT_FOUND || (err == CL_SUCCESS && n == 0)) continue;
+            CL_CHECK(err);
+            std::vector<cl_device_id> ids(n);
+            CL_CHECK(clGetDeviceIDs(p, CL_DEVICE_TYPE_ALL, n, ids.data(), nullptr));
+            for (cl_device_id id : ids) {
+                DeviceInfo d;
+                // retainObject=true: the wrappers add their own reference (a no-op for root devices).
+                d.platform = cl::Platform(p, true);
+                d.device = cl::Device(id, true);
+                d.platformName = pname;
+                d.name = deviceString(id, CL_DEVICE_NAME, "clGetDeviceInfo(CL_DEVICE_NAME)");
+                d.vendor = deviceString(id, CL_DEVICE_VENDOR, "clGetDeviceInfo(CL_DEVICE_VENDOR)");
+                d.driverVersion = deviceString(id, CL_DRIVER_VERSION, "clGetDeviceInfo(CL_DRIVER_VERSION)");
+                d.openclCVersion =
+                    deviceString(id, CL_DEVICE_OPENCL_C_VERSION, "clGetDeviceInfo(CL_DEVICE_OPENCL_C_VERSION)");
+                d.type = deviceValue<cl_device_type>(id, CL_DEVICE_TYPE, "clGetDeviceInfo(CL_DEVICE_TYPE)");
+                d.computeUnits =
+                    deviceValue<cl_uint>(id, CL_DEVICE_MAX_COMPUTE_UNITS, "clGetDeviceInfo(CL_DEVICE_MAX_COMPUTE_UNITS)");
+                d.globalMem =
+                    deviceValue<cl_ulong>(id, CL_DEVICE_GLOBAL_MEM_SIZE, "clGetDeviceInfo(CL_DEVICE_GLOBAL_MEM_SIZE)");
+                d.maxAlloc = deviceValue<cl_ulong>(id, CL_DEVICE_MAX_MEM_ALLOC_SIZE,
+                                                   "clGetDeviceInfo(CL_DEVICE_MAX_MEM_ALLOC_SIZE)");
+                d.maxWorkGroup = deviceValue<size_t>(id, CL_DEVICE_MAX_WORK_GROUP_SIZE,
+                                                     "clGetDeviceInfo(CL_DEVICE_MAX_WORK_GROUP_SIZE)");
+                found.push_back(std::move(d));
+            }
+        } catch (const Error& e) {
+            warn("skipping OpenCL platform \"" + pname + "\": " + e.what());
+            continue;
+        } catch (const cl::Error& e) {
+            warn("skipping OpenCL platform \"" + pname + "\": " + toError(e, "", __FILE__, __LINE__).what());
+            continue;
+        }
+        for (DeviceInfo& d : found) {
+            d.index = (int)out.size();
+            out.push_back(std::move(d));
+        }
+    }
+    return out;
+}
+
+std::vector<DeviceInfo> selectDevices(const std::string& spec) {
+    std::vector<DeviceInfo> all = listDevices();
+    if (all.empty()) throw Error("no OpenCL devices found (is an OpenCL driver / ICD installed?)", ExitCode::Device);
+
+    std::vector<bool> chosen(all.size(), false);
+    auto firstOfType = [&](cl_device_type t) -> int {
+        for (const DeviceInfo& d : all)
+            if (d.type & t) return d.index;
+        return -1;
+    };
+
+    std::string s = trim(spec);
+    if (s.empty()) {
+        int i = firstOfType(CL_DEVICE_TYPE_GPU);
+        if (i < 0) i = firstOfType(CL_DEVICE_TYPE_CPU);
+        if (i < 0) i = firstOfType(CL_DEVICE_TYPE_ACCELERATOR);
+        if (i < 0) i = 0;
+        return {all[i]};
+    }
+
+    std::stringstream ss(s);
+    std::string item;
+    while (std::getline(ss, item, ',')) {
+        item = trim(item);
+        std::string key = lower(item);
+        bool any = false;
+        if (item.empty()) {
+            throw Error("--device \"" + spec + "\": empty item in the list; " + describeAll(all), ExitCode::Device);
+        } else if (isIndex(item)) {
+            size_t idx = item.size() > 9 ? all.size() : std::stoul(item);
+            if (idx < all.size()) chosen[idx] = any = true;
+        } else if (key == "all") {
+            std::fill(chosen.begin(), chosen.end(), true);
+            any = true;
+        } else if (key == "cpu" || key == "gpu" || key == "accelerator") {
+            cl_device_type t = key == "cpu" ? CL_DEVICE_TYPE_CPU
+                               : key == "gpu" ? CL_DEVICE_TYPE_GPU
+                                              : CL_DEVICE_TYPE_ACCELERATOR;
+            for (const DeviceInfo& d : all)
+                if (d.type & t) chosen[d.index] = any = true;
+        } else {
+            for (const DeviceInfo& d : all)
+                if (lower(d.name).find(key) != std::string::npos) chosen[d.index] = any = true;
+        }
+        if (!any)
+            throw Error("--device \"" + spec + "\": \"" + item + "\" names no OpenCL device; " + describeAll(all),
+                        ExitCode::Device);
+    }
+    std::vector<DeviceInfo> out;
+    for (const DeviceInfo& d : all)
+        if (chosen[d.index]) out.push_back(d);
+    return out;
+}
+
+void printDevices(std::ostream& os) {
+    std::vector<DeviceInfo> all = listDevices();
+    if (all.empty()) {
+        os << "no OpenCL devices found (is an OpenCL driver / ICD installed?)\n";
+        return;
+    }
+    for (const DeviceInfo& d : all) {
+        os << "[" << d.index << "] " << deviceTypeName(d.type) << "  " << d.name << "  (platform: " << d.platformName
+           << ")  compute units: " << d.computeUnits << "  global memory: " << (d.globalMem >> 20) << " MiB  "
+           << d.openclCVersion << "  driver: " << d.driverVersion << "\n";
+    }
+}
+
+}  // namespace clrt

@@ -1,0 +1,77 @@
+// program.h — an OpenCL context + queue for one device (DeviceContext) and program building:
+// sources are assembled as device_types.h followed by the named cl_kernels/ files (embedded at build
+// time, or read from $CLRT_KERNEL_DIR so kernels can be edited without rebuilding), compiled with
+// "-cl-std=CL1.2" plus the caller's defines, and cached as device binaries on disk
+// ($CLRT_CACHE_DIR, else $XDG_CACHE_HOME/clrt, else ~/.cache/clrt; CLRT_NO_CACHE=1 disables).
+#pragma once
+#include <CL/opencl.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "cl/devices.h"
+
+namespace clrt {
+
+// Owns the context and the (in-order) command queue of one device.
+class DeviceContext {
+public:
+    explicit DeviceContext(const DeviceInfo& info, bool profiling = false);
+    const DeviceInfo& info() const { return info_; }
+    const cl::Device& device() const { return info_.device; }
+    cl::Context& context() { return context_; }
+    cl::CommandQueue& queue() { return queue_; }
+    void finish();  // clFinish, checked
+
+private:
+    DeviceInfo info_;
+    cl::Context context_;
+    cl::CommandQueue queue_;
+};
+
+// How a program was obtained.
+struct BuildInfo {
+    bool cacheHit = false;  // created from a cached binary
+    double seconds = 0;     // wall time of the build or the binary load
+    std::string options;    // the build options string
+    std::string log;        // the build log of a successful build (warnings), may be empty
+    std::string cacheFile;  // cache entry read or written; "" when caching is disabled
+};
+
+// A named source: (name used in #line / messages, text).
+using NamedSource = std::pair<std::string, std::string>;
+
+// device_types.h followed by the given kernel files (by file name, e.g. "intersect.cl"), each text
+// starting with a #line marker naming its file. From the embedded copies, or from $CLRT_KERNEL_DIR
+// (device_types.h then from $CLRT_KERNEL_DIR/../src/shared/). Throws clrt::Error (Device) if missing.
+std::vector<NamedSource> loadKernelSources(const std::vector<std::string>& kernelFiles);
+
+// loadKernelSources(kernelFiles) + buildProgramFromSources().
+cl::Program buildProgram(DeviceContext& dc, const std::vector<std::string>& kernelFiles,
+                         const std::vector<std::string>& defines, BuildInfo* info = nullptr);
+
+// Builds exactly the given sources (concatenated in order; nothing is prepended except a
+// `#line 1 "<name>"` marker for texts that do not start with "#line"). Defines are build options such
+// as "-DCLRT_HAS_SPHERES=1". Uses the binary cache. On failure throws clrt::Error (Device) whose
+// message holds the error name, the device, the options string and the full build log.
+cl::Program buildProgramFromSources(DeviceContext& dc, const std::vector<NamedSource>& namedSources,
+                                    const std::vector<std::string>& defines, BuildInfo* info = nullptr);
+
+// The options string used for `defines`: the defines, then "-cl-std=CL1.2".
+std::string buildOptions(const std::vector<std::string>& defines);
+
+// The program cache folder per the environment, or "" when caching is disabled.
+std::string programCacheDir();
+
+// FNV-1a 64-bit hash (chainable through `h`).
+uint64_t fnv1a64(const std::string& s, uint64_t h = 0xcbf29ce484222325ull);
+
+// Smallest multiple of `multiple` >= value (value itself when multiple is 0).
+inline size_t roundUp(size_t value, size_t multiple) {
+    return multiple == 0 ? value : (value + multiple - 1) / multiple * multiple;
+}
+
+}  // namespace clrt

@@ -1,0 +1,274 @@
+// Image files (see image.h): readImage picks a decoder from the magic bytes (PNG/JPEG via stb_image,
+// EXR via OpenEXR's generic InputFile so any R,G,B / Y layout, half or float, scanline or tiled,
+// reads); PNG written with stb_image_write, EXR with OpenEXR (ZIP, RGB, float or half). Writers go
+// through a temporary sibling file and rename() so a failed write never truncates an existing image.
+#include "image/image.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <thread>
+#include <unistd.h>
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+#include <ImfRgbaFile.h>
+#include <ImfStringAttribute.h>
+#include <ImfThreading.h>
+#include <Imath/half.h>
+#include <stb/stb_image.h>
+#include <stb/stb_image_write.h>
+
+#include "util/error.h"
+
+namespace clrt {
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string readAll(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Error(path + ": cannot open image file");
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (in.bad()) throw Error(path + ": cannot read image file");
+    return bytes;
+}
+
+bool startsWith(const std::string& s, const char* magic, size_t n) {
+    return s.size() >= n && std::memcmp(s.data(), magic, n) == 0;
+}
+
+ImageRGB readStb(const std::string& path, const std::string& bytes, bool png) {
+    const auto* data = reinterpret_cast<const stbi_uc*>(bytes.data());
+    if (bytes.size() > size_t(INT32_MAX)) throw Error(path + ": image file too large");
+    int len = int(bytes.size());
+    int w = 0, h = 0, comp = 0;
+    ImageRGB img;
+    if (png && stbi_is_16_bit_from_memory(data, len)) {
+        stbi_us* px = stbi_load_16_from_memory(data, len, &w, &h, &comp, 3);
+        if (!px) throw Error(path + ": cannot decode PNG: " + stbi_failure_reason());
+        img.pixels.assign(px, px + size_t(w) * h * 3);
+        stbi_image_free(px);
+    } else {
+        stbi_uc* px = stbi_load_from_memory(data, len, &w, &h, &comp, 3);
+        if (!px) throw Error(path + ": cannot decode " + (png ? "PNG" : "JPEG") + ": " + stbi_failure_reason());
+        img.pixels.assign(px, px + size_t(w) * h * 3);
+        stbi_image_free(px);
+    }
+    img.width = w;
+    img.height = h;
+    return img;
+}
+
+// Replaces NaN, Inf and negative values by 0; one warning for the whole image.
+void sanitize(const std::string& path, ImageRGB& img) {
+    size_t bad = 0;
+    for (float& v : img.pixels)
+        if (!(v >= 0.0f) || std::isinf(v)) {
+            v = 0.0f;
+            ++bad;
+        }
+    if (bad > 0)
+        warn(path + ": " + std::to_string(bad) + " NaN, infinite or negative texel values replaced by 0");
+}
+
+void initExrThreads() {
+    static bool done = [] {
+        unsigned n = std::thread::hardware_concurrency();
+        Imf::setGlobalThreadCount(n > 1 ? int(n) : 0);
+        return true;
+    }();
+    (void)done;
+}
+
+// Finds the RGB channel names: "R","G","B", or one layer's "<layer>.R" etc. Returns false if none.
+bool findRgbChannels(const Imf::ChannelList& ch, std::string names[3]) {
+    if (ch.findChannel("R") || ch.findChannel("G") || ch.findChannel("B")) {
+        names[0] = "R"; names[1] = "G"; names[2] = "B";
+        return true;
+    }
+    for (auto it = ch.begin(); it != ch.end(); ++it) {
+        std::string n = it.name();
+        if (n.size() > 2 && n.compare(n.size() - 2, 2, ".R") == 0) {
+            std::string layer = n.substr(0, n.size() - 1);
+            names[0] = layer + "R"; names[1] = layer + "G"; names[2] = layer + "B";
+            return true;
+        }
+    }
+    return false;
+}
+
+// Luminance/chroma files (Y, RY, BY): the RGBA interface converts them to RGB.
+void readExrLuminanceChroma(const std::string& path, ImageRGB& img) {
+    Imf::RgbaInputFile file(path.c_str());
+    const Imath::Box2i dw = file.dataWindow();
+    std::vector<Imf::Rgba> buf(size_t(img.width) * img.height);
+    file.setFrameBuffer(buf.data() - dw.min.x - ptrdiff_t(dw.min.y) * img.width, 1, size_t(img.width));
+    file.readPixels(dw.min.y, dw.max.y);
+    if (!file.isComplete()) throw Error(path + ": EXR file is incomplete (truncated?)");
+    for (size_t i = 0; i < buf.size(); ++i) {
+        img.pixels[i * 3 + 0] = buf[i].r;
+        img.pixels[i * 3 + 1] = buf[i].g;
+        img.pixels[i * 3 + 2] = buf[i].b;
+    }
+}
+
+ImageRGB readExr(const std::string& path) {
+    initExrThreads();
+    ImageRGB img;
+    img.isHdr = true;
+    try {
+        bool lumaChroma = false;
+        {
+            Imf::InputFile file(path.c_str());  // reads scanline and tiled files alike
+            const Imf::Header& hdr = file.header();
+            const Imath::Box2i dw = hdr.dataWindow();
+            const int64_t w = int64_t(dw.max.x) - dw.min.x + 1, h = int64_t(dw.max.y) - dw.min.y + 1;
+            if (w <= 0 || h <= 0 || w * h > (int64_t(1) << 30))
+                throw Error(path + ": EXR data window has a bad size");
+            img.width = int(w);
+            img.height = int(h);
+            img.pixels.assign(size_t(w) * size_t(h) * 3, 0.0f);
+            const Imf::ChannelList& ch = hdr.channels();
+            lumaChroma = ch.findChannel("RY") || ch.findChannel("BY");
+            if (!lumaChroma) {
+                std::string names[3];
+                const bool rgb = findRgbChannels(ch, names);
+                if (!rgb && !ch.findChannel("Y")) throw Error(path + ": EXR file has no R, G, B or Y channel");
+                if (!rgb) names[0] = "Y";  // grey: read Y into R, copy to G and B below
+                Imf::FrameBuffer fb;
+                const size_t xs = 3 * sizeof(float), ys = xs * size_t(w);
+                for (int c = 0; c < (rgb ? 3 : 1); ++c) {
+                    const Imf::Channel* info = ch.findChannel(names[c]);
+                    if (info && (info->xSampling != 1 || info->ySampling != 1))
+                        throw Error(path + ": EXR channel " + names[c] + " is subsampled, which is not supported");
+                    // A channel the file lacks (e.g. only R and G) is filled with 0 by OpenEXR.
+                    fb.insert(names[c], Imf::Slice::Make(Imf::FLOAT, img.pixels.data() + c, dw, xs, ys));
+                }
+                file.setFrameBuffer(fb);
+                file.readPixels(dw.min.y, dw.max.y);
+                if (!file.isComplete()) throw Error(path + ": EXR file is incomplete (truncated?)");
+                if (!rgb)
+                    for (size_t i = 0; i < img.pixels.size(); i += 3)
+                        img.pixels[i + 1] = img.pixels[i + 2] = img.pixels[i];
+            }
+        }
+        if (lumaChroma) readExrLuminanceChroma(path, img);
+    } catch (const Error&) {
+        throw;
+    } catch (const std::exception& e) {
+        std::string what = e.what();
+        std::replace(what.begin(), what.end(), '\n', ' ');
+        throw Error(path + ": cannot read EXR: " + what);
+    }
+    sanitize(path, img);
+    return img;
+}
+
+void checkImage(const std::string& path, int width, int height, size_t size) {
+    if (width <= 0 || height <= 0 || size != size_t(width) * size_t(height) * 3)
+        throw Error(path + ": cannot write an image of " + std::to_string(width) + "x" + std::to_string(height) +
+                        " with " + std::to_string(size) + " values",
+                    ExitCode::Output);
+}
+
+}  // namespace
+
+ImageRGB readImage(const std::string& path) {
+    std::string bytes = readAll(path);
+    if (startsWith(bytes, "\x89PNG", 4)) return readStb(path, bytes, true);
+    if (startsWith(bytes, "\xFF\xD8\xFF", 3)) return readStb(path, bytes, false);
+    if (startsWith(bytes, "\x76\x2F\x31\x01", 4)) {
+        bytes.clear();
+        bytes.shrink_to_fit();
+        return readExr(path);
+    }
+    throw Error(path + ": unknown image format (not PNG, JPEG or EXR)");
+}
+
+std::string temporarySiblingPath(const std::string& path) {
+    fs::path p(path);
+    fs::path dir = p.parent_path();
+    if (p.filename().empty()) throw Error(path + ": output path names no file", ExitCode::Output);
+    if (!dir.empty() && !fs::is_directory(dir))
+        throw Error(path + ": output directory '" + dir.string() + "' does not exist", ExitCode::Output);
+    std::string name = "." + p.filename().string() + ".tmp-" + std::to_string(getpid());
+    return (dir / name).string();
+}
+
+void commitTemporary(const std::string& tmpPath, const std::string& path) {
+    if (std::rename(tmpPath.c_str(), path.c_str()) != 0) {
+        int err = errno;
+        std::remove(tmpPath.c_str());
+        throw Error(path + ": cannot write output file: " + std::strerror(err), ExitCode::Output);
+    }
+}
+
+void writePng8(const std::string& path, int width, int height, const std::vector<unsigned char>& rgb) {
+    checkImage(path, width, height, rgb.size());
+    writeAtomically(path, [&](const std::string& tmp) {
+        errno = 0;
+        if (!stbi_write_png(tmp.c_str(), width, height, 3, rgb.data(), width * 3)) {
+            std::string why = errno ? std::strerror(errno) : "stbi_write_png failed";
+            throw Error(path + ": cannot write PNG: " + why, ExitCode::Output);
+        }
+    });
+}
+
+void writePngClamped(const std::string& path, const ImageRGB& img) {
+    checkImage(path, img.width, img.height, img.pixels.size());
+    std::vector<unsigned char> rgb(img.pixels.size());
+    for (size_t i = 0; i < rgb.size(); ++i) {
+        float v = img.pixels[i];
+        v = v > 0.0f ? std::min(v, 255.0f) : 0.0f;  // NaN -> 0
+        rgb[i] = static_cast<unsigned char>(std::lround(v));
+    }
+    writePng8(path, img.width, img.height, rgb);
+}
+
+void writeExr(const std::string& path, const ImageRGB& img, const ExrWriteOptions& opts) {
+    checkImage(path, img.width, img.height, img.pixels.size());
+    initExrThreads();
+    writeAtomically(path, [&](const std::string& tmp) {
+        try {
+            Imf::Header hdr(img.width, img.height);
+            hdr.compression() = Imf::ZIP_COMPRESSION;
+            const Imf::PixelType type = opts.half ? Imf::HALF : Imf::FLOAT;
+            const char* names[3] = {"R", "G", "B"};
+            for (const char* n : names) hdr.channels().insert(n, Imf::Channel(type));
+            for (const auto& kv : opts.attributes) hdr.insert(kv.first, Imf::StringAttribute(kv.second));
+
+            std::vector<Imath::half> halves;
+            const char* base = reinterpret_cast<const char*>(img.pixels.data());
+            size_t elem = sizeof(float);
+            if (opts.half) {
+                halves.assign(img.pixels.begin(), img.pixels.end());
+                base = reinterpret_cast<const char*>(halves.data());
+                elem = sizeof(Imath::half);
+            }
+            Imf::FrameBuffer fb;
+            for (int c = 0; c < 3; ++c)
+                fb.insert(names[c], Imf::Slice(type, const_cast<char*>(base + c * elem), 3 * elem,
+                                               3 * elem * size_t(img.width)));
+            Imf::OutputFile out(tmp.c_str(), hdr);
+            out.setFrameBuffer(fb);
+            out.writePixels(img.height);
+        } catch (const Error&) {
+            throw;
+        } catch (const std::exception& e) {
+            std::string what = e.what();
+            std::replace(what.begin(), what.end(), '\n', ' ');
+            throw Error(path + ": cannot write EXR: " + what, ExitCode::Output);
+        }
+    });
+}
+
+}  // namespace clrt

@@ -1,0 +1,232 @@
+// clrt command line: `clrt devices`, `clrt render SCENE [options]`. Parses arguments, runs the
+// pipeline (load -> flatten/BVH -> kernel build -> render -> write), prints progress and per-stage
+// times, and turns every clrt::Error into one line on stderr and its exit code.
+#include <CL/opencl.hpp>
+
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+#include <string>
+#include <unistd.h>
+#include <vector>
+
+#include "cl/devices.h"
+#include "cl/program.h"
+#include "image/image.h"
+#include "render/device_scene.h"
+#include "render/renderer.h"
+#include "scene/scene_loader.h"
+#include "util/error.h"
+
+using namespace clrt;
+
+namespace {
+
+const char* kMainHelp =
+    "clrt — an OpenCL ray tracer for CENG795 scenes\n"
+    "\n"
+    "usage: clrt <command> [options]\n"
+    "\n"
+    "commands:\n"
+    "  devices                 list every OpenCL platform/device with its index\n"
+    "  render SCENE [options]  render every camera of SCENE (XML or JSON); see `clrt render --help`\n"
+    "\n"
+    "options:\n"
+    "  -h, --help              this text\n"
+    "\n"
+    "exit codes: 0 ok, 1 usage, 2 bad input, 3 device failure, 4 output failure\n";
+
+const char* kRenderHelp =
+    "usage: clrt render SCENE [options]\n"
+    "\n"
+    "Renders every camera of SCENE (or one, with --camera) and writes each image under its ImageName\n"
+    "into OUTDIR (.png: clamped and rounded; .exr: float radiance).\n"
+    "\n"
+    "options:\n"
+    "  -o, --output DIR      output directory (default: the current directory); must exist\n"
+    "  --device SPEC         OpenCL device: an index from `clrt devices`, cpu, gpu, or a name\n"
+    "                        substring (default: the first GPU, else the CPU device)\n"
+    "  --spp N               samples per pixel, overriding each camera's NumSamples\n"
+    "  --seed N              random seed (default 0); the same seed gives the same image\n"
+    "  --camera ID           render only the camera with this id\n"
+    "  -v, --verbose         print the kernel build flags and other details\n"
+    "  -h, --help            this text\n";
+
+struct Args {
+    std::vector<std::string> positional;
+    std::string outDir = ".", device, cameraId;
+    int spp = 0;
+    uint32_t seed = 0;
+    bool verbose = false, help = false;
+};
+
+int parseInt(const std::string& opt, const std::string& v, long lo, long hi) {
+    char* end = nullptr;
+    errno = 0;
+    long x = std::strtol(v.c_str(), &end, 10);
+    if (v.empty() || *end != '\0' || errno != 0 || x < lo || x > hi)
+        throw Error(opt + ": expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got '" + v + "'",
+                    ExitCode::Usage);
+    return int(x);
+}
+
+Args parseRenderArgs(int argc, char** argv, int start) {
+    Args a;
+    for (int i = start; i < argc; ++i) {
+        std::string s = argv[i];
+        auto value = [&]() -> std::string {
+            if (i + 1 >= argc) throw Error(s + ": missing value", ExitCode::Usage);
+            return argv[++i];
+        };
+        if (s == "-h" || s == "--help") a.help = true;
+        else if (s == "-o" || s == "--output") a.outDir = value();
+        else if (s == "--device") a.device = value();
+        else if (s == "--spp") a.spp = parseInt(s, value(), 1, 1 << 20);
+        else if (s == "--seed") a.seed = uint32_t(parseInt(s, value(), 0, 2147483647));
+        else if (s == "--camera") a.cameraId = value();
+        else if (s == "-v" || s == "--verbose") a.verbose = true;
+        else if (!s.empty() && s[0] == '-') throw Error("unknown option '" + s + "' (see clrt render --help)", ExitCode::Usage);
+        else a.positional.push_back(s);
+    }
+    return a;
+}
+
+double since(std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+class Progress {
+public:
+    explicit Progress(std::string label) : label_(std::move(label)), tty_(isatty(STDERR_FILENO)) {}
+    void update(size_t done, size_t total) {
+        int pct = total ? int(100 * done / total) : 100;
+        if (tty_) {
+            int bar = pct * 30 / 100;
+            std::fprintf(stderr, "\r%s [%.*s%*s] %3d%%", label_.c_str(), bar, "##############################", 30 - bar, "", pct);
+            if (done == total) std::fprintf(stderr, "\n");
+        } else if (done == total) {
+            std::fprintf(stderr, "%s done\n", label_.c_str());
+        }
+        std::fflush(stderr);
+    }
+
+private:
+    std::string label_;
+    bool tty_;
+};
+
+int cmdDevices() {
+    printDevices(std::cout);
+    return 0;
+}
+
+int cmdRender(const Args& a) {
+    if (a.positional.size() != 1) throw Error("render: expected exactly one scene file (see clrt render --help)", ExitCode::Usage);
+    setVerbose(a.verbose);
+    namespace fs = std::filesystem;
+    if (!fs::is_directory(a.outDir)) throw Error(a.outDir + ": output directory does not exist", ExitCode::Output);
+
+    auto t = std::chrono::steady_clock::now();
+    Scene scene = loadScene(a.positional[0]);
+    double tParse = since(t);
+
+    std::vector<const Camera*> cams;
+    for (const Camera& c : scene.cameras)
+        if (a.cameraId.empty() || std::to_string(c.id) == a.cameraId) cams.push_back(&c);
+    if (cams.empty())
+        throw Error(a.positional[0] + (a.cameraId.empty() ? ": the scene has no camera" : ": no camera with id " + a.cameraId));
+
+    std::vector<DeviceInfo> devs = selectDevices(a.device);
+    const DeviceInfo& di = devs.front();
+    if (devs.size() > 1) warn("several devices selected; rendering on the first: " + di.name);
+
+    t = std::chrono::steady_clock::now();
+    DeviceScene ds = flattenScene(scene);
+    double tFlatten = since(t);
+
+    t = std::chrono::steady_clock::now();
+    DeviceContext dc(di);
+    Renderer renderer(dc, ds);
+    double tBuild = since(t);
+    if (verbose()) {
+        std::string flags;
+        for (const std::string& d : ds.features.defines()) flags += " " + d;
+        info("device: " + di.name + " (" + di.platformName + ")");
+        info("kernel flags:" + flags + (renderer.buildInfo().cacheHit ? " (cached binary)" : ""));
+        info("primitives: " + std::to_string(ds.params.numTriangles) + " triangles, " + std::to_string(ds.params.numSpheres) +
+             " spheres; BVH SAH cost " + std::to_string(ds.bvh.sahCost) + ", depth " + std::to_string(ds.bvh.depth));
+    }
+
+    RenderCounters counters;
+    double tOutput = 0;
+    for (const Camera* cam : cams) {
+        RenderSettings rs;
+        rs.spp = a.spp > 0 ? a.spp : cam->numSamples;
+        rs.seed = a.seed;
+        Progress prog("camera " + std::to_string(cam->id) + " (" + cam->imageName + ", " + std::to_string(cam->width) + "x" +
+                      std::to_string(cam->height) + ", " + std::to_string(rs.spp) + " spp)");
+        ImageRGB img = renderer.render(*cam, rs, counters, [&](size_t d, size_t n) { prog.update(d, n); });
+        auto to = std::chrono::steady_clock::now();
+        fs::path out = fs::path(a.outDir) / fs::path(cam->imageName).filename();
+        std::string ext = out.extension().string();
+        for (char& c : ext) c = char(std::tolower(c));
+        if (ext == ".exr") {
+            ExrWriteOptions eo;
+            eo.attributes["renderer"] = "clrt";
+            eo.attributes["spp"] = std::to_string(rs.spp);
+            eo.attributes["device"] = di.name;
+            writeExr(out.string(), img, eo);
+        } else {
+            if (ext != ".png") warnOnce(cam->imageName + ": unknown image extension; writing PNG data");
+            writePngClamped(out.string(), img);
+        }
+        tOutput += since(to);
+        std::fprintf(stderr, "wrote %s\n", out.string().c_str());
+    }
+    double rays = double(counters.cameraRays + counters.secondaryRays + counters.shadowRays);
+    double secs = std::max(counters.seconds, 1e-9);
+    std::fprintf(stderr, "times: parse %.3fs, bvh %.3fs (flatten %.3fs), kernel build %.3fs%s, render %.3fs, output %.3fs; %.2f Mrays/s\n",
+                 tParse, ds.bvhSeconds, tFlatten - ds.bvhSeconds, tBuild, renderer.buildInfo().cacheHit ? " (cached)" : "",
+                 counters.seconds, tOutput, rays / secs * 1e-6);
+    std::printf("stats: parse=%.3fs bvh=%.3fs build=%.3fs render=%.3fs output=%.3fs camera_mrays=%.2f shadow_mrays=%.2f "
+                "secondary_mrays=%.2f spp=%d\n",
+                tParse, ds.bvhSeconds, tBuild, counters.seconds, tOutput, counters.cameraRays / secs * 1e-6,
+                counters.shadowRays / secs * 1e-6, counters.secondaryRays / secs * 1e-6, a.spp > 0 ? a.spp : cams[0]->numSamples);
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    try {
+        if (argc < 2 || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "--help")) {
+            std::fputs(kMainHelp, argc < 2 ? stderr : stdout);
+            return argc < 2 ? 1 : 0;
+        }
+        std::string cmd = argv[1];
+        if (cmd == "devices") return cmdDevices();
+        if (cmd == "render") {
+            Args a = parseRenderArgs(argc, argv, 2);
+            if (a.help) {
+                std::fputs(kRenderHelp, stdout);
+                return 0;
+            }
+            return cmdRender(a);
+        }
+        throw Error("unknown command '" + cmd + "' (see clrt --help)", ExitCode::Usage);
+    } catch (const Error& e) {
+        std::fprintf(stderr, "clrt: error: %s\n", e.what());
+        return int(e.code());
+    } catch (const cl::Error& e) {
+        std::fprintf(stderr, "clrt: error: OpenCL %s (%d)\n", e.what(), e.err());
+        return int(ExitCode::Device);
+    } catch (const std::bad_alloc&) {
+        std::fprintf(stderr, "clrt: error: out of host memory\n");
+        return int(ExitCode::Device);
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "clrt: error: %s\n", e.what());
+        return 2;
+    }
+}

@@ -1,0 +1,46 @@
+// Flattening: Scene (the model) + BVH -> DeviceScene, the flat arrays of shared structs the kernels
+// read, plus the feature set of this scene (which -D flags its program needs). Images referenced by
+// textures and environment lights are loaded here into one float4 texel atlas.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "bvh/bvh.h"
+#include "scene/scene.h"
+#include "shared/device_types.h"
+
+namespace clrt {
+
+struct FeatureSet {
+    bool pointLight = false, spotLight = false, directionalLight = false, areaLight = false, envLight = false;
+    bool mirror = false, dielectric = false, conductor = false;
+    bool textures = false;
+    bool spheres = false;
+    std::vector<std::string> defines() const;  // e.g. {"-DCLRT_HAS_POINT_LIGHT=1", ...}
+};
+
+struct DeviceScene {
+    std::vector<dev::Triangle> triangles;          // in BVH leaf order is NOT implied: see bvh.primRefs
+    std::vector<dev::TriangleShading> triangleShading;
+    std::vector<dev::Sphere> spheres;
+    std::vector<dev::Material> materials;
+    std::vector<dev::TextureSet> textureSets;
+    std::vector<dev::TextureMap> textures;
+    std::vector<dev::ImageInfo> images;
+    std::vector<dev::float4> texels;
+    std::vector<dev::Light> lights;
+    Bvh bvh;
+    dev::SceneParams params{};
+    FeatureSet features;
+    size_t skippedTriangles = 0;
+    double bvhSeconds = 0, flattenSeconds = 0;
+};
+
+DeviceScene flattenScene(const Scene& scene);
+
+// Camera frame and image plane for the kernels; strata chosen for numSamples.
+dev::CameraParams makeCameraParams(const Camera& cam);
+
+inline dev::float4 toFloat4(const Vec3& v, float w = 0) { return {v.x, v.y, v.z, w}; }
+
+}  // namespace clrt

@@ -1,0 +1,44 @@
+// The wavefront renderer on one OpenCL device: uploads a DeviceScene, builds the program specialised
+// to its feature set, and renders a camera as a sequence of (sample, pixel range) batches:
+//   generate -> [intersect -> shade -> (sample lights -> shadow rays -> gather) -> accumulate
+//   -> compact children] until no path is left or MaxRecursionDepth is reached.
+// Every figure of the result is a pure function of (scene, camera, seed): deterministic.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "cl/program.h"
+#include "image/image.h"
+#include "render/device_scene.h"
+
+namespace clrt {
+
+struct RenderCounters {
+    uint64_t cameraRays = 0, secondaryRays = 0, shadowRays = 0;
+    double seconds = 0;  // wall time of the render loop (device work included)
+};
+
+struct RenderSettings {
+    int spp = 1;
+    uint32_t seed = 0;
+    size_t maxBatchPixels = 1u << 18;  // pixels per batch (one sample each)
+    int splitDepthOverride = -1;       // >= 0: force the dielectric split depth
+};
+
+class Renderer {
+public:
+    Renderer(DeviceContext& dc, const DeviceScene& scene);
+    ~Renderer();
+    const BuildInfo& buildInfo() const;
+    // Renders one camera; `progress(done, total)` is called after each batch.
+    ImageRGB render(const Camera& cam, const RenderSettings& settings, RenderCounters& counters,
+                    const std::function<void(size_t, size_t)>& progress = {});
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace clrt

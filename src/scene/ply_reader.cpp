@@ -1,0 +1,362 @@
+// PLY reader (see ply_reader.h). The whole file is read into memory; the header is parsed into a list
+// of elements and properties, then every element is walked in order with one value reader per format
+// (ASCII tokens or little/big-endian binary). Only the vertex and face elements are kept; everything
+// else (edges, materials, extra properties, list properties on vertices) is read and dropped.
+// Counts are checked against the bytes left before anything is allocated, so a header that lies
+// about its counts gives an error instead of a huge allocation or a read past the end.
+#include "scene/ply_reader.h"
+
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <limits>
+#include <sstream>
+
+#include "util/error.h"
+
+namespace clrt {
+namespace {
+
+enum class Format { Ascii, BinaryLE, BinaryBE };
+enum class Type { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float32, Float64 };
+
+struct Property {
+    std::string name;
+    bool isList = false;
+    Type countType = Type::UInt8;  // lists only
+    Type valueType = Type::Float32;
+};
+
+struct Element {
+    std::string name;
+    uint64_t count = 0;
+    std::vector<Property> props;
+};
+
+bool parseType(const std::string& s, Type& t) {
+    static const struct { const char* name; Type type; } kTypes[] = {
+        {"char", Type::Int8},     {"int8", Type::Int8},       {"uchar", Type::UInt8},    {"uint8", Type::UInt8},
+        {"short", Type::Int16},   {"int16", Type::Int16},     {"ushort", Type::UInt16},  {"uint16", Type::UInt16},
+        {"int", Type::Int32},     {"int32", Type::Int32},     {"uint", Type::UInt32},    {"uint32", Type::UInt32},
+        {"float", Type::Float32}, {"float32", Type::Float32}, {"double", Type::Float64}, {"float64", Type::Float64},
+    };
+    for (const auto& e : kTypes)
+        if (s == e.name) { t = e.type; return true; }
+    return false;
+}
+
+size_t typeSize(Type t) {
+    switch (t) {
+        case Type::Int8: case Type::UInt8: return 1;
+        case Type::Int16: case Type::UInt16: return 2;
+        case Type::Int32: case Type::UInt32: case Type::Float32: return 4;
+        case Type::Float64: return 8;
+    }
+    return 1;
+}
+
+bool isIntegral(Type t) { return t != Type::Float32 && t != Type::Float64; }
+
+bool hostIsLittleEndian() {
+    uint16_t one = 1;
+    unsigned char b;
+    std::memcpy(&b, &one, 1);
+    return b == 1;
+}
+
+// Sequential reader over the data section. Every value comes back as a double: all PLY scalar types
+// (at most 32-bit integers, float, double) are exactly representable.
+class DataReader {
+public:
+    DataReader(const std::string& path, const std::string& data, size_t pos, Format fmt)
+        : path_(path), data_(data), pos_(pos), fmt_(fmt),
+          swap_((fmt == Format::BinaryLE) != hostIsLittleEndian()) {}
+
+    size_t remaining() const { return data_.size() - pos_; }
+    Format format() const { return fmt_; }
+
+    double read(Type t, const char* what) {
+        return fmt_ == Format::Ascii ? readAscii(t, what) : readBinary(t, what);
+    }
+
+    // Where we are, for messages: "line N" in ASCII, "byte N" in binary.
+    std::string where() const {
+        if (fmt_ != Format::Ascii) return "byte " + std::to_string(pos_);
+        return "line " + std::to_string(line_);
+    }
+
+    void setStartLine(size_t line) { line_ = line; }
+
+private:
+    [[noreturn]] void truncated(const char* what) const {
+        throw Error(path_ + ": file ends early while reading " + what +
+                    " (the header lies about counts, or the file is truncated)");
+    }
+
+    double readBinary(Type t, const char* what) {
+        size_t n = typeSize(t);
+        if (remaining() < n) truncated(what);
+        unsigned char b[8];
+        std::memcpy(b, data_.data() + pos_, n);
+        pos_ += n;
+        if (swap_)
+            for (size_t i = 0; i < n / 2; ++i) std::swap(b[i], b[n - 1 - i]);
+        switch (t) {
+            case Type::Int8: { int8_t v; std::memcpy(&v, b, 1); return v; }
+            case Type::UInt8: return b[0];
+            case Type::Int16: { int16_t v; std::memcpy(&v, b, 2); return v; }
+            case Type::UInt16: { uint16_t v; std::memcpy(&v, b, 2); return v; }
+            case Type::Int32: { int32_t v; std::memcpy(&v, b, 4); return v; }
+            case Type::UInt32: { uint32_t v; std::memcpy(&v, b, 4); return v; }
+            case Type::Float32: { float v; std::memcpy(&v, b, 4); return v; }
+            case Type::Float64: { double v; std::memcpy(&v, b, 8); return v; }
+        }
+        return 0;
+    }
+
+    double readAscii(Type t, const char* what) {
+        // Skip whitespace (CR and LF included), counting lines.
+        while (pos_ < data_.size()) {
+            char c = data_[pos_];
+            if (c == '\n') ++line_;
+            else if (c != ' ' && c != '\t' && c != '\r' && c != '\f' && c != '\v') break;
+            ++pos_;
+        }
+        size_t start = pos_;
+        while (pos_ < data_.size() && !std::isspace(static_cast<unsigned char>(data_[pos_]))) ++pos_;
+        if (start == pos_) truncated(what);
+        std::string tok = data_.substr(start, pos_ - start);
+        char* end = nullptr;
+        errno = 0;
+        double v = std::strtod(tok.c_str(), &end);
+        if (end == tok.c_str() || *end != '\0')
+            throw Error(path_ + ": line " + std::to_string(line_) + ": '" + tok + "' is not a number (" + what + ")");
+        if (isIntegral(t) && (!std::isfinite(v) || v != std::floor(v)))
+            throw Error(path_ + ": line " + std::to_string(line_) + ": '" + tok + "' is not an integer (" + what + ")");
+        if (t == Type::Float32) v = static_cast<float>(v);
+        return v;
+    }
+
+    const std::string& path_;
+    const std::string& data_;
+    size_t pos_;
+    Format fmt_;
+    bool swap_;
+    size_t line_ = 1;
+};
+
+struct Header {
+    Format format = Format::Ascii;
+    std::vector<Element> elements;
+    size_t dataStart = 0;  // byte offset of the first data byte
+    size_t dataLine = 1;   // line number of the first data line (ASCII messages)
+};
+
+Header parseHeader(const std::string& path, const std::string& bytes) {
+    Header h;
+    if (bytes.compare(0, 3, "ply") != 0) throw Error(path + ": not a PLY file (it does not start with 'ply')");
+    bool sawFormat = false, sawEnd = false;
+    size_t pos = 0, lineNo = 0;
+    while (pos < bytes.size()) {
+        size_t nl = bytes.find('\n', pos);
+        size_t end = nl == std::string::npos ? bytes.size() : nl;
+        std::string line = bytes.substr(pos, end - pos);
+        pos = nl == std::string::npos ? bytes.size() : nl + 1;
+        ++lineNo;
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        auto bad = [&](const std::string& why) {
+            return Error(path + ": bad PLY header, line " + std::to_string(lineNo) + ": " + why);
+        };
+        if (lineNo == 1) {
+            // Tolerate trailing blanks after the magic word, nothing else.
+            if (line.compare(0, 3, "ply") != 0 || line.find_first_not_of(" \t", 3) != std::string::npos)
+                throw Error(path + ": not a PLY file (it does not start with 'ply')");
+            continue;
+        }
+        std::istringstream ls(line);
+        std::string kw;
+        if (!(ls >> kw)) continue;  // blank line
+        if (kw == "comment" || kw == "obj_info") continue;
+        if (kw == "end_header") { sawEnd = true; break; }
+        if (kw == "format") {
+            std::string f, version;
+            if (!(ls >> f >> version)) throw bad("expected 'format <type> <version>'");
+            if (f == "ascii") h.format = Format::Ascii;
+            else if (f == "binary_little_endian") h.format = Format::BinaryLE;
+            else if (f == "binary_big_endian") h.format = Format::BinaryBE;
+            else throw Error(path + ": unsupported PLY format '" + f + "'");
+            sawFormat = true;
+        } else if (kw == "element") {
+            Element e;
+            std::string count;
+            if (!(ls >> e.name >> count)) throw bad("expected 'element <name> <count>'");
+            if (count.empty() || count.find_first_not_of("0123456789") != std::string::npos)
+                throw bad("element count '" + count + "' is not a non-negative integer");
+            errno = 0;
+            unsigned long long c = std::strtoull(count.c_str(), nullptr, 10);
+            if (errno == ERANGE) throw bad("element count '" + count + "' is too large");
+            e.count = c;
+            h.elements.push_back(e);
+        } else if (kw == "property") {
+            if (h.elements.empty()) throw bad("property before any element");
+            Property p;
+            std::string t;
+            if (!(ls >> t)) throw bad("expected a property type");
+            if (t == "list") {
+                std::string ct, vt;
+                p.isList = true;
+                if (!(ls >> ct >> vt >> p.name)) throw bad("expected 'property list <count type> <type> <name>'");
+                if (!parseType(ct, p.countType)) throw bad("unknown type '" + ct + "'");
+                if (!isIntegral(p.countType)) throw bad("list count type '" + ct + "' is not an integer type");
+                if (!parseType(vt, p.valueType)) throw bad("unknown type '" + vt + "'");
+            } else {
+                if (!parseType(t, p.valueType)) throw bad("unknown type '" + t + "'");
+                if (!(ls >> p.name)) throw bad("expected a property name");
+            }
+            h.elements.back().props.push_back(p);
+        } else {
+            throw bad("unknown keyword '" + kw + "'");
+        }
+    }
+    if (!sawEnd) throw Error(path + ": bad PLY header: no 'end_header' line");
+    if (!sawFormat) throw Error(path + ": bad PLY header: no 'format' line");
+    h.dataStart = pos;
+    h.dataLine = lineNo + 1;
+    return h;
+}
+
+int findProp(const Element& e, const char* name) {
+    for (size_t i = 0; i < e.props.size(); ++i)
+        if (!e.props[i].isList && e.props[i].name == name) return int(i);
+    return -1;
+}
+
+// Fewest bytes (binary) or tokens (ASCII: at least 1 byte each) one element of `e` can take.
+size_t minElementSize(const Element& e, Format fmt) {
+    size_t n = 0;
+    for (const Property& p : e.props)
+        n += fmt == Format::Ascii ? 1 : typeSize(p.isList ? p.countType : p.valueType);
+    return n;
+}
+
+}  // namespace
+
+MeshData readPly(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Error(path + ": cannot open PLY file");
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (in.bad()) throw Error(path + ": cannot read PLY file");
+
+    Header h = parseHeader(path, bytes);
+    DataReader rd(path, bytes, h.dataStart, h.format);
+    rd.setStartLine(h.dataLine);
+
+    MeshData mesh;
+    bool sawVertex = false, sawFace = false;
+    for (const Element& e : h.elements) {
+        if (e.props.empty()) continue;  // nothing to read, whatever the count says
+        size_t minSize = minElementSize(e, h.format);
+        if (e.count > rd.remaining() / minSize)
+            throw Error(path + ": header says " + std::to_string(e.count) + " " + e.name +
+                        " elements but the file is too short to hold them (the header lies about counts)");
+        const bool isVertex = e.name == "vertex", isFace = e.name == "face";
+        if ((isVertex && sawVertex) || (isFace && sawFace))
+            throw Error(path + ": more than one '" + e.name + "' element");
+
+        if (isVertex) {
+            sawVertex = true;
+            if (e.count > uint64_t(std::numeric_limits<int>::max()))
+                throw Error(path + ": too many vertices (" + std::to_string(e.count) + ")");
+            int ix = findProp(e, "x"), iy = findProp(e, "y"), iz = findProp(e, "z");
+            if (ix < 0 || iy < 0 || iz < 0) throw Error(path + ": vertex element lacks an x, y or z property");
+            int inx = findProp(e, "nx"), iny = findProp(e, "ny"), inz = findProp(e, "nz");
+            bool hasN = inx >= 0 && iny >= 0 && inz >= 0;
+            int iu = -1, iv = -1;
+            static const char* kUv[][2] = {{"u", "v"}, {"s", "t"}, {"texture_u", "texture_v"}, {"texture_s", "texture_t"}};
+            for (const auto& uv : kUv) {
+                iu = findProp(e, uv[0]);
+                iv = findProp(e, uv[1]);
+                if (iu >= 0 && iv >= 0) break;
+            }
+            bool hasUv = iu >= 0 && iv >= 0;
+            mesh.positions.resize(e.count);
+            if (hasN) mesh.normals.resize(e.count);
+            if (hasUv) mesh.uvs.resize(e.count);
+            std::vector<double> vals(e.props.size());
+            for (uint64_t i = 0; i < e.count; ++i) {
+                for (size_t p = 0; p < e.props.size(); ++p) {
+                    const Property& pr = e.props[p];
+                    if (pr.isList) {
+                        double n = rd.read(pr.countType, "a vertex list count");
+                        if (n < 0) throw Error(path + ": " + rd.where() + ": negative list count");
+                        for (double k = 0; k < n; ++k) rd.read(pr.valueType, "a vertex list");
+                    } else {
+                        vals[p] = rd.read(pr.valueType, "vertex data");
+                    }
+                }
+                mesh.positions[i] = Vec3(float(vals[ix]), float(vals[iy]), float(vals[iz]));
+                if (hasN) mesh.normals[i] = Vec3(float(vals[inx]), float(vals[iny]), float(vals[inz]));
+                if (hasUv) mesh.uvs[i] = Vec2{float(vals[iu]), float(vals[iv])};
+            }
+        } else if (isFace) {
+            sawFace = true;
+            int list = -1;
+            for (size_t p = 0; p < e.props.size(); ++p)
+                if (e.props[p].isList && (e.props[p].name == "vertex_indices" || e.props[p].name == "vertex_index"))
+                    list = int(p);
+            if (list < 0) throw Error(path + ": face element has no 'vertex_indices' list property");
+            if (!isIntegral(e.props[list].valueType))
+                throw Error(path + ": face vertex indices have a floating-point type");
+            mesh.indices.reserve(size_t(e.count) * 3);  // bounded by the size check above
+            std::vector<int> poly;
+            for (uint64_t f = 0; f < e.count; ++f) {
+                for (size_t p = 0; p < e.props.size(); ++p) {
+                    const Property& pr = e.props[p];
+                    if (!pr.isList) { rd.read(pr.valueType, "face data"); continue; }
+                    double n = rd.read(pr.countType, "a face list count");
+                    if (n < 0) throw Error(path + ": " + rd.where() + ": negative list count in face " + std::to_string(f));
+                    if (int(p) != list) {
+                        for (double k = 0; k < n; ++k) rd.read(pr.valueType, "a face list");
+                        continue;
+                    }
+                    poly.clear();
+                    for (double k = 0; k < n; ++k) {
+                        double idx = rd.read(pr.valueType, "face indices");
+                        if (idx < 0 || idx > double(std::numeric_limits<int>::max()))
+                            throw Error(path + ": face " + std::to_string(f) + " has vertex index " +
+                                        std::to_string(int64_t(idx)) + ", out of range");
+                        poly.push_back(int(idx));
+                    }
+                    for (size_t k = 1; k + 1 < poly.size(); ++k) {
+                        mesh.indices.push_back(poly[0]);
+                        mesh.indices.push_back(poly[k]);
+                        mesh.indices.push_back(poly[k + 1]);
+                    }
+                }
+            }
+        } else {
+            for (uint64_t i = 0; i < e.count; ++i)
+                for (const Property& pr : e.props) {
+                    if (!pr.isList) { rd.read(pr.valueType, e.name.c_str()); continue; }
+                    double n = rd.read(pr.countType, e.name.c_str());
+                    if (n < 0) throw Error(path + ": " + rd.where() + ": negative list count");
+                    for (double k = 0; k < n; ++k) rd.read(pr.valueType, e.name.c_str());
+                }
+        }
+    }
+    if (!sawVertex) throw Error(path + ": PLY file has no vertex element");
+
+    const size_t nv = mesh.positions.size();
+    for (size_t i = 0; i < mesh.indices.size(); ++i)
+        if (size_t(mesh.indices[i]) >= nv)
+            throw Error(path + ": triangle " + std::to_string(i / 3) + " uses vertex index " +
+                        std::to_string(mesh.indices[i]) + " but there are only " + std::to_string(nv) + " vertices");
+    return mesh;
+}
+
+}  // namespace clrt

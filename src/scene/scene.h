@@ -1,0 +1,134 @@
+// The scene model: what a CENG795 scene file says, resolved (ids -> indices, transformation strings
+// -> matrices, PLY files -> vertex arrays) but not yet flattened for the device. Produced by the scene
+// loader (scene_loader.h) from XML or JSON; consumed by render/flatten. Nothing here knows OpenCL.
+//
+// Conventions: all indices are 0-based indices into the vectors of Scene; colours are linear
+// (degamma already applied by the loader); angles are in degrees as in the file unless named *Rad.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "util/math.h"
+
+namespace clrt {
+
+enum class TonemapOperator { Photographic, ACES, Filmic };
+
+struct Tonemap {
+    TonemapOperator op = TonemapOperator::Photographic;
+    float key = 0.18f;          // TMOOptions[0]
+    float burnPercent = 1.0f;   // TMOOptions[1]
+    float saturation = 1.0f;
+    float gamma = 2.2f;
+    std::string extension;      // e.g. "_aces"; empty when the block names none
+};
+
+struct Camera {
+    int id = 0;
+    // Orthonormal camera frame in world space, already corrected for handedness:
+    // u = right, v = up, w = -gaze (the camera looks along -w).
+    Vec3 position, u, v, w;
+    // Image plane at distance nearDistance along -w: left right bottom top.
+    float left = -1, right = 1, bottom = -1, top = 1;
+    float nearDistance = 1;
+    float focusDistance = 0;  // > 0 with apertureSize > 0: thin lens
+    float apertureSize = 0;
+    int width = 0, height = 0;
+    int numSamples = 1;
+    std::string imageName;
+    std::vector<Tonemap> tonemaps;
+};
+
+enum class MaterialType { BlinnPhong, Mirror, Dielectric, Conductor };
+
+struct Material {
+    int id = 0;
+    MaterialType type = MaterialType::BlinnPhong;
+    Vec3 ambient, diffuse, specular, mirror;
+    float phongExponent = 1;
+    float refractionIndex = 1;
+    float absorptionIndex = 0;  // conductor k
+    Vec3 absorptionCoefficient; // dielectric Beer's law, per unit distance
+    float roughness = 0;
+};
+
+enum class TextureType { Image, Perlin, Checkerboard };
+enum class DecalMode { ReplaceKd, BlendKd, ReplaceKs, ReplaceBackground, ReplaceNormal, BumpNormal, ReplaceAll };
+enum class Interpolation { Nearest, Bilinear, Trilinear };
+
+struct Texture {
+    int id = 0;
+    TextureType type = TextureType::Image;
+    int imageIndex = -1;            // into Scene::imagePaths (Image textures)
+    DecalMode decalMode = DecalMode::ReplaceKd;
+    Interpolation interpolation = Interpolation::Bilinear;
+    float normalizer = 255;         // Image: texel / normalizer (loader sets 1 for EXR when absent)
+    bool normalizerGiven = false;
+    float bumpFactor = 1;
+    bool degamma = false;           // degamma="true" on the TextureMap: texels are gamma-encoded
+    // Procedural (Perlin, Checkerboard)
+    std::string noiseConversion = "linear";  // linear | absval
+    float noiseScale = 1;
+    Vec3 blackColor{0, 0, 0}, whiteColor{1, 1, 1};
+    float scale = 1, offset = 0;
+};
+
+enum class LightType { Point, Area, Directional, Spot, Environment };
+enum class EnvMapping { LatLong, Probe };
+enum class EnvSampler { Uniform, Cosine, Importance, Mis };
+
+struct Light {
+    int id = 0;
+    LightType type = LightType::Point;
+    Vec3 position;
+    Vec3 intensity;       // Point, Spot: intensity; Area, Directional: radiance
+    Vec3 direction;       // Directional, Spot; Area: normal
+    float size = 1;       // Area: side length
+    float coverageAngle = 0, falloffAngle = 0;  // Spot, full angles in degrees
+    int imageIndex = -1;  // Environment
+    EnvMapping mapping = EnvMapping::LatLong;
+    EnvSampler sampler = EnvSampler::Mis;
+    bool samplerGiven = false;
+};
+
+// A triangle mesh in its own object space (before its transformation).
+struct MeshData {
+    std::vector<Vec3> positions;
+    std::vector<Vec3> normals;    // per vertex, empty if none given
+    std::vector<Vec2> uvs;        // per vertex, empty if none
+    std::vector<int> indices;     // 3 per triangle, 0-based into positions
+};
+
+// One placed shape. Meshes and instances share MeshData by index; spheres carry their own data.
+enum class ShapeType { Mesh, Sphere };
+
+struct Shape {
+    int id = 0;
+    ShapeType type = ShapeType::Mesh;
+    int meshIndex = -1;           // Mesh: into Scene::meshes (instances share it)
+    Vec3 center;                  // Sphere: object-space centre
+    float radius = 1;             // Sphere
+    int materialIndex = 0;        // into Scene::materials
+    std::vector<int> textureIndices;  // into Scene::textures
+    Mat4 transform;               // object -> world
+    bool smooth = false;          // smooth shading: interpolate vertex normals
+    std::string source;           // for messages, e.g. "Mesh id=3"
+};
+
+struct Scene {
+    std::string path;              // the scene file
+    Vec3 backgroundColor{0, 0, 0};
+    float shadowRayEpsilon = 1e-3f;
+    float intersectionTestEpsilon = 1e-6f;
+    int maxRecursionDepth = 6;
+    Vec3 ambientLight{0, 0, 0};
+    std::vector<Camera> cameras;
+    std::vector<Light> lights;     // all but ambient
+    std::vector<Material> materials;
+    std::vector<std::string> imagePaths;  // absolute or relative to the working dir, resolved by the loader
+    std::vector<Texture> textures;
+    std::vector<MeshData> meshes;
+    std::vector<Shape> shapes;
+};
+
+}  // namespace clrt

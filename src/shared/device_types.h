@@ -1,0 +1,200 @@
+/* device_types.h — THE definition of every struct and enum that crosses the host/device boundary.
+ *
+ * Read by the C++ compiler (inside namespace clrt::dev, with float4/int4 defined below as 16-byte
+ * aligned PODs) and by the OpenCL C compiler (embedded as the first source of every program).
+ * Rules: only float, int, uint, float4, int4 members; every struct a multiple of 16 bytes with
+ * explicit padding; no float3, bool or size_t. The host static_asserts sizes (src/cl/layout_check.cpp)
+ * and a test compares them, and every offset, with what a kernel reports (tests/test_cl.cpp). */
+#ifndef CLRT_DEVICE_TYPES_H
+#define CLRT_DEVICE_TYPES_H
+
+#ifndef __OPENCL_C_VERSION__
+#include <cstdint>
+namespace clrt {
+namespace dev {
+typedef unsigned int uint;
+struct alignas(16) float4 { float x, y, z, w; };
+struct alignas(16) int4 { int x, y, z, w; };
+struct alignas(8) float2 { float x, y; };
+#endif
+
+/* ---- enums (plain ints on both sides) ---------------------------------------------------- */
+enum MaterialKind { MATERIAL_BLINN_PHONG = 0, MATERIAL_MIRROR = 1, MATERIAL_DIELECTRIC = 2, MATERIAL_CONDUCTOR = 3 };
+enum LightKind { LIGHT_POINT = 0, LIGHT_AREA = 1, LIGHT_DIRECTIONAL = 2, LIGHT_SPOT = 3, LIGHT_ENVIRONMENT = 4 };
+enum EnvMappingKind { ENV_LATLONG = 0, ENV_PROBE = 1 };
+enum EnvSamplerKind { ENV_SAMPLE_UNIFORM = 0, ENV_SAMPLE_COSINE = 1, ENV_SAMPLE_IMPORTANCE = 2, ENV_SAMPLE_MIS = 3 };
+enum TextureKind { TEXTURE_IMAGE = 0, TEXTURE_PERLIN = 1, TEXTURE_CHECKERBOARD = 2 };
+enum DecalKind { DECAL_REPLACE_KD = 0, DECAL_BLEND_KD = 1, DECAL_REPLACE_KS = 2, DECAL_REPLACE_BACKGROUND = 3,
+                 DECAL_REPLACE_NORMAL = 4, DECAL_BUMP_NORMAL = 5, DECAL_REPLACE_ALL = 6 };
+enum InterpKind { INTERP_NEAREST = 0, INTERP_BILINEAR = 1 };
+
+/* Primitive references in BVH leaves: index < numTriangles is a triangle, else sphere (index - numTriangles). */
+#define CLRT_MAX_TEXTURES_PER_SHAPE 4
+#define CLRT_BVH_STACK_SIZE 64
+#define CLRT_INVALID (-1)
+
+/* A BVH node (binary, flattened depth-first: the left child of an interior node is the next node).
+ * Leaf: count > 0 and first = first index into primRefs. Interior: count == 0, first = right child. */
+typedef struct BvhNode {
+    float4 boundsMin;  /* xyz; w unused */
+    float4 boundsMax;  /* xyz; w unused */
+    int first;         /* leaf: first primRef; interior: index of the right child */
+    int count;         /* leaf: number of primRefs; interior: 0 */
+    int axis;          /* interior: split axis (0,1,2), for near-first traversal */
+    int pad0;
+} BvhNode;
+
+/* A world-space triangle. Vertex data for shading lives in TriangleShading at the same index. */
+typedef struct Triangle {
+    float4 v0, v1, v2;  /* world-space positions; w unused */
+} Triangle;
+
+typedef struct TriangleShading {
+    float4 n0, n1, n2;  /* world-space vertex normals (smooth) or the face normal thrice (flat) */
+    float4 uv01;        /* u0 v0 u1 v1 */
+    float4 uv2;         /* u2 v2, unused, unused */
+    int material;       /* index into materials */
+    int textureSet;     /* index into textureSets, or CLRT_INVALID */
+    int pad0, pad1;
+} TriangleShading;
+
+/* A sphere: object-space centre and radius, and the object<->world affine maps as 3 rows each. */
+typedef struct Sphere {
+    float4 centerRadius;     /* object space xyz, radius w */
+    float4 worldToObject[3]; /* rows of the inverse transform (3x4 affine) */
+    float4 objectToWorld[3]; /* rows of the transform */
+    int material;
+    int textureSet;
+    int pad0, pad1;
+} Sphere;
+
+typedef struct TextureSet {
+    int texture[CLRT_MAX_TEXTURES_PER_SHAPE]; /* indices into textures, CLRT_INVALID when unused */
+} TextureSet;
+
+typedef struct Material {
+    float4 ambient;     /* rgb */
+    float4 diffuse;
+    float4 specular;
+    float4 mirror;
+    float4 absorption;  /* dielectric: Beer absorption coefficient rgb */
+    float phongExponent;
+    float refractionIndex;
+    float absorptionIndex; /* conductor k */
+    float roughness;
+    int kind;           /* MaterialKind */
+    int pad0, pad1, pad2;
+} Material;
+
+typedef struct TextureMap {
+    float4 blackColor;
+    float4 whiteColor;
+    int kind;           /* TextureKind */
+    int decal;          /* DecalKind */
+    int interpolation;  /* InterpKind */
+    int image;          /* index into images, or CLRT_INVALID */
+    float normalizer;
+    float bumpFactor;
+    float scale;
+    float offset;
+    float noiseScale;
+    int noiseAbs;       /* Perlin: 1 = absval conversion, 0 = linear */
+    int pad0, pad1;
+} TextureMap;
+
+/* An image in the texel atlas (float4 texels, row-major, row 0 at the top). */
+typedef struct ImageInfo {
+    int offset;         /* first texel in the atlas */
+    int width;
+    int height;
+    int pad0;
+} ImageInfo;
+
+typedef struct Light {
+    float4 position;    /* point/spot/area centre */
+    float4 direction;   /* directional: direction the light travels; spot: axis; area: normal */
+    float4 radiance;    /* point/spot: intensity; area/directional/env: radiance scale */
+    float4 edgeU;       /* area: edge vector (length = size) */
+    float4 edgeV;       /* area: second edge vector */
+    float cosCoverageHalf; /* spot */
+    float cosFalloffHalf;  /* spot */
+    float area;            /* area light: size^2 */
+    int kind;              /* LightKind */
+    int image;             /* env: index into images */
+    int mapping;           /* env: EnvMappingKind */
+    int sampler;           /* env: EnvSamplerKind */
+    int distribution;      /* env: offset into the env distribution buffer, or CLRT_INVALID */
+} Light;
+
+/* Camera: world-space frame and image plane, precomputed by the host. */
+typedef struct CameraParams {
+    float4 position;
+    float4 u, v, w;        /* right, up, backwards */
+    float4 nearPlane;      /* left right bottom top */
+    float nearDistance;
+    float focusDistance;
+    float apertureSize;
+    int width;
+    int height;
+    int spp;
+    int strataX;           /* stratified jitter grid: strataX * strataY = spp when spp is a product */
+    int strataY;
+} CameraParams;
+
+/* Per-scene constants passed to every kernel. */
+typedef struct SceneParams {
+    float4 background;     /* rgb */
+    float4 ambient;        /* rgb ambient light */
+    int numTriangles;
+    int numSpheres;
+    int numLights;
+    int maxDepth;
+    int backgroundTexture; /* texture index with DECAL_REPLACE_BACKGROUND, or CLRT_INVALID */
+    int envLight;          /* index of the environment light, or CLRT_INVALID */
+    uint seed;
+    int splitDepth;        /* dielectrics split into reflection + refraction below this depth */
+} SceneParams;
+
+/* Ray and hit record of the wavefront. */
+typedef struct Ray {
+    float4 origin;         /* xyz; w = tMin (unused: origins are offset robustly) */
+    float4 direction;      /* xyz; w = tMax */
+} Ray;
+
+typedef struct Hit {
+    float t;               /* < 0: miss */
+    int prim;              /* primitive reference (see above) */
+    float u, v;            /* triangle barycentrics */
+} Hit;
+
+/* One path of the wavefront. */
+typedef struct PathState {
+    float4 throughput;     /* rgb; w unused */
+    int pixel;             /* linear pixel index in the image */
+    int sample;            /* sample index in the pixel */
+    int depth;             /* number of bounces so far */
+    uint pathId;           /* position in the split tree: 1 = camera ray, children 2i, 2i+1 */
+} PathState;
+
+/* A shadow ray with the radiance it carries if unoccluded. */
+typedef struct ShadowRay {
+    float4 origin;         /* xyz; w = tMax */
+    float4 direction;      /* xyz */
+    float4 contribution;   /* rgb, already multiplied by the path throughput */
+} ShadowRay;
+
+/* What the shading stage leaves for the light-sampling stage of one path. */
+typedef struct ShadingPoint {
+    float4 position;       /* world; w = 1 when the lights are to be sampled, 0 otherwise */
+    float4 normal;         /* shading normal, facing the incoming ray's side */
+    float4 geomNormal;     /* geometric normal, same side (used for ray offsets) */
+    float4 wo;             /* unit direction towards the previous vertex */
+    float4 kd;             /* diffuse reflectance after textures */
+    float4 ks;             /* specular reflectance after textures; w = Phong exponent */
+} ShadingPoint;
+
+#ifndef __OPENCL_C_VERSION__
+}  /* namespace dev */
+}  /* namespace clrt */
+#endif
+#endif /* CLRT_DEVICE_TYPES_H */

@@ -1,0 +1,338 @@
+// test_cl.cpp — tests of the OpenCL layer (src/cl/): error names and checks, device listing and
+// selection, program building (build-log errors, the binary cache, CLRT_KERNEL_DIR) and the host/device
+// struct layout comparison run on a real OpenCL device (PoCL's CPU device on the development machine).
+#include <catch.hpp>
+
+#include <CL/opencl.hpp>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <set>
+#include <sstream>
+
+#include "cl/check.h"
+#include "cl/devices.h"
+#include "cl/layout_check.h"
+#include "cl/program.h"
+#include "util/error.h"
+
+namespace fs = std::filesystem;
+using namespace clrt;
+
+namespace {
+
+// Sets an environment variable for the scope, restoring the old value afterwards.
+class EnvGuard {
+public:
+    EnvGuard(const char* name, const char* value) : name_(name) {
+        const char* old = std::getenv(name);
+        had_ = old != nullptr;
+        if (had_) old_ = old;
+        if (value)
+            setenv(name, value, 1);
+        else
+            unsetenv(name);
+    }
+    ~EnvGuard() {
+        if (had_)
+            setenv(name_.c_str(), old_.c_str(), 1);
+        else
+            unsetenv(name_.c_str());
+    }
+
+private:
+    std::string name_, old_;
+    bool had_ = false;
+};
+
+fs::path makeTempDir(const std::string& tag) {
+    auto stamp = std::chrono::steady_clock::now().time_since_epoch().count();
+    fs::path p = fs::temp_directory_path() / ("clrt_test_" + tag + "_" + std::to_string(stamp));
+    fs::create_directories(p);
+    return p;
+}
+
+// The first CPU device (PoCL here), shared by the tests that need a context.
+DeviceContext& cpuContext() {
+    static DeviceContext dc(selectDevices("cpu").at(0));
+    return dc;
+}
+
+std::string readText(const std::string& path) {
+    std::ifstream in(path);
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+}  // namespace
+
+TEST_CASE("clErrorName names the standard codes", "[cl]") {
+    CHECK(std::string(clErrorName(CL_SUCCESS)) == "CL_SUCCESS");
+    CHECK(std::string(clErrorName(CL_OUT_OF_RESOURCES)) == "CL_OUT_OF_RESOURCES");
+    CHECK(std::string(clErrorName(CL_INVALID_KERNEL_ARGS)) == "CL_INVALID_KERNEL_ARGS");
+    CHECK(std::string(clErrorName(CL_BUILD_PROGRAM_FAILURE)) == "CL_BUILD_PROGRAM_FAILURE");
+    CHECK(std::string(clErrorName(-1001)) == "CL_PLATFORM_NOT_FOUND_KHR");
+    CHECK(std::string(clErrorName(12345)) == "CL_UNKNOWN_ERROR");
+    // Every code from 0 to -19 and -30 to -68 has a real name.
+    for (int c = 0; c >= -68; --c) {
+        if (c < -19 && c > -30) continue;
+        INFO("code " << c);
+        CHECK(std::string(clErrorName(c)) != "CL_UNKNOWN_ERROR");
+    }
+}
+
+TEST_CASE("CL_CHECK throws clrt::Error with name, call, file and line", "[cl]") {
+    try {
+        CL_CHECK(CL_INVALID_WORK_GROUP_SIZE);
+        FAIL("CL_CHECK did not throw");
+    } catch (const Error& e) {
+        std::string msg = e.what();
+        CHECK(e.code() == ExitCode::Device);
+        CHECK(msg.find("CL_INVALID_WORK_GROUP_SIZE") != std::string::npos);
+        CHECK(msg.find("tests/test_cl.cpp:") != std::string::npos);
+    }
+    CHECK_NOTHROW(CL_CHECK(CL_SUCCESS));
+}
+
+TEST_CASE("roundUp", "[cl]") {
+    CHECK(roundUp(0, 64) == 0);
+    CHECK(roundUp(1, 64) == 64);
+    CHECK(roundUp(64, 64) == 64);
+    CHECK(roundUp(65, 64) == 128);
+    CHECK(roundUp(7, 0) == 7);
+}
+
+TEST_CASE("listDevices finds the PoCL CPU device", "[cl]") {
+    std::vector<DeviceInfo> all = listDevices();
+    REQUIRE(!all.empty());
+    bool cpu = false;
+    for (size_t i = 0; i < all.size(); ++i) {
+        const DeviceInfo& d = all[i];
+        CHECK(d.index == (int)i);
+        CHECK(!d.name.empty());
+        CHECK(d.computeUnits > 0);
+        CHECK(d.globalMem > 0);
+        CHECK(d.maxAlloc > 0);
+        CHECK(d.maxWorkGroup > 0);
+        CHECK(d.openclCVersion.find("OpenCL C") != std::string::npos);
+        if (d.type & CL_DEVICE_TYPE_CPU) cpu = true;
+    }
+    CHECK(cpu);
+}
+
+TEST_CASE("selectDevices understands its specs", "[cl]") {
+    std::vector<DeviceInfo> all = listDevices();
+    REQUIRE(!all.empty());
+
+    auto cpus = selectDevices("cpu");
+    REQUIRE(!cpus.empty());
+    for (const DeviceInfo& d : cpus) CHECK((d.type & CL_DEVICE_TYPE_CPU) != 0);
+    CHECK(selectDevices("CPU").size() == cpus.size());
+
+    auto zero = selectDevices("0");
+    REQUIRE(zero.size() == 1);
+    CHECK(zero[0].index == 0);
+    CHECK(zero[0].name == all[0].name);
+
+    CHECK(selectDevices("").size() == 1);
+    CHECK(selectDevices("all").size() == all.size());
+    CHECK(selectDevices("0,0").size() == 1);  // duplicates collapse
+
+    // Case-insensitive name substring.
+    std::string part = all[0].name.substr(0, std::min<size_t>(all[0].name.size(), 6));
+    for (char& c : part) c = (char)std::toupper((unsigned char)c);
+    auto byName = selectDevices(part);
+    REQUIRE(!byName.empty());
+    CHECK(byName[0].index == 0);
+
+    for (const char* bad : {"nonexistent-xyz", "99", "0,nonexistent-xyz", "0,,1"}) {
+        INFO("spec " << bad);
+        try {
+            selectDevices(bad);
+            FAIL("selectDevices did not throw");
+        } catch (const Error& e) {
+            CHECK(e.code() == ExitCode::Device);
+            CHECK(std::string(e.what()).find(all[0].name) != std::string::npos);  // lists what exists
+        }
+    }
+}
+
+TEST_CASE("printDevices lists every device", "[cl]") {
+    std::ostringstream os;
+    printDevices(os);
+    std::vector<DeviceInfo> all = listDevices();
+    std::string text = os.str();
+    for (const DeviceInfo& d : all) {
+        CHECK(text.find("[" + std::to_string(d.index) + "]") != std::string::npos);
+        CHECK(text.find(d.name) != std::string::npos);
+        CHECK(text.find(d.platformName) != std::string::npos);
+        CHECK(text.find("MiB") != std::string::npos);
+    }
+}
+
+TEST_CASE("CL_CPP converts cl::Error into clrt::Error", "[cl]") {
+    DeviceContext& dc = cpuContext();
+    try {
+        cl::Buffer b = CL_CPP(cl::Buffer(dc.context(), CL_MEM_READ_WRITE, 0));
+        FAIL("zero-size buffer was accepted");
+    } catch (const Error& e) {
+        std::string msg = e.what();
+        CHECK(e.code() == ExitCode::Device);
+        CHECK(msg.find("CL_INVALID_BUFFER_SIZE") != std::string::npos);
+        CHECK(msg.find("tests/test_cl.cpp:") != std::string::npos);
+    }
+}
+
+TEST_CASE("a program with a syntax error reports the build log and the file name", "[cl]") {
+    DeviceContext& dc = cpuContext();
+    EnvGuard noCache("CLRT_NO_CACHE", "1");
+    std::vector<NamedSource> srcs = {{"cl_kernels/broken_test.cl", "__kernel void k(__global int* o) {\n"
+                                                                     "  o[0] = 1\n"
+                                                                     "}\n"}};
+    try {
+        buildProgramFromSources(dc, srcs, {"-DCLRT_TEST_DEFINE=1"});
+        FAIL("broken program built");
+    } catch (const Error& e) {
+        std::string msg = e.what();
+        INFO(msg);
+        CHECK(e.code() == ExitCode::Device);
+        CHECK(msg.find("CL_BUILD_PROGRAM_FAILURE") != std::string::npos);
+        CHECK(msg.find("cl_kernels/broken_test.cl:2") != std::string::npos);  // the log names file:line
+        CHECK(msg.find("-DCLRT_TEST_DEFINE=1 -cl-std=CL1.2") != std::string::npos);
+        CHECK(msg.find("build log") != std::string::npos);
+    }
+}
+
+TEST_CASE("build options never include fast-relaxed-math", "[cl]") {
+    CHECK(buildOptions({"-DA=1", "-DB=2"}) == "-DA=1 -DB=2 -cl-std=CL1.2");
+    CHECK_THROWS_AS(buildOptions({"-cl-fast-relaxed-math"}), Error);
+}
+
+TEST_CASE("kernel sources: embedded by name, or read from CLRT_KERNEL_DIR", "[cl]") {
+    {
+        EnvGuard g("CLRT_KERNEL_DIR", nullptr);
+        auto srcs = loadKernelSources({"layout.cl"});
+        REQUIRE(srcs.size() == 2);
+        CHECK(srcs[0].first == "src/shared/device_types.h");
+        CHECK(srcs[0].second.rfind("#line 1 \"src/shared/device_types.h\"", 0) == 0);
+        CHECK(srcs[1].first == "cl_kernels/layout.cl");
+        CHECK(srcs[1].second.rfind("#line 1 \"cl_kernels/layout.cl\"", 0) == 0);
+        CHECK(srcs[1].second.find("layout_report") != std::string::npos);
+        try {
+            loadKernelSources({"no_such_kernel.cl"});
+            FAIL("missing kernel accepted");
+        } catch (const Error& e) {
+            CHECK(std::string(e.what()).find("no_such_kernel.cl") != std::string::npos);
+            CHECK(std::string(e.what()).find("layout.cl") != std::string::npos);  // lists what is known
+        }
+    }
+    {
+        std::string dir = std::string(CLRT_SOURCE_DIR) + "/cl_kernels";
+        EnvGuard g("CLRT_KERNEL_DIR", dir.c_str());
+        auto srcs = loadKernelSources({"layout.cl"});
+        REQUIRE(srcs.size() == 2);
+        std::string typesPath = dir + "/../src/shared/device_types.h";
+        CHECK(srcs[0].second == "#line 1 \"" + typesPath + "\"\n" + readText(typesPath));
+        CHECK(srcs[1].second == "#line 1 \"" + dir + "/layout.cl\"\n" + readText(dir + "/layout.cl"));
+        CHECK_THROWS_AS(loadKernelSources({"no_such_kernel.cl"}), Error);
+    }
+}
+
+TEST_CASE("program cache directory follows the environment", "[cl]") {
+    EnvGuard a("CLRT_NO_CACHE", nullptr), b("CLRT_CACHE_DIR", "/tmp/clrt-x"), c("XDG_CACHE_HOME", "/tmp/xdg");
+    CHECK(programCacheDir() == "/tmp/clrt-x");
+    {
+        EnvGuard d("CLRT_CACHE_DIR", nullptr);
+        CHECK(programCacheDir() == "/tmp/xdg/clrt");
+    }
+    EnvGuard e("CLRT_NO_CACHE", "1");
+    CHECK(programCacheDir() == "");
+}
+
+TEST_CASE("host layout table covers every struct and tiles each one exactly", "[cl][layout]") {
+    const auto& table = hostLayout();
+    REQUIRE(!table.empty());
+    // Every `typedef struct X` of device_types.h has a struct row.
+    std::set<std::string> listed;
+    for (const LayoutEntry& e : table)
+        if (!e.member) listed.insert(e.structName);
+    std::string header = readText(std::string(CLRT_SOURCE_DIR) + "/src/shared/device_types.h");
+    std::regex re("typedef\\s+struct\\s+(\\w+)");
+    int found = 0;
+    for (auto it = std::sregex_iterator(header.begin(), header.end(), re); it != std::sregex_iterator(); ++it) {
+        ++found;
+        INFO("struct " << (*it)[1].str() << " of device_types.h is missing from cl_kernels/layout.cl");
+        CHECK(listed.count((*it)[1].str()) == 1);
+    }
+    CHECK(found == (int)listed.size());
+    // Members (explicit padding included) follow each other without gaps and end at sizeof.
+    for (size_t i = 0; i < table.size();) {
+        const LayoutEntry& s = table[i];
+        REQUIRE(s.member == nullptr);
+        CHECK(s.first % 16 == 0);
+        int end = 0;
+        for (++i; i < table.size() && table[i].member; ++i) {
+            INFO(s.structName << "." << table[i].member << ": gap or missing member before it in layout.cl");
+            CHECK(table[i].first == end);
+            end = table[i].first + table[i].second;
+        }
+        INFO(s.structName << ": members listed in layout.cl do not reach sizeof");
+        CHECK(end == s.first);
+    }
+}
+
+TEST_CASE("device struct layout matches the host; second build hits the program cache", "[cl][layout]") {
+    DeviceContext& dc = cpuContext();
+    fs::path dir = makeTempDir("cache");
+    EnvGuard noCache("CLRT_NO_CACHE", nullptr);
+    EnvGuard kernelDir("CLRT_KERNEL_DIR", nullptr);
+    EnvGuard cacheDir("CLRT_CACHE_DIR", dir.c_str());
+
+    BuildInfo first, second;
+    std::vector<int> dev1 = deviceLayout(dc, &first);
+    CHECK_FALSE(first.cacheHit);
+    CHECK(first.seconds > 0);
+    CHECK(first.options == "-cl-std=CL1.2");
+    REQUIRE(!first.cacheFile.empty());
+    CHECK(fs::exists(first.cacheFile));
+    CHECK(fs::path(first.cacheFile).parent_path() == dir);
+
+    std::vector<int> dev2 = deviceLayout(dc, &second);
+    CHECK(second.cacheHit);
+    CHECK(second.cacheFile == first.cacheFile);
+    CHECK(dev2 == dev1);  // the cached binary runs and reports the same
+
+    // Compare entry by entry; a failure names the struct and member.
+    const auto& host = hostLayout();
+    REQUIRE(dev1.size() == 1 + 2 * host.size());
+    CHECK(dev1[0] == (int)host.size());
+    for (size_t i = 0; i < host.size(); ++i) {
+        const LayoutEntry& e = host[i];
+        INFO(e.structName << (e.member ? std::string(".") + e.member : std::string(" (struct)")));
+        CHECK(dev1[1 + 2 * i] == e.first);
+        CHECK(dev1[2 + 2 * i] == e.second);
+    }
+    CHECK(layoutMismatches(dev1).empty());
+
+    // layoutMismatches itself reports a difference with the struct and member name.
+    std::vector<int> broken = dev1;
+    broken[1 + 2 * 1] += 4;  // host[1] is BvhNode.boundsMin's offset
+    auto diffs = layoutMismatches(broken);
+    REQUIRE(diffs.size() == 1);
+    CHECK(diffs[0].find(std::string(host[1].structName) + "." + host[1].member) != std::string::npos);
+
+    // A corrupt cache entry falls back to building from source.
+    { std::ofstream(first.cacheFile, std::ios::binary | std::ios::trunc) << "garbage"; }
+    BuildInfo third;
+    std::vector<int> dev3 = deviceLayout(dc, &third);
+    CHECK_FALSE(third.cacheHit);
+    CHECK(dev3 == dev1);
+
+    std::error_code ec;
+    fs::remove_all(dir, ec);
+}

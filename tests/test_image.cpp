@@ -1,0 +1,443 @@
+// Tests for image IO: EXR float/half round trips (bit-exact for float), PNG round trips, grey/Y and
+// tiled/RGBA EXR layouts, NaN/negative clamping with one warning, the shared env maps and textures,
+// corrupt and truncated inputs, and atomic writes (a failed write leaves the old file intact).
+#include <catch.hpp>
+
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <functional>
+#include <fstream>
+#include <random>
+#include <string>
+#include <vector>
+#include <unistd.h>
+
+#include <ImfChannelList.h>
+#include <ImfCompression.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+#include <ImfStringAttribute.h>
+#include <ImfTiledOutputFile.h>
+#include <Imath/half.h>
+#include <stb/stb_image_write.h>
+
+#include "image/image.h"
+#include "util/error.h"
+
+namespace fs = std::filesystem;
+using clrt::ImageRGB;
+
+namespace {
+
+fs::path imgTempDir() {
+    fs::path d = fs::temp_directory_path() / ("clrt_test_image_" + std::to_string(getpid()));
+    fs::create_directories(d);
+    return d;
+}
+std::string imgTemp(const std::string& name) { return (imgTempDir() / name).string(); }
+
+std::string slurp(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+void spit(const std::string& path, const std::string& bytes) {
+    std::ofstream out(path, std::ios::binary);
+    out.write(bytes.data(), std::streamsize(bytes.size()));
+}
+
+uint32_t bits(float f) {
+    uint32_t u;
+    std::memcpy(&u, &f, 4);
+    return u;
+}
+
+ImageRGB makeImage(int w, int h) {
+    ImageRGB img;
+    img.width = w;
+    img.height = h;
+    img.pixels.assign(size_t(w) * h * 3, 0.0f);
+    return img;
+}
+
+// Runs f with stderr redirected to a file and returns what was written to it.
+template <class F> std::string captureStderr(F f) {
+    std::string path = imgTemp("stderr.txt");
+    std::fflush(stderr);
+    int saved = dup(2);
+    FILE* tmp = std::fopen(path.c_str(), "w");
+    dup2(fileno(tmp), 2);
+    try {
+        f();
+    } catch (...) {
+        std::fflush(stderr);
+        dup2(saved, 2);
+        close(saved);
+        std::fclose(tmp);
+        throw;
+    }
+    std::fflush(stderr);
+    dup2(saved, 2);
+    close(saved);
+    std::fclose(tmp);
+    return slurp(path);
+}
+
+void requireReadError(const std::string& path) {
+    try {
+        clrt::readImage(path);
+        FAIL("expected clrt::Error reading " << path);
+    } catch (const clrt::Error& e) {
+        INFO(e.what());
+        CHECK(std::string(e.what()).find(path) != std::string::npos);
+        CHECK(e.code() == clrt::ExitCode::BadInput);
+    }
+}
+
+void requireWriteError(const std::function<void()>& f, const std::string& path) {
+    try {
+        f();
+        FAIL("expected clrt::Error writing " << path);
+    } catch (const clrt::Error& e) {
+        INFO(e.what());
+        CHECK(std::string(e.what()).find(path) != std::string::npos);
+        CHECK(e.code() == clrt::ExitCode::Output);
+    }
+}
+
+size_t countOccurrences(const std::string& s, const std::string& what) {
+    size_t n = 0;
+    for (size_t p = s.find(what); p != std::string::npos; p = s.find(what, p + 1)) ++n;
+    return n;
+}
+
+}  // namespace
+
+TEST_CASE("EXR float round trip is bit-exact, with attributes and ZIP", "[image]") {
+    ImageRGB img = makeImage(37, 23);
+    std::mt19937 rng(1234);
+    std::uniform_real_distribution<float> uni(0.0f, 10.0f);
+    for (float& v : img.pixels) v = uni(rng);
+    const float specials[] = {0.0f, 1e-40f, FLT_MIN / 4, FLT_MIN, 65504.0f, 65520.0f, 70000.0f, 1e10f, 3e38f, FLT_MAX};
+    for (size_t i = 0; i < sizeof(specials) / sizeof(float); ++i) img.pixels[i * 7] = specials[i];
+
+    std::string path = imgTemp("float.exr");
+    clrt::ExrWriteOptions opts;
+    opts.attributes["renderer"] = "clrt";
+    opts.attributes["spp"] = "16";
+    clrt::writeExr(path, img, opts);
+
+    ImageRGB back = clrt::readImage(path);
+    CHECK(back.isHdr);
+    REQUIRE(back.width == 37);
+    REQUIRE(back.height == 23);
+    REQUIRE(back.pixels.size() == img.pixels.size());
+    size_t mismatches = 0;
+    for (size_t i = 0; i < img.pixels.size(); ++i) mismatches += bits(img.pixels[i]) != bits(back.pixels[i]);
+    CHECK(mismatches == 0);
+    CHECK(back.pixels[7] == 1e-40f);
+
+    Imf::InputFile f(path.c_str());
+    CHECK(f.header().compression() == Imf::ZIP_COMPRESSION);
+    const auto* r = f.header().channels().findChannel("R");
+    REQUIRE(r);
+    CHECK(r->type == Imf::FLOAT);
+    CHECK(!f.header().channels().findChannel("A"));
+    const auto* a = f.header().findTypedAttribute<Imf::StringAttribute>("renderer");
+    REQUIRE(a);
+    CHECK(a->value() == "clrt");
+    const auto* b = f.header().findTypedAttribute<Imf::StringAttribute>("spp");
+    REQUIRE(b);
+    CHECK(b->value() == "16");
+}
+
+TEST_CASE("EXR half round trip within half precision", "[image]") {
+    ImageRGB img = makeImage(16, 9);
+    std::mt19937 rng(99);
+    std::uniform_real_distribution<float> uni(0.001f, 60000.0f);
+    for (float& v : img.pixels) v = uni(rng);
+    img.pixels[0] = 0.0f;
+    img.pixels[1] = 65504.0f;
+    std::string path = imgTemp("half.exr");
+    clrt::ExrWriteOptions opts;
+    opts.half = true;
+    clrt::writeExr(path, img, opts);
+    {
+        Imf::InputFile f(path.c_str());
+        const auto* g = f.header().channels().findChannel("G");
+        REQUIRE(g);
+        CHECK(g->type == Imf::HALF);
+    }
+    ImageRGB back = clrt::readImage(path);
+    REQUIRE(back.pixels.size() == img.pixels.size());
+    for (size_t i = 0; i < img.pixels.size(); ++i) {
+        INFO(i << ": " << img.pixels[i] << " vs " << back.pixels[i]);
+        REQUIRE(std::fabs(back.pixels[i] - img.pixels[i]) <= img.pixels[i] * (1.0f / 2048.0f));
+        REQUIRE(back.pixels[i] == float(Imath::half(img.pixels[i])));
+    }
+    CHECK(back.pixels[1] == 65504.0f);
+}
+
+TEST_CASE("EXR NaN, Inf and negatives become 0 with one warning", "[image]") {
+    ImageRGB img = makeImage(4, 2);
+    for (size_t i = 0; i < img.pixels.size(); ++i) img.pixels[i] = float(i) + 1;
+    img.pixels[0] = std::nanf("");
+    img.pixels[5] = INFINITY;
+    img.pixels[10] = -3.0f;
+    img.pixels[11] = -INFINITY;
+    std::string path = imgTemp("bad_values.exr");
+    clrt::writeExr(path, img);
+    ImageRGB back;
+    std::string err = captureStderr([&] { back = clrt::readImage(path); });
+    CHECK(back.pixels[0] == 0.0f);
+    CHECK(back.pixels[5] == 0.0f);
+    CHECK(back.pixels[10] == 0.0f);
+    CHECK(back.pixels[11] == 0.0f);
+    CHECK(back.pixels[1] == 2.0f);
+    CHECK(countOccurrences(err, "warning") == 1);
+    CHECK(err.find(" 4 ") != std::string::npos);
+}
+
+TEST_CASE("EXR Y-only file expands to grey; tiled RGBA with offset data window reads", "[image]") {
+    const int w = 5, h = 3;
+    SECTION("Y channel, half") {
+        std::string path = imgTemp("grey.exr");
+        std::vector<Imath::half> y(w * h);
+        for (int i = 0; i < w * h; ++i) y[i] = float(i) * 0.5f;
+        Imf::Header hdr(w, h);
+        hdr.channels().insert("Y", Imf::Channel(Imf::HALF));
+        Imf::FrameBuffer fb;
+        fb.insert("Y", Imf::Slice(Imf::HALF, reinterpret_cast<char*>(y.data()), sizeof(Imath::half),
+                                  sizeof(Imath::half) * w));
+        {
+            Imf::OutputFile out(path.c_str(), hdr);
+            out.setFrameBuffer(fb);
+            out.writePixels(h);
+        }
+        ImageRGB img = clrt::readImage(path);
+        REQUIRE(img.width == w);
+        REQUIRE(img.height == h);
+        for (int i = 0; i < w * h; ++i)
+            for (int c = 0; c < 3; ++c) CHECK(img.pixels[i * 3 + c] == float(i) * 0.5f);
+    }
+    SECTION("tiled RGBA float with data window not at the origin") {
+        std::string path = imgTemp("tiled.exr");
+        Imath::Box2i dw(Imath::V2i(10, 20), Imath::V2i(10 + w - 1, 20 + h - 1));
+        Imf::Header hdr(Imath::Box2i(Imath::V2i(0, 0), Imath::V2i(63, 63)), dw);
+        const char* names[4] = {"R", "G", "B", "A"};
+        for (const char* n : names) hdr.channels().insert(n, Imf::Channel(Imf::FLOAT));
+        hdr.setTileDescription(Imf::TileDescription(2, 2, Imf::ONE_LEVEL));
+        std::vector<float> px(size_t(w) * h * 4);
+        for (size_t i = 0; i < px.size(); ++i) px[i] = float(i);
+        Imf::FrameBuffer fb;
+        for (int c = 0; c < 4; ++c)
+            fb.insert(names[c], Imf::Slice::Make(Imf::FLOAT, px.data() + c, dw, 4 * sizeof(float),
+                                                 4 * sizeof(float) * w));
+        {
+            Imf::TiledOutputFile out(path.c_str(), hdr);
+            out.setFrameBuffer(fb);
+            out.writeTiles(0, out.numXTiles() - 1, 0, out.numYTiles() - 1);
+        }
+        ImageRGB img = clrt::readImage(path);
+        REQUIRE(img.width == w);
+        REQUIRE(img.height == h);
+        for (int i = 0; i < w * h; ++i)
+            for (int c = 0; c < 3; ++c) CHECK(img.pixels[i * 3 + c] == px[i * 4 + c]);
+    }
+}
+
+TEST_CASE("PNG round trips", "[image]") {
+    const int w = 13, h = 7;
+    std::vector<unsigned char> rgb(w * h * 3);
+    std::mt19937 rng(7);
+    for (auto& v : rgb) v = static_cast<unsigned char>(rng() & 0xFF);
+    rgb[0] = 0;
+    rgb[1] = 255;
+    std::string path = imgTemp("rt.png");
+    clrt::writePng8(path, w, h, rgb);
+    ImageRGB img = clrt::readImage(path);
+    CHECK(!img.isHdr);
+    REQUIRE(img.width == w);
+    REQUIRE(img.height == h);
+    REQUIRE(img.pixels.size() == rgb.size());
+    for (size_t i = 0; i < rgb.size(); ++i) REQUIRE(img.pixels[i] == float(rgb[i]));
+
+    SECTION("clamped writer rounds and clamps") {
+        ImageRGB lin = makeImage(2, 1);
+        lin.pixels = {-5.0f, 0.4f, 0.5f, 254.6f, 300.0f, std::nanf("")};
+        std::string p2 = imgTemp("clamped.png");
+        clrt::writePngClamped(p2, lin);
+        ImageRGB back = clrt::readImage(p2);
+        CHECK(back.pixels == std::vector<float>{0, 0, 1, 255, 255, 0});
+    }
+    SECTION("grey PNG expands to RGB") {
+        unsigned char grey[6] = {0, 10, 20, 30, 40, 250};
+        std::string p3 = imgTemp("grey.png");
+        REQUIRE(stbi_write_png(p3.c_str(), 3, 2, 1, grey, 3));
+        ImageRGB g = clrt::readImage(p3);
+        REQUIRE(g.width == 3);
+        REQUIRE(g.height == 2);
+        for (int i = 0; i < 6; ++i)
+            for (int c = 0; c < 3; ++c) CHECK(g.pixels[i * 3 + c] == float(grey[i]));
+    }
+    SECTION("PNG with a .exr name is read by content") {
+        std::string p4 = imgTemp("actually_png.exr");
+        fs::copy_file(path, p4, fs::copy_options::overwrite_existing);
+        CHECK(clrt::readImage(p4).pixels == img.pixels);
+    }
+}
+
+TEST_CASE("shared env maps and textures load", "[image][shared]") {
+    fs::path shared(CLRT_SHARED_DIR);
+    fs::path sunset = shared / "envmaps" / "sunset.exr";
+    if (!fs::exists(sunset)) {
+        WARN("shared env maps not found, skipped: " << sunset);
+        return;
+    }
+    ImageRGB img;
+    std::string err = captureStderr([&] { img = clrt::readImage(sunset.string()); });
+    CHECK(img.isHdr);
+    CHECK(img.width == 1024);
+    CHECK(img.height == 512);
+    // The file holds negative values: they were clamped, with one warning.
+    CHECK(countOccurrences(err, "warning") == 1);
+    float maxV = 0;
+    bool allOk = true;
+    for (float v : img.pixels) {
+        allOk = allOk && std::isfinite(v) && v >= 0.0f;
+        maxV = std::max(maxV, v);
+    }
+    CHECK(allOk);
+    CHECK(maxV > 1.0f);  // it is HDR
+
+    int count = 0;
+    for (const fs::path& dir : {shared / "envmaps", shared / "scenes"}) {
+        for (const auto& e : fs::recursive_directory_iterator(dir)) {
+            std::string ext = e.path().extension().string();
+            if (!e.is_regular_file() || (ext != ".exr" && ext != ".png" && ext != ".jpg" && ext != ".jpeg")) continue;
+            INFO(e.path().string());
+            ImageRGB t;
+            captureStderr([&] { REQUIRE_NOTHROW(t = clrt::readImage(e.path().string())); });
+            CHECK(t.width > 0);
+            CHECK(t.pixels.size() == size_t(t.width) * t.height * 3);
+            ++count;
+        }
+    }
+    CHECK(count > 20);
+}
+
+TEST_CASE("corrupt and truncated images raise clrt::Error", "[image]") {
+    ImageRGB img = makeImage(64, 64);
+    std::mt19937 rng(5);
+    for (float& v : img.pixels) v = float(rng() % 1000) / 7.0f;
+    std::string exr = imgTemp("good.exr"), png = imgTemp("good.png");
+    clrt::writeExr(exr, img);
+    clrt::writePngClamped(png, img);
+    std::string exrBytes = slurp(exr), pngBytes = slurp(png);
+
+    SECTION("missing file") { requireReadError(imgTemp("nope.png")); }
+    SECTION("empty file") {
+        spit(imgTemp("empty.png"), "");
+        requireReadError(imgTemp("empty.png"));
+    }
+    SECTION("unknown format") {
+        spit(imgTemp("text.png"), "this is not an image at all");
+        requireReadError(imgTemp("text.png"));
+    }
+    SECTION("truncated EXR") {
+        for (double frac : {0.1, 0.5, 0.9}) {
+            std::string p = imgTemp("trunc" + std::to_string(int(frac * 10)) + ".exr");
+            spit(p, exrBytes.substr(0, size_t(exrBytes.size() * frac)));
+            requireReadError(p);
+        }
+    }
+    SECTION("EXR magic then random bytes") {
+        std::string b = "\x76\x2f\x31\x01";
+        for (int i = 0; i < 500; ++i) b += char(rng() & 0xFF);
+        spit(imgTemp("random.exr"), b);
+        requireReadError(imgTemp("random.exr"));
+    }
+    SECTION("truncated PNG") {
+        for (double frac : {0.05, 0.5, 0.95}) {
+            std::string p = imgTemp("trunc" + std::to_string(int(frac * 100)) + ".png");
+            spit(p, pngBytes.substr(0, size_t(pngBytes.size() * frac)));
+            requireReadError(p);
+        }
+    }
+    SECTION("PNG magic then random bytes") {
+        std::string b = "\x89PNG\r\n\x1a\n";
+        for (int i = 0; i < 500; ++i) b += char(rng() & 0xFF);
+        spit(imgTemp("random.png"), b);
+        requireReadError(imgTemp("random.png"));
+    }
+    SECTION("truncated and random JPEG") {
+        std::vector<unsigned char> rgb(64 * 64 * 3);
+        for (auto& v : rgb) v = static_cast<unsigned char>(rng() & 0xFF);
+        std::string jpg = imgTemp("good.jpg");
+        REQUIRE(stbi_write_jpg(jpg.c_str(), 64, 64, 3, rgb.data(), 90));
+        ImageRGB ok = clrt::readImage(jpg);
+        CHECK(ok.width == 64);
+        std::string jb = slurp(jpg);
+        spit(imgTemp("trunc.jpg"), jb.substr(0, jb.size() / 2));
+        requireReadError(imgTemp("trunc.jpg"));
+        std::string b = "\xFF\xD8\xFF";
+        for (int i = 0; i < 500; ++i) b += char(rng() & 0xFF);
+        spit(imgTemp("random.jpg"), b);
+        requireReadError(imgTemp("random.jpg"));
+    }
+}
+
+TEST_CASE("writers fail cleanly and never truncate the target", "[image]") {
+    ImageRGB img = makeImage(8, 8);
+    for (size_t i = 0; i < img.pixels.size(); ++i) img.pixels[i] = float(i % 256);
+    std::vector<unsigned char> rgb(8 * 8 * 3, 77);
+
+    SECTION("missing output directory") {
+        std::string p = (imgTempDir() / "no_such_dir" / "out.png").string();
+        requireWriteError([&] { clrt::writePng8(p, 8, 8, rgb); }, p);
+        std::string e = (imgTempDir() / "no_such_dir" / "out.exr").string();
+        requireWriteError([&] { clrt::writeExr(e, img); }, e);
+        CHECK(!fs::exists(imgTempDir() / "no_such_dir"));
+    }
+    SECTION("temporary path is a hidden sibling") {
+        std::string p = imgTemp("x.png");
+        fs::path t = clrt::temporarySiblingPath(p);
+        CHECK(t.parent_path() == imgTempDir());
+        CHECK(t.filename().string().rfind(".x.png.tmp-", 0) == 0);
+    }
+    SECTION("failed writes leave the good file intact and no temporary behind") {
+        for (const std::string name : {"keep.png", "keep.exr"}) {
+            std::string p = imgTemp(name);
+            if (name == "keep.png") clrt::writePng8(p, 8, 8, rgb);
+            else clrt::writeExr(p, img);
+            std::string good = slurp(p);
+            REQUIRE(!good.empty());
+            // A writer that produces half a file and then fails.
+            CHECK_THROWS_AS(clrt::writeAtomically(p,
+                                                  [&](const std::string& tmp) {
+                                                      spit(tmp, good.substr(0, good.size() / 2));
+                                                      throw clrt::Error("simulated failure", clrt::ExitCode::Output);
+                                                  }),
+                            clrt::Error);
+            // A real writer given bad input.
+            ImageRGB bad = makeImage(8, 8);
+            bad.pixels.resize(10);
+            requireWriteError([&] { clrt::writeExr(p, bad); }, p);
+            requireWriteError([&] { clrt::writePng8(p, 8, 8, std::vector<unsigned char>(5)); }, p);
+            CHECK(slurp(p) == good);
+            CHECK(!fs::exists(clrt::temporarySiblingPath(p)));
+        }
+    }
+    SECTION("target is a directory: rename fails, temporary removed") {
+        fs::path d = imgTempDir() / "a_directory.png";
+        fs::create_directories(d / "child");
+        requireWriteError([&] { clrt::writePng8(d.string(), 8, 8, rgb); }, d.string());
+        CHECK(fs::is_directory(d / "child"));
+        CHECK(!fs::exists(clrt::temporarySiblingPath(d.string())));
+    }
+}
