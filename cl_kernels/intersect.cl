@@ -100,7 +100,10 @@ inline float Aabb_Intersect(float4 bmin, float4 bmax, float3 org, float3 invDir,
     float3 t1 = (bmax.xyz - org) * invDir;
     float3 tn = fmin(t0, t1), tf = fmax(t0, t1);
     float tEnter = fmax(fmax(tn.x, tn.y), fmax(tn.z, 0.0f));
-    float tExit = fmin(fmin(tf.x, tf.y), fmin(tf.z, tMax));
+    /* Widened by 1 + 2γ3 (pbrt): a hit the watertight triangle test accepts exactly on an edge
+     * may lie a few ULPs outside the triangle's tight box. */
+    float tExit = fmin(fmin(tf.x, tf.y), tf.z) * 1.0000004f;
+    tExit = fmin(tExit, tMax);
     return tEnter <= tExit ? tEnter : INFINITY;
 }
 

@@ -45,7 +45,9 @@
     S(Hit) M(Hit, t) M(Hit, prim) M(Hit, u) M(Hit, v)                                             \
     S(PathState) M(PathState, throughput) M(PathState, pixel) M(PathState, sample)                \
         M(PathState, depth) M(PathState, pathId)                                                  \
-    S(ShadowRay) M(ShadowRay, origin) M(ShadowRay, direction) M(ShadowRay, contribution)
+    S(ShadowRay) M(ShadowRay, origin) M(ShadowRay, direction) M(ShadowRay, contribution)        \
+    S(ShadingPoint) M(ShadingPoint, position) M(ShadingPoint, normal)                             \
+        M(ShadingPoint, geomNormal) M(ShadingPoint, wo) M(ShadingPoint, kd) M(ShadingPoint, ks)
 #endif
 
 #ifdef __OPENCL_C_VERSION__

@@ -51,6 +51,8 @@ const char* kRenderHelp =
     "  --spp N               samples per pixel, overriding each camera's NumSamples\n"
     "  --seed N              random seed (default 0); the same seed gives the same image\n"
     "  --camera ID           render only the camera with this id\n"
+    "  --ldr-quantize MODE   round (default) or floor: how .png outputs turn clamped radiance into\n"
+    "                        8 bits; the course's reference renders truncate (floor)\n"
     "  -v, --verbose         print the kernel build flags and other details\n"
     "  -h, --help            this text\n";
 
@@ -59,7 +61,7 @@ struct Args {
     std::string outDir = ".", device, cameraId;
     int spp = 0;
     uint32_t seed = 0;
-    bool verbose = false, help = false;
+    bool verbose = false, help = false, truncatePng = false;
 };
 
 int parseInt(const std::string& opt, const std::string& v, long lo, long hi) {
@@ -87,6 +89,11 @@ Args parseRenderArgs(int argc, char** argv, int start) {
         else if (s == "--seed") a.seed = uint32_t(parseInt(s, value(), 0, 2147483647));
         else if (s == "--camera") a.cameraId = value();
         else if (s == "-v" || s == "--verbose") a.verbose = true;
+        else if (s == "--ldr-quantize") {
+            std::string v = value();
+            if (v != "round" && v != "floor") throw Error("--ldr-quantize: expected round or floor, got '" + v + "'", ExitCode::Usage);
+            a.truncatePng = v == "floor";
+        }
         else if (!s.empty() && s[0] == '-') throw Error("unknown option '" + s + "' (see clrt render --help)", ExitCode::Usage);
         else a.positional.push_back(s);
     }
@@ -180,7 +187,7 @@ int cmdRender(const Args& a) {
             writeExr(out.string(), img, eo);
         } else {
             if (ext != ".png") warnOnce(cam->imageName + ": unknown image extension; writing PNG data");
-            writePngClamped(out.string(), img);
+            writePngClamped(out.string(), img, a.truncatePng);
         }
         tOutput += since(to);
         std::fprintf(stderr, "wrote %s\n", out.string().c_str());

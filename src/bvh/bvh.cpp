@@ -3,11 +3,15 @@
 // and caps the tree depth so the device traversal stack (CLRT_BVH_STACK_SIZE) can never overflow:
 // a node whose SAH split would leave a child too deep for a median-split subtree gets a median
 // split instead. Costs are evaluated in double so huge scenes cannot overflow to inf or NaN.
+// Large subtrees are built on separate threads (right child into its own node array, appended
+// afterwards with its indices shifted), so the result is identical for any thread count.
 #include "bvh/bvh.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <system_error>
+#include <thread>
 
 namespace clrt {
 namespace {
@@ -65,9 +69,11 @@ public:
 
     // Levels on the longest root-to-leaf path (root alone = 1); the builder keeps it <= kMaxLevels.
     static constexpr int kMaxLevels = CLRT_BVH_STACK_SIZE - 8;
+    static constexpr int kParallelMin = 65536;  // smaller subtrees are not worth a thread
     int depth = 0;
 
-    void build(int begin, int end, int level) {
+    // threads: how many threads this subtree may use (including the calling one).
+    void build(int begin, int end, int level, int threads = 1) {
         depth = std::max(depth, level);
         const int n = end - begin;
         const int idx = int(nodes_.size());
@@ -92,9 +98,32 @@ public:
         }
         nodes_[idx].count = 0;
         nodes_[idx].axis = axis;
-        build(begin, mid, level + 1);
+        if (threads > 1 && n >= kParallelMin) {
+            // Right subtree on a new thread into its own array; left subtree here.
+            std::vector<dev::BvhNode> rightNodes;
+            rightNodes.reserve(size_t(2) * (end - mid));
+            Builder right(opts_, items_, rightNodes);
+            int rt = threads / 2;
+            std::thread worker;
+            try {
+                worker = std::thread([&] { right.build(mid, end, level + 1, rt); });
+            } catch (const std::system_error&) {  // no thread to be had: do it here
+                right.build(mid, end, level + 1, 1);
+            }
+            build(begin, mid, level + 1, threads - rt);
+            if (worker.joinable()) worker.join();
+            const int offset = int(nodes_.size());
+            for (dev::BvhNode nd : rightNodes) {
+                if (nd.count == 0) nd.first += offset;
+                nodes_.push_back(nd);
+            }
+            nodes_[idx].first = offset;
+            depth = std::max(depth, right.depth);
+            return;
+        }
+        build(begin, mid, level + 1, threads);
         nodes_[idx].first = int(nodes_.size());
-        build(mid, end, level + 1);
+        build(mid, end, level + 1, threads);
     }
 
 private:
@@ -239,7 +268,8 @@ Bvh buildBvh(const std::vector<Aabb>& primBounds, const BvhBuildOptions& opts) {
 
     bvh.nodes.reserve(size_t(2) * n);
     Builder builder(opts, items, bvh.nodes);
-    builder.build(0, n, 1);
+    int threads = opts.maxThreads > 0 ? opts.maxThreads : int(std::thread::hardware_concurrency());
+    builder.build(0, n, 1, std::max(1, threads));
     bvh.depth = builder.depth;
 
     bvh.primRefs.resize(n);

@@ -25,8 +25,10 @@ struct Aabb {
 
 struct BvhBuildOptions {
     int bins = 16;            // SAH bins per axis
-    int maxLeafSize = 4;      // leaves never hold more (unless all centroids coincide)
+    int maxLeafSize = 4;      // leaves never hold more (coincident centroids: median split)
     float traversalCost = 1;  // SAH cost of an interior node relative to one primitive test
+    int maxThreads = 0;       // threads for large subtrees; 0 = all hardware threads. The tree
+                              // does not depend on it.
 };
 
 struct Bvh {

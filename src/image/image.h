@@ -27,8 +27,9 @@ ImageRGB readImage(const std::string& path);
 // Writes an 8-bit RGB PNG of already-quantised values (0..255 per channel, row 0 at the top).
 void writePng8(const std::string& path, int width, int height, const std::vector<unsigned char>& rgb);
 
-// Writes a PNG from linear values the course way: clamp to [0,255] and round.
-void writePngClamped(const std::string& path, const ImageRGB& img);
+// Writes a PNG from linear values: clamp to [0,255] and round (truncate = true: floor, which is what
+// the course's reference renders do; see README "Conventions").
+void writePngClamped(const std::string& path, const ImageRGB& img, bool truncate = false);
 
 struct ExrWriteOptions {
     bool half = false;                            // HALF instead of FLOAT channels

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -223,13 +224,13 @@ void writePng8(const std::string& path, int width, int height, const std::vector
     });
 }
 
-void writePngClamped(const std::string& path, const ImageRGB& img) {
+void writePngClamped(const std::string& path, const ImageRGB& img, bool truncate) {
     checkImage(path, img.width, img.height, img.pixels.size());
     std::vector<unsigned char> rgb(img.pixels.size());
     for (size_t i = 0; i < rgb.size(); ++i) {
         float v = img.pixels[i];
         v = v > 0.0f ? std::min(v, 255.0f) : 0.0f;  // NaN -> 0
-        rgb[i] = static_cast<unsigned char>(std::lround(v));
+        rgb[i] = static_cast<unsigned char>(truncate ? std::floor(v) : std::lround(v));
     }
     writePng8(path, img.width, img.height, rgb);
 }

@@ -80,9 +80,13 @@ struct Renderer::Impl {
         }
     }
 
+    // A fixed work-group size: PoCL compiles a kernel once per distinct local size, so letting the
+    // runtime choose (it varies with the global size) would recompile at every queue length.
+    size_t localSize = 64;
     void run(cl::Kernel& k, size_t n) {
         if (n == 0) return;
-        CL_CPP(dc.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(n), cl::NullRange));
+        CL_CPP(dc.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(roundUp(n, localSize)),
+                                               cl::NDRange(localSize)));
     }
 };
 

@@ -647,11 +647,11 @@ struct Walker {
             if (allIn) {
                 for (long u : vertUv) md.uvs.push_back(texcoords[size_t(u)]);
             } else if (needUv) {
-                fail(n, who + ": texture coordinate index out of range (TexCoordData has " +
-                            std::to_string(texcoords.size()) + " pairs)");
+                warnOnce(n.location() + ": " + who + ": texture coordinate index out of range (TexCoordData has " +
+                         std::to_string(texcoords.size()) + " pairs); the mesh gets no texture coordinates");
             }
         } else if (needUv) {
-            fail(n, who + " has an image texture but the scene has no TexCoordData");
+            warnOnce(n.location() + ": " + who + " has an image texture but the scene has no TexCoordData");
         }
         return md;
     }
@@ -702,7 +702,8 @@ struct Walker {
                 scene.meshes.push_back(std::move(md));
             }
             if (hasImageTexture(s.textureIndices) && scene.meshes[size_t(s.meshIndex)].uvs.empty())
-                fail(*faces, who + " has an image texture but PLY '" + *ply + "' has no texture coordinates");
+                warnOnce(faces->location() + ": " + who + " has an image texture but PLY '" + *ply +
+                         "' has no texture coordinates");
             return s;
         }
         long vOff = intAttribute(*faces, "vertexOffset", 0);
@@ -784,7 +785,7 @@ struct Walker {
         Mat4 own = transformOf(n);
         s.transform = reset ? own : own * base.transform;
         if (hasImageTexture(s.textureIndices) && scene.meshes[size_t(s.meshIndex)].uvs.empty())
-            fail(n, who + " has an image texture but its mesh has no texture coordinates");
+            warnOnce(n.location() + ": " + who + " has an image texture but its mesh has no texture coordinates");
         return s;
     }
 
@@ -792,18 +793,19 @@ struct Walker {
         checkChildren(n, {"Mesh", "MeshInstance", "Triangle", "Sphere", "LightMesh", "LightSphere"});
         // Meshes first, so that instances may name a mesh defined after them.
         std::map<int, MeshProto> meshes;
-        std::set<std::pair<std::string, int>> seen;
+        std::set<std::pair<std::string, int>> seen;  // (kind, id)
         NodeList all = n.children();
         std::vector<Shape> meshShapes;
         for (auto& c : all) {
             std::string name = c->name();
             if (name != "Mesh" && name != "MeshInstance" && name != "Triangle" && name != "Sphere") continue;
-            if (auto id = c->attribute("id")) {
-                int v = intAttribute(*c, "id", 0);
-                if (!seen.emplace(name, v).second) fail(*c, "duplicate " + name + " id " + std::to_string(v));
-                (void)id;
-            }
             if (name == "Mesh") {
+                // Mesh ids are what instances refer to: they must be unique. (Shared scenes repeat
+                // Sphere ids, so other kinds are not checked.)
+                if (c->attribute("id")) {
+                    int v = intAttribute(*c, "id", 0);
+                    if (!seen.emplace(name, v).second) fail(*c, "duplicate Mesh id " + std::to_string(v));
+                }
                 Shape s = readMesh(*c);
                 meshes.emplace(s.id, MeshProto{s, c});
                 meshShapes.push_back(s);
@@ -816,8 +818,8 @@ struct Walker {
             else if (name == "MeshInstance") scene.shapes.push_back(readInstance(*c, meshes));
             else if (name == "Triangle") scene.shapes.push_back(readTriangle(*c));
             else if (name == "Sphere") scene.shapes.push_back(readSphere(*c));
-            else if (name == "LightMesh" || name == "LightSphere")
-                warnOnce(scene.path + ": <" + name + "> is not supported; skipped");
+            else if ((name == "LightMesh" || name == "LightSphere") && warnedUnknown.insert(name).second)
+                warnOnce(c->location() + ": <" + name + "> (emissive object) is not supported; skipped");
         }
     }
 };

@@ -1,0 +1,70 @@
+// Shared helpers for tests: the OpenCL device to test on ($CLRT_TEST_DEVICE, default "cpu" = PoCL),
+// temporary directories, image metrics, and running the clrt binary.
+#pragma once
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+#include "cl/devices.h"
+#include "cl/program.h"
+#include "image/image.h"
+
+namespace clrt::test {
+
+inline DeviceInfo testDevice() {
+    const char* spec = std::getenv("CLRT_TEST_DEVICE");
+    return selectDevices(spec && *spec ? spec : "cpu").front();
+}
+
+// One shared context per test process (program builds are the slow part on PoCL).
+inline DeviceContext& testContext() {
+    static DeviceContext dc(testDevice());
+    return dc;
+}
+
+inline std::string sharedDir() { return CLRT_SHARED_DIR; }
+inline bool haveShared() { return std::filesystem::is_directory(sharedDir() + "/scenes"); }
+
+struct TempDir {
+    std::filesystem::path path;
+    TempDir() {
+        std::string tmpl = (std::filesystem::temp_directory_path() / "clrt-test-XXXXXX").string();
+        path = mkdtemp(tmpl.data());
+    }
+    ~TempDir() {
+        std::error_code ec;
+        std::filesystem::remove_all(path, ec);
+    }
+    std::string file(const std::string& name) const { return (path / name).string(); }
+};
+
+// PSNR in dB between two 8-bit-valued images (values 0..255).
+inline double psnr8(const ImageRGB& a, const ImageRGB& b) {
+    double se = 0;
+    for (size_t i = 0; i < a.pixels.size(); ++i) {
+        double d = double(a.pixels[i]) - double(b.pixels[i]);
+        se += d * d;
+    }
+    double mse = se / double(a.pixels.size());
+    return mse == 0 ? INFINITY : 10.0 * std::log10(255.0 * 255.0 / mse);
+}
+
+// The course's LDR quantisation of linear values: clamp to [0,255], then round (or floor).
+inline ImageRGB quantize(const ImageRGB& img, bool floorInstead = false) {
+    ImageRGB q = img;
+    for (float& v : q.pixels) {
+        float c = std::fmin(255.0f, std::fmax(0.0f, std::isfinite(v) ? v : 0.0f));
+        v = floorInstead ? std::floor(c) : std::round(c);
+    }
+    return q;
+}
+
+// Runs the clrt binary with arguments; returns the exit code; output goes to `logFile`.
+inline int runClrt(const std::string& args, const std::string& logFile) {
+    std::string cmd = std::string(CLRT_BINARY) + " " + args + " >" + logFile + " 2>&1";
+    int rc = std::system(cmd.c_str());
+    return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+}  // namespace clrt::test
