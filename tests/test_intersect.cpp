@@ -1,0 +1,147 @@
+// The intersection kernels (cl_kernels/intersect.cl) against the plain C++ reference
+// (src/bvh/host_intersect.h) on PoCL: closest hits and shadow-ray any-hits over random scenes of
+// triangles and spheres, BVH-traversed on both sides.
+#include <catch.hpp>
+
+#include <random>
+
+#include "bvh/bvh.h"
+#include "bvh/host_intersect.h"
+#include "cl/check.h"
+#include "test_helpers.h"
+
+using namespace clrt;
+using namespace clrt::test;
+
+namespace {
+
+struct RandomScene {
+    std::vector<dev::Triangle> tris;
+    std::vector<dev::Sphere> spheres;
+    std::vector<Vec3> sphereCenter;
+    std::vector<float> sphereRadius;
+    Bvh bvh;
+};
+
+RandomScene makeScene(uint32_t seed, int numTris, int numSpheres) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> pos(-10, 10), size(0.05f, 3.0f), unit(-1, 1);
+    RandomScene s;
+    std::vector<Aabb> boxes;
+    for (int i = 0; i < numTris; ++i) {
+        Vec3 c(pos(rng), pos(rng), pos(rng));
+        float sz = size(rng);
+        Vec3 p[3];
+        for (Vec3& v : p) v = c + Vec3(unit(rng), unit(rng), unit(rng)) * sz;
+        if (i % 17 == 0) p[2] = p[1];  // some degenerate ones
+        s.tris.push_back({{p[0].x, p[0].y, p[0].z, 0}, {p[1].x, p[1].y, p[1].z, 0}, {p[2].x, p[2].y, p[2].z, 0}});
+        Aabb b;
+        for (Vec3& v : p) b.grow(v);
+        boxes.push_back(b);
+    }
+    for (int i = 0; i < numSpheres; ++i) {
+        Vec3 c(pos(rng), pos(rng), pos(rng));
+        float r = size(rng) * 0.5f;
+        dev::Sphere sp{};
+        sp.centerRadius = {c.x, c.y, c.z, r};
+        for (int k = 0; k < 3; ++k) {
+            sp.worldToObject[k] = {k == 0 ? 1.f : 0.f, k == 1 ? 1.f : 0.f, k == 2 ? 1.f : 0.f, 0};
+            sp.objectToWorld[k] = sp.worldToObject[k];
+        }
+        s.spheres.push_back(sp);
+        s.sphereCenter.push_back(c);
+        s.sphereRadius.push_back(r);
+        Aabb b;
+        b.grow(c - Vec3(r));
+        b.grow(c + Vec3(r));
+        boxes.push_back(b);
+    }
+    s.bvh = buildBvh(boxes);
+    return s;
+}
+
+}  // namespace
+
+TEST_CASE("intersection kernels match the host reference on random scenes", "[cl][intersect]") {
+    DeviceContext& dc = testContext();
+    auto sources = loadKernelSources({"common.cl", "intersect.cl"});
+    cl::Program program = buildProgramFromSources(dc, sources, {});
+    cl::Kernel closest = CL_CPP(cl::Kernel(program, "intersect_closest"));
+    cl::Kernel shadow = CL_CPP(cl::Kernel(program, "intersect_shadow"));
+
+    RandomScene s = makeScene(1234, 3000, 200);
+    const int numTris = int(s.tris.size());
+    std::mt19937 rng(99);
+    std::uniform_real_distribution<float> pos(-15, 15), unit(-1, 1);
+    const int numRays = 20000;
+    std::vector<dev::Ray> rays(numRays);
+    std::vector<dev::ShadowRay> shadows(numRays);
+    for (int i = 0; i < numRays; ++i) {
+        Vec3 o(pos(rng), pos(rng), pos(rng));
+        Vec3 d = normalize(Vec3(unit(rng), unit(rng), unit(rng)));
+        if (i % 10 == 0) d = Vec3(0, 0, i % 20 == 0 ? 1.f : -1.f);  // axis-aligned: zero components
+        float tMax = (i % 3 == 0) ? 5.0f : INFINITY;
+        rays[i] = {{o.x, o.y, o.z, 0}, {d.x, d.y, d.z, tMax}};
+        shadows[i] = {{o.x, o.y, o.z, tMax}, {d.x, d.y, d.z, 0}, {1, 1, 1, 0}};
+    }
+    cl::Context& ctx = dc.context();
+    auto ro = [&](auto& v) {
+        using T = typename std::decay_t<decltype(v)>::value_type;
+        return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), v.data()));
+    };
+    cl::Buffer nodes = ro(s.bvh.nodes), refs = ro(s.bvh.primRefs), tris = ro(s.tris), sph = ro(s.spheres);
+    cl::Buffer rayBuf = ro(rays);
+    cl::Buffer hitBuf = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(dev::Hit) * numRays));
+    cl::Buffer shadowBuf = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR,
+                                             sizeof(dev::ShadowRay) * numRays, shadows.data()));
+    for (cl::Kernel* k : {&closest, &shadow}) {
+        k->setArg(0, nodes); k->setArg(1, refs); k->setArg(2, tris); k->setArg(3, sph); k->setArg(4, numTris);
+    }
+    closest.setArg(5, rayBuf); closest.setArg(6, hitBuf); closest.setArg(7, numRays);
+    shadow.setArg(5, shadowBuf); shadow.setArg(6, numRays);
+    cl::CommandQueue& q = dc.queue();
+    CL_CPP(q.enqueueNDRangeKernel(closest, cl::NullRange, cl::NDRange(roundUp(numRays, 64)), cl::NDRange(64)));
+    CL_CPP(q.enqueueNDRangeKernel(shadow, cl::NullRange, cl::NDRange(roundUp(numRays, 64)), cl::NDRange(64)));
+    std::vector<dev::Hit> hits(numRays);
+    CL_CPP(q.enqueueReadBuffer(hitBuf, CL_TRUE, 0, sizeof(dev::Hit) * numRays, hits.data()));
+    CL_CPP(q.enqueueReadBuffer(shadowBuf, CL_TRUE, 0, sizeof(dev::ShadowRay) * numRays, shadows.data()));
+
+    int hitCount = 0, primMismatch = 0, tMismatch = 0, occlusionMismatch = 0;
+    for (int i = 0; i < numRays; ++i) {
+        Vec3 o(rays[i].origin.x, rays[i].origin.y, rays[i].origin.z);
+        Vec3 d(rays[i].direction.x, rays[i].direction.y, rays[i].direction.z);
+        float tMax = rays[i].direction.w;
+        int prim = -1;
+        float tBest = tMax;
+        traverseBvh(s.bvh, o, d, tBest, [&](int ref, float& tm) {
+            float t, b1, b2;
+            bool h = ref < numTris
+                         ? intersectTriangleWatertight(o, d, Vec3(s.tris[ref].v0.x, s.tris[ref].v0.y, s.tris[ref].v0.z),
+                                                       Vec3(s.tris[ref].v1.x, s.tris[ref].v1.y, s.tris[ref].v1.z),
+                                                       Vec3(s.tris[ref].v2.x, s.tris[ref].v2.y, s.tris[ref].v2.z), tm, t, b1, b2)
+                         : intersectSphere(o, d, s.sphereCenter[ref - numTris], s.sphereRadius[ref - numTris], tm, t);
+            if (h) { tm = t; prim = ref; }
+        });
+        const dev::Hit& h = hits[i];
+        hitCount += prim >= 0;
+        bool devHit = h.prim >= 0;
+        if (devHit != (prim >= 0)) { ++primMismatch; continue; }
+        if (prim < 0) continue;
+        if (h.prim != prim) {
+            // Two primitives at (almost) the same distance may be ordered differently by float noise.
+            if (std::fabs(h.t - tBest) > 1e-4f * std::max(1.0f, tBest)) ++primMismatch;
+            continue;
+        }
+        if (std::fabs(h.t - tBest) > 1e-5f * std::max(1.0f, tBest)) ++tMismatch;
+        bool occluded = shadows[i].contribution.x == 0;
+        if (!occluded) ++occlusionMismatch;  // the ray hit something before tMax: must be occluded
+    }
+    // Rays the host says miss must not be occluded on the device.
+    for (int i = 0; i < numRays; ++i)
+        if (hits[i].prim < 0 && shadows[i].contribution.x == 0) ++occlusionMismatch;
+    INFO("rays with hits: " << hitCount << " of " << numRays);
+    CHECK(hitCount > numRays / 10);
+    CHECK(primMismatch == 0);
+    CHECK(tMismatch == 0);
+    CHECK(occlusionMismatch == 0);
+}
