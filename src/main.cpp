@@ -8,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 #include <string>
 #include <unistd.h>
 #include <vector>
@@ -16,6 +17,7 @@
 #include "cl/program.h"
 #include "image/image.h"
 #include "render/device_scene.h"
+#include "render/multi_device.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
 #include "util/error.h"
@@ -46,8 +48,9 @@ const char* kRenderHelp =
     "\n"
     "options:\n"
     "  -o, --output DIR      output directory (default: the current directory); must exist\n"
-    "  --device SPEC         OpenCL device: an index from `clrt devices`, cpu, gpu, or a name\n"
-    "                        substring (default: the first GPU, else the CPU device)\n"
+    "  --device SPEC         OpenCL device: an index from `clrt devices`, cpu, gpu, a name\n"
+    "                        substring, `all`, or a comma list (0,2) to render on several devices\n"
+    "                        at once (default: the first GPU, else the CPU device)\n"
     "  --spp N               samples per pixel, overriding each camera's NumSamples\n"
     "  --seed N              random seed (default 0); the same seed gives the same image\n"
     "  --camera ID           render only the camera with this id\n"
@@ -146,27 +149,44 @@ int cmdRender(const Args& a) {
         throw Error(a.positional[0] + (a.cameraId.empty() ? ": the scene has no camera" : ": no camera with id " + a.cameraId));
 
     std::vector<DeviceInfo> devs = selectDevices(a.device);
-    const DeviceInfo& di = devs.front();
-    if (devs.size() > 1) warn("several devices selected; rendering on the first: " + di.name);
 
     t = std::chrono::steady_clock::now();
     DeviceScene ds = flattenScene(scene);
     double tFlatten = since(t);
 
+    // One context and program per device; a device whose setup fails is dropped while others remain.
     t = std::chrono::steady_clock::now();
-    DeviceContext dc(di);
-    Renderer renderer(dc, ds);
+    std::vector<std::unique_ptr<DeviceContext>> contexts;
+    std::vector<std::unique_ptr<Renderer>> renderers;
+    for (const DeviceInfo& d : devs) {
+        try {
+            auto dc = std::make_unique<DeviceContext>(d);
+            auto r = std::make_unique<Renderer>(*dc, ds);
+            contexts.push_back(std::move(dc));
+            renderers.push_back(std::move(r));
+        } catch (const Error& e) {
+            if (devs.size() == 1) throw;
+            warn("device [" + std::to_string(d.index) + "] " + d.name + " dropped: " + e.what());
+        }
+    }
+    if (renderers.empty()) throw Error("no selected device could build the renderer", ExitCode::Device);
     double tBuild = since(t);
+    Renderer& renderer = *renderers.front();
+    const DeviceInfo& di = renderer.context().info();
     if (verbose()) {
         std::string flags;
         for (const std::string& d : ds.features.defines()) flags += " " + d;
-        info("device: " + di.name + " (" + di.platformName + ")");
+        for (auto& r : renderers) info("device: [" + std::to_string(r->context().info().index) + "] " + r->context().info().name +
+                                       " (" + r->context().info().platformName + ")");
         info("kernel flags:" + flags + (renderer.buildInfo().cacheHit ? " (cached binary)" : ""));
         info("primitives: " + std::to_string(ds.params.numTriangles) + " triangles, " + std::to_string(ds.params.numSpheres) +
              " spheres; BVH SAH cost " + std::to_string(ds.bvh.sahCost) + ", depth " + std::to_string(ds.bvh.depth));
     }
 
     RenderCounters counters;
+    std::vector<DeviceWork> work(renderers.size());
+    for (size_t i = 0; i < renderers.size(); ++i)
+        work[i].name = "[" + std::to_string(renderers[i]->context().info().index) + "] " + renderers[i]->context().info().name;
     double tOutput = 0;
     for (const Camera* cam : cams) {
         RenderSettings rs;
@@ -174,7 +194,16 @@ int cmdRender(const Args& a) {
         rs.seed = a.seed;
         Progress prog("camera " + std::to_string(cam->id) + " (" + cam->imageName + ", " + std::to_string(cam->width) + "x" +
                       std::to_string(cam->height) + ", " + std::to_string(rs.spp) + " spp)");
-        ImageRGB img = renderer.render(*cam, rs, counters, [&](size_t d, size_t n) { prog.update(d, n); });
+        ImageRGB img;
+        if (renderers.size() == 1) {
+            img = renderer.render(*cam, rs, work[0].counters, [&](size_t d, size_t n) { prog.update(d, n); });
+        } else {
+            std::vector<Renderer*> rp;
+            for (auto& r : renderers) rp.push_back(r.get());
+            auto w0 = std::chrono::steady_clock::now();
+            img = renderOnDevices(rp, *cam, rs, work, [&](size_t d, size_t n) { prog.update(d, n); });
+            counters.seconds += since(w0);
+        }
         auto to = std::chrono::steady_clock::now();
         fs::path out = fs::path(a.outDir) / fs::path(cam->imageName).filename();
         std::string ext = out.extension().string();
@@ -192,6 +221,21 @@ int cmdRender(const Args& a) {
         tOutput += since(to);
         std::fprintf(stderr, "wrote %s\n", out.string().c_str());
     }
+    double deviceSeconds = 0;
+    for (const DeviceWork& w : work) {
+        counters.cameraRays += w.counters.cameraRays;
+        counters.secondaryRays += w.counters.secondaryRays;
+        counters.shadowRays += w.counters.shadowRays;
+        deviceSeconds = std::max(deviceSeconds, w.counters.seconds);
+    }
+    if (renderers.size() == 1) counters.seconds = deviceSeconds;
+    if (work.size() > 1)
+        for (const DeviceWork& w : work) {
+            double r = double(w.counters.cameraRays + w.counters.secondaryRays + w.counters.shadowRays);
+            std::fprintf(stderr, "device %s: %llu tiles, %llu pixels, %.2f Mrays/s%s\n", w.name.c_str(),
+                         (unsigned long long)w.counters.tiles, (unsigned long long)w.counters.pixels,
+                         w.counters.seconds > 0 ? r / w.counters.seconds * 1e-6 : 0.0, w.failed ? " (failed)" : "");
+        }
     double rays = double(counters.cameraRays + counters.secondaryRays + counters.shadowRays);
     double secs = std::max(counters.seconds, 1e-9);
     std::fprintf(stderr, "times: parse %.3fs, bvh %.3fs (flatten %.3fs), kernel build %.3fs%s, render %.3fs, output %.3fs; %.2f Mrays/s\n",

@@ -93,9 +93,32 @@ struct Renderer::Impl {
 Renderer::Renderer(DeviceContext& dc, const DeviceScene& scene) : impl_(new Impl(dc, scene)) {}
 Renderer::~Renderer() = default;
 const BuildInfo& Renderer::buildInfo() const { return impl_->build; }
+DeviceContext& Renderer::context() { return impl_->dc; }
 
 ImageRGB Renderer::render(const Camera& cam, const RenderSettings& settings, RenderCounters& counters,
                           const std::function<void(size_t, size_t)>& progress) {
+    ImageRGB out;
+    out.width = cam.width;
+    out.height = cam.height;
+    out.isHdr = true;
+    out.pixels.assign(size_t(cam.width) * cam.height * 3, 0.0f);
+    bool handedOut = false;
+    renderTiles(
+        cam, settings, counters,
+        [&](size_t& first, size_t& count) {
+            if (handedOut) return false;
+            handedOut = true;
+            first = 0;
+            count = size_t(cam.width) * cam.height;
+            return true;
+        },
+        out, progress);
+    return out;
+}
+
+void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, RenderCounters& counters,
+                           const std::function<bool(size_t&, size_t&)>& nextTile, ImageRGB& out,
+                           const std::function<void(size_t, size_t)>& progress) {
     Impl& m = *impl_;
     auto t0 = std::chrono::steady_clock::now();
     const DeviceScene& ds = m.scene;
@@ -118,6 +141,8 @@ ImageRGB Renderer::render(const Camera& cam, const RenderSettings& settings, Ren
                         " MiB per buffer",
                     ExitCode::BadInput);
 
+    // The split depth depends only on the image and the batch limit, never on the tile: every
+    // device and every tiling computes each pixel identically.
     const size_t batch = std::min(numPixels, settings.maxBatchPixels);
     const bool bounces = ds.features.mirror || ds.features.dielectric || ds.features.conductor;
     dev::SceneParams sp = ds.params;
@@ -177,69 +202,73 @@ ImageRGB Renderer::render(const Camera& cam, const RenderSettings& settings, Ren
     m.kCompact.setArg(4, m.paths); m.kCompact.setArg(5, m.rays);
 
     std::vector<int> valid, target;
-    const size_t totalBatches = size_t(cp.spp) * ((numPixels + batch - 1) / batch);
-    size_t doneBatches = 0;
-    for (int sample = 0; sample < cp.spp; ++sample) {
-        for (size_t first = 0; first < numPixels; first += batch) {
-            int n = int(std::min(batch, numPixels - first));
-            kg.setArg(2, int(first)); kg.setArg(3, sample); kg.setArg(4, n);
-            m.run(kg, n);
-            counters.cameraRays += n;
-            for (int depth = 0; n > 0; ++depth) {
-                m.kIntersect.setArg(7, n);
-                m.run(m.kIntersect, n);
-                ks.setArg(2, n);
-                m.run(ks, n);
-                for (int l0 = 0; l0 < numLights; l0 += int(lightChunk)) {
-                    int l1 = std::min(numLights, l0 + int(lightChunk));
-                    int slots = n * (l1 - l0);
-                    kl.setArg(1, n); kl.setArg(2, l0); kl.setArg(3, l1);
-                    m.run(kl, n);
-                    m.kShadow.setArg(6, slots);
-                    m.run(m.kShadow, slots);
-                    m.kGather.setArg(0, n); m.kGather.setArg(1, l1 - l0);
-                    m.run(m.kGather, n);
-                    counters.shadowRays += slots;
+    std::vector<dev::float4> tilePixels;
+    const float inv = 1.0f / float(cp.spp);
+    size_t tileFirst = 0, tileCount = 0;
+    while (nextTile(tileFirst, tileCount)) {
+        const size_t tileEnd = std::min(numPixels, tileFirst + tileCount);
+        const size_t totalBatches = size_t(cp.spp) * ((tileEnd - tileFirst + batch - 1) / batch);
+        size_t doneBatches = 0;
+        for (int sample = 0; sample < cp.spp; ++sample) {
+            for (size_t first = tileFirst; first < tileEnd; first += batch) {
+                int n = int(std::min(batch, tileEnd - first));
+                kg.setArg(2, int(first)); kg.setArg(3, sample); kg.setArg(4, n);
+                m.run(kg, n);
+                counters.cameraRays += n;
+                for (int depth = 0; n > 0; ++depth) {
+                    m.kIntersect.setArg(7, n);
+                    m.run(m.kIntersect, n);
+                    ks.setArg(2, n);
+                    m.run(ks, n);
+                    for (int l0 = 0; l0 < numLights; l0 += int(lightChunk)) {
+                        int l1 = std::min(numLights, l0 + int(lightChunk));
+                        int slots = n * (l1 - l0);
+                        kl.setArg(1, n); kl.setArg(2, l0); kl.setArg(3, l1);
+                        m.run(kl, n);
+                        m.kShadow.setArg(6, slots);
+                        m.run(m.kShadow, slots);
+                        m.kGather.setArg(0, n); m.kGather.setArg(1, l1 - l0);
+                        m.run(m.kGather, n);
+                        counters.shadowRays += slots;
+                    }
+                    m.kAccumulate.setArg(0, n);
+                    m.run(m.kAccumulate, n);
+                    if (!bounces || depth >= sp.maxDepth) break;
+                    // Order-preserving compaction of the children.
+                    size_t slots = size_t(n) * 2;
+                    valid.resize(slots);
+                    target.resize(slots);
+                    CL_CPP(q.enqueueReadBuffer(m.childValid, CL_TRUE, 0, slots * sizeof(int), valid.data()));
+                    int next = 0;
+                    for (size_t i = 0; i < slots; ++i) target[i] = valid[i] ? next++ : -1;
+                    if (next == 0) break;
+                    CL_CPP(q.enqueueWriteBuffer(m.compactTarget, CL_FALSE, 0, slots * sizeof(int), target.data()));
+                    m.kCompact.setArg(0, int(slots));
+                    m.run(m.kCompact, slots);
+                    n = next;
+                    counters.secondaryRays += n;
                 }
-                m.kAccumulate.setArg(0, n);
-                m.run(m.kAccumulate, n);
-                if (!bounces || depth >= sp.maxDepth) break;
-                // Order-preserving compaction of the children.
-                size_t slots = size_t(n) * 2;
-                valid.resize(slots);
-                target.resize(slots);
-                CL_CPP(q.enqueueReadBuffer(m.childValid, CL_TRUE, 0, slots * sizeof(int), valid.data()));
-                int next = 0;
-                for (size_t i = 0; i < slots; ++i) target[i] = valid[i] ? next++ : -1;
-                if (next == 0) break;
-                CL_CPP(q.enqueueWriteBuffer(m.compactTarget, CL_FALSE, 0, slots * sizeof(int), target.data()));
-                m.kCompact.setArg(0, int(slots));
-                m.run(m.kCompact, slots);
-                n = next;
-                counters.secondaryRays += n;
-            }
-            ++doneBatches;
-            if (progress) {
-                CL_CPP(q.finish());
-                progress(doneBatches, totalBatches);
+                ++doneBatches;
+                if (progress) {
+                    CL_CPP(q.finish());
+                    progress(doneBatches, totalBatches);
+                }
             }
         }
-    }
-    std::vector<dev::float4> pixels(numPixels);
-    CL_CPP(q.enqueueReadBuffer(image, CL_TRUE, 0, imageBytes, pixels.data()));
-    ImageRGB out;
-    out.width = cam.width;
-    out.height = cam.height;
-    out.isHdr = true;
-    out.pixels.resize(numPixels * 3);
-    const float inv = 1.0f / float(cp.spp);
-    for (size_t i = 0; i < numPixels; ++i) {
-        out.pixels[i * 3] = pixels[i].x * inv;
-        out.pixels[i * 3 + 1] = pixels[i].y * inv;
-        out.pixels[i * 3 + 2] = pixels[i].z * inv;
+        // Read the tile back: each tile's pixels are written by exactly one device.
+        tilePixels.resize(tileEnd - tileFirst);
+        CL_CPP(q.enqueueReadBuffer(image, CL_TRUE, tileFirst * sizeof(dev::float4),
+                                   tilePixels.size() * sizeof(dev::float4), tilePixels.data()));
+        for (size_t i = 0; i < tilePixels.size(); ++i) {
+            float* o = &out.pixels[(tileFirst + i) * 3];
+            o[0] = tilePixels[i].x * inv;
+            o[1] = tilePixels[i].y * inv;
+            o[2] = tilePixels[i].z * inv;
+        }
+        counters.tiles += 1;
+        counters.pixels += tileEnd - tileFirst;
     }
     counters.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    return out;
 }
 
 }  // namespace clrt

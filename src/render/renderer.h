@@ -17,6 +17,7 @@ namespace clrt {
 
 struct RenderCounters {
     uint64_t cameraRays = 0, secondaryRays = 0, shadowRays = 0;
+    uint64_t tiles = 0, pixels = 0;  // work done (tiles and pixels, all samples each)
     double seconds = 0;  // wall time of the render loop (device work included)
 };
 
@@ -35,6 +36,15 @@ public:
     // Renders one camera; `progress(done, total)` is called after each batch.
     ImageRGB render(const Camera& cam, const RenderSettings& settings, RenderCounters& counters,
                     const std::function<void(size_t, size_t)>& progress = {});
+
+    // Renders the pixel ranges handed out by nextTile(first, count) (false: none left), all samples
+    // of each, into `out` (width*height*3 floats, already sized). Several Renderers on different
+    // devices may share `out`: tiles are disjoint, and a pixel's value does not depend on which
+    // device or tile rendered it.
+    void renderTiles(const Camera& cam, const RenderSettings& settings, RenderCounters& counters,
+                     const std::function<bool(size_t&, size_t&)>& nextTile, ImageRGB& out,
+                     const std::function<void(size_t, size_t)>& progress = {});
+    DeviceContext& context();
 
 private:
     struct Impl;
