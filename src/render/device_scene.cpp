@@ -307,6 +307,22 @@ DeviceScene flattenScene(const Scene& scene) {
     boxes.insert(boxes.end(), sphereBoxes.begin(), sphereBoxes.end());
     ds.bvh = buildBvh(boxes);
     ds.bvhSeconds = secondsSince(tb);
+    // Store triangles in BVH leaf order so a leaf's triangles are contiguous in memory.
+    {
+        const int numTris = int(ds.triangles.size());
+        std::vector<dev::Triangle> tris;
+        std::vector<dev::TriangleShading> shading;
+        tris.reserve(ds.triangles.size());
+        shading.reserve(ds.triangleShading.size());
+        for (int& ref : ds.bvh.primRefs) {
+            if (ref >= numTris) continue;  // spheres keep their indices
+            tris.push_back(ds.triangles[ref]);
+            shading.push_back(ds.triangleShading[ref]);
+            ref = int(tris.size()) - 1;
+        }
+        ds.triangles.swap(tris);
+        ds.triangleShading.swap(shading);
+    }
     if (ds.triangles.empty()) { ds.triangles.push_back(dev::Triangle{}); ds.triangleShading.push_back(dev::TriangleShading{}); }
     if (ds.spheres.empty()) ds.spheres.push_back(dev::Sphere{});
     if (ds.textureSets.empty()) ds.textureSets.push_back(dev::TextureSet{{-1, -1, -1, -1}});

@@ -1,0 +1,275 @@
+// ray_bench — the same rays traced by clrt's intersection kernels and by Embree 3 (a baseline nobody
+// here wrote), both on this machine's CPU. For a scene it generates, on the host:
+//   camera rays   one per pixel centre of the first camera (the camera kernel's formula);
+//   shadow rays   from each camera-ray hit towards the first point/spot/area light (or straight up);
+//   diffuse rays  cosine-distributed around each hit's normal (fixed seed);
+// then times clrt's intersect_closest / intersect_shadow kernels on the chosen OpenCL device and
+// Embree's single-ray API (rtcIntersect1 / rtcOccluded1) on N threads, and prints Mrays/s, the ratio
+// clrt/Embree, and how often the two agree on hit/miss (and on the primitive hit).
+//
+// usage: ray_bench SCENE [--runs 5] [--device SPEC] [--threads 2]
+#include <embree3/rtcore.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <random>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "cl/check.h"
+#include "cl/devices.h"
+#include "cl/program.h"
+#include "render/device_scene.h"
+#include "scene/scene_loader.h"
+#include "util/error.h"
+
+using namespace clrt;
+
+namespace {
+
+double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+}
+
+// Host copy of Ray_OffsetOrigin (cl_kernels/common.cl).
+Vec3 offsetOrigin(Vec3 p, Vec3 n) {
+    auto one = [](float p, float n) {
+        int of = int(256.0f * n);
+        int bits;
+        std::memcpy(&bits, &p, 4);
+        bits += p < 0 ? -of : of;
+        float pi;
+        std::memcpy(&pi, &bits, 4);
+        return std::fabs(p) < 1.0f / 32.0f ? p + n / 65536.0f : pi;
+    };
+    return {one(p.x, n.x), one(p.y, n.y), one(p.z, n.z)};
+}
+
+struct RaySet {
+    std::string name;
+    std::vector<dev::Ray> rays;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    try {
+        if (argc < 2) {
+            std::fprintf(stderr, "usage: ray_bench SCENE [--runs N] [--device SPEC] [--threads T]\n");
+            return 1;
+        }
+        std::string scenePath = argv[1], deviceSpec = "cpu";
+        int runs = 5, threads = 2;
+        for (int i = 2; i + 1 < argc; i += 2) {
+            std::string o = argv[i];
+            if (o == "--runs") runs = std::max(1, std::atoi(argv[i + 1]));
+            else if (o == "--device") deviceSpec = argv[i + 1];
+            else if (o == "--threads") threads = std::max(1, std::atoi(argv[i + 1]));
+        }
+        Scene scene = loadScene(scenePath);
+        DeviceScene ds = flattenScene(scene);
+        const int numTris = ds.params.numTriangles;
+        if (ds.params.numSpheres > 0) std::fprintf(stderr, "note: spheres are ignored by this benchmark\n");
+
+        // ---- Embree scene: the same world-space triangles.
+        RTCDevice edev = rtcNewDevice(("threads=" + std::to_string(threads)).c_str());
+        RTCScene escene = rtcNewScene(edev);
+        RTCGeometry geom = rtcNewGeometry(edev, RTC_GEOMETRY_TYPE_TRIANGLE);
+        float* vb = (float*)rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                                    size_t(numTris) * 3);
+        unsigned* ib = (unsigned*)rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                          3 * sizeof(unsigned), size_t(numTris));
+        for (int t = 0; t < numTris; ++t) {
+            const dev::Triangle& tr = ds.triangles[t];
+            const dev::float4* v[3] = {&tr.v0, &tr.v1, &tr.v2};
+            for (int k = 0; k < 3; ++k) {
+                vb[(size_t(t) * 3 + k) * 3 + 0] = v[k]->x;
+                vb[(size_t(t) * 3 + k) * 3 + 1] = v[k]->y;
+                vb[(size_t(t) * 3 + k) * 3 + 2] = v[k]->z;
+                ib[size_t(t) * 3 + k] = unsigned(t * 3 + k);
+            }
+        }
+        rtcCommitGeometry(geom);
+        rtcAttachGeometry(escene, geom);
+        rtcReleaseGeometry(geom);
+        auto tb = std::chrono::steady_clock::now();
+        rtcCommitScene(escene);
+        double embreeBuild = std::chrono::duration<double>(std::chrono::steady_clock::now() - tb).count();
+
+        auto traceEmbree = [&](const std::vector<dev::Ray>& rays, bool shadow, std::vector<int>& prim) {
+            prim.assign(rays.size(), -1);
+            std::atomic<size_t> next{0};
+            auto work = [&]() {
+                RTCIntersectContext ctx;
+                for (;;) {
+                    size_t b = next.fetch_add(1024);
+                    if (b >= rays.size()) break;
+                    size_t e = std::min(rays.size(), b + 1024);
+                    for (size_t i = b; i < e; ++i) {
+                        rtcInitIntersectContext(&ctx);
+                        const dev::Ray& r = rays[i];
+                        RTCRayHit rh;
+                        rh.ray.org_x = r.origin.x; rh.ray.org_y = r.origin.y; rh.ray.org_z = r.origin.z;
+                        rh.ray.dir_x = r.direction.x; rh.ray.dir_y = r.direction.y; rh.ray.dir_z = r.direction.z;
+                        rh.ray.tnear = 0; rh.ray.tfar = r.direction.w; rh.ray.mask = ~0u; rh.ray.flags = 0; rh.ray.time = 0;
+                        if (shadow) {
+                            rtcOccluded1(escene, &ctx, &rh.ray);
+                            prim[i] = rh.ray.tfar < 0 ? 1 : -1;
+                        } else {
+                            rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+                            rtcIntersect1(escene, &ctx, &rh);
+                            prim[i] = rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? -1 : int(rh.hit.primID);
+                        }
+                    }
+                }
+            };
+            std::vector<std::thread> ts;
+            for (int t = 0; t < threads; ++t) ts.emplace_back(work);
+            for (auto& t : ts) t.join();
+        };
+
+        // ---- clrt: intersection program and buffers.
+        DeviceInfo di = selectDevices(deviceSpec).front();
+        DeviceContext dc(di);
+        cl::Program prog = buildProgram(dc, {"common.cl", "intersect.cl"}, ds.features.defines());
+        cl::Kernel kClosest = CL_CPP(cl::Kernel(prog, "intersect_closest"));
+        cl::Kernel kShadow = CL_CPP(cl::Kernel(prog, "intersect_shadow"));
+        auto upload = [&](auto& v) {
+            using T = typename std::decay_t<decltype(v)>::value_type;
+            return CL_CPP(cl::Buffer(dc.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), v.data()));
+        };
+        cl::Buffer nodes = upload(ds.bvh.nodes), refs = upload(ds.bvh.primRefs), tris = upload(ds.triangles),
+                   sph = upload(ds.spheres);
+        for (cl::Kernel* k : {&kClosest, &kShadow}) {
+            k->setArg(0, nodes); k->setArg(1, refs); k->setArg(2, tris); k->setArg(3, sph); k->setArg(4, numTris);
+        }
+        auto traceClrt = [&](const std::vector<dev::Ray>& rays, bool shadow, std::vector<int>& prim) {
+            const int n = int(rays.size());
+            prim.assign(rays.size(), -1);
+            cl::CommandQueue& q = dc.queue();
+            const size_t global = roundUp(rays.size(), 64);
+            if (!shadow) {
+                cl::Buffer rb = upload(const_cast<std::vector<dev::Ray>&>(rays));
+                cl::Buffer hb = CL_CPP(cl::Buffer(dc.context(), CL_MEM_READ_WRITE, sizeof(dev::Hit) * rays.size()));
+                kClosest.setArg(5, rb); kClosest.setArg(6, hb); kClosest.setArg(7, n);
+                CL_CPP(q.finish());
+                auto t0 = std::chrono::steady_clock::now();
+                CL_CPP(q.enqueueNDRangeKernel(kClosest, cl::NullRange, cl::NDRange(global), cl::NDRange(64)));
+                CL_CPP(q.finish());
+                double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+                std::vector<dev::Hit> hits(rays.size());
+                CL_CPP(q.enqueueReadBuffer(hb, CL_TRUE, 0, sizeof(dev::Hit) * hits.size(), hits.data()));
+                for (size_t i = 0; i < hits.size(); ++i) prim[i] = hits[i].prim;
+                return s;
+            }
+            std::vector<dev::ShadowRay> sr(rays.size());
+            for (size_t i = 0; i < rays.size(); ++i) {
+                sr[i].origin = rays[i].origin;
+                sr[i].origin.w = rays[i].direction.w;
+                sr[i].direction = rays[i].direction;
+                sr[i].contribution = {1, 1, 1, 0};
+            }
+            cl::Buffer sb = upload(sr);
+            kShadow.setArg(5, sb); kShadow.setArg(6, n);
+            CL_CPP(q.finish());
+            auto t0 = std::chrono::steady_clock::now();
+            CL_CPP(q.enqueueNDRangeKernel(kShadow, cl::NullRange, cl::NDRange(global), cl::NDRange(64)));
+            CL_CPP(q.finish());
+            double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+            CL_CPP(q.enqueueReadBuffer(sb, CL_TRUE, 0, sizeof(dev::ShadowRay) * sr.size(), sr.data()));
+            for (size_t i = 0; i < sr.size(); ++i) prim[i] = sr[i].contribution.x == 0 ? 1 : -1;
+            return s;
+        };
+
+        // ---- Rays.
+        const Camera& cam = scene.cameras.at(0);
+        dev::CameraParams cp = makeCameraParams(cam);
+        RaySet camera{"camera", {}};
+        for (int y = 0; y < cam.height; ++y)
+            for (int x = 0; x < cam.width; ++x) {
+                float su = (x + 0.5f) / cam.width, sv = (y + 0.5f) / cam.height;
+                float uc = cp.nearPlane.x + (cp.nearPlane.y - cp.nearPlane.x) * su;
+                float vc = cp.nearPlane.w - (cp.nearPlane.w - cp.nearPlane.z) * sv;
+                Vec3 d = normalize(cam.u * uc + cam.v * vc - cam.w * cam.nearDistance);
+                camera.rays.push_back({{cam.position.x, cam.position.y, cam.position.z, 0}, {d.x, d.y, d.z, INFINITY}});
+            }
+        std::vector<int> camPrim;
+        traceClrt(camera.rays, false, camPrim);  // also warms up the kernel
+        // Hit points -> shadow and diffuse rays.
+        Vec3 lightPos(0, 0, 0);
+        bool haveLight = false;
+        for (const dev::Light& l : ds.lights)
+            if (l.kind == dev::LIGHT_POINT || l.kind == dev::LIGHT_SPOT || l.kind == dev::LIGHT_AREA) {
+                lightPos = Vec3(l.position.x, l.position.y, l.position.z);
+                haveLight = true;
+                break;
+            }
+        Aabb world;
+        world.min = Vec3(ds.bvh.nodes[0].boundsMin.x, ds.bvh.nodes[0].boundsMin.y, ds.bvh.nodes[0].boundsMin.z);
+        world.max = Vec3(ds.bvh.nodes[0].boundsMax.x, ds.bvh.nodes[0].boundsMax.y, ds.bvh.nodes[0].boundsMax.z);
+        if (!haveLight) lightPos = Vec3(world.centroid().x, world.max.y + length(world.max - world.min), world.centroid().z);
+        RaySet shadow{"shadow", {}}, diffuse{"diffuse", {}};
+        std::mt19937 rng(7);
+        std::uniform_real_distribution<float> U(0, 1);
+        for (size_t i = 0; i < camera.rays.size(); ++i) {
+            int p = camPrim[i];
+            if (p < 0 || p >= numTris) continue;
+            const dev::Triangle& tr = ds.triangles[p];
+            Vec3 v0(tr.v0.x, tr.v0.y, tr.v0.z), v1(tr.v1.x, tr.v1.y, tr.v1.z), v2(tr.v2.x, tr.v2.y, tr.v2.z);
+            Vec3 o(camera.rays[i].origin.x, camera.rays[i].origin.y, camera.rays[i].origin.z);
+            Vec3 d(camera.rays[i].direction.x, camera.rays[i].direction.y, camera.rays[i].direction.z);
+            Vec3 n = normalize(cross(v1 - v0, v2 - v0));
+            if (dot(n, d) > 0) n = -n;
+            // Hit point: intersect the triangle's plane (good enough for generating rays).
+            float t = dot(v0 - o, n) / dot(d, n);
+            Vec3 ph = offsetOrigin(o + d * t, n);
+            Vec3 toL = lightPos - ph;
+            float dist = length(toL);
+            Vec3 l = toL / dist;
+            shadow.rays.push_back({{ph.x, ph.y, ph.z, 0}, {l.x, l.y, l.z, dist * 0.9999f}});
+            Vec3 a = std::fabs(n.x) > 0.9f ? Vec3(0, 1, 0) : Vec3(1, 0, 0);
+            Vec3 tu = normalize(cross(a, n)), tv = cross(n, tu);
+            float r1 = U(rng), r2 = U(rng), r = std::sqrt(r1), phi = 2 * float(M_PI) * r2;
+            Vec3 dd = normalize(tu * (r * std::cos(phi)) + tv * (r * std::sin(phi)) + n * std::sqrt(std::max(0.f, 1 - r1)));
+            diffuse.rays.push_back({{ph.x, ph.y, ph.z, 0}, {dd.x, dd.y, dd.z, INFINITY}});
+        }
+
+        std::printf("scene %s: %d triangles; clrt device: %s; Embree %d threads (BVH build %.3f s)\n",
+                    scenePath.c_str(), numTris, di.name.c_str(), threads, embreeBuild);
+        std::printf("%-8s %10s %12s %12s %8s %10s %10s\n", "rays", "count", "clrt Mray/s", "embree Mray/s", "ratio",
+                    "hit agree", "prim agree");
+        for (RaySet* set : {&camera, &shadow, &diffuse}) {
+            bool isShadow = set == &shadow;
+            std::vector<double> tc, te;
+            std::vector<int> pc, pe;
+            for (int r = 0; r < runs; ++r) {
+                tc.push_back(traceClrt(set->rays, isShadow, pc));
+                auto t0 = std::chrono::steady_clock::now();
+                traceEmbree(set->rays, isShadow, pe);
+                te.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+            }
+            size_t hitAgree = 0, primAgree = 0;
+            for (size_t i = 0; i < pc.size(); ++i) {
+                hitAgree += (pc[i] >= 0) == (pe[i] >= 0);
+                primAgree += pc[i] == pe[i];
+            }
+            double n = double(set->rays.size());
+            double mc = n / median(tc) * 1e-6, me = n / median(te) * 1e-6;
+            std::printf("%-8s %10zu %12.2f %12.2f %8.2f %9.3f%% %9.3f%%\n", set->name.c_str(), set->rays.size(), mc, me,
+                        mc / me, 100.0 * hitAgree / std::max(1.0, n), 100.0 * primAgree / std::max(1.0, n));
+        }
+        std::printf("(medians of %d runs)\n", runs);
+        rtcReleaseScene(escene);
+        rtcReleaseDevice(edev);
+        return 0;
+    } catch (const Error& e) {
+        std::fprintf(stderr, "ray_bench: error: %s\n", e.what());
+        return int(e.code());
+    }
+}
