@@ -56,6 +56,8 @@ const char* kRenderHelp =
     "  --camera ID           render only the camera with this id\n"
     "  --ldr-quantize MODE   round (default) or floor: how .png outputs turn clamped radiance into\n"
     "                        8 bits; the course's reference renders truncate (floor)\n"
+    "  --all-features        build the kernels with every feature, not only what the scene uses\n"
+    "                        (for measuring what specialisation gains)\n"
     "  -v, --verbose         print the kernel build flags and other details\n"
     "  -h, --help            this text\n";
 
@@ -64,7 +66,7 @@ struct Args {
     std::string outDir = ".", device, cameraId;
     int spp = 0;
     uint32_t seed = 0;
-    bool verbose = false, help = false, truncatePng = false;
+    bool verbose = false, help = false, truncatePng = false, allFeatures = false;
 };
 
 int parseInt(const std::string& opt, const std::string& v, long lo, long hi) {
@@ -92,6 +94,7 @@ Args parseRenderArgs(int argc, char** argv, int start) {
         else if (s == "--seed") a.seed = uint32_t(parseInt(s, value(), 0, 2147483647));
         else if (s == "--camera") a.cameraId = value();
         else if (s == "-v" || s == "--verbose") a.verbose = true;
+        else if (s == "--all-features") a.allFeatures = true;
         else if (s == "--ldr-quantize") {
             std::string v = value();
             if (v != "round" && v != "floor") throw Error("--ldr-quantize: expected round or floor, got '" + v + "'", ExitCode::Usage);
@@ -149,10 +152,29 @@ int cmdRender(const Args& a) {
         throw Error(a.positional[0] + (a.cameraId.empty() ? ": the scene has no camera" : ": no camera with id " + a.cameraId));
 
     std::vector<DeviceInfo> devs = selectDevices(a.device);
+    // An image no selected device can hold is refused here, before the BVH, the kernel build and any
+    // host allocation of its size (the renderer checks the same limit per device).
+    for (const Camera* c : cams) {
+        const uint64_t bytes = uint64_t(c->width) * uint64_t(c->height) * sizeof(dev::float4);
+        uint64_t best = 0;
+        std::string bestName;
+        for (const DeviceInfo& d : devs)
+            if (std::min<uint64_t>(d.maxAlloc, d.globalMem / 2) >= best) {
+                best = std::min<uint64_t>(d.maxAlloc, d.globalMem / 2);
+                bestName = d.name;
+            }
+        if (bytes > best)
+            throw Error(a.positional[0] + ": camera " + std::to_string(c->id) + ": " + std::to_string(c->width) + "x" +
+                            std::to_string(c->height) + " needs " + std::to_string(bytes >> 20) +
+                            " MiB of image memory; device '" + bestName + "' allows " + std::to_string(best >> 20) +
+                            " MiB per buffer",
+                        ExitCode::BadInput);
+    }
 
     t = std::chrono::steady_clock::now();
     DeviceScene ds = flattenScene(scene);
     double tFlatten = since(t);
+    if (a.allFeatures) ds.features = FeatureSet::all();
 
     // One context and program per device; a device whose setup fails is dropped while others remain.
     t = std::chrono::steady_clock::now();

@@ -17,6 +17,13 @@ struct FeatureSet {
     bool textures = false;
     bool spheres = false;
     std::vector<std::string> defines() const;  // e.g. {"-DCLRT_HAS_POINT_LIGHT=1", ...}
+    // Every feature on: the unspecialised program (clrt render --all-features).
+    static FeatureSet all() {
+        FeatureSet f;
+        f.pointLight = f.spotLight = f.directionalLight = f.areaLight = f.envLight = true;
+        f.mirror = f.dielectric = f.conductor = f.textures = f.spheres = true;
+        return f;
+    }
 };
 
 struct DeviceScene {

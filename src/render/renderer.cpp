@@ -242,7 +242,8 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
                     int next = 0;
                     for (size_t i = 0; i < slots; ++i) target[i] = valid[i] ? next++ : -1;
                     if (next == 0) break;
-                    CL_CPP(q.enqueueWriteBuffer(m.compactTarget, CL_FALSE, 0, slots * sizeof(int), target.data()));
+                    // Blocking: `target` is resized on the next pass, so the copy must be done before then.
+                    CL_CPP(q.enqueueWriteBuffer(m.compactTarget, CL_TRUE, 0, slots * sizeof(int), target.data()));
                     m.kCompact.setArg(0, int(slots));
                     m.run(m.kCompact, slots);
                     n = next;
