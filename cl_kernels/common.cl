@@ -60,23 +60,23 @@ inline float3 Warp_UniformHemisphere(float u1, float u2) {
     return (float3)(r * cos(phi), r * sin(phi), z);
 }
 
-/* ---- Robust ray origins (Wächter & Binder, Ray Tracing Gems ch. 6) -----------------------------
- * Moves p off the surface along the geometric normal n (pointing to the side the new ray leaves to)
- * by a few ULPs of p's own magnitude, so no scene-scale epsilon is needed. */
+/* ---- Robust ray origins -----------------------------------------------------------------------
+ * Moves p off the surface along the geometric normal n (unit, pointing to the side the new ray
+ * leaves to) by a distance proportional to p's largest coordinate, so no scene-scale epsilon is
+ * needed: a hit point (barycentric interpolation, or a sphere point re-projected onto the surface)
+ * is off its surface by a few ulps of that magnitude, and the offset is CLRT_OFFSET_ULPS of them.
+ * Unlike the per-component integer-ulp offset of Wächter & Binder (Ray Tracing Gems ch. 6, 256
+ * ulps per component), this stays small far from the origin: at 1e5 that offset was 2 units and
+ * lifted shadow rays over whole objects (light leaks); this one is 0.19 units there, 1.9e-6 at 1.
+ * Near the origin an absolute floor of 2^-16 applies (as in Wächter & Binder). */
+#ifndef CLRT_OFFSET_ULPS
+#define CLRT_OFFSET_ULPS 16.0f
+#endif
 inline float3 Ray_OffsetOrigin(float3 p, float3 n) {
-    const float originBand = 1.0f / 32.0f;
-    const float floatScale = 1.0f / 65536.0f;
-    const float intScale = 256.0f;
-    int3 ofi = convert_int3(intScale * n);
-    float3 pi;
-    pi.x = as_float(as_int(p.x) + (p.x < 0.0f ? -ofi.x : ofi.x));
-    pi.y = as_float(as_int(p.y) + (p.y < 0.0f ? -ofi.y : ofi.y));
-    pi.z = as_float(as_int(p.z) + (p.z < 0.0f ? -ofi.z : ofi.z));
-    float3 r;
-    r.x = fabs(p.x) < originBand ? p.x + floatScale * n.x : pi.x;
-    r.y = fabs(p.y) < originBand ? p.y + floatScale * n.y : pi.y;
-    r.z = fabs(p.z) < originBand ? p.z + floatScale * n.z : pi.z;
-    return r;
+    const float floorOffset = 1.0f / 65536.0f;
+    float m = fmax(fmax(fabs(p.x), fabs(p.y)), fabs(p.z));
+    float d = fmax(CLRT_OFFSET_ULPS * FLT_EPSILON * m, floorOffset);
+    return p + d * n;
 }
 
 /* Replaces NaN/Inf components by 0 (radiance guard before accumulation). */

@@ -7,6 +7,11 @@
 #define CLRT_HAVE_FP64 1
 #endif
 
+/* No contraction of a*b - c*d into fma() here: the watertight test relies on a shared edge's function
+ * coming out as the exact negation in both triangles (and, when non-zero, with the exact sign), which
+ * fma breaks; with it, rays aimed at shared edges slipped through closed meshes. */
+#pragma OPENCL FP_CONTRACT OFF
+
 /* Per-ray constants of the watertight test: permuted axes and shear. */
 typedef struct {
     int kx, ky, kz;
@@ -98,6 +103,12 @@ inline int Sphere_Intersect(const __global Sphere* sp, float3 orgW, float3 dirW,
 inline float Aabb_Intersect(float4 bmin, float4 bmax, float3 org, float3 invDir, float tMax) {
     float3 t0 = (bmin.xyz - org) * invDir;
     float3 t1 = (bmax.xyz - org) * invDir;
+    /* A zero direction component with the origin exactly on that face gives 0·inf = NaN: the ray
+     * lies in the face's plane, so the slab is unbounded (-inf, +inf), whatever the zero's sign.
+     * (fmin/fmax would otherwise pick the other, infinite bound and cull the box: rays in the
+     * plane of a box face, e.g. aimed exactly at a vertex, escaped closed meshes.) */
+    t0 = select(t0, -invDir, isnan(t0));
+    t1 = select(t1, invDir, isnan(t1));
     float3 tn = fmin(t0, t1), tf = fmax(t0, t1);
     float tEnter = fmax(fmax(tn.x, tn.y), fmax(tn.z, 0.0f));
     /* Widened by 1 + 2γ3 (pbrt): a hit the watertight triangle test accepts exactly on an edge
@@ -194,3 +205,6 @@ __kernel void intersect_shadow(const __global BvhNode* nodes, const __global int
     if (Bvh_Traverse(nodes, primRefs, tris, spheres, numTriangles, s->origin.xyz, s->direction.xyz, s->origin.w, 1, &h))
         s->contribution = (float4)(0.0f);
 }
+
+/* Contraction back to the OpenCL default for the files that follow (shading gains from fma). */
+#pragma OPENCL FP_CONTRACT ON

@@ -40,14 +40,19 @@
     S(SceneParams) M(SceneParams, background) M(SceneParams, ambient)                             \
         M(SceneParams, numTriangles) M(SceneParams, numSpheres) M(SceneParams, numLights)         \
         M(SceneParams, maxDepth) M(SceneParams, backgroundTexture) M(SceneParams, envLight)       \
-        M(SceneParams, seed) M(SceneParams, splitDepth)                                           \
+        M(SceneParams, seed) M(SceneParams, splitDepth) M(SceneParams, envScale)                  \
+        M(SceneParams, envImage) M(SceneParams, envMapping) M(SceneParams, envPad0)               \
+        M(SceneParams, envPad1)                                                                   \
     S(Ray) M(Ray, origin) M(Ray, direction)                                                       \
     S(Hit) M(Hit, t) M(Hit, prim) M(Hit, u) M(Hit, v)                                             \
     S(PathState) M(PathState, throughput) M(PathState, pixel) M(PathState, sample)                \
         M(PathState, depth) M(PathState, pathId)                                                  \
     S(ShadowRay) M(ShadowRay, origin) M(ShadowRay, direction) M(ShadowRay, contribution)        \
     S(ShadingPoint) M(ShadingPoint, position) M(ShadingPoint, normal)                             \
-        M(ShadingPoint, geomNormal) M(ShadingPoint, wo) M(ShadingPoint, kd) M(ShadingPoint, ks)
+        M(ShadingPoint, geomNormal) M(ShadingPoint, wo) M(ShadingPoint, kd) M(ShadingPoint, ks)    \
+    S(TonemapParams) M(TonemapParams, op) M(TonemapParams, scale) M(TonemapParams, whiteL)        \
+        M(TonemapParams, hasWhite) M(TonemapParams, saturation) M(TonemapParams, invGamma)        \
+        M(TonemapParams, truncate) M(TonemapParams, numPixels)
 #endif
 
 #ifdef __OPENCL_C_VERSION__

@@ -1,7 +1,12 @@
 /* lights.cl — light sampling, one `case` per light kind. Light_Sample returns what the course's
  * shading model multiplies with the BRDF terms: the irradiance-like quantity E (point and spot:
- * I/d², directional: radiance, area: L·A·cosθ_L/d² for a uniformly drawn point) divided by the pdf
- * of the chosen direction, and the direction and distance for the shadow ray. */
+ * I/d², directional: radiance, area: L·A·cosθ_L/d² for a uniformly drawn point, environment:
+ * L(wi)/pdf(wi) for a direction drawn by the light's sampler) divided by the pdf of the chosen
+ * direction, and the direction and distance (INFINITY: directional, environment) for the shadow ray.
+ * Environment samplers (SCENE_FORMAT.md): uniform (hemisphere around n by rejection, pdf 1/2π),
+ * cosine (pdf cosθ/π), importance (the map's luminance distribution, envmap.cl), mis (one-sample
+ * MIS: importance or cosine with probability 1/2 each, weighted by the balance heuristic, i.e.
+ * divided by the mixture pdf ½·p_imp + ½·p_cos). Needs envmap.cl. */
 
 /* Spot fall-off (SCENE_FORMAT.md): 1 inside falloff/2, 0 outside coverage/2, smooth quartic between.
  * Guards coverage == falloff (a hard edge) without dividing by zero. */
@@ -47,8 +52,77 @@ inline float3 AreaLight_Sample(const __global Light* light, float3 p, float2 u, 
     return light->radiance.xyz * (light->area * cosLight / d2);
 }
 
-/* The dispatcher. u: two uniform numbers for lights that need them. */
-inline float3 Light_Sample(const __global Light* light, float3 p, float2 u, float3* wi, float* dist) {
+/* Uniform direction in the hemisphere around n: a point drawn in [-1,1]^3 is kept if inside the unit
+ * ball (course: rejection), then mirrored into n's side. The retries draw hashed uniforms; after 32
+ * failures (probability ~1e-10) the uniform hemisphere warp is used: the density is 1/2π either way. */
+inline float3 EnvSample_Uniform(float3 n, float2 u) {
+    for (uint k = 0; k < 32u; ++k) {
+        float2 a = Env_RetryUniforms(u.x, u.y, 64u + 2u * k), b = Env_RetryUniforms(u.x, u.y, 65u + 2u * k);
+        float3 q = (float3)(2.0f * a.x - 1.0f, 2.0f * a.y - 1.0f, 2.0f * b.x - 1.0f);
+        float l2 = dot(q, q);
+        if (l2 > 1e-6f && l2 <= 1.0f) {
+            q /= sqrt(l2);
+            return dot(q, n) < 0.0f ? -q : q;
+        }
+    }
+    float3 t, b;
+    makeBasis(n, &t, &b);
+    float3 l = Warp_UniformHemisphere(u.x, u.y);
+    return l.x * t + l.y * b + l.z * n;
+}
+
+inline float3 EnvSample_Cosine(float3 n, float2 u) {
+    float3 t, b;
+    makeBasis(n, &t, &b);
+    float3 l = Warp_CosineHemisphere(u.x, u.y);
+    return normalize(l.x * t + l.y * b + l.z * n);
+}
+
+inline float3 EnvironmentLight_Sample(const __global Light* light, float3 n, float2 u, const __global ImageInfo* images,
+                                      const __global float4* texels, const __global float* envDist, float3* wi,
+                                      float* dist) {
+    *dist = INFINITY;
+    int sampler = light->sampler;
+    if (light->distribution == CLRT_INVALID && (sampler == ENV_SAMPLE_IMPORTANCE || sampler == ENV_SAMPLE_MIS))
+        sampler = ENV_SAMPLE_COSINE;
+    const __global float* d = envDist + (light->distribution == CLRT_INVALID ? 0 : light->distribution);
+    float3 w = n;
+    float pdf = 0.0f;
+    switch (sampler) {
+    case ENV_SAMPLE_UNIFORM:
+        w = EnvSample_Uniform(n, u);
+        pdf = 1.0f / (2.0f * CLRT_PI);
+        break;
+    case ENV_SAMPLE_COSINE:
+        w = EnvSample_Cosine(n, u);
+        pdf = fmax(dot(w, n), 0.0f) * CLRT_INV_PI;
+        break;
+    case ENV_SAMPLE_IMPORTANCE:
+        if (!EnvDist_Sample(d, u.x, u.y, &w, &pdf)) return (float3)(0.0f);
+        break;
+    default: { /* ENV_SAMPLE_MIS */
+        float pImp;
+        if (u.x < 0.5f) {
+            if (!EnvDist_Sample(d, 2.0f * u.x, u.y, &w, &pImp)) return (float3)(0.0f);
+        } else {
+            w = EnvSample_Cosine(n, (float2)(fmin(2.0f * u.x - 1.0f, CLRT_ONE_MINUS_EPS), u.y));
+            pImp = EnvDist_Pdf(d, w);
+        }
+        pdf = 0.5f * pImp + 0.5f * fmax(dot(w, n), 0.0f) * CLRT_INV_PI;
+        break;
+    }
+    }
+    *wi = w;
+    if (!(pdf > 0.0f) || !isfinite(pdf)) return (float3)(0.0f);
+    float3 l = EnvMap_Radiance(texels, images[light->image], light->mapping, light->radiance.xyz, w);
+    return finiteOrZero(l / pdf);
+}
+
+/* The dispatcher. p: the shading point, n: its shading normal (environment samplers), u: two uniform
+ * numbers for lights that need them; images/texels/envDist: the texel atlas and the environment
+ * distributions. */
+inline float3 Light_Sample(const __global Light* light, float3 p, float3 n, float2 u, const __global ImageInfo* images,
+                           const __global float4* texels, const __global float* envDist, float3* wi, float* dist) {
     *dist = 0.0f;
     *wi = (float3)(0.0f, 0.0f, 1.0f);
     switch (light->kind) {
@@ -63,6 +137,9 @@ inline float3 Light_Sample(const __global Light* light, float3 p, float2 u, floa
 #endif
 #ifdef CLRT_HAS_AREA_LIGHT
     case LIGHT_AREA: return AreaLight_Sample(light, p, u, wi, dist);
+#endif
+#ifdef CLRT_HAS_ENV_LIGHT
+    case LIGHT_ENVIRONMENT: return EnvironmentLight_Sample(light, n, u, images, texels, envDist, wi, dist);
 #endif
     default: return (float3)(0.0f);
     }

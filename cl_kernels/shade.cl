@@ -2,7 +2,8 @@
  *   shade_hits:      per path, turns a hit into a ShadingPoint (textures applied), adds the terms
  *                    that need no shadow ray (ambient, background on a miss), and writes the
  *                    reflection/refraction children to slots 2i and 2i+1 of the next queue;
- *   sample_lights:   per path and light of a chunk, one shadow ray carrying its Blinn-Phong term;
+ *   sample_lights:   per path and light of a chunk, one shadow ray carrying its Blinn-Phong term
+ *                    (environment lights: one sampled direction, the shadow ray going to infinity);
  *   gather_shadows:  adds the unoccluded shadow contributions of each path in light order;
  *   accumulate:      adds each pixel's paths to the float image (paths of one pixel are adjacent);
  *   compact_paths:   order-preserving compaction of the children with host-computed indices.
@@ -81,8 +82,18 @@ inline float3 Glossy_Perturb(float3 r, float roughness, float u1, float u2) {
     return normalize(r + roughness * ((u1 - 0.5f) * a + (u2 - 0.5f) * b));
 }
 
+/* Radiance of a ray (direction dir) that hits nothing: the environment map when the scene has an
+ * environment light (camera, mirror and refraction rays alike), else the background texture (camera
+ * rays) or the background colour. */
 inline float3 Miss_Radiance(SceneParams scene, const __global TextureMap* textures, const __global ImageInfo* images,
-                            const __global float4* texels, CameraParams cam, PathState path) {
+                            const __global float4* texels, CameraParams cam, PathState path, float3 dir) {
+#ifdef CLRT_HAS_ENV_LIGHT
+    if (scene.envLight != CLRT_INVALID) {
+        float l = length(dir);
+        if (!(l > 0.0f) || !isfinite(l)) return (float3)(0.0f);
+        return EnvMap_Radiance(texels, images[scene.envImage], scene.envMapping, scene.envScale.xyz, dir / l);
+    }
+#endif
     if (path.depth == 0 && scene.backgroundTexture != CLRT_INVALID) {
         int x = path.pixel % cam.width, y = path.pixel / cam.width;
         float2 uv = (float2)(((float)x + 0.5f) / (float)cam.width, ((float)y + 0.5f) / (float)cam.height);
@@ -126,7 +137,7 @@ __kernel void shade_hits(SceneParams scene, CameraParams cam, int count,
     sp.position = (float4)(0.0f);
     if (h.prim == CLRT_INVALID) {
         points[i] = sp;
-        pathRadiance[i] = (float4)(throughput * Miss_Radiance(scene, textures, images, texels, cam, path), 0.0f);
+        pathRadiance[i] = (float4)(throughput * Miss_Radiance(scene, textures, images, texels, cam, path, ray.direction.xyz), 0.0f);
         return;
     }
     SurfaceHit s = Surface_FromHit(h, ray, tris, shading, spheres, scene.numTriangles);
@@ -232,7 +243,9 @@ __kernel void shade_hits(SceneParams scene, CameraParams cam, int count,
 /* One shadow ray per (path, light in [lightBegin, lightEnd)), at slot i·chunk + (l − lightBegin). */
 __kernel void sample_lights(SceneParams scene, int count, int lightBegin, int lightEnd,
                             const __global PathState* paths, const __global ShadingPoint* points,
-                            const __global Light* lights, __global ShadowRay* shadows) {
+                            const __global Light* lights, __global ShadowRay* shadows,
+                            const __global ImageInfo* images, const __global float4* texels,
+                            const __global float* envDist) {
     int i = get_global_id(0);
     if (i >= count) return;
     int chunk = lightEnd - lightBegin;
@@ -250,7 +263,7 @@ __kernel void sample_lights(SceneParams scene, int count, int lightBegin, int li
             float3 wi;
             float dist;
             float3 p = sp.position.xyz, n = sp.normal.xyz, ng = sp.geomNormal.xyz;
-            float3 e = Light_Sample(&lights[l], p, u, &wi, &dist);
+            float3 e = Light_Sample(&lights[l], p, n, u, images, texels, envDist, &wi, &dist);
             float cosTheta = dot(n, wi);
             if (cosTheta > 0.0f && dot(ng, wi) > 0.0f && maxComponent(e) > 0.0f) {
                 float3 hv = normalize(wi + sp.wo.xyz);

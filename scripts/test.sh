@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Sets up (scripts/setup.sh) and runs the whole test suite on the PoCL CPU device.
+# Sets up (scripts/setup.sh), runs the whole Catch2 test suite on the PoCL CPU device, then a short
+# libFuzzer smoke run of the scene/PLY/image readers (scripts/fuzz.sh; skip with CLRT_NO_FUZZ=1).
 # Usage: bash scripts/test.sh [catch2 args...]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -7,5 +8,24 @@ bash scripts/setup.sh
 # Tests run on PoCL's CPU device; a private kernel-binary cache keeps reruns fast.
 export CLRT_TEST_DEVICE="${CLRT_TEST_DEVICE:-cpu}"
 export CLRT_CACHE_DIR="${CLRT_CACHE_DIR:-$PWD/build/kernel-cache}"
-cd build
-./clrt_tests "$@"
+log=build/test-log.txt
+set +e
+(cd build && ./clrt_tests "$@") 2>&1 | tee "$log"
+rc=${PIPESTATUS[0]}
+set -e
+# One plain summary line: "tests: N passed, N failed" (test cases).
+if grep -q "^All tests passed" "$log"; then
+  n=$(sed -n 's/^All tests passed (.* in \([0-9]*\) test case.*/\1/p' "$log" | tail -1)
+  echo "tests: ${n:-0} passed, 0 failed"
+else
+  line=$(grep -E "^test cases:" "$log" | tail -1 || true)
+  p=$(echo "$line" | sed -n 's/.*| *\([0-9]*\) passed.*/\1/p'); f=$(echo "$line" | sed -n 's/.*| *\([0-9]*\) failed.*/\1/p')
+  echo "tests: ${p:-0} passed, ${f:-1} failed"
+fi
+[ "$rc" -eq 0 ] || exit "$rc"
+if [ -z "${CLRT_NO_FUZZ:-}" ] && [ $# -eq 0 ]; then
+  command -v clang++ >/dev/null || { [ "$(id -u)" -eq 0 ] && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq clang >/dev/null; }
+  echo "fuzz smoke run (6 s per target):"
+  bash scripts/fuzz.sh 6 > build/fuzz-log.txt 2>&1 || { tail -30 build/fuzz-log.txt; echo "fuzz: smoke run found a problem"; exit 1; }
+  tail -3 build/fuzz-log.txt
+fi

@@ -18,6 +18,7 @@
 #include "image/image.h"
 #include "render/device_scene.h"
 #include "render/multi_device.h"
+#include "render/output.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
 #include "util/error.h"
@@ -34,6 +35,7 @@ const char* kMainHelp =
     "commands:\n"
     "  devices                 list every OpenCL platform/device with its index\n"
     "  render SCENE [options]  render every camera of SCENE (XML or JSON); see `clrt render --help`\n"
+    "  tonemap IN.exr [options] tone-map an HDR image to PNG on the device; see `clrt tonemap --help`\n"
     "\n"
     "options:\n"
     "  -h, --help              this text\n"
@@ -44,7 +46,8 @@ const char* kRenderHelp =
     "usage: clrt render SCENE [options]\n"
     "\n"
     "Renders every camera of SCENE (or one, with --camera) and writes each image under its ImageName\n"
-    "into OUTDIR (.png: clamped and rounded; .exr: float radiance).\n"
+    "into OUTDIR (.png: clamped and rounded; .exr: float radiance, plus one tone-mapped .png per\n"
+    "Tonemap block of the camera: stem.png, or stem<Extension>.png / stem_<tmo>.png for several).\n"
     "\n"
     "options:\n"
     "  -o, --output DIR      output directory (default: the current directory); must exist\n"
@@ -58,6 +61,7 @@ const char* kRenderHelp =
     "                        8 bits; the course's reference renders truncate (floor)\n"
     "  --all-features        build the kernels with every feature, not only what the scene uses\n"
     "                        (for measuring what specialisation gains)\n"
+    "  --exr-half            write .exr outputs with half-float channels (default: float)\n"
     "  -v, --verbose         print the kernel build flags and other details\n"
     "  -h, --help            this text\n";
 
@@ -66,7 +70,7 @@ struct Args {
     std::string outDir = ".", device, cameraId;
     int spp = 0;
     uint32_t seed = 0;
-    bool verbose = false, help = false, truncatePng = false, allFeatures = false;
+    bool verbose = false, help = false, truncatePng = false, exrHalf = false, allFeatures = false;
 };
 
 int parseInt(const std::string& opt, const std::string& v, long lo, long hi) {
@@ -94,6 +98,7 @@ Args parseRenderArgs(int argc, char** argv, int start) {
         else if (s == "--seed") a.seed = uint32_t(parseInt(s, value(), 0, 2147483647));
         else if (s == "--camera") a.cameraId = value();
         else if (s == "-v" || s == "--verbose") a.verbose = true;
+        else if (s == "--exr-half") a.exrHalf = true;
         else if (s == "--all-features") a.allFeatures = true;
         else if (s == "--ldr-quantize") {
             std::string v = value();
@@ -194,7 +199,6 @@ int cmdRender(const Args& a) {
     if (renderers.empty()) throw Error("no selected device could build the renderer", ExitCode::Device);
     double tBuild = since(t);
     Renderer& renderer = *renderers.front();
-    const DeviceInfo& di = renderer.context().info();
     if (verbose()) {
         std::string flags;
         for (const std::string& d : ds.features.defines()) flags += " " + d;
@@ -217,6 +221,7 @@ int cmdRender(const Args& a) {
         Progress prog("camera " + std::to_string(cam->id) + " (" + cam->imageName + ", " + std::to_string(cam->width) + "x" +
                       std::to_string(cam->height) + ", " + std::to_string(rs.spp) + " spp)");
         ImageRGB img;
+        auto tr = std::chrono::steady_clock::now();
         if (renderers.size() == 1) {
             img = renderer.render(*cam, rs, work[0].counters, [&](size_t d, size_t n) { prog.update(d, n); });
         } else {
@@ -226,22 +231,18 @@ int cmdRender(const Args& a) {
             img = renderOnDevices(rp, *cam, rs, work, [&](size_t d, size_t n) { prog.update(d, n); });
             counters.seconds += since(w0);
         }
+        const double camSeconds = since(tr);
         auto to = std::chrono::steady_clock::now();
-        fs::path out = fs::path(a.outDir) / fs::path(cam->imageName).filename();
-        std::string ext = out.extension().string();
-        for (char& c : ext) c = char(std::tolower(c));
-        if (ext == ".exr") {
-            ExrWriteOptions eo;
-            eo.attributes["renderer"] = "clrt";
-            eo.attributes["spp"] = std::to_string(rs.spp);
-            eo.attributes["device"] = di.name;
-            writeExr(out.string(), img, eo);
-        } else {
-            if (ext != ".png") warnOnce(cam->imageName + ": unknown image extension; writing PNG data");
-            writePngClamped(out.string(), img, a.truncatePng);
-        }
+        OutputOptions oo;
+        oo.outDir = a.outDir;
+        oo.truncatePng = a.truncatePng;
+        oo.exrHalf = a.exrHalf;
+        oo.spp = rs.spp;
+        oo.renderSeconds = camSeconds;
+        for (auto& r : renderers) oo.deviceName += (oo.deviceName.empty() ? "" : ", ") + r->context().info().name;
+        std::vector<std::string> written = writeCameraOutputs(*cam, img, oo, renderer.context());
         tOutput += since(to);
-        std::fprintf(stderr, "wrote %s\n", out.string().c_str());
+        for (const std::string& w : written) std::fprintf(stderr, "wrote %s\n", w.c_str());
     }
     double deviceSeconds = 0;
     for (const DeviceWork& w : work) {
@@ -280,6 +281,7 @@ int main(int argc, char** argv) {
         }
         std::string cmd = argv[1];
         if (cmd == "devices") return cmdDevices();
+        if (cmd == "tonemap") return cmdTonemap(argc, argv);
         if (cmd == "render") {
             Args a = parseRenderArgs(argc, argv, 2);
             if (a.help) {

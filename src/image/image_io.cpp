@@ -36,6 +36,11 @@ namespace fs = std::filesystem;
 namespace {
 
 std::string readAll(const std::string& path) {
+    std::error_code ec;
+    // Directories, FIFOs and devices would throw from the stream or never end.
+    if (!fs::is_regular_file(path, ec))
+        throw Error(path + (fs::exists(path, ec) ? ": cannot open image file: not a regular file"
+                                                 : ": cannot open image file: no such file"));
     std::ifstream in(path, std::ios::binary);
     if (!in) throw Error(path + ": cannot open image file");
     std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -45,6 +50,41 @@ std::string readAll(const std::string& path) {
 
 bool startsWith(const std::string& s, const char* magic, size_t n) {
     return s.size() >= n && std::memcmp(s.data(), magic, n) == 0;
+}
+
+// stb_image 2.27 (the system libstb) writes past its Huffman size table when a DHT segment declares
+// more than 256 codes (fixed upstream in 2.28): memory corruption from a corrupt or hostile JPEG, found
+// by fuzz/fuzz_image. Walk the marker segments (and skip entropy-coded data the way a decoder does)
+// and refuse such a file before stb sees it.
+void checkJpegHuffmanTables(const std::string& path, const std::string& b) {
+    auto at = [&](size_t i) { return static_cast<unsigned char>(b[i]); };
+    const size_t n = b.size();
+    size_t p = 2;  // after SOI
+    while (p + 1 < n) {
+        if (at(p) != 0xFF) { ++p; continue; }  // out of sync: look for the next marker
+        unsigned m = at(p + 1);
+        if (m == 0xFF) { ++p; continue; }      // fill byte
+        if (m == 0x00 || m == 0x01 || (m >= 0xD0 && m <= 0xD8)) { p += 2; continue; }  // no length
+        if (m == 0xD9) break;                  // EOI
+        if (p + 3 >= n) break;
+        const size_t segEnd = std::min(n, p + 2 + (size_t(at(p + 2)) << 8 | at(p + 3)));
+        if (m == 0xC4) {
+            // Like stb: a table is read whenever any declared byte is left (reads past the end give 0).
+            for (size_t q = p + 4; q < segEnd;) {
+                size_t codes = 0;
+                for (size_t i = 0; i < 16; ++i) codes += q + 1 + i < n ? at(q + 1 + i) : 0;
+                if (codes > 256)
+                    throw Error(path + ": cannot decode JPEG: corrupt Huffman table (" + std::to_string(codes) +
+                                " codes, at most 256)");
+                q += 17 + codes;
+            }
+        }
+        p = std::max(segEnd, p + 4);
+        if (m == 0xDA)  // start of scan: entropy-coded data runs to the next marker other than RSTn
+            while (p + 1 < n && !(at(p) == 0xFF && at(p + 1) != 0x00 && at(p + 1) != 0xFF &&
+                                  !(at(p + 1) >= 0xD0 && at(p + 1) <= 0xD7)))
+                ++p;
+    }
 }
 
 ImageRGB readStb(const std::string& path, const std::string& bytes, bool png) {
@@ -59,6 +99,7 @@ ImageRGB readStb(const std::string& path, const std::string& bytes, bool png) {
         img.pixels.assign(px, px + size_t(w) * h * 3);
         stbi_image_free(px);
     } else {
+        if (!png) checkJpegHuffmanTables(path, bytes);
         stbi_uc* px = stbi_load_from_memory(data, len, &w, &h, &comp, 3);
         if (!px) throw Error(path + ": cannot decode " + (png ? "PNG" : "JPEG") + ": " + stbi_failure_reason());
         img.pixels.assign(px, px + size_t(w) * h * 3);

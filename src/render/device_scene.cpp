@@ -8,6 +8,7 @@
 #include <map>
 
 #include "image/image.h"
+#include "render/env_distribution.h"
 #include "util/error.h"
 
 namespace clrt {
@@ -294,13 +295,38 @@ DeviceScene flattenScene(const Scene& scene) {
             d.area = l.size * l.size;
             break;
         }
-        case LightType::Environment:
-            warnOnce(scene.path + ": SphericalDirectionalLight is not supported yet; skipped");
-            continue;
+        case LightType::Environment: {
+            d.kind = dev::LIGHT_ENVIRONMENT;
+            f.envLight = true;
+            d.radiance = {1, 1, 1, 0};
+            d.direction = {0, 1, 0, 0};
+            d.image = useImage(l.imageIndex);
+            d.mapping = l.mapping == EnvMapping::Probe ? dev::ENV_PROBE : dev::ENV_LATLONG;
+            d.sampler = l.sampler == EnvSampler::Uniform      ? dev::ENV_SAMPLE_UNIFORM
+                        : l.sampler == EnvSampler::Cosine     ? dev::ENV_SAMPLE_COSINE
+                        : l.sampler == EnvSampler::Importance ? dev::ENV_SAMPLE_IMPORTANCE
+                                                              : dev::ENV_SAMPLE_MIS;
+            const dev::ImageInfo& info = ds.images[d.image];
+            EnvMapView view{&ds.texels[info.offset], info.width, info.height, d.mapping};
+            EnvDistribution dist = buildEnvDistribution(view);
+            d.distribution = int(ds.envDistribution.size());
+            ds.envDistribution.insert(ds.envDistribution.end(), dist.data.begin(), dist.data.end());
+            if (ds.params.envLight == CLRT_INVALID) {
+                ds.params.envLight = int(ds.lights.size());
+                ds.params.envScale = d.radiance;
+                ds.params.envImage = d.image;
+                ds.params.envMapping = d.mapping;
+            } else {
+                warnOnce(scene.path + ": several SphericalDirectionalLights: each lights the scene, but rays that "
+                         "miss show the first one only");
+            }
+            break;
+        }
         }
         ds.lights.push_back(d);
     }
     if (ds.lights.empty()) ds.lights.push_back(dev::Light{});  // never an empty buffer; numLights stays 0
+    if (ds.envDistribution.empty()) ds.envDistribution.push_back(0.0f);
 
     // ---- BVH over triangles then spheres
     auto tb = std::chrono::steady_clock::now();
@@ -332,11 +358,27 @@ DeviceScene flattenScene(const Scene& scene) {
     p.ambient = toFloat4(scene.ambientLight);
     p.numTriangles = int(boxes.size() - sphereBoxes.size());
     p.numSpheres = int(sphereBoxes.size());
-    p.numLights = 0;
-    for (const Light& l : scene.lights) p.numLights += l.type != LightType::Environment;
+    p.numLights = int(scene.lights.size());  // every light is flattened (ds.lights holds a dummy when 0)
     p.maxDepth = std::max(0, scene.maxRecursionDepth);
     ds.flattenSeconds = secondsSince(t0) - ds.bvhSeconds;
     return ds;
+}
+
+bool parseEnvSampler(const std::string& name, EnvSampler& out) {
+    if (name == "uniform") out = EnvSampler::Uniform;
+    else if (name == "cosine") out = EnvSampler::Cosine;
+    else if (name == "importance") out = EnvSampler::Importance;
+    else if (name == "mis") out = EnvSampler::Mis;
+    else return false;
+    return true;
+}
+
+void overrideEnvSampling(Scene& scene, EnvSampler sampler) {
+    for (Light& l : scene.lights)
+        if (l.type == LightType::Environment) {
+            l.sampler = sampler;
+            l.samplerGiven = true;
+        }
 }
 
 }  // namespace clrt

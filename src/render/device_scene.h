@@ -36,6 +36,7 @@ struct DeviceScene {
     std::vector<dev::ImageInfo> images;
     std::vector<dev::float4> texels;
     std::vector<dev::Light> lights;
+    std::vector<float> envDistribution;  // importance distributions of env lights (env_distribution.h)
     Bvh bvh;
     dev::SceneParams params{};
     FeatureSet features;
@@ -44,6 +45,11 @@ struct DeviceScene {
 };
 
 DeviceScene flattenScene(const Scene& scene);
+
+// Environment-light sampling strategy by name (uniform | cosine | importance | mis); false if unknown.
+bool parseEnvSampler(const std::string& name, EnvSampler& out);
+// Sets the sampler of every environment light of `scene` (clrt render --env-sampling), before flattening.
+void overrideEnvSampling(Scene& scene, EnvSampler sampler);
 
 // Camera frame and image plane for the kernels; strata chosen for numSamples.
 dev::CameraParams makeCameraParams(const Camera& cam);

@@ -14,7 +14,7 @@ namespace clrt {
 
 namespace {
 const std::vector<std::string> kKernelFiles = {"common.cl", "intersect.cl", "camera.cl", "textures.cl",
-                                               "lights.cl", "shade.cl"};
+                                               "envmap.cl", "lights.cl", "shade.cl"};
 
 template <class T> cl::Buffer uploadBuffer(cl::Context& ctx, const std::vector<T>& v) {
     return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * std::max<size_t>(v.size(), 1),
@@ -28,7 +28,7 @@ struct Renderer::Impl {
     BuildInfo build;
     cl::Program program;
     cl::Kernel kGenerate, kIntersect, kShadow, kShade, kLights, kGather, kAccumulate, kCompact;
-    cl::Buffer nodes, primRefs, tris, triShading, spheres, materials, textureSets, textures, images, texels, lights;
+    cl::Buffer nodes, primRefs, tris, triShading, spheres, materials, textureSets, textures, images, texels, lights, envDist;
     // Queue buffers (sized per render).
     size_t queueCapacity = 0, shadowCapacity = 0;
     cl::Buffer paths, rays, hits, points, pathRadiance, nextPaths, nextRays, childValid, compactTarget, shadows;
@@ -57,6 +57,7 @@ struct Renderer::Impl {
         images = uploadBuffer(ctx, scene.images);
         texels = uploadBuffer(ctx, scene.texels);
         lights = uploadBuffer(ctx, scene.lights);
+        envDist = uploadBuffer(ctx, scene.envDistribution);
     }
 
     void ensureQueues(size_t capacity, size_t shadowSlots) {
@@ -95,8 +96,20 @@ Renderer::~Renderer() = default;
 const BuildInfo& Renderer::buildInfo() const { return impl_->build; }
 DeviceContext& Renderer::context() { return impl_->dc; }
 
+// Refuses an image whose float buffer the device cannot hold, before anything of its size is allocated.
+static void checkImageFits(const DeviceInfo& di, const Camera& cam) {
+    const uint64_t imageBytes = uint64_t(cam.width) * uint64_t(cam.height) * sizeof(dev::float4);
+    if (imageBytes > di.maxAlloc || imageBytes > di.globalMem / 2)
+        throw Error("camera " + std::to_string(cam.id) + ": " + std::to_string(cam.width) + "x" +
+                        std::to_string(cam.height) + " needs " + std::to_string(imageBytes >> 20) +
+                        " MiB of image memory; device '" + di.name + "' allows " + std::to_string(di.maxAlloc >> 20) +
+                        " MiB per buffer",
+                    ExitCode::BadInput);
+}
+
 ImageRGB Renderer::render(const Camera& cam, const RenderSettings& settings, RenderCounters& counters,
                           const std::function<void(size_t, size_t)>& progress) {
+    checkImageFits(impl_->dc.info(), cam);
     ImageRGB out;
     out.width = cam.width;
     out.height = cam.height;
@@ -133,13 +146,7 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     }
     const size_t numPixels = size_t(cam.width) * cam.height;
     const size_t imageBytes = numPixels * sizeof(dev::float4);
-    const DeviceInfo& di = m.dc.info();
-    if (imageBytes > di.maxAlloc || imageBytes > di.globalMem / 2)
-        throw Error("camera " + std::to_string(cam.id) + ": " + std::to_string(cam.width) + "x" +
-                        std::to_string(cam.height) + " needs " + std::to_string(imageBytes >> 20) +
-                        " MiB of image memory; device '" + di.name + "' allows " + std::to_string(di.maxAlloc >> 20) +
-                        " MiB per buffer",
-                    ExitCode::BadInput);
+    checkImageFits(m.dc.info(), cam);
 
     // The split depth depends only on the image and the batch limit, never on the tile: every
     // device and every tiling computes each pixel identically.
@@ -196,6 +203,7 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     cl::Kernel& kl = m.kLights;
     kl.setArg(0, sizeof(sp), &sp);
     kl.setArg(4, m.paths); kl.setArg(5, m.points); kl.setArg(6, m.lights); kl.setArg(7, m.shadows);
+    kl.setArg(8, m.images); kl.setArg(9, m.texels); kl.setArg(10, m.envDist);
     m.kGather.setArg(2, m.shadows); m.kGather.setArg(3, m.pathRadiance);
     m.kAccumulate.setArg(1, m.paths); m.kAccumulate.setArg(2, m.pathRadiance); m.kAccumulate.setArg(3, image);
     m.kCompact.setArg(1, m.compactTarget); m.kCompact.setArg(2, m.nextPaths); m.kCompact.setArg(3, m.nextRays);

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <limits>
@@ -247,6 +248,11 @@ size_t minElementSize(const Element& e, Format fmt) {
 }  // namespace
 
 MeshData readPly(const std::string& path) {
+    std::error_code ec;
+    // Directories, FIFOs and devices (/dev/zero) would throw from the stream or never end.
+    if (!std::filesystem::is_regular_file(path, ec))
+        throw Error(path + (std::filesystem::exists(path, ec) ? ": cannot open PLY file: not a regular file"
+                                                              : ": cannot open PLY file: no such file"));
     std::ifstream in(path, std::ios::binary);
     if (!in) throw Error(path + ": cannot open PLY file");
     std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

@@ -139,6 +139,8 @@ int requiredId(const SceneNode& n) {
 }
 
 std::vector<uint8_t> readBinary(const SceneNode& n, const std::string& path) {
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec)) fail(n, describe(n) + ": cannot open binaryFile '" + path + "': not a regular file");
     std::ifstream f(path, std::ios::binary);
     if (!f) fail(n, describe(n) + ": cannot open binaryFile '" + path + "'");
     return std::vector<uint8_t>((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());

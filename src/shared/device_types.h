@@ -153,6 +153,10 @@ typedef struct SceneParams {
     int envLight;          /* index of the environment light, or CLRT_INVALID */
     uint seed;
     int splitDepth;        /* dielectrics split into reflection + refraction below this depth */
+    float4 envScale;       /* environment light (envLight): radiance scale of the map, rgb */
+    int envImage;          /* its image (index into images) */
+    int envMapping;        /* its EnvMappingKind */
+    int envPad0, envPad1;
 } SceneParams;
 
 /* Ray and hit record of the wavefront. */
@@ -192,6 +196,19 @@ typedef struct ShadingPoint {
     float4 kd;             /* diffuse reflectance after textures */
     float4 ks;             /* specular reflectance after textures; w = Phong exponent */
 } ShadingPoint;
+
+/* Tone mapping (cl_kernels/tonemap.cl): what the per-pixel mapping needs, computed by the host from
+ * the device's log-sum and luminance percentile (src/render/tonemap_device.cpp). */
+typedef struct TonemapParams {
+    int op;                /* TmoKind: 0 Photographic, 1 ACES, 2 Filmic */
+    float scale;           /* key / log-average luminance: L = Y * scale */
+    float whiteL;          /* Photographic L_white (when hasWhite) */
+    int hasWhite;          /* 1: burn-out white point; 0: L / (1 + L) */
+    float saturation;
+    float invGamma;        /* 1 / gamma */
+    int truncate;          /* 1: floor to 8 bits (the course's); 0: round */
+    uint numPixels;
+} TonemapParams;
 
 #ifndef __OPENCL_C_VERSION__
 }  /* namespace dev */

@@ -1,0 +1,151 @@
+/* envmap.cl — environment maps on the device: the lat-long and probe mappings of SCENE_FORMAT.md,
+ * their (u,v) -> solid-angle Jacobians, the bilinear radiance lookup, and sampling / pdf of the
+ * piecewise-constant importance distribution built by src/render/env_distribution.cpp (whose host
+ * functions mirror these float-for-float; see the layout and within-cell rules there). No kernels. */
+
+#define CLRT_ENV_MAX_REJECTIONS 32
+#define CLRT_ONE_MINUS_EPS 0.99999994f
+
+/* Direction (unit, y up) -> (u, v). */
+inline float2 EnvMap_DirToUv(int mapping, float3 d) {
+    if (mapping == ENV_PROBE) {
+        float s = sqrt(d.x * d.x + d.y * d.y);
+        float r = atan2(s, -d.z) / CLRT_PI; /* acos(-dz), accurate near the centre and the rim */
+        float x = s > 0.0f ? r * d.x / s : r, y = s > 0.0f ? r * d.y / s : 0.0f;
+        return (float2)(0.5f * (x + 1.0f), 0.5f * (1.0f - y));
+    }
+    return (float2)(0.5f * (1.0f + atan2(d.x, -d.z) / CLRT_PI), atan2(sqrt(d.x * d.x + d.z * d.z), d.y) / CLRT_PI);
+}
+
+/* (u, v) -> unit direction; returns 0 where (u, v) carries no light (probe: outside the disc). */
+inline int EnvMap_UvToDir(int mapping, float u, float v, float3* d) {
+    if (mapping == ENV_PROBE) {
+        float x = 2.0f * u - 1.0f, y = 1.0f - 2.0f * v;
+        float r = sqrt(x * x + y * y);
+        if (!(r <= 1.0f)) return 0;
+        if (r <= 0.0f) { *d = (float3)(0.0f, 0.0f, -1.0f); return 1; }
+        float theta = CLRT_PI * r, st = sin(theta);
+        *d = (float3)(st * x / r, st * y / r, -cos(theta));
+        return 1;
+    }
+    float phi = CLRT_PI * (2.0f * u - 1.0f), theta = CLRT_PI * v;
+    float st = sin(theta);
+    *d = (float3)(st * sin(phi), cos(theta), -st * cos(phi));
+    return 1;
+}
+
+/* pdf over solid angle = pdf over (u, v) times this; 0 where degenerate. */
+inline float EnvMap_UvToSolidAngle(int mapping, float u, float v) {
+    if (mapping == ENV_PROBE) {
+        float x = 2.0f * u - 1.0f, y = 1.0f - 2.0f * v;
+        float r = sqrt(x * x + y * y);
+        if (!(r <= 1.0f)) return 0.0f;
+        if (r < 1e-6f) return 1.0f / (4.0f * CLRT_PI * CLRT_PI);
+        float s = sin(CLRT_PI * r);
+        return s > 0.0f ? r / (4.0f * CLRT_PI * s) : 0.0f;
+    }
+    float s = sin(CLRT_PI * v);
+    return s > 0.0f ? 1.0f / (2.0f * CLRT_PI * CLRT_PI * s) : 0.0f;
+}
+
+/* Bilinear, texel centres at ((i+0.5)/W, (j+0.5)/H); lat-long wraps in u, rows and probe columns clamp. */
+inline float3 EnvMap_Lookup(const __global float4* texels, ImageInfo img, int mapping, float u, float v) {
+    int w = img.width, h = img.height;
+    float px = u * (float)w - 0.5f, py = v * (float)h - 0.5f;
+    float fx = floor(px), fy = floor(py);
+    float dx = px - fx, dy = py - fy;
+    int x0 = (int)fx, y0 = (int)fy, x1 = x0 + 1, y1 = y0 + 1;
+    if (mapping == ENV_LATLONG) {
+        x0 %= w; if (x0 < 0) x0 += w;
+        x1 %= w; if (x1 < 0) x1 += w;
+    } else {
+        x0 = clamp(x0, 0, w - 1); x1 = clamp(x1, 0, w - 1);
+    }
+    y0 = clamp(y0, 0, h - 1); y1 = clamp(y1, 0, h - 1);
+    const __global float4* t = texels + img.offset;
+    return t[y0 * w + x0].xyz * ((1.0f - dx) * (1.0f - dy)) + t[y0 * w + x1].xyz * (dx * (1.0f - dy)) +
+           t[y1 * w + x0].xyz * ((1.0f - dx) * dy) + t[y1 * w + x1].xyz * (dx * dy);
+}
+
+/* Radiance of the map in direction d (unit), times `scale`. */
+inline float3 EnvMap_Radiance(const __global float4* texels, ImageInfo img, int mapping, float3 scale, float3 d) {
+    float2 uv = EnvMap_DirToUv(mapping, d);
+    return EnvMap_Lookup(texels, img, mapping, uv.x, uv.y) * scale;
+}
+
+/* Extra uniforms for rejection retries: the k-th pair derived from (u1, u2) (host: envRetryUniforms). */
+inline float2 Env_RetryUniforms(float u1, float u2, uint k) {
+    uint h1 = Rng_Hash(as_uint(u1) ^ Rng_Hash(as_uint(u2) + 0x632be5abu * (k + 1u)));
+    uint h2 = Rng_Hash(h1 ^ 0x9e3779b9u);
+    return (float2)((float)(h1 >> 8) * (1.0f / 16777216.0f), (float)(h2 >> 8) * (1.0f / 16777216.0f));
+}
+
+/* Largest k in [0, n-1] with cdf[k] <= x (cdf[0] = 0 <= x < cdf[n] = 1). */
+inline int EnvDist_FindInterval(const __global float* cdf, int n, float x) {
+    int lo = 0, hi = n;
+    while (hi - lo > 1) {
+        int mid = (lo + hi) / 2;
+        if (cdf[mid] <= x) lo = mid; else hi = mid;
+    }
+    return lo;
+}
+
+/* pdf over solid angle of unit direction d (lat-long: uniform in solid angle within a cell; probe:
+ * uniform in (u, v) over the cell's part inside the disc). */
+inline float EnvDist_Pdf(const __global float* dist, float3 d) {
+    int W = (int)dist[0], H = (int)dist[1], mapping = (int)dist[2];
+    float2 uv = EnvMap_DirToUv(mapping, d);
+    int i = clamp((int)(uv.x * (float)W), 0, W - 1), j = clamp((int)(uv.y * (float)H), 0, H - 1);
+    const __global float* marg = dist + 4;
+    const __global float* cond = dist + 4 + H + 1 + j * (W + 1);
+    float p = (marg[j + 1] - marg[j]) * (cond[i + 1] - cond[i]);
+    if (mapping == ENV_LATLONG) {
+        const __global float* z = dist + 4 + H + 1 + H * (W + 1) + W * H;
+        float omega = 2.0f * CLRT_PI / (float)W * (z[j] - z[j + 1]);
+        return omega > 0.0f ? p / omega : 0.0f;
+    }
+    float f = dist[4 + H + 1 + H * (W + 1) + j * W + i];
+    return f > 0.0f ? p * (float)W * (float)H / f * EnvMap_UvToSolidAngle(mapping, uv.x, uv.y) : 0.0f;
+}
+
+/* Importance sample: returns 1 and the direction and its solid-angle pdf, or 0 (no direction). */
+inline int EnvDist_Sample(const __global float* dist, float u1, float u2, float3* dir, float* pdf) {
+    int W = (int)dist[0], H = (int)dist[1], mapping = (int)dist[2];
+    *pdf = 0.0f;
+    const __global float* marg = dist + 4;
+    int j = EnvDist_FindInterval(marg, H, u2);
+    float dv = fmin((u2 - marg[j]) / (marg[j + 1] - marg[j]), CLRT_ONE_MINUS_EPS);
+    const __global float* cond = dist + 4 + H + 1 + j * (W + 1);
+    int i = EnvDist_FindInterval(cond, W, u1);
+    float du = fmin((u1 - cond[i]) / (cond[i + 1] - cond[i]), CLRT_ONE_MINUS_EPS);
+    float p = (marg[j + 1] - marg[j]) * (cond[i + 1] - cond[i]);
+    if (mapping == ENV_LATLONG) { /* cos θ uniform between the row's bounds */
+        const __global float* zr = dist + 4 + H + 1 + H * (W + 1) + W * H;
+        float z = zr[j] - dv * (zr[j] - zr[j + 1]);
+        float st = sqrt(fmax(0.0f, 1.0f - z * z));
+        float phi = CLRT_PI * (2.0f * (((float)i + du) / (float)W) - 1.0f);
+        *dir = (float3)(st * sin(phi), z, -st * cos(phi));
+        float omega = 2.0f * CLRT_PI / (float)W * (zr[j] - zr[j + 1]);
+        *pdf = omega > 0.0f ? p / omega : 0.0f;
+        return *pdf > 0.0f && isfinite(*pdf);
+    }
+    float u = ((float)i + du) / (float)W, v = ((float)j + dv) / (float)H;
+    {
+        float x = 2.0f * u - 1.0f, y = 1.0f - 2.0f * v;
+        int inside = x * x + y * y <= 1.0f;
+        for (int k = 0; !inside && k < CLRT_ENV_MAX_REJECTIONS; ++k) {
+            float2 r = Env_RetryUniforms(u1, u2, (uint)k);
+            u = ((float)i + r.x) / (float)W;
+            v = ((float)j + r.y) / (float)H;
+            x = 2.0f * u - 1.0f;
+            y = 1.0f - 2.0f * v;
+            inside = x * x + y * y <= 1.0f;
+        }
+        if (!inside) return 0;
+    }
+    if (!EnvMap_UvToDir(mapping, u, v, dir)) return 0;
+    float f = dist[4 + H + 1 + H * (W + 1) + j * W + i];
+    float pUv = f > 0.0f ? p * (float)W * (float)H / f : 0.0f;
+    *pdf = pUv * EnvMap_UvToSolidAngle(mapping, u, v);
+    return *pdf > 0.0f && isfinite(*pdf);
+}

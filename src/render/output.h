@@ -1,0 +1,45 @@
+// output.h — writing a rendered camera image, and the `clrt tonemap` subcommand.
+// An ImageName ending in .png is clamped and quantised (round, or floor with --ldr-quantize floor);
+// one ending in .exr is written as float (or half) RGB OpenEXR, ZIP-compressed, with header
+// attributes (renderer, spp, renderTime, device), and next to it one tone-mapped PNG per Tonemap block
+// of the camera, tone-mapped on the OpenCL device (render/tonemap_device.h). Every file is written
+// through a temporary sibling and rename(); all tone mapping is done before the first file is written.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "cl/program.h"
+#include "image/image.h"
+#include "image/tonemap.h"
+#include "scene/scene.h"
+
+namespace clrt {
+
+struct OutputOptions {
+    std::string outDir = ".";      // must exist
+    bool truncatePng = false;      // .png ImageName: floor instead of round (--ldr-quantize floor)
+    bool tonemapTruncate = true;   // tone-mapped PNGs: floor (the course's references) or round
+    bool exrHalf = false;          // --exr-half: HALF channels instead of FLOAT
+    int spp = 0;                   // header attributes of the EXR
+    double renderSeconds = 0;
+    std::string deviceName;
+};
+
+// The host TonemapSettings of a scene Tonemap block.
+TonemapSettings tonemapSettingsFrom(const Tonemap& t);
+
+// The PNG paths of the tone-mapped images of `hdrPath` (its extension replaced): one block -> stem +
+// its Extension (usually none) + ".png"; several -> stem + (Extension, or "_<tmo>") + ".png", a
+// name already taken getting "_<block number>" appended (with a warning).
+std::vector<std::string> tonemapPngPaths(const std::string& hdrPath, const std::vector<Tonemap>& blocks);
+
+// Writes the outputs of one camera (see above) into opts.outDir; returns the paths written.
+std::vector<std::string> writeCameraOutputs(const Camera& cam, const ImageRGB& radiance, const OutputOptions& opts,
+                                            DeviceContext& dc);
+
+// `clrt tonemap IN.exr [-o OUT.png] [options]`; argv[1] is "tonemap". Returns the exit code; throws
+// clrt::Error on bad input.
+int cmdTonemap(int argc, char** argv);
+extern const char* const kTonemapHelp;
+
+}  // namespace clrt

@@ -1,0 +1,186 @@
+// tonemap_device.cpp — the host driver of cl_kernels/tonemap.cl (see tonemap_device.h): buffers,
+// launches with a fixed work-group size of 64 (PoCL compiles once per local size), the double sum
+// of the per-work-item compensated partials, and the radix select of the percentile luminance.
+#include "render/tonemap_device.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <string>
+
+#include "cl/check.h"
+#include "shared/device_types.h"
+#include "util/error.h"
+
+namespace clrt {
+
+namespace {
+constexpr size_t kLocal = 64;
+constexpr size_t kMaxWorkItems = 16384;  // partial sums / histogram work-items per launch
+}  // namespace
+
+struct TonemapDevice::Impl {
+    DeviceContext& dc;
+    BuildInfo build;
+    cl::Program program;
+    cl::Kernel kLum, kHist, kMap, kMapFloat;
+    cl::Buffer rgb, lum, partials, hist, out, outFloat;
+    size_t numPixels = 0, capacity = 0;
+    size_t workItems = 0;
+    int width = 0, height = 0;
+    bool lumValid = false;
+    double lumDelta = -1, logSum = 0;
+
+    explicit Impl(DeviceContext& d) : dc(d) {
+        program = buildProgram(dc, {"common.cl", "tonemap.cl"}, {}, &build);
+        kLum = CL_CPP(cl::Kernel(program, "Tonemap_Luminance"));
+        kHist = CL_CPP(cl::Kernel(program, "Tonemap_Histogram"));
+        kMap = CL_CPP(cl::Kernel(program, "Tonemap_Map"));
+        kMapFloat = CL_CPP(cl::Kernel(program, "Tonemap_MapFloat"));
+        hist = CL_CPP(cl::Buffer(dc.context(), CL_MEM_READ_WRITE, 256 * sizeof(cl_uint)));
+        partials = CL_CPP(cl::Buffer(dc.context(), CL_MEM_READ_WRITE, kMaxWorkItems * 2 * sizeof(float)));
+    }
+
+    void launch(cl::Kernel& k, size_t globalItems) {
+        CL_CPP(dc.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(roundUp(globalItems, kLocal)),
+                                               cl::NDRange(kLocal)));
+    }
+
+    void upload(const ImageRGB& img) {
+        const size_t n = size_t(img.width) * size_t(img.height);
+        if (img.width <= 0 || img.height <= 0 || img.pixels.size() != n * 3)
+            throw Error("tone mapping: bad image of " + std::to_string(img.width) + "x" + std::to_string(img.height));
+        if (n > size_t(UINT32_MAX) / 4)
+            throw Error("tone mapping: image of " + std::to_string(n) + " pixels is too large");
+        const uint64_t bytes = uint64_t(n) * 3 * sizeof(float);
+        if (bytes > dc.info().maxAlloc)
+            throw Error("tone mapping: a " + std::to_string(img.width) + "x" + std::to_string(img.height) + " image needs " +
+                            std::to_string(bytes >> 20) + " MiB; device '" + dc.info().name + "' allows " +
+                            std::to_string(dc.info().maxAlloc >> 20) + " MiB per buffer",
+                        ExitCode::Device);
+        if (n > capacity) {
+            rgb = CL_CPP(cl::Buffer(dc.context(), CL_MEM_READ_ONLY, n * 3 * sizeof(float)));
+            lum = CL_CPP(cl::Buffer(dc.context(), CL_MEM_READ_WRITE, n * sizeof(float)));
+            out = CL_CPP(cl::Buffer(dc.context(), CL_MEM_WRITE_ONLY, std::max<size_t>(n * 3, 16)));
+            outFloat = cl::Buffer();  // allocated on first use
+            capacity = n;
+        }
+        CL_CPP(dc.queue().enqueueWriteBuffer(rgb, CL_FALSE, 0, n * 3 * sizeof(float), img.pixels.data()));
+        numPixels = n;
+        width = img.width;
+        height = img.height;
+        workItems = std::min(roundUp(n, kLocal), kMaxWorkItems);
+        lumValid = false;
+    }
+
+    // Luminance buffer and Σ log(δ + Y) (partials summed in double, in a fixed order).
+    void luminance(double delta) {
+        if (lumValid && lumDelta == delta) return;
+        if (numPixels == 0) throw Error("tone mapping: no image uploaded");
+        CL_CPP(kLum.setArg(0, rgb));
+        CL_CPP(kLum.setArg(1, cl_uint(numPixels)));
+        CL_CPP(kLum.setArg(2, float(delta)));
+        CL_CPP(kLum.setArg(3, lum));
+        CL_CPP(kLum.setArg(4, partials));
+        launch(kLum, workItems);
+        std::vector<float> p(roundUp(workItems, kLocal) * 2);
+        CL_CPP(dc.queue().enqueueReadBuffer(partials, CL_TRUE, 0, p.size() * sizeof(float), p.data()));
+        double sum = 0;
+        for (size_t i = 0; i < p.size(); i += 2) sum += double(p[i]) + double(p[i + 1]);
+        logSum = sum;
+        lumValid = true;
+        lumDelta = delta;
+    }
+
+    // Radix select over the bit patterns of the (non-negative) luminances: exact k-th smallest.
+    float select(size_t k) {
+        cl_uint prefix = 0, mask = 0;
+        size_t rank = std::min(k, numPixels - 1);
+        for (int shift = 24; shift >= 0; shift -= 8) {
+            const cl_uint zero = 0;
+            CL_CPP(dc.queue().enqueueFillBuffer(hist, zero, 0, 256 * sizeof(cl_uint)));
+            CL_CPP(kHist.setArg(0, lum));
+            CL_CPP(kHist.setArg(1, cl_uint(numPixels)));
+            CL_CPP(kHist.setArg(2, prefix));
+            CL_CPP(kHist.setArg(3, mask));
+            CL_CPP(kHist.setArg(4, cl_uint(shift)));
+            CL_CPP(kHist.setArg(5, hist));
+            launch(kHist, workItems);
+            cl_uint h[256];
+            CL_CPP(dc.queue().enqueueReadBuffer(hist, CL_TRUE, 0, sizeof(h), h));
+            size_t below = 0;
+            int bin = -1;
+            for (int b = 0; b < 256; ++b) {
+                if (rank < below + h[b]) {
+                    bin = b;
+                    break;
+                }
+                below += h[b];
+            }
+            if (bin < 0) throw Error("tone mapping: percentile selection lost its rank (device histogram is inconsistent)",
+                                     ExitCode::Device);
+            rank -= below;
+            prefix |= cl_uint(bin) << shift;
+            mask |= 255u << shift;
+        }
+        float v;
+        static_assert(sizeof(v) == sizeof(prefix), "float is 32 bits");
+        std::memcpy(&v, &prefix, sizeof(v));
+        return v;
+    }
+
+    TonemapDeviceResult map(const TonemapSettings& s, bool floatDisplay) {
+        validateTonemapSettings(s, "tone mapping");
+        luminance(s.delta);
+        TonemapDeviceResult r;
+        r.logSum = logSum;
+        const bool needWhite = s.op == TmoKind::Photographic && s.burnPercent > 0.0f;
+        const size_t k = percentileIndex(numPixels, 100.0 - double(s.burnPercent));
+        r.kthLuminance = needWhite ? select(k) : 0.0f;
+        r.stats = tonemapStatsFrom(logSum, numPixels, r.kthLuminance, s);
+
+        dev::TonemapParams p{};
+        p.op = int(s.op);
+        p.scale = r.stats.scale;
+        p.whiteL = r.stats.whiteL;
+        p.hasWhite = r.stats.hasWhite ? 1 : 0;
+        p.saturation = s.saturation;
+        p.invGamma = 1.0f / s.gamma;
+        p.truncate = s.truncate ? 1 : 0;
+        p.numPixels = cl_uint(numPixels);
+        if (floatDisplay) {
+            if (outFloat() == nullptr)
+                outFloat = CL_CPP(cl::Buffer(dc.context(), CL_MEM_WRITE_ONLY, capacity * 3 * sizeof(float)));
+            CL_CPP(kMapFloat.setArg(0, rgb));
+            CL_CPP(kMapFloat.setArg(1, sizeof(p), &p));
+            CL_CPP(kMapFloat.setArg(2, outFloat));
+            launch(kMapFloat, numPixels);
+            r.display.resize(numPixels * 3);
+            CL_CPP(dc.queue().enqueueReadBuffer(outFloat, CL_TRUE, 0, r.display.size() * sizeof(float), r.display.data()));
+            return r;
+        }
+        CL_CPP(kMap.setArg(0, rgb));
+        CL_CPP(kMap.setArg(1, sizeof(p), &p));
+        CL_CPP(kMap.setArg(2, out));
+        launch(kMap, numPixels);
+        r.rgb8.resize(numPixels * 3);
+        CL_CPP(dc.queue().enqueueReadBuffer(out, CL_TRUE, 0, r.rgb8.size(), r.rgb8.data()));
+        return r;
+    }
+};
+
+TonemapDevice::TonemapDevice(DeviceContext& dc) : impl_(new Impl(dc)) {}
+TonemapDevice::~TonemapDevice() = default;
+const BuildInfo& TonemapDevice::buildInfo() const { return impl_->build; }
+void TonemapDevice::upload(const ImageRGB& img) { impl_->upload(img); }
+TonemapDeviceResult TonemapDevice::map(const TonemapSettings& s, bool floatDisplay) { return impl_->map(s, floatDisplay); }
+TonemapDeviceResult TonemapDevice::run(const ImageRGB& img, const TonemapSettings& s) {
+    impl_->upload(img);
+    return impl_->map(s, false);
+}
+float TonemapDevice::kthLuminance(size_t k, double delta) {
+    impl_->luminance(delta);
+    return impl_->select(k);
+}
+
+}  // namespace clrt
