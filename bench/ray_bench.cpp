@@ -146,6 +146,10 @@ int main(int argc, char** argv) {
         };
         cl::Buffer nodes = upload(ds.bvh.nodes), refs = upload(ds.bvh.primRefs), tris = upload(ds.triangles),
                    sph = upload(ds.spheres);
+        cl::Buffer planes = upload(ds.planes);
+        if (ds.params.numPlanes > 0) std::fprintf(stderr, "note: planes are ignored by this benchmark\n");
+        kClosest.setArg(8, planes); kClosest.setArg(9, 0); kClosest.setArg(10, 0);
+        kShadow.setArg(7, planes); kShadow.setArg(8, 0); kShadow.setArg(9, 0);
         for (cl::Kernel* k : {&kClosest, &kShadow}) {
             k->setArg(0, nodes); k->setArg(1, refs); k->setArg(2, tris); k->setArg(3, sph); k->setArg(4, numTris);
         }

@@ -177,32 +177,57 @@ inline int Bvh_Traverse(const __global BvhNode* nodes, const __global int* primR
     return found;
 }
 
+/* Every plane against the ray (planes are unbounded, so not in the BVH). */
+inline int Planes_Intersect(const __global Plane* planes, int numPlanes, int firstPlaneRef, float3 org, float3 dir,
+                            float tMax, int anyHit, Hit* hit) {
+    int found = 0;
+    for (int k = 0; k < numPlanes; ++k) {
+        float3 n = planes[k].normal.xyz;
+        float denom = dot(n, dir);
+        if (denom == 0.0f) continue;
+        float t = dot(planes[k].point.xyz - org, n) / denom;
+        if (t > 0.0f && t < tMax) {
+            tMax = t;
+            hit->t = t; hit->prim = firstPlaneRef + k; hit->u = 0.0f; hit->v = 0.0f;
+            found = 1;
+            if (anyHit) return 1;
+        }
+    }
+    return found;
+}
+
 /* Closest hit for each ray of the queue. */
 __kernel void intersect_closest(const __global BvhNode* nodes, const __global int* primRefs,
                                 const __global Triangle* tris, const __global Sphere* spheres,
-                                int numTriangles, const __global Ray* rays, __global Hit* hits, int count) {
+                                int numTriangles, const __global Ray* rays, __global Hit* hits, int count,
+                                const __global Plane* planes, int numPlanes, int firstPlaneRef) {
     int i = get_global_id(0);
     if (i >= count) return;
     Ray r = rays[i];
     Hit h;
     h.t = -1.0f; h.prim = CLRT_INVALID; h.u = 0.0f; h.v = 0.0f;
     float3 dir = r.direction.xyz;
-    if (allFinite3(r.origin.xyz) && allFinite3(dir) && r.direction.w > 0.0f)
-        Bvh_Traverse(nodes, primRefs, tris, spheres, numTriangles, r.origin.xyz, dir, r.direction.w, 0, &h);
+    if (allFinite3(r.origin.xyz) && allFinite3(dir) && r.direction.w > 0.0f) {
+        float tMax = r.direction.w;
+        if (numPlanes > 0 && Planes_Intersect(planes, numPlanes, firstPlaneRef, r.origin.xyz, dir, tMax, 0, &h)) tMax = h.t;
+        Bvh_Traverse(nodes, primRefs, tris, spheres, numTriangles, r.origin.xyz, dir, tMax, 0, &h);
+    }
     hits[i] = h;
 }
 
 /* Any hit for each shadow ray: an occluded ray's contribution is set to zero. */
 __kernel void intersect_shadow(const __global BvhNode* nodes, const __global int* primRefs,
                                const __global Triangle* tris, const __global Sphere* spheres,
-                               int numTriangles, __global ShadowRay* shadows, int count) {
+                               int numTriangles, __global ShadowRay* shadows, int count,
+                               const __global Plane* planes, int numPlanes, int firstPlaneRef) {
     int i = get_global_id(0);
     if (i >= count) return;
     __global ShadowRay* s = &shadows[i];
     float4 c = s->contribution;
     if (c.x == 0.0f && c.y == 0.0f && c.z == 0.0f) return;
     Hit h;
-    if (Bvh_Traverse(nodes, primRefs, tris, spheres, numTriangles, s->origin.xyz, s->direction.xyz, s->origin.w, 1, &h))
+    if ((numPlanes > 0 && Planes_Intersect(planes, numPlanes, firstPlaneRef, s->origin.xyz, s->direction.xyz, s->origin.w, 1, &h)) ||
+        Bvh_Traverse(nodes, primRefs, tris, spheres, numTriangles, s->origin.xyz, s->direction.xyz, s->origin.w, 1, &h))
         s->contribution = (float4)(0.0f);
 }
 

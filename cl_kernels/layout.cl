@@ -18,6 +18,8 @@
         M(TriangleShading, textureSet) M(TriangleShading, pad0) M(TriangleShading, pad1)          \
     S(Sphere) M(Sphere, centerRadius) M(Sphere, worldToObject) M(Sphere, objectToWorld)           \
         M(Sphere, material) M(Sphere, textureSet) M(Sphere, pad0) M(Sphere, pad1)                 \
+    S(Plane) M(Plane, point) M(Plane, normal) M(Plane, material) M(Plane, textureSet)              \
+        M(Plane, pad0) M(Plane, pad1)                                                             \
     S(TextureSet) M(TextureSet, texture)                                                          \
     S(Material) M(Material, ambient) M(Material, diffuse) M(Material, specular)                   \
         M(Material, mirror) M(Material, absorption) M(Material, phongExponent)                    \
@@ -41,7 +43,7 @@
         M(SceneParams, numTriangles) M(SceneParams, numSpheres) M(SceneParams, numLights)         \
         M(SceneParams, maxDepth) M(SceneParams, backgroundTexture) M(SceneParams, envLight)       \
         M(SceneParams, seed) M(SceneParams, splitDepth) M(SceneParams, envScale)                  \
-        M(SceneParams, envImage) M(SceneParams, envMapping) M(SceneParams, envPad0)               \
+        M(SceneParams, envImage) M(SceneParams, envMapping) M(SceneParams, numPlanes)               \
         M(SceneParams, envPad1)                                                                   \
     S(Ray) M(Ray, origin) M(Ray, direction)                                                       \
     S(Hit) M(Hit, t) M(Hit, prim) M(Hit, u) M(Hit, v)                                             \

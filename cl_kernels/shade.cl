@@ -18,7 +18,8 @@ typedef struct {
 } SurfaceHit;
 
 inline SurfaceHit Surface_FromHit(Hit h, Ray r, const __global Triangle* tris, const __global TriangleShading* shading,
-                                  const __global Sphere* spheres, int numTriangles) {
+                                  const __global Sphere* spheres, const __global Plane* planes, int numTriangles,
+                                  int numSpheres) {
     SurfaceHit s;
     s.dir = r.direction.xyz;
     s.t = h.t;
@@ -36,6 +37,19 @@ inline SurfaceHit Surface_FromHit(Hit h, Ray r, const __global Triangle* tris, c
         s.uv = b0 * sh->uv01.xy + b1 * sh->uv01.zw + b2 * sh->uv2.xy;
         s.material = sh->material;
         s.textureSet = sh->textureSet;
+    } else if (h.prim >= numTriangles + numSpheres) {
+        const __global Plane* pl = &planes[h.prim - numTriangles - numSpheres];
+        s.p = r.origin.xyz + h.t * r.direction.xyz;
+        s.p -= dot(s.p - pl->point.xyz, pl->normal.xyz) * pl->normal.xyz;  /* project onto the plane */
+        s.ng = pl->normal.xyz;
+        s.ns = s.ng;
+        /* Planar uv: the point's coordinates in a frame of the plane (a texture repeats every unit). */
+        float3 tu, tv;
+        makeBasis(s.ng, &tu, &tv);
+        float3 q = s.p - pl->point.xyz;
+        s.uv = (float2)(dot(q, tu), dot(q, tv));
+        s.material = pl->material;
+        s.textureSet = pl->textureSet;
     } else {
         const __global Sphere* sp = &spheres[h.prim - numTriangles];
         float3 o = affinePoint(sp->worldToObject, r.origin.xyz);
@@ -124,7 +138,8 @@ __kernel void shade_hits(SceneParams scene, CameraParams cam, int count,
                          const __global TextureSet* textureSets, const __global TextureMap* textures,
                          const __global ImageInfo* images, const __global float4* texels,
                          __global ShadingPoint* points, __global float4* pathRadiance,
-                         __global PathState* nextPaths, __global Ray* nextRays, __global int* childValid) {
+                         __global PathState* nextPaths, __global Ray* nextRays, __global int* childValid,
+                         const __global Plane* planes) {
     int i = get_global_id(0);
     if (i >= count) return;
     PathState path = paths[i];
@@ -140,7 +155,7 @@ __kernel void shade_hits(SceneParams scene, CameraParams cam, int count,
         pathRadiance[i] = (float4)(throughput * Miss_Radiance(scene, textures, images, texels, cam, path, ray.direction.xyz), 0.0f);
         return;
     }
-    SurfaceHit s = Surface_FromHit(h, ray, tris, shading, spheres, scene.numTriangles);
+    SurfaceHit s = Surface_FromHit(h, ray, tris, shading, spheres, planes, scene.numTriangles, scene.numSpheres);
     Material m = materials[s.material];
     float3 wo = -s.dir;
     float3 ng = s.frontFacing ? s.ng : -s.ng;   /* facing the incoming ray */

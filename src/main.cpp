@@ -59,6 +59,8 @@ const char* kRenderHelp =
     "  --camera ID           render only the camera with this id\n"
     "  --ldr-quantize MODE   round (default) or floor: how .png outputs turn clamped radiance into\n"
     "                        8 bits; the course's reference renders truncate (floor)\n"
+    "  --env-sampling S      sampler of every SphericalDirectionalLight: uniform, cosine, importance or\n"
+    "                        mis (default: the scene's sampler=, else mis)\n"
     "  --all-features        build the kernels with every feature, not only what the scene uses\n"
     "                        (for measuring what specialisation gains)\n"
     "  --exr-half            write .exr outputs with half-float channels (default: float)\n"
@@ -71,6 +73,7 @@ struct Args {
     int spp = 0;
     uint32_t seed = 0;
     bool verbose = false, help = false, truncatePng = false, exrHalf = false, allFeatures = false;
+    std::string envSampling;  // --env-sampling: overrides every environment light's sampler
 };
 
 int parseInt(const std::string& opt, const std::string& v, long lo, long hi) {
@@ -100,6 +103,13 @@ Args parseRenderArgs(int argc, char** argv, int start) {
         else if (s == "-v" || s == "--verbose") a.verbose = true;
         else if (s == "--exr-half") a.exrHalf = true;
         else if (s == "--all-features") a.allFeatures = true;
+        else if (s == "--env-sampling") {
+            a.envSampling = value();
+            EnvSampler es;
+            if (!parseEnvSampler(a.envSampling, es))
+                throw Error("--env-sampling: expected uniform, cosine, importance or mis, got '" + a.envSampling + "'",
+                            ExitCode::Usage);
+        }
         else if (s == "--ldr-quantize") {
             std::string v = value();
             if (v != "round" && v != "floor") throw Error("--ldr-quantize: expected round or floor, got '" + v + "'", ExitCode::Usage);
@@ -148,6 +158,11 @@ int cmdRender(const Args& a) {
 
     auto t = std::chrono::steady_clock::now();
     Scene scene = loadScene(a.positional[0]);
+    if (!a.envSampling.empty()) {
+        EnvSampler es;
+        parseEnvSampler(a.envSampling, es);
+        overrideEnvSampling(scene, es);
+    }
     double tParse = since(t);
 
     std::vector<const Camera*> cams;

@@ -1,6 +1,6 @@
 // The intersection kernels (cl_kernels/intersect.cl) against the plain C++ reference
 // (src/bvh/host_intersect.h) on PoCL: closest hits and shadow-ray any-hits over random scenes of
-// triangles and spheres, BVH-traversed on both sides.
+// triangles and spheres, BVH-traversed on both sides, plus two infinite planes.
 #include <catch.hpp>
 
 #include <random>
@@ -99,6 +99,15 @@ TEST_CASE("intersection kernels match the host reference on random scenes", "[cl
     }
     closest.setArg(5, rayBuf); closest.setArg(6, hitBuf); closest.setArg(7, numRays);
     shadow.setArg(5, shadowBuf); shadow.setArg(6, numRays);
+    // Two infinite planes, outside the BVH, with references after the triangles and spheres.
+    std::vector<dev::Plane> planes(2);
+    planes[0].point = {0, -12, 0, 0}; planes[0].normal = {0, 1, 0, 0};
+    Vec3 n1 = normalize(Vec3(1, 0.5f, -0.25f));
+    planes[1].point = {14, 0, 0, 0}; planes[1].normal = {n1.x, n1.y, n1.z, 0};
+    const int firstPlaneRef = numTris + int(s.spheres.size());
+    cl::Buffer planeBuf = ro(planes);
+    closest.setArg(8, planeBuf); closest.setArg(9, 2); closest.setArg(10, firstPlaneRef);
+    shadow.setArg(8 - 1, planeBuf); shadow.setArg(8, 2); shadow.setArg(9, firstPlaneRef);
     cl::CommandQueue& q = dc.queue();
     CL_CPP(q.enqueueNDRangeKernel(closest, cl::NullRange, cl::NDRange(roundUp(numRays, 64)), cl::NDRange(64)));
     CL_CPP(q.enqueueNDRangeKernel(shadow, cl::NullRange, cl::NDRange(roundUp(numRays, 64)), cl::NDRange(64)));
@@ -122,6 +131,14 @@ TEST_CASE("intersection kernels match the host reference on random scenes", "[cl
                          : intersectSphere(o, d, s.sphereCenter[ref - numTris], s.sphereRadius[ref - numTris], tm, t);
             if (h) { tm = t; prim = ref; }
         });
+        for (int k = 0; k < 2; ++k) {  // host reference for the planes
+            Vec3 pp(planes[k].point.x, planes[k].point.y, planes[k].point.z);
+            Vec3 pn(planes[k].normal.x, planes[k].normal.y, planes[k].normal.z);
+            float denom = dot(pn, d);
+            if (denom == 0) continue;
+            float t = dot(pp - o, pn) / denom;
+            if (t > 0 && t < tBest) { tBest = t; prim = firstPlaneRef + k; }
+        }
         const dev::Hit& h = hits[i];
         hitCount += prim >= 0;
         bool devHit = h.prim >= 0;

@@ -218,7 +218,7 @@ TEST_CASE("env importance pdf integrates to one over the sphere", "[lights][env]
     for (const NamedMap& nm : sharedMaps()) {
         INFO(nm.name);
         const EnvDistribution& d = nm.map.dist;
-        const int M = nm.name.rfind("1x1", 0) == 0 ? 256 : 1024;
+        const int M = nm.name.rfind("1x1", 0) == 0 ? 256 : 2048;  // interior.exr: 0.9908 at 1024, 1.0048 at 2048, 1.0004 at 4096
         double integral = integrateSphere([&](const Vec3& w) { return double(d.pdf(w)); }, M);
         WARN(nm.name << ": ∫pdf dω = " << integral);
         CHECK(integral == Approx(1.0).epsilon(0.01));

@@ -122,6 +122,9 @@ std::vector<dev::Hit> deviceClosest(const std::vector<dev::Triangle>& trisIn, co
     cl::Kernel& k = intersectProgram().closest;
     k.setArg(0, nodes); k.setArg(1, refs); k.setArg(2, tb); k.setArg(3, sb); k.setArg(4, int(trisIn.size()));
     k.setArg(5, rb); k.setArg(6, hb); k.setArg(7, n);
+    std::vector<dev::Plane> noPlanes(1);
+    cl::Buffer pb = ro(noPlanes);
+    k.setArg(8, pb); k.setArg(9, 0); k.setArg(10, 0);
     CL_CPP(dc.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(roundUp(size_t(n), 64)), cl::NDRange(64)));
     std::vector<dev::Hit> hits(rays.size());
     CL_CPP(dc.queue().enqueueReadBuffer(hb, CL_TRUE, 0, sizeof(dev::Hit) * hits.size(), hits.data()));

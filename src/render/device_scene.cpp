@@ -180,6 +180,22 @@ DeviceScene flattenScene(const Scene& scene) {
     size_t nanSkipped = 0;
     for (const Shape& s : scene.shapes) {
         int texSet = textureSetFor(s);
+        if (s.type == ShapeType::Plane) {
+            Mat4 inv;
+            Vec3 n = s.transform.inverse(inv) ? normalize(inv.transposed().transformVector(s.normal)) : Vec3(0, 0, 0);
+            Vec3 p = s.transform.transformPoint(s.center);
+            if (!(length(n) > 0) || !isFinite(n) || !isFinite(p)) {
+                warn(s.source + ": singular transform or bad normal; plane skipped");
+                continue;
+            }
+            dev::Plane pl{};
+            pl.point = toFloat4(p);
+            pl.normal = toFloat4(n);
+            pl.material = s.materialIndex;
+            pl.textureSet = texSet;
+            ds.planes.push_back(pl);
+            continue;
+        }
         if (s.type == ShapeType::Sphere) {
             dev::Sphere sp{};
             sp.centerRadius = toFloat4(s.center, s.radius);
@@ -351,6 +367,7 @@ DeviceScene flattenScene(const Scene& scene) {
     }
     if (ds.triangles.empty()) { ds.triangles.push_back(dev::Triangle{}); ds.triangleShading.push_back(dev::TriangleShading{}); }
     if (ds.spheres.empty()) ds.spheres.push_back(dev::Sphere{});
+    if (ds.planes.empty()) ds.planes.push_back(dev::Plane{});
     if (ds.textureSets.empty()) ds.textureSets.push_back(dev::TextureSet{{-1, -1, -1, -1}});
 
     dev::SceneParams& p = ds.params;
@@ -358,6 +375,7 @@ DeviceScene flattenScene(const Scene& scene) {
     p.ambient = toFloat4(scene.ambientLight);
     p.numTriangles = int(boxes.size() - sphereBoxes.size());
     p.numSpheres = int(sphereBoxes.size());
+    p.numPlanes = int(ds.planes.size());
     p.numLights = int(scene.lights.size());  // every light is flattened (ds.lights holds a dummy when 0)
     p.maxDepth = std::max(0, scene.maxRecursionDepth);
     ds.flattenSeconds = secondsSince(t0) - ds.bvhSeconds;

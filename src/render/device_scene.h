@@ -30,6 +30,7 @@ struct DeviceScene {
     std::vector<dev::Triangle> triangles;          // in BVH leaf order is NOT implied: see bvh.primRefs
     std::vector<dev::TriangleShading> triangleShading;
     std::vector<dev::Sphere> spheres;
+    std::vector<dev::Plane> planes;               // never empty (a dummy when the scene has none)
     std::vector<dev::Material> materials;
     std::vector<dev::TextureSet> textureSets;
     std::vector<dev::TextureMap> textures;

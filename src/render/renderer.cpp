@@ -28,7 +28,7 @@ struct Renderer::Impl {
     BuildInfo build;
     cl::Program program;
     cl::Kernel kGenerate, kIntersect, kShadow, kShade, kLights, kGather, kAccumulate, kCompact;
-    cl::Buffer nodes, primRefs, tris, triShading, spheres, materials, textureSets, textures, images, texels, lights, envDist;
+    cl::Buffer nodes, primRefs, tris, triShading, spheres, planes, materials, textureSets, textures, images, texels, lights, envDist;
     // Queue buffers (sized per render).
     size_t queueCapacity = 0, shadowCapacity = 0;
     cl::Buffer paths, rays, hits, points, pathRadiance, nextPaths, nextRays, childValid, compactTarget, shadows;
@@ -51,6 +51,7 @@ struct Renderer::Impl {
         tris = uploadBuffer(ctx, scene.triangles);
         triShading = uploadBuffer(ctx, scene.triangleShading);
         spheres = uploadBuffer(ctx, scene.spheres);
+        planes = uploadBuffer(ctx, scene.planes);
         materials = uploadBuffer(ctx, scene.materials);
         textureSets = uploadBuffer(ctx, scene.textureSets);
         textures = uploadBuffer(ctx, scene.textures);
@@ -188,6 +189,9 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     setGeometry(m.kIntersect);
     m.kIntersect.setArg(5, m.rays);
     m.kIntersect.setArg(6, m.hits);
+    const int firstPlaneRef = sp.numTriangles + sp.numSpheres;
+    m.kIntersect.setArg(8, m.planes); m.kIntersect.setArg(9, sp.numPlanes); m.kIntersect.setArg(10, firstPlaneRef);
+    m.kShadow.setArg(7, m.planes); m.kShadow.setArg(8, sp.numPlanes); m.kShadow.setArg(9, firstPlaneRef);
     setGeometry(m.kShadow);
     m.kShadow.setArg(5, m.shadows);
     cl::Kernel& ks = m.kShade;
@@ -197,7 +201,7 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
         int a = 3;
         for (cl::Buffer* b : {&m.paths, &m.rays, &m.hits, &m.tris, &m.triShading, &m.spheres, &m.materials,
                               &m.textureSets, &m.textures, &m.images, &m.texels, &m.points, &m.pathRadiance,
-                              &m.nextPaths, &m.nextRays, &m.childValid})
+                              &m.nextPaths, &m.nextRays, &m.childValid, &m.planes})
             ks.setArg(a++, *b);
     }
     cl::Kernel& kl = m.kLights;

@@ -100,13 +100,14 @@ struct MeshData {
 };
 
 // One placed shape. Meshes and instances share MeshData by index; spheres carry their own data.
-enum class ShapeType { Mesh, Sphere };
+enum class ShapeType { Mesh, Sphere, Plane };
 
 struct Shape {
     int id = 0;
     ShapeType type = ShapeType::Mesh;
     int meshIndex = -1;           // Mesh: into Scene::meshes (instances share it)
-    Vec3 center;                  // Sphere: object-space centre
+    Vec3 center;                  // Sphere: object-space centre; Plane: a point on it
+    Vec3 normal;                  // Plane: object-space normal (unnormalised as given)
     float radius = 1;             // Sphere
     int materialIndex = 0;        // into Scene::materials
     std::vector<int> textureIndices;  // into Scene::textures

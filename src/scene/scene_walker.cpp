@@ -13,7 +13,7 @@
 //          BumpFactor NoiseConversion NoiseScale BlackColor WhiteColor Scale Offset
 //   Objects: Mesh (shadingMode) Material Textures Transformations Faces (inline | plyFile |
 //          binaryFile; vertexOffset textureOffset), MeshInstance (baseMeshId resetTransform),
-//          Triangle (Indices), Sphere (Center Radius); LightMesh/LightSphere are warned about, skipped.
+//          Triangle (Indices), Sphere (Center Radius), Plane (Point Normal; JSON 2025 scenes); LightMesh/LightSphere are warned about, skipped.
 // VertexData/TexCoordData may carry a binaryFile attribute instead of text: raw little-endian float32
 // values (no count prefix; no shared scene uses it). Faces binaryFile: raw little-endian int32.
 // Errors: clrt::Error "<location>: <what>", location from SceneNode::location().
@@ -768,6 +768,26 @@ struct Walker {
         return s;
     }
 
+    // Plane (2025 JSON scenes): an infinite plane through vertex Point with normal Normal.
+    Shape readPlane(const SceneNode& n) {
+        checkChildren(n, {"Material", "Textures", "Transformations", "Point", "Normal"});
+        Shape s;
+        std::string who = describe(n);
+        s.id = intAttribute(n, "id", 0);
+        s.type = ShapeType::Plane;
+        s.source = sourceOf(n);
+        s.materialIndex = materialRef(n, *need(n, "Material"));
+        if (auto t = n.child("Textures")) s.textureIndices = textureRefs(n, *t);
+        s.transform = transformOf(n);
+        auto pn = need(n, "Point");
+        s.center = vertices[size_t(vertexIndex(*pn, who, integer(*pn), 0))];
+        auto nn = need(n, "Normal");
+        auto v = numbers(*nn, 3);
+        s.normal = Vec3(float(v[0]), float(v[1]), float(v[2]));
+        if (!(length(s.normal) > 0) || !isFinite(s.normal)) fail(*nn, who + ": Normal must be a non-zero vector");
+        return s;
+    }
+
     Shape readInstance(const SceneNode& n, const std::map<int, MeshProto>& meshes) {
         checkChildren(n, {"Material", "Textures", "Transformations"});
         std::string who = describe(n);
@@ -792,7 +812,7 @@ struct Walker {
     }
 
     void readObjects(const SceneNode& n) {
-        checkChildren(n, {"Mesh", "MeshInstance", "Triangle", "Sphere", "LightMesh", "LightSphere"});
+        checkChildren(n, {"Mesh", "MeshInstance", "Triangle", "Sphere", "Plane", "LightMesh", "LightSphere"});
         // Meshes first, so that instances may name a mesh defined after them.
         std::map<int, MeshProto> meshes;
         std::set<std::pair<std::string, int>> seen;  // (kind, id)
@@ -820,6 +840,7 @@ struct Walker {
             else if (name == "MeshInstance") scene.shapes.push_back(readInstance(*c, meshes));
             else if (name == "Triangle") scene.shapes.push_back(readTriangle(*c));
             else if (name == "Sphere") scene.shapes.push_back(readSphere(*c));
+            else if (name == "Plane") scene.shapes.push_back(readPlane(*c));
             else if ((name == "LightMesh" || name == "LightSphere") && warnedUnknown.insert(name).second)
                 warnOnce(c->location() + ": <" + name + "> (emissive object) is not supported; skipped");
         }

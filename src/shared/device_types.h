@@ -68,6 +68,16 @@ typedef struct Sphere {
     int pad0, pad1;
 } Sphere;
 
+/* An infinite plane (2025 JSON scenes). Not in the BVH: every ray tests every plane. Primitive
+ * references of planes follow those of triangles and spheres (firstPlaneRef = numTriangles + numSpheres). */
+typedef struct Plane {
+    float4 point;            /* world space */
+    float4 normal;           /* world space, unit */
+    int material;
+    int textureSet;
+    int pad0, pad1;
+} Plane;
+
 typedef struct TextureSet {
     int texture[CLRT_MAX_TEXTURES_PER_SHAPE]; /* indices into textures, CLRT_INVALID when unused */
 } TextureSet;
@@ -156,7 +166,8 @@ typedef struct SceneParams {
     float4 envScale;       /* environment light (envLight): radiance scale of the map, rgb */
     int envImage;          /* its image (index into images) */
     int envMapping;        /* its EnvMappingKind */
-    int envPad0, envPad1;
+    int numPlanes;         /* infinite planes (see Plane) */
+    int envPad1;
 } SceneParams;
 
 /* Ray and hit record of the wavefront. */

@@ -1,0 +1,517 @@
+#!/usr/bin/env python3
+"""Speed against error: the benchmark behind `scripts/bench` (see bench/README.md).
+
+Renders a fixed set of small scenes with clrt on one device, several runs (seeds) per point, and writes
+bench/results/<device>/:
+  bench.csv         one row per (scene, strategy, spp): medians and spreads of stage times, Mrays/s,
+                    relMSE, RMSE, FLIP, efficiency, and the reference's spp and noise floor
+  runs.csv          every single run
+  refs.csv          the references: spp, seeds, their own estimated relMSE/RMSE, FLIP between halves
+  features.csv      specialised build vs --all-features (render time; cold/warm kernel build time)
+  ray_bench.txt/csv clrt's intersection kernels vs Embree 3 (bench/ray_bench.cpp), when built
+  <scene>.png       relMSE and FLIP against render time (log-log, one curve per strategy, the
+                    reference's noise floor dashed) and efficiency 1/(relMSE x time) against spp
+  report.md         all tables
+
+Runs with Debian's python3 (numpy, matplotlib) plus OpenEXR and flip-evaluator from PyPI
+(scripts/bench puts them into a venv under the build folder).
+"""
+import argparse
+import csv
+import hashlib
+import json
+import os
+import re
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+import xml.etree.ElementTree as ET
+
+import numpy as np
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
+SHARED = os.path.abspath(os.path.join(ROOT, "..", "shared", "scenes"))
+
+# The fixed scene set. res: the resolution the copy is rendered at; spp: the points of each curve;
+# ref_spp: the reference (two independent halves of ref_spp/2); env: sampling strategies apply.
+SCENES = [
+    dict(name="demo", path=os.path.join(ROOT, "scenes", "demo.xml"), res=(320, 240), spp=[1, 4, 16, 64], ref_spp=1024),
+    dict(name="cube_point", path=os.path.join(SHARED, "hw5", "cube_point.xml"), res=(200, 200), spp=[1, 4, 16, 64], ref_spp=1024),
+    dict(name="veachAjar", path=os.path.join(SHARED, "classic", "veachAjar.xml"), res=(256, 180), spp=[1, 4, 16, 64], ref_spp=1024),
+    dict(name="sphere_env_light_courtyard", path=os.path.join(SHARED, "hw5", "sphere_env_light_courtyard.xml"),
+         res=(256, 128), spp=[1, 4, 16, 64, 256], ref_spp=4096, env=True),
+    dict(name="tt_pisa_courtyard", path=os.path.join(SHARED, "hw5", "tt", "scene_pisa_courtyard.xml"),
+         res=(300, 167), spp=[1, 4, 16, 64], ref_spp=1024, env=True),
+]
+FEATURE_SCENES = ["cube_point", "veachAjar", "tt_pisa_courtyard"]
+RAY_BENCH_SCENES = ["cube_point", "veachAjar", "tt_pisa_courtyard"]
+ALL_STRATEGIES = ["uniform", "cosine", "importance", "mis"]
+REF_SEEDS = (1000001, 1000002)
+EPS_REL = 1e-2
+
+
+def log(*a):
+    print(*a, file=sys.stderr, flush=True)
+
+
+# ---------------------------------------------------------------------------------------------- scenes
+def prepare_scene(sc, tmpdir):
+    """A copy of the scene with ImageResolution reduced, one camera, ImageName -> img.exr and every
+    relative path (PLY, binaryFile, Image) made absolute, so it can live outside the read-only tree.
+    Returns (path, hdr) where hdr tells whether the original camera wrote an .exr (an HDR scene)."""
+    src = sc["path"]
+    base = os.path.dirname(os.path.abspath(src))
+    tree = ET.parse(src)
+    root = tree.getroot()
+    absp = lambda p: p if os.path.isabs(p) else os.path.normpath(os.path.join(base, p))
+    for el in root.iter():
+        for attr in ("plyFile", "binaryFile"):
+            if attr in el.attrib:
+                el.attrib[attr] = absp(el.attrib[attr])
+    for img in root.iter("Image"):
+        if img.text and img.text.strip():
+            img.text = absp(img.text.strip())
+    cams = root.find("Cameras")
+    hdr = False
+    for i, cam in enumerate(list(cams)):
+        if i > 0:
+            cams.remove(cam)
+            continue
+        name = cam.find("ImageName")
+        hdr = name.text.strip().lower().endswith(".exr")
+        name.text = "img.exr"
+        cam.find("ImageResolution").text = "%d %d" % sc["res"]
+        # A Scissor (if any) would refer to the original resolution.
+        for s in cam.findall("Scissor"):
+            cam.remove(s)
+    out = os.path.join(tmpdir, sc["name"] + ".xml")
+    tree.write(out)
+    return out, hdr
+
+
+def scene_hash(path):
+    """sha256 of the rewritten scene and the contents of every file it refers to."""
+    h = hashlib.sha256()
+    data = open(path, "rb").read()
+    h.update(data)
+    text = data.decode("utf-8", "replace")
+    files = re.findall(r'(?:plyFile|binaryFile)="([^"]+)"', text) + re.findall(r"<Image[^>]*>([^<]+)</Image>", text)
+    for f in sorted(set(files)):
+        h.update(f.encode())
+        try:
+            with open(f, "rb") as fh:
+                for chunk in iter(lambda: fh.read(1 << 20), b""):
+                    h.update(chunk)
+        except OSError:
+            h.update(b"missing")
+    return h.hexdigest()[:16]
+
+
+# ----------------------------------------------------------------------------------------------- clrt
+class Clrt:
+    def __init__(self, exe, device, env_flag):
+        self.exe, self.device, self.env_flag = exe, device, env_flag
+
+    def render(self, scene, spp, seed, strategy=None, all_features=False, env=None, verbose=False):
+        out = tempfile.mkdtemp(prefix="clrt-bench-")
+        cmd = [self.exe, "render", scene, "-o", out, "--spp", str(spp), "--seed", str(seed)]
+        if self.device:
+            cmd += ["--device", self.device]
+        if strategy and strategy != "default":
+            cmd += [self.env_flag, strategy]
+        if all_features:
+            cmd.append("--all-features")
+        if verbose:
+            cmd.append("-v")
+        t0 = time.perf_counter()
+        p = subprocess.run(cmd, capture_output=True, text=True, env=env)
+        wall = time.perf_counter() - t0
+        if p.returncode != 0:
+            shutil.rmtree(out, ignore_errors=True)
+            raise RuntimeError("%s failed (%d): %s" % (" ".join(cmd), p.returncode, p.stderr.strip()[-600:]))
+        m = re.search(r"^stats: (.*)$", p.stdout, re.M)
+        stats = {k: float(v.rstrip("s")) for k, v in (x.split("=") for x in m.group(1).split())}
+        stats["wall"] = wall
+        stats.pop("spp", None)
+        img = read_exr(os.path.join(out, "img.exr"))
+        shutil.rmtree(out, ignore_errors=True)
+        return stats, img, p.stderr
+
+
+def read_exr(path):
+    import OpenEXR
+    with OpenEXR.File(path) as f:
+        ch = f.channels()
+        if "RGB" in ch:
+            a = ch["RGB"].pixels
+        elif "RGBA" in ch:
+            a = ch["RGBA"].pixels[..., :3]
+        else:
+            a = np.stack([ch[c].pixels for c in ("R", "G", "B")], axis=-1)
+    return np.asarray(a, dtype=np.float64)
+
+
+# -------------------------------------------------------------------------------------------- metrics
+def rel_mse(x, ref, white=1.0):
+    """mean over pixels and channels of (x-ref)^2 / (ref^2 + 1e-2 white^2): images in units of the
+    display white (255 for the course's LDR scenes, whose PNGs clamp radiance at 255; 1 for HDR ones)."""
+    return float(np.mean((x - ref) ** 2 / (ref ** 2 + EPS_REL * white * white)))
+
+
+def rmse(x, ref):
+    return float(np.sqrt(np.mean((x - ref) ** 2)))
+
+
+def lum(a):
+    return 0.2126 * a[..., 0] + 0.7152 * a[..., 1] + 0.0722 * a[..., 2]
+
+
+def to_ldr(a, ref, hdr):
+    """The display both images of a FLIP comparison go through (the same for test and reference).
+    LDR scenes (the course writes them as PNG: radiance clamped to [0,255]): a/255 clamped.
+    HDR scenes: global Reinhard with key 0.18 on the reference's log-average luminance,
+    x/(1+x) per channel, then gamma 1/2.2 (the scenes' own Tonemap settings, without the burn)."""
+    if not hdr:
+        return np.clip(a / 255.0, 0.0, 1.0)
+    la = np.exp(np.mean(np.log(1e-6 + np.maximum(lum(ref), 0.0))))
+    s = 0.18 / la * np.maximum(a, 0.0)
+    return np.clip(s / (1.0 + s), 0.0, 1.0) ** (1.0 / 2.2)
+
+
+def flip(x, ref, hdr):
+    import flip_evaluator
+    r = np.ascontiguousarray(to_ldr(ref, ref, hdr), dtype=np.float32)
+    t = np.ascontiguousarray(to_ldr(x, ref, hdr), dtype=np.float32)
+    _, mean, _ = flip_evaluator.evaluate(r, t, "LDR", inputsRGB=True, applyMagma=False)
+    return float(mean)
+
+
+def med(v):
+    return statistics.median(v)
+
+
+def spread(v):
+    return min(v), max(v)
+
+
+# ----------------------------------------------------------------------------------------- references
+def reference(clrt, sc, scene_path, strategy, cache_dir, hdr, refresh):
+    """The reference of a scene, cached under cache_dir by the scene's hash: two independent halves
+    a, b of ref_spp/2 each (seeds REF_SEEDS); reference = (a+b)/2. Returns (ref, meta) where meta holds
+    its own estimated error: Var(a-b) = 2 Var(half) and Var(ref) = Var(half)/2, so the reference's
+    squared error is estimated by |a-b|^2/4 (relMSE and RMSE alike)."""
+    key = "%s-%s-%d-%s" % (sc["name"], scene_hash(scene_path), sc["ref_spp"], strategy)
+    d = os.path.join(cache_dir, key)
+    meta_path = os.path.join(d, "meta.json")
+    pa, pb = os.path.join(d, "half_a.npy"), os.path.join(d, "half_b.npy")
+    if not refresh and os.path.exists(meta_path) and os.path.exists(pa) and os.path.exists(pb):
+        meta = json.load(open(meta_path))
+        a, b = np.load(pa).astype(np.float64), np.load(pb).astype(np.float64)
+        log("  reference %s (cached, %d spp)" % (key, meta["spp"]))
+    else:
+        os.makedirs(d, exist_ok=True)
+        half = sc["ref_spp"] // 2
+        log("  reference %s: rendering 2 x %d spp (%s) ..." % (key, half, strategy))
+        t0 = time.perf_counter()
+        _, a, _ = clrt.render(scene_path, half, REF_SEEDS[0], strategy)
+        _, b, _ = clrt.render(scene_path, half, REF_SEEDS[1], strategy)
+        np.save(pa, a.astype(np.float32))
+        np.save(pb, b.astype(np.float32))
+        meta = dict(scene=sc["name"], hash=key, spp=sc["ref_spp"], strategy=strategy, seeds=list(REF_SEEDS),
+                    seconds=time.perf_counter() - t0)
+        json.dump(meta, open(meta_path, "w"), indent=1)
+    ref = 0.5 * (a + b)
+    white = 1.0 if hdr else 255.0
+    meta = dict(meta, relmse=float(np.mean((a - b) ** 2 / (ref ** 2 + EPS_REL * white * white)) / 4.0),
+                rmse=float(np.sqrt(np.mean((a - b) ** 2) / 4.0)), flip_halves=flip(a, b, hdr))
+    return ref, meta
+
+
+# ---------------------------------------------------------------------------------------------- plots
+def plot_scene(name, rows, meta_by_strategy, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(1, 3, figsize=(15, 4.4))
+    floor = min(m["relmse"] for m in meta_by_strategy.values())
+    for strat in sorted({r["strategy"] for r in rows}):
+        rs = sorted((r for r in rows if r["strategy"] == strat), key=lambda r: r["spp"])
+        t = np.array([r["render_s"] for r in rs])
+        terr = np.array([[r["render_s"] - r["render_s_min"] for r in rs], [r["render_s_max"] - r["render_s"] for r in rs]])
+        e = np.array([r["relmse"] for r in rs])
+        eerr = np.array([[r["relmse"] - r["relmse_min"] for r in rs], [r["relmse_max"] - r["relmse"] for r in rs]])
+        ok = np.array([r["above_floor"] for r in rs], dtype=bool)
+        line = ax[0].errorbar(t[ok], e[ok], xerr=terr[:, ok], yerr=eerr[:, ok], marker="o", capsize=2, label=strat)
+        if (~ok).any():
+            ax[0].plot(t[~ok], e[~ok], "o", mfc="none", color=line[0].get_color())
+        for r in rs:
+            ax[0].annotate("%d" % r["spp"], (r["render_s"], r["relmse"]), fontsize=7, xytext=(3, 3), textcoords="offset points")
+        f = np.array([r["flip"] for r in rs])
+        ax[1].plot(t, f, marker="o", label=strat)
+        eff = np.array([r["efficiency"] for r in rs])
+        ax[2].plot([r["spp"] for r in rs], eff, marker="o", label=strat)
+    ax[0].axhline(floor, ls="--", color="gray", lw=1, label="reference noise floor")
+    from matplotlib.ticker import NullFormatter
+    for a in ax:
+        a.set_xscale("log")
+        a.set_yscale("log")
+        a.xaxis.set_minor_formatter(NullFormatter())
+        a.yaxis.set_minor_formatter(NullFormatter())
+        a.grid(True, which="both", alpha=0.3)
+        a.legend(fontsize=8)
+    ax[0].set_xlabel("render time [s] (median)")
+    ax[0].set_ylabel("relMSE (median; bars: min-max)")
+    ax[1].set_xlabel("render time [s] (median)")
+    ax[1].set_ylabel("FLIP (LDR, median)")
+    ax[2].set_xlabel("spp")
+    ax[2].set_ylabel("efficiency 1/(relMSE x render s)")
+    fig.suptitle("%s: error against time (hollow: within 2x of the reference's noise floor)" % name)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+# -------------------------------------------------------------------------------------------- helpers
+def write_csv(path, rows, cols):
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=cols, extrasaction="ignore")
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: ("%.6g" % v if isinstance(v, float) else v) for k, v in r.items()})
+
+
+def md_table(rows, cols, fmt=None):
+    fmt = fmt or {}
+    out = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
+    for r in rows:
+        out.append("| " + " | ".join((fmt.get(c, "%s") % r[c]) if c in r else "" for c in cols) + " |")
+    return "\n".join(out)
+
+
+def slug(s):
+    return re.sub(r"[^a-z0-9]+", "-", s.lower()).strip("-")
+
+
+# ------------------------------------------------------------------------------------------------ main
+def main():
+    ap = argparse.ArgumentParser(description="speed against error benchmark (see bench/README.md)")
+    ap.add_argument("--build", default=os.path.join(ROOT, "build"), help="build folder with clrt (and ray_bench)")
+    ap.add_argument("--device", default="cpu", help="clrt --device SPEC (default cpu)")
+    ap.add_argument("--runs", type=int, default=3, help="runs (seeds) per point; figures are medians")
+    ap.add_argument("--scenes", default="", help="comma list of scene names (default: all present)")
+    ap.add_argument("--strategies", default="", help="comma list of env sampling strategies (default: all the build offers)")
+    ap.add_argument("--out", default="", help="output folder (default bench/results/<device>)")
+    ap.add_argument("--refs", default=os.path.join(ROOT, "bench", "results", "refs"), help="reference cache folder")
+    ap.add_argument("--refresh-refs", action="store_true", help="re-render the references")
+    ap.add_argument("--no-features", action="store_true", help="skip the specialised vs --all-features part")
+    ap.add_argument("--no-ray-bench", action="store_true", help="skip ray_bench")
+    ap.add_argument("--quick", action="store_true", help="1 run, first two spp points: a smoke test")
+    a = ap.parse_args()
+    if a.quick:
+        a.runs = 1
+
+    exe = os.path.join(a.build, "clrt")
+    if not os.access(exe, os.X_OK):
+        sys.exit("bench: %s not found (build it first, or run scripts/bench)" % exe)
+    help_text = subprocess.run([exe, "render", "--help"], capture_output=True, text=True).stdout
+    env_flag = "--env-sampling" if "--env-sampling" in help_text else None
+    strategies = [s for s in (a.strategies.split(",") if a.strategies else ALL_STRATEGIES) if s]
+    if env_flag:
+        offered = [s for s in ALL_STRATEGIES if s in help_text]
+        strategies = [s for s in strategies if s in offered]
+    else:
+        log("bench: this clrt has no --env-sampling option; env scenes run with its default sampler only")
+        strategies = ["default"]
+    clrt = Clrt(exe, a.device, env_flag or "--env-sampling")
+
+    wanted = set(filter(None, a.scenes.split(",")))
+    scenes = [s for s in SCENES if (not wanted or s["name"] in wanted)]
+    missing = [s["name"] for s in scenes if not os.path.exists(s["path"])]
+    if missing:
+        log("bench: skipping scenes not present: " + ", ".join(missing))
+    scenes = [s for s in scenes if os.path.exists(s["path"])]
+
+    tmp = tempfile.mkdtemp(prefix="clrt-bench-scenes-")
+    prepared = {}
+    for sc in scenes:
+        prepared[sc["name"]] = prepare_scene(sc, tmp)
+
+    # Device name (for the folder) from a verbose warm-up run, which also fills the kernel cache.
+    first = prepared[scenes[0]["name"]][0]
+    _, _, err = clrt.render(first, 1, 0, verbose=True)
+    m = re.search(r"device: \[\d+\] (.*?) \(", err)
+    device_name = m.group(1).strip() if m else (a.device or "default")
+    out = a.out or os.path.join(ROOT, "bench", "results", slug(device_name))
+    os.makedirs(out, exist_ok=True)
+    os.makedirs(a.refs, exist_ok=True)
+    log("bench: device '%s' -> %s; %d runs per point; strategies: %s" % (device_name, out, a.runs, ", ".join(strategies)))
+
+    summary, runs_rows, ref_rows = [], [], []
+    t_start = time.perf_counter()
+    for sc in scenes:
+        scene_path, hdr = prepared[sc["name"]]
+        strats = strategies if sc.get("env") else ["default"]
+        ref_strategy = ("mis" if "mis" in strats else strats[-1]) if sc.get("env") else "default"
+        log("%s (%dx%d, %s)" % (sc["name"], sc["res"][0], sc["res"][1], "HDR" if hdr else "LDR"))
+        ref, meta = reference(clrt, sc, scene_path, ref_strategy, a.refs, hdr, a.refresh_refs)
+        ref_rows.append(dict(scene=sc["name"], ref_spp=meta["spp"], ref_strategy=meta["strategy"], ref_seeds="%d+%d" % tuple(meta["seeds"]),
+                             ref_relmse=meta["relmse"], ref_rmse=meta["rmse"], ref_flip_halves=meta["flip_halves"],
+                             ref_seconds=meta["seconds"], hash=meta["hash"]))
+        scene_rows = []
+        spps = sc["spp"][:2] if a.quick else sc["spp"]
+        for strat in strats:
+            clrt.render(scene_path, 1, 0, strat)  # warm-up: kernel cache, file cache
+            for spp in spps:
+                rs = []
+                for run in range(a.runs):
+                    st, img, _ = clrt.render(scene_path, spp, run + 1, strat)
+                    r = dict(scene=sc["name"], strategy=strat, spp=spp, seed=run + 1, **st)
+                    r["relmse"] = rel_mse(img, ref, 1.0 if hdr else 255.0)
+                    r["rmse"] = rmse(img, ref)
+                    r["flip"] = flip(img, ref, hdr)
+                    runs_rows.append(r)
+                    rs.append(r)
+                row = dict(scene=sc["name"], strategy=strat, spp=spp, runs=len(rs), width=sc["res"][0], height=sc["res"][1])
+                for k in ("parse", "bvh", "build", "render", "output", "wall", "camera_mrays", "shadow_mrays",
+                          "secondary_mrays", "relmse", "rmse", "flip"):
+                    v = [r[k] for r in rs]
+                    kk = k + "_s" if k in ("parse", "bvh", "build", "render", "output", "wall") else k
+                    row[kk] = med(v)
+                    row[kk + "_min"], row[kk + "_max"] = spread(v)
+                row["efficiency"] = 1.0 / (row["relmse"] * max(row["render_s"], 1e-9))
+                row["ref_spp"] = meta["spp"]
+                row["ref_relmse"] = meta["relmse"]
+                row["above_floor"] = int(row["relmse"] >= 2.0 * meta["relmse"])
+                scene_rows.append(row)
+                log("  %-10s spp %4d: render %.3fs [%.3f-%.3f]  relMSE %.4g [%.4g-%.4g]  FLIP %.4f" % (
+                    strat, spp, row["render_s"], row["render_s_min"], row["render_s_max"], row["relmse"],
+                    row["relmse_min"], row["relmse_max"], row["flip"]))
+        summary += scene_rows
+        plot_scene(sc["name"], scene_rows, {ref_strategy: meta}, os.path.join(out, sc["name"] + ".png"))
+    t_bench = time.perf_counter() - t_start
+
+    cols = ["scene", "strategy", "spp", "runs", "width", "height"]
+    for k in ("parse_s", "bvh_s", "build_s", "render_s", "output_s", "wall_s", "camera_mrays", "shadow_mrays",
+              "secondary_mrays", "relmse", "rmse", "flip"):
+        cols += [k, k + "_min", k + "_max"]
+    cols += ["efficiency", "ref_spp", "ref_relmse", "above_floor"]
+    write_csv(os.path.join(out, "bench.csv"), summary, cols)
+    write_csv(os.path.join(out, "runs.csv"), runs_rows,
+              ["scene", "strategy", "spp", "seed", "parse", "bvh", "build", "render", "output", "wall", "camera_mrays",
+               "shadow_mrays", "secondary_mrays", "relmse", "rmse", "flip"])
+    write_csv(os.path.join(out, "refs.csv"), ref_rows, list(ref_rows[0].keys()) if ref_rows else ["scene"])
+
+    # ---- specialised build vs --all-features
+    feat_rows = []
+    if not a.no_features:
+        log("specialised vs --all-features")
+        for name in FEATURE_SCENES:
+            if name not in prepared:
+                continue
+            scene_path, _ = prepared[name]
+            spp = 4
+            for allf in (False, True):
+                variant = "all-features" if allf else "specialised"
+                cold, warm = [], []
+                for run in range(a.runs):
+                    cdir = tempfile.mkdtemp(prefix="clrt-bench-cache-")
+                    env = dict(os.environ, CLRT_CACHE_DIR=os.path.join(cdir, "clrt"), POCL_CACHE_DIR=os.path.join(cdir, "pocl"))
+                    st1, _, _ = clrt.render(scene_path, 1, 0, all_features=allf, env=env)
+                    st2, _, _ = clrt.render(scene_path, 1, 0, all_features=allf, env=env)
+                    cold.append(st1["build"])
+                    warm.append(st2["build"])
+                    shutil.rmtree(cdir, ignore_errors=True)
+                renders = []
+                for run in range(a.runs):
+                    st, _, _ = clrt.render(scene_path, spp, run + 1, all_features=allf)
+                    renders.append(st["render"])
+                _, _, err = clrt.render(scene_path, 1, 0, all_features=allf, verbose=True)
+                fm = re.search(r"kernel flags:([^\n(]*)", err)
+                feat_rows.append(dict(scene=name, variant=variant, spp=spp, runs=a.runs, render_s=med(renders),
+                                      render_s_min=min(renders), render_s_max=max(renders), build_cold_s=med(cold),
+                                      build_cold_s_min=min(cold), build_cold_s_max=max(cold), build_warm_s=med(warm),
+                                      build_warm_s_min=min(warm), build_warm_s_max=max(warm),
+                                      flags=(fm.group(1).strip() if fm else "")))
+                log("  %-12s %-12s render %.3fs [%.3f-%.3f]  build cold %.2fs [%.2f-%.2f]  warm %.3fs" % (
+                    name, variant, med(renders), min(renders), max(renders), med(cold), min(cold), max(cold), med(warm)))
+            s, f = feat_rows[-2], feat_rows[-1]
+            s["speedup"] = f["render_s"] / s["render_s"]
+            f["speedup"] = 1.0
+        write_csv(os.path.join(out, "features.csv"), feat_rows,
+                  ["scene", "variant", "spp", "runs", "render_s", "render_s_min", "render_s_max", "speedup",
+                   "build_cold_s", "build_cold_s_min", "build_cold_s_max", "build_warm_s", "build_warm_s_min",
+                   "build_warm_s_max", "flags"])
+
+    # ---- ray_bench: clrt intersection kernels vs Embree
+    rb_rows, rb_text = [], ""
+    rb = os.path.join(a.build, "ray_bench")
+    if not a.no_ray_bench and os.access(rb, os.X_OK):
+        log("ray_bench (clrt vs Embree)")
+        for name in RAY_BENCH_SCENES:
+            sc = next((s for s in SCENES if s["name"] == name), None)
+            if sc is None or not os.path.exists(sc["path"]):
+                continue
+            cmd = [rb, sc["path"], "--runs", str(max(a.runs, 3)), "--threads", str(os.cpu_count() or 2)]
+            if a.device:
+                cmd += ["--device", a.device]
+            p = subprocess.run(cmd, capture_output=True, text=True)
+            rb_text += "$ %s\n%s\n" % (" ".join(os.path.relpath(c, ROOT) if os.path.isabs(c) else c for c in cmd), p.stdout)
+            for line in p.stdout.splitlines():
+                f = line.split()
+                if len(f) == 7 and f[0] in ("camera", "shadow", "diffuse"):
+                    rb_rows.append(dict(scene=name, rays=f[0], count=int(f[1]), clrt_mrays=float(f[2]),
+                                        embree_mrays=float(f[3]), ratio=float(f[4]), hit_agree=f[5], prim_agree=f[6]))
+        open(os.path.join(out, "ray_bench.txt"), "w").write(rb_text)
+        write_csv(os.path.join(out, "ray_bench.csv"), rb_rows,
+                  ["scene", "rays", "count", "clrt_mrays", "embree_mrays", "ratio", "hit_agree", "prim_agree"])
+    elif not a.no_ray_bench:
+        log("bench: %s not built (needs libembree-dev); ray_bench skipped" % rb)
+
+    # ---- report
+    rep = ["# clrt benchmark: %s" % device_name, "",
+           "%s; clrt device `%s`; %d runs per point (seeds 1..%d), figures are medians, [min-max] the spread; "
+           "benchmark part took %.0f s." % (time.strftime("%Y-%m-%d"), a.device, a.runs, a.runs, t_bench), "",
+           "## References", "",
+           "Rendered by clrt as two independent halves (seeds %d, %d); reference = their mean. Its own error is "
+           "estimated from the halves: relMSE_ref = mean((a-b)^2/(ref^2+%g W^2))/4, RMSE_ref likewise; FLIP(a,b) is the "
+           "FLIP of one half against the other; W = 255 (the display white) for LDR scenes, 1 for HDR ones. Points within 2x of relMSE_ref are flagged (above_floor=0, "
+           "hollow in the plots)." % (REF_SEEDS[0], REF_SEEDS[1], EPS_REL), "",
+           md_table(ref_rows, ["scene", "ref_spp", "ref_strategy", "ref_relmse", "ref_rmse", "ref_flip_halves", "ref_seconds"],
+                    {"ref_relmse": "%.3g", "ref_rmse": "%.3g", "ref_flip_halves": "%.4f", "ref_seconds": "%.1f"}), "",
+           "## Error against time", ""]
+    for r in summary:
+        r["render_fmt"] = "%.3f [%.3f-%.3f]" % (r["render_s"], r["render_s_min"], r["render_s_max"])
+        r["relmse_fmt"] = "%.3g [%.3g-%.3g]" % (r["relmse"], r["relmse_min"], r["relmse_max"])
+        r["mrays_fmt"] = "%.2f / %.2f / %.2f" % (r["camera_mrays"], r["shadow_mrays"], r["secondary_mrays"])
+        r["stages_fmt"] = "%.2f / %.2f / %.2f / %.2f" % (r["parse_s"], r["bvh_s"], r["build_s"], r["output_s"])
+    rep.append(md_table(summary, ["scene", "strategy", "spp", "render_fmt", "stages_fmt", "mrays_fmt", "relmse_fmt", "rmse",
+                                  "flip", "efficiency", "above_floor"],
+                        {"rmse": "%.3g", "flip": "%.4f", "efficiency": "%.3g"}))
+    rep += ["", "Columns: render s median [min-max]; stages = parse / bvh / kernel build / output s (medians); Mrays/s = "
+            "camera / shadow / secondary rays per render second; efficiency = 1/(relMSE x render s).", ""]
+    if feat_rows:
+        for r in feat_rows:
+            r["render_fmt"] = "%.3f [%.3f-%.3f]" % (r["render_s"], r["render_s_min"], r["render_s_max"])
+            r["cold_fmt"] = "%.2f [%.2f-%.2f]" % (r["build_cold_s"], r["build_cold_s_min"], r["build_cold_s_max"])
+            r["warm_fmt"] = "%.3f [%.3f-%.3f]" % (r["build_warm_s"], r["build_warm_s_min"], r["build_warm_s_max"])
+        rep += ["## Specialised kernels vs --all-features", "",
+                "Render at %d spp (the scenes above, same resolution); kernel build time cold (fresh CLRT_CACHE_DIR "
+                "and POCL_CACHE_DIR) and warm (the second run with the same folders); speedup = all-features render "
+                "s / specialised render s." % 4, "",
+                md_table(feat_rows, ["scene", "variant", "render_fmt", "speedup", "cold_fmt", "warm_fmt", "flags"],
+                         {"speedup": "%.2f"}), ""]
+    if rb_text:
+        rep += ["## Intersection: clrt kernels vs Embree 3 (ray_bench)", "",
+                md_table(rb_rows, ["scene", "rays", "count", "clrt_mrays", "embree_mrays", "ratio", "hit_agree", "prim_agree"],
+                         {"clrt_mrays": "%.2f", "embree_mrays": "%.2f", "ratio": "%.2f"}), ""]
+    open(os.path.join(out, "report.md"), "w").write("\n".join(rep) + "\n")
+    print("\n".join(rep))
+    shutil.rmtree(tmp, ignore_errors=True)
+    log("bench: wrote %s" % out)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
