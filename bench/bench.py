@@ -46,6 +46,7 @@ SCENES = [
     dict(name="tt_pisa_courtyard", path=os.path.join(SHARED, "hw5", "tt", "scene_pisa_courtyard.xml"),
          res=(300, 167), spp=[1, 4, 16, 64], ref_spp=1024, env=True),
 ]
+FEATURE_SPP = 16
 FEATURE_SCENES = ["cube_point", "veachAjar", "tt_pisa_courtyard"]
 RAY_BENCH_SCENES = ["cube_point", "veachAjar", "tt_pisa_courtyard"]
 ALL_STRATEGIES = ["uniform", "cosine", "importance", "mis"]
@@ -408,40 +409,47 @@ def main():
     feat_rows = []
     if not a.no_features:
         log("specialised vs --all-features")
+        fruns = max(a.runs, 5)
+        spp = FEATURE_SPP
         for name in FEATURE_SCENES:
             if name not in prepared:
                 continue
             scene_path, _ = prepared[name]
-            spp = 4
-            for allf in (False, True):
-                variant = "all-features" if allf else "specialised"
-                cold, warm = [], []
-                for run in range(a.runs):
+            res = {False: dict(cold=[], warm=[], render=[]), True: dict(cold=[], warm=[], render=[])}
+            # Cold/warm kernel build: fresh clrt and PoCL caches per run; the second run finds the binary.
+            for run in range(a.runs):
+                for allf in (False, True):
                     cdir = tempfile.mkdtemp(prefix="clrt-bench-cache-")
                     env = dict(os.environ, CLRT_CACHE_DIR=os.path.join(cdir, "clrt"), POCL_CACHE_DIR=os.path.join(cdir, "pocl"))
                     st1, _, _ = clrt.render(scene_path, 1, 0, all_features=allf, env=env)
                     st2, _, _ = clrt.render(scene_path, 1, 0, all_features=allf, env=env)
-                    cold.append(st1["build"])
-                    warm.append(st2["build"])
+                    res[allf]["cold"].append(st1["build"])
+                    res[allf]["warm"].append(st2["build"])
                     shutil.rmtree(cdir, ignore_errors=True)
-                renders = []
-                for run in range(a.runs):
+            # Render time, the two variants interleaved so that drift of the machine hits both alike.
+            for allf in (False, True):
+                clrt.render(scene_path, 1, 0, all_features=allf)  # warm the default cache
+            for run in range(fruns):
+                for allf in (False, True):
                     st, _, _ = clrt.render(scene_path, spp, run + 1, all_features=allf)
-                    renders.append(st["render"])
+                    res[allf]["render"].append(st["render"])
+            for allf in (False, True):
+                variant = "all-features" if allf else "specialised"
                 _, _, err = clrt.render(scene_path, 1, 0, all_features=allf, verbose=True)
                 fm = re.search(r"kernel flags:([^\n(]*)", err)
-                feat_rows.append(dict(scene=name, variant=variant, spp=spp, runs=a.runs, render_s=med(renders),
-                                      render_s_min=min(renders), render_s_max=max(renders), build_cold_s=med(cold),
-                                      build_cold_s_min=min(cold), build_cold_s_max=max(cold), build_warm_s=med(warm),
-                                      build_warm_s_min=min(warm), build_warm_s_max=max(warm),
+                R, C, W = res[allf]["render"], res[allf]["cold"], res[allf]["warm"]
+                feat_rows.append(dict(scene=name, variant=variant, spp=spp, runs=fruns, build_runs=a.runs,
+                                      render_s=med(R), render_s_min=min(R), render_s_max=max(R),
+                                      build_cold_s=med(C), build_cold_s_min=min(C), build_cold_s_max=max(C),
+                                      build_warm_s=med(W), build_warm_s_min=min(W), build_warm_s_max=max(W),
                                       flags=(fm.group(1).strip() if fm else "")))
                 log("  %-12s %-12s render %.3fs [%.3f-%.3f]  build cold %.2fs [%.2f-%.2f]  warm %.3fs" % (
-                    name, variant, med(renders), min(renders), max(renders), med(cold), min(cold), max(cold), med(warm)))
-            s, f = feat_rows[-2], feat_rows[-1]
-            s["speedup"] = f["render_s"] / s["render_s"]
-            f["speedup"] = 1.0
+                    name, variant, med(R), min(R), max(R), med(C), min(C), max(C), med(W)))
+            s_, f_ = feat_rows[-2], feat_rows[-1]
+            s_["speedup"] = f_["render_s"] / s_["render_s"]
+            f_["speedup"] = 1.0
         write_csv(os.path.join(out, "features.csv"), feat_rows,
-                  ["scene", "variant", "spp", "runs", "render_s", "render_s_min", "render_s_max", "speedup",
+                  ["scene", "variant", "spp", "runs", "build_runs", "render_s", "render_s_min", "render_s_max", "speedup",
                    "build_cold_s", "build_cold_s_min", "build_cold_s_max", "build_warm_s", "build_warm_s_min",
                    "build_warm_s_max", "flags"])
 
@@ -498,9 +506,10 @@ def main():
             r["cold_fmt"] = "%.2f [%.2f-%.2f]" % (r["build_cold_s"], r["build_cold_s_min"], r["build_cold_s_max"])
             r["warm_fmt"] = "%.3f [%.3f-%.3f]" % (r["build_warm_s"], r["build_warm_s_min"], r["build_warm_s_max"])
         rep += ["## Specialised kernels vs --all-features", "",
-                "Render at %d spp (the scenes above, same resolution); kernel build time cold (fresh CLRT_CACHE_DIR "
-                "and POCL_CACHE_DIR) and warm (the second run with the same folders); speedup = all-features render "
-                "s / specialised render s." % 4, "",
+                "Render s at %d spp (the scenes above, same resolution; %d runs, the two variants interleaved); kernel "
+                "build s cold (fresh CLRT_CACHE_DIR and POCL_CACHE_DIR) and warm (a second run with the same folders), "
+                "%d runs each; speedup = all-features render s / specialised render s."
+                % (FEATURE_SPP, feat_rows[0]["runs"], feat_rows[0]["build_runs"]), "",
                 md_table(feat_rows, ["scene", "variant", "render_fmt", "speedup", "cold_fmt", "warm_fmt", "flags"],
                          {"speedup": "%.2f"}), ""]
     if rb_text:
