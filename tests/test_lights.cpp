@@ -652,3 +652,128 @@ TEST_CASE("env samplers on sunset.exr: importance and MIS beat uniform >= 10x in
     CHECK(err[0] / err[2] >= 10.0);
     CHECK(err[0] / err[3] >= 10.0);
 }
+
+TEST_CASE("light sampling edge cases: 1xN maps, points on the light, spot angles at their limits", "[lights][robust]") {
+    // 1xN and Nx1 maps (one column / one row) with a luminance gradient: pdf still integrates to one
+    // and every sample's pdf equals the evaluated pdf.
+    for (int mapping : {int(dev::ENV_LATLONG), int(dev::ENV_PROBE)})
+        for (auto wh : {std::make_pair(1, 64), std::make_pair(64, 1)}) {
+            ImageRGB img = constantImage(wh.first, wh.second, 0.0f);
+            for (size_t p = 0; p < img.pixels.size(); ++p) img.pixels[p] = float(1 + (p / 3) % 7);
+            HostMap m = makeMap(img, mapping);
+            INFO("mapping " << mapping << ", " << wh.first << "x" << wh.second);
+            double integral = integrateSphere([&](const Vec3& w) { return double(m.dist.pdf(w)); }, 512);
+            CHECK(integral == Approx(1.0).epsilon(0.01));
+            std::mt19937 rng(3);
+            std::uniform_real_distribution<float> uni(0.0f, 0.99999994f);
+            int mismatch = 0, samples = 0;
+            for (int i = 0; i < 4000; ++i) {
+                Vec3 w;
+                float pdf;
+                if (!m.dist.sample(uni(rng), uni(rng), w, pdf)) continue;
+                ++samples;
+                CHECK(std::isfinite(pdf));
+                float pe = m.dist.pdf(w);
+                if (std::fabs(pe - pdf) > 1e-3f * std::max(pe, pdf)) ++mismatch;
+            }
+            CHECK(samples > 3900);
+            CHECK(mismatch <= samples / 500);
+        }
+
+    // Device: spot lights with coverage == falloff, falloff 0 and coverage 180; shading points exactly
+    // at a point light and on an area light: finite, never NaN, within physical bounds.
+    const char* src = R"CLC(
+__kernel void edge_test(const __global Light* lights, int numLights, const __global float4* pts,
+                        const __global ImageInfo* images, const __global float4* texels, const __global float* envDist,
+                        __global float4* out, int n) {
+    int i = get_global_id(0);
+    if (i >= n) return;
+    for (int l = 0; l < numLights; ++l) {
+        float3 wi; float dist;
+        float3 e = Light_Sample(&lights[l], pts[i].xyz, (float3)(0.0f, 1.0f, 0.0f), (float2)(pts[i].w, 0.5f), images,
+                                texels, envDist, &wi, &dist);
+        out[i * numLights + l] = (float4)(e, dist);
+    }
+}
+)CLC";
+    std::vector<dev::Light> lights;
+    auto spot = [&](float coverage, float falloff) {
+        dev::Light l{};
+        l.kind = dev::LIGHT_SPOT;
+        l.position = {0, 2, 0, 0};
+        l.direction = {0, -1, 0, 0};
+        l.radiance = {100, 100, 100, 0};
+        l.cosCoverageHalf = float(std::cos(coverage * 0.5 * kPiD / 180));
+        l.cosFalloffHalf = float(std::cos(falloff * 0.5 * kPiD / 180));
+        l.image = l.distribution = CLRT_INVALID;
+        lights.push_back(l);
+    };
+    spot(60, 60);    // hard edge: coverage == falloff
+    spot(60, 0);     // falloff 0: the quartic ramp over the whole cone
+    spot(180, 90);   // a hemisphere
+    dev::Light point{};
+    point.kind = dev::LIGHT_POINT;
+    point.position = {0, 0, 0, 0};
+    point.radiance = {10, 10, 10, 0};
+    lights.push_back(point);
+    dev::Light area{};
+    area.kind = dev::LIGHT_AREA;
+    area.position = {0, 0, 0, 0};
+    area.direction = {0, -1, 0, 0};
+    area.edgeU = {1, 0, 0, 0};
+    area.edgeV = {0, 0, 1, 0};
+    area.area = 1;
+    area.radiance = {5, 5, 5, 0};
+    lights.push_back(area);
+    const int L = int(lights.size());
+    std::vector<dev::float4> pts;
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> pos(-3, 3), uni(0, 0.99999994f);
+    pts.push_back({0, 0, 0, 0.5f});  // exactly at the point light / area light centre
+    pts.push_back({0, 2, 0, 0.5f});  // exactly at the spot position
+    for (int i = 0; i < 2046; ++i) pts.push_back({pos(rng), i % 3 == 0 ? 0.0f : pos(rng), pos(rng), uni(rng)});
+    const int n = int(pts.size());
+    DeviceContext& dc = testContext();
+    auto sources = loadKernelSources({"common.cl", "envmap.cl", "lights.cl"});
+    sources.push_back({"edge_test.cl", src});
+    cl::Program program = buildProgramFromSources(
+        dc, sources, {"-DCLRT_HAS_SPOT_LIGHT=1", "-DCLRT_HAS_AREA_LIGHT=1", "-DCLRT_HAS_POINT_LIGHT=1"});
+    cl::Kernel k = CL_CPP(cl::Kernel(program, "edge_test"));
+    cl::Context& ctx = dc.context();
+    auto ro = [&](const auto& v) {
+        using T = typename std::decay_t<decltype(v)>::value_type;
+        return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), const_cast<T*>(v.data())));
+    };
+    std::vector<dev::ImageInfo> images(1, dev::ImageInfo{0, 1, 1, 0});
+    std::vector<dev::float4> texels(1, dev::float4{0, 0, 0, 0});
+    std::vector<float> dist(4, 0.0f);
+    std::vector<dev::float4> out(size_t(n) * L);
+    cl::Buffer lb = ro(lights), pb = ro(pts), ib = ro(images), tb = ro(texels), db = ro(dist);
+    cl::Buffer ob = CL_CPP(cl::Buffer(ctx, CL_MEM_WRITE_ONLY, out.size() * sizeof(dev::float4)));
+    k.setArg(0, lb); k.setArg(1, L); k.setArg(2, pb); k.setArg(3, ib); k.setArg(4, tb); k.setArg(5, db);
+    k.setArg(6, ob); k.setArg(7, n);
+    CL_CPP(dc.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(roundUp(size_t(n), 64)), cl::NDRange(64)));
+    CL_CPP(dc.queue().enqueueReadBuffer(ob, CL_TRUE, 0, out.size() * sizeof(dev::float4), out.data()));
+    int nonFinite = 0, outOfBounds = 0, hardEdgeMixed = 0;
+    for (int i = 0; i < n; ++i)
+        for (int l = 0; l < L; ++l) {
+            const dev::float4& o = out[size_t(i) * L + l];
+            if (!std::isfinite(o.x) || !std::isfinite(o.y) || !std::isfinite(o.z) || std::isnan(o.w)) ++nonFinite;
+            if (o.x < 0) ++outOfBounds;
+            if (l < 3) {  // spot: never above I/d²
+                Vec3 d = Vec3(0, 2, 0) - Vec3(pts[i].x, pts[i].y, pts[i].z);
+                double d2 = dot(d, d);
+                if (d2 > 0 && o.x > 100.0 / d2 * (1 + 1e-5)) ++outOfBounds;
+                if (l == 0 && d2 > 0) {  // hard edge: either full or nothing
+                    double v = o.x * d2 / 100.0;
+                    if (v > 1e-6 && std::fabs(v - 1) > 1e-4) ++hardEdgeMixed;
+                }
+            }
+        }
+    CHECK(nonFinite == 0);
+    CHECK(outOfBounds == 0);
+    CHECK(hardEdgeMixed == 0);
+    // At the light's own position the contribution is zero, not Inf.
+    CHECK(out[size_t(0) * L + 3].x == 0.0f);  // point light at the shading point
+    CHECK(out[size_t(1) * L + 0].x == 0.0f);  // spot light at the shading point
+}
