@@ -64,14 +64,18 @@ dev::CameraParams makeCameraParams(const Camera& cam) {
     c.apertureSize = cam.apertureSize;
     c.width = cam.width;
     c.height = cam.height;
-    c.spp = std::max(1, cam.numSamples);
+    setSamplesPerPixel(c, cam.numSamples);
+    return c;
+}
+
+void setSamplesPerPixel(dev::CameraParams& c, int spp) {
+    c.spp = std::max(1, spp);
     // Strata: the largest divisor of spp not above sqrt(spp), so 100 -> 10x10, 7 -> 1x7.
     int sx = 1;
     for (int d = 1; d * d <= c.spp; ++d)
         if (c.spp % d == 0) sx = d;
     c.strataX = c.spp / sx;
     c.strataY = sx;
-    return c;
 }
 
 DeviceScene flattenScene(const Scene& scene) {

@@ -54,6 +54,8 @@ void overrideEnvSampling(Scene& scene, EnvSampler sampler);
 
 // Camera frame and image plane for the kernels; strata chosen for numSamples.
 dev::CameraParams makeCameraParams(const Camera& cam);
+// Sets spp (at least 1) and the stratification grid strataX × strataY = spp.
+void setSamplesPerPixel(dev::CameraParams& c, int spp);
 
 inline dev::float4 toFloat4(const Vec3& v, float w = 0) { return {v.x, v.y, v.z, w}; }
 

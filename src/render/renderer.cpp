@@ -137,14 +137,7 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     auto t0 = std::chrono::steady_clock::now();
     const DeviceScene& ds = m.scene;
     dev::CameraParams cp = makeCameraParams(cam);
-    cp.spp = std::max(1, settings.spp);
-    {
-        int sx = 1;
-        for (int d = 1; d * d <= cp.spp; ++d)
-            if (cp.spp % d == 0) sx = d;
-        cp.strataX = cp.spp / sx;
-        cp.strataY = sx;
-    }
+    setSamplesPerPixel(cp, settings.spp);
     const size_t numPixels = size_t(cam.width) * cam.height;
     const size_t imageBytes = numPixels * sizeof(dev::float4);
     checkImageFits(m.dc.info(), cam);

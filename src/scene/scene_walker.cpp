@@ -750,16 +750,22 @@ struct Walker {
         return s;
     }
 
-    Shape readSphere(const SceneNode& n) {
-        checkChildren(n, {"Material", "Textures", "Transformations", "Center", "Radius"});
+    // What spheres and planes read alike: id, Material, Textures, Transformations.
+    Shape analyticShape(const SceneNode& n, ShapeType type) {
         Shape s;
-        std::string who = describe(n);
         s.id = intAttribute(n, "id", 0);
-        s.type = ShapeType::Sphere;
+        s.type = type;
         s.source = sourceOf(n);
         s.materialIndex = materialRef(n, *need(n, "Material"));
         if (auto t = n.child("Textures")) s.textureIndices = textureRefs(n, *t);
         s.transform = transformOf(n);
+        return s;
+    }
+
+    Shape readSphere(const SceneNode& n) {
+        checkChildren(n, {"Material", "Textures", "Transformations", "Center", "Radius"});
+        Shape s = analyticShape(n, ShapeType::Sphere);
+        std::string who = describe(n);
         auto cn = need(n, "Center");
         s.center = vertices[size_t(vertexIndex(*cn, who, integer(*cn), 0))];
         auto rn = need(n, "Radius");
@@ -771,14 +777,8 @@ struct Walker {
     // Plane (2025 JSON scenes): an infinite plane through vertex Point with normal Normal.
     Shape readPlane(const SceneNode& n) {
         checkChildren(n, {"Material", "Textures", "Transformations", "Point", "Normal"});
-        Shape s;
+        Shape s = analyticShape(n, ShapeType::Plane);
         std::string who = describe(n);
-        s.id = intAttribute(n, "id", 0);
-        s.type = ShapeType::Plane;
-        s.source = sourceOf(n);
-        s.materialIndex = materialRef(n, *need(n, "Material"));
-        if (auto t = n.child("Textures")) s.textureIndices = textureRefs(n, *t);
-        s.transform = transformOf(n);
         auto pn = need(n, "Point");
         s.center = vertices[size_t(vertexIndex(*pn, who, integer(*pn), 0))];
         auto nn = need(n, "Normal");
