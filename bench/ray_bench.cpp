@@ -157,14 +157,15 @@ int main(int argc, char** argv) {
             const int n = int(rays.size());
             prim.assign(rays.size(), -1);
             cl::CommandQueue& q = dc.queue();
-            const size_t global = roundUp(rays.size(), 64);
+            const size_t local = std::getenv("CLRT_LOCAL_SIZE") ? size_t(std::atoi(std::getenv("CLRT_LOCAL_SIZE"))) : 64;
+            const size_t global = roundUp(rays.size(), local);
             if (!shadow) {
                 cl::Buffer rb = upload(const_cast<std::vector<dev::Ray>&>(rays));
                 cl::Buffer hb = CL_CPP(cl::Buffer(dc.context(), CL_MEM_READ_WRITE, sizeof(dev::Hit) * rays.size()));
                 kClosest.setArg(5, rb); kClosest.setArg(6, hb); kClosest.setArg(7, n);
                 CL_CPP(q.finish());
                 auto t0 = std::chrono::steady_clock::now();
-                CL_CPP(q.enqueueNDRangeKernel(kClosest, cl::NullRange, cl::NDRange(global), cl::NDRange(64)));
+                CL_CPP(q.enqueueNDRangeKernel(kClosest, cl::NullRange, cl::NDRange(global), cl::NDRange(local)));
                 CL_CPP(q.finish());
                 double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
                 std::vector<dev::Hit> hits(rays.size());
@@ -183,7 +184,7 @@ int main(int argc, char** argv) {
             kShadow.setArg(5, sb); kShadow.setArg(6, n);
             CL_CPP(q.finish());
             auto t0 = std::chrono::steady_clock::now();
-            CL_CPP(q.enqueueNDRangeKernel(kShadow, cl::NullRange, cl::NDRange(global), cl::NDRange(64)));
+            CL_CPP(q.enqueueNDRangeKernel(kShadow, cl::NullRange, cl::NDRange(global), cl::NDRange(local)));
             CL_CPP(q.finish());
             double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
             CL_CPP(q.enqueueReadBuffer(sb, CL_TRUE, 0, sizeof(dev::ShadowRay) * sr.size(), sr.data()));
