@@ -255,12 +255,9 @@ def plot_scene(name, rows, meta_by_strategy, path):
         eff = np.array([r["efficiency"] for r in rs])
         ax[2].plot([r["spp"] for r in rs], eff, marker="o", label=strat)
     ax[0].axhline(floor, ls="--", color="gray", lw=1, label="reference noise floor")
-    from matplotlib.ticker import NullFormatter
     for a in ax:
         a.set_xscale("log")
         a.set_yscale("log")
-        a.xaxis.set_minor_formatter(NullFormatter())
-        a.yaxis.set_minor_formatter(NullFormatter())
         a.grid(True, which="both", alpha=0.3)
         a.legend(fontsize=8)
     ax[0].set_xlabel("render time [s] (median)")
@@ -273,6 +270,17 @@ def plot_scene(name, rows, meta_by_strategy, path):
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def replot(d):
+    rows = list(csv.DictReader(open(os.path.join(d, "bench.csv"))))
+    refs = {r["scene"]: r for r in csv.DictReader(open(os.path.join(d, "refs.csv")))}
+    num = lambda r: {k: (v if k in ("scene", "strategy") else float(v)) for k, v in r.items()}
+    rows = [num(r) for r in rows]
+    for name in dict.fromkeys(r["scene"] for r in rows):
+        meta = {refs[name]["ref_strategy"]: dict(relmse=float(refs[name]["ref_relmse"]))}
+        plot_scene(name, [r for r in rows if r["scene"] == name], meta, os.path.join(d, name + ".png"))
+    log("bench: plots redrawn in %s" % d)
 
 
 # -------------------------------------------------------------------------------------------- helpers
@@ -310,7 +318,10 @@ def main():
     ap.add_argument("--no-features", action="store_true", help="skip the specialised vs --all-features part")
     ap.add_argument("--no-ray-bench", action="store_true", help="skip ray_bench")
     ap.add_argument("--quick", action="store_true", help="1 run, first two spp points: a smoke test")
+    ap.add_argument("--replot", metavar="DIR", help="only redraw the plots of DIR (a results folder) from its CSVs")
     a = ap.parse_args()
+    if a.replot:
+        return replot(a.replot)
     if a.quick:
         a.runs = 1
 

@@ -9,6 +9,9 @@
 #include "cl/devices.h"
 #include "cl/program.h"
 #include "image/image.h"
+#include "render/device_scene.h"
+#include "render/renderer.h"
+#include "scene/scene.h"
 
 namespace clrt::test {
 
@@ -38,6 +41,17 @@ struct TempDir {
     }
     std::string file(const std::string& name) const { return (path / name).string(); }
 };
+
+// Flattens `scene` and renders `cam` at `spp` samples with `seed` on the test device.
+inline ImageRGB renderCamera(const Scene& scene, const Camera& cam, int spp = 1, uint32_t seed = 0) {
+    DeviceScene ds = flattenScene(scene);
+    Renderer r(testContext(), ds);
+    RenderSettings rs;
+    rs.spp = spp;
+    rs.seed = seed;
+    RenderCounters c;
+    return r.render(cam, rs, c);
+}
 
 // PSNR in dB between two 8-bit-valued images (values 0..255).
 inline double psnr8(const ImageRGB& a, const ImageRGB& b) {

@@ -142,13 +142,7 @@ std::string envSceneXml(const std::string& image, const std::string& type, const
 ImageRGB renderFile(const std::string& path, int spp, EnvSampler* override = nullptr, uint32_t seed = 1) {
     Scene scene = loadScene(path);
     if (override) overrideEnvSampling(scene, *override);
-    DeviceScene ds = flattenScene(scene);
-    Renderer r(testContext(), ds);
-    RenderSettings rs;
-    rs.spp = spp;
-    rs.seed = seed;
-    RenderCounters c;
-    return r.render(scene.cameras.at(0), rs, c);
+    return renderCamera(scene, scene.cameras.at(0), spp, seed);
 }
 
 const char* kSamplerNames[] = {"uniform", "cosine", "importance", "mis"};

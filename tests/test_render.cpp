@@ -14,17 +14,9 @@ using namespace clrt;
 using namespace clrt::test;
 
 namespace {
-ImageRGB renderScene(const std::string& path, int spp = 0, uint32_t seed = 0, RenderCounters* out = nullptr) {
+ImageRGB renderScene(const std::string& path, int spp = 0, uint32_t seed = 0) {
     Scene scene = loadScene(path);
-    DeviceScene ds = flattenScene(scene);
-    Renderer r(testContext(), ds);
-    RenderSettings rs;
-    rs.spp = spp > 0 ? spp : scene.cameras.at(0).numSamples;
-    rs.seed = seed;
-    RenderCounters c;
-    ImageRGB img = r.render(scene.cameras.at(0), rs, c);
-    if (out) *out = c;
-    return img;
+    return renderCamera(scene, scene.cameras.at(0), spp > 0 ? spp : scene.cameras.at(0).numSamples, seed);
 }
 
 size_t countNonFinite(const ImageRGB& img) {

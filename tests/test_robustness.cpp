@@ -32,13 +32,7 @@ size_t countNonFinite(const ImageRGB& img) {
 }
 
 ImageRGB renderModel(const Scene& scene, const Camera& cam, int spp = 1, uint32_t seed = 0) {
-    DeviceScene ds = flattenScene(scene);
-    Renderer r(testContext(), ds);
-    RenderSettings rs;
-    rs.spp = spp;
-    rs.seed = seed;
-    RenderCounters c;
-    return r.render(cam, rs, c);
+    return renderCamera(scene, cam, spp, seed);
 }
 
 // Scales a camera's resolution down so that its larger side is at most maxSide (aspect kept as far as
