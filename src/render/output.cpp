@@ -84,8 +84,15 @@ std::vector<std::string> writeCameraOutputs(const Camera& cam, const ImageRGB& r
     // Tone-map every block first, so a device failure leaves no partial set of files.
     const std::vector<std::string> pngPaths = tonemapPngPaths(out.string(), cam.tonemaps);
     std::vector<std::vector<unsigned char>> pngs;
+    auto t0 = std::chrono::steady_clock::now();
+    auto lap = [&](const char* what) {  // -v: where the output stage spends its time
+        auto t1 = std::chrono::steady_clock::now();
+        info(std::string("output: ") + what + " " + std::to_string(std::chrono::duration<double>(t1 - t0).count()) + " s");
+        t0 = t1;
+    };
     if (!cam.tonemaps.empty()) {
         TonemapDevice tm(dc);
+        lap("tone-map program");
         tm.upload(radiance);
         for (const Tonemap& t : cam.tonemaps) {
             TonemapSettings s = tonemapSettingsFrom(t);
@@ -96,6 +103,7 @@ std::vector<std::string> writeCameraOutputs(const Camera& cam, const ImageRGB& r
                      (r.stats.hasWhite ? ", L_white " + std::to_string(r.stats.whiteL) : std::string()));
             pngs.push_back(std::move(r.rgb8));
         }
+        lap("tone mapping");
     }
     ExrWriteOptions eo;
     eo.half = opts.exrHalf;
@@ -105,10 +113,12 @@ std::vector<std::string> writeCameraOutputs(const Camera& cam, const ImageRGB& r
     eo.attributes["device"] = opts.deviceName.empty() ? dc.info().name : opts.deviceName;
     writeExr(out.string(), radiance, eo);
     written.push_back(out.string());
+    lap("EXR");
     for (size_t i = 0; i < pngs.size(); ++i) {
         writePng8(pngPaths[i], radiance.width, radiance.height, pngs[i]);
         written.push_back(pngPaths[i]);
     }
+    if (!pngs.empty()) lap("PNG");
     return written;
 }
 
