@@ -762,12 +762,17 @@ struct Walker {
         return s;
     }
 
+    // The VertexData position named by child `child` (a vertex index) of n.
+    Vec3 vertexAt(const SceneNode& n, const char* child, const std::string& who) {
+        auto c = need(n, child);
+        return vertices[size_t(vertexIndex(*c, who, integer(*c), 0))];
+    }
+
     Shape readSphere(const SceneNode& n) {
         checkChildren(n, {"Material", "Textures", "Transformations", "Center", "Radius"});
         Shape s = analyticShape(n, ShapeType::Sphere);
         std::string who = describe(n);
-        auto cn = need(n, "Center");
-        s.center = vertices[size_t(vertexIndex(*cn, who, integer(*cn), 0))];
+        s.center = vertexAt(n, "Center", who);
         auto rn = need(n, "Radius");
         s.radius = number(*rn);
         if (!(s.radius > 0)) fail(*rn, who + ": Radius must be positive");
@@ -779,8 +784,7 @@ struct Walker {
         checkChildren(n, {"Material", "Textures", "Transformations", "Point", "Normal"});
         Shape s = analyticShape(n, ShapeType::Plane);
         std::string who = describe(n);
-        auto pn = need(n, "Point");
-        s.center = vertices[size_t(vertexIndex(*pn, who, integer(*pn), 0))];
+        s.center = vertexAt(n, "Point", who);
         auto nn = need(n, "Normal");
         auto v = numbers(*nn, 3);
         s.normal = Vec3(float(v[0]), float(v[1]), float(v[2]));
