@@ -441,3 +441,21 @@ TEST_CASE("writers fail cleanly and never truncate the target", "[image]") {
         CHECK(!fs::exists(clrt::temporarySiblingPath(d.string())));
     }
 }
+
+TEST_CASE("a PNG with a zero-length IDAT chunk (valid, found by the fuzzer) reads correctly", "[image]") {
+    // 1x1 RGB, red; an empty IDAT precedes the one with the data. stb_image passes a null pointer to
+    // memcpy with length 0 for it (UBSan in the fuzz build; see scripts/fuzz.sh).
+    static const char kPng[] =
+        "\x89\x50\x4e\x47\x0d\x0a\x1a\x0a\x00\x00\x00\x0d\x49\x48\x44\x52\x00\x00\x00\x01\x00\x00\x00\x01"
+        "\x08\x02\x00\x00\x00\x90\x77\x53\xde\x00\x00\x00\x00\x49\x44\x41\x54\x35\xaf\x06\x1e\x00\x00\x00"
+        "\x0c\x49\x44\x41\x54\x78\x9c\x63\xf8\xcf\xc0\x00\x00\x03\x01\x01\x00\xc9\xfe\x92\xef\x00\x00\x00"
+        "\x00\x49\x45\x4e\x44\xae\x42\x60\x82";
+    std::string path = imgTemp("zero_idat.png");
+    spit(path, std::string(kPng, sizeof(kPng) - 1));
+    ImageRGB img = clrt::readImage(path);
+    REQUIRE(img.width == 1);
+    REQUIRE(img.height == 1);
+    CHECK(img.at(0, 0, 0) == 255.0f);
+    CHECK(img.at(0, 0, 1) == 0.0f);
+    CHECK(img.at(0, 0, 2) == 0.0f);
+}
