@@ -144,7 +144,7 @@ int main(int argc, char** argv) {
             using T = typename std::decay_t<decltype(v)>::value_type;
             return CL_CPP(cl::Buffer(dc.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), v.data()));
         };
-        cl::Buffer nodes = upload(ds.bvh.nodes), refs = upload(ds.bvh.primRefs), tris = upload(ds.triangles),
+        cl::Buffer nodes = upload(ds.bvh4.nodes), refs = upload(ds.bvh.primRefs), tris = upload(ds.triangles),
                    sph = upload(ds.spheres);
         cl::Buffer planes = upload(ds.planes);
         if (ds.params.numPlanes > 0) std::fprintf(stderr, "note: planes are ignored by this benchmark\n");

@@ -123,22 +123,80 @@ inline float3 safeInverse(float3 d) {
     return (float3)(1.0f / d.x, 1.0f / d.y, 1.0f / d.z);
 }
 
-/* Traverses the BVH. anyHit = 1: stop at the first hit (shadow rays). Returns 1 on a hit. */
-inline int Bvh_Traverse(const __global BvhNode* nodes, const __global int* primRefs,
+/* Orders two (key, entry) pairs so the smaller key comes first; branch-free. */
+#define CLRT_CSWAP(ka, ea, kb, eb)                      \
+    {                                                   \
+        int sw_ = (kb) < (ka);                          \
+        float tk_ = sw_ ? (kb) : (ka);                  \
+        int te_ = sw_ ? (eb) : (ea);                    \
+        (kb) = sw_ ? (ka) : (kb); (eb) = sw_ ? (ea) : (eb); \
+        (ka) = tk_; (ea) = te_;                         \
+    }
+
+/* Traverses the 4-wide BVH (Bvh4Node) near-first. anyHit = 1: stop at the first hit (shadow rays).
+ * Returns 1 on a hit.
+ * A node's four slab tests are float4 operations on its struct-of-arrays bounds, with the near and far
+ * planes picked once per ray by the sign of the direction: an empty lane (min +inf, max -inf) is then
+ * never hit, and 0·inf = NaN (a ray lying in a box face's plane) is dropped by fmin/fmax, which return
+ * the other operand, i.e. that axis does not bound the slab. The hit children are sorted by entry
+ * distance (a 5-comparator network); the nearest is visited next and the others are pushed, far first,
+ * with their entry distance so that a closest-hit traversal skips those beyond the best hit so far.
+ * Stack entries: node index (>= 0) or a leaf, ~(first << 4 | count). */
+inline int Bvh_Traverse(const __global Bvh4Node* nodes, const __global int* primRefs,
                         const __global Triangle* tris, const __global Sphere* spheres, int numTriangles,
                         float3 org, float3 dir, float tMax, int anyHit, Hit* hit) {
-    float3 invDir = safeInverse(dir);
-    RayShear shear = RayShear_Make(dir);
-    int stack[CLRT_BVH_STACK_SIZE];
+    const float3 invDir = safeInverse(dir);
+    const RayShear shear = RayShear_Make(dir);
+    const int negX = signbit(invDir.x), negY = signbit(invDir.y), negZ = signbit(invDir.z);
+    int stackEntry[CLRT_BVH4_STACK_SIZE];
+    float stackT[CLRT_BVH4_STACK_SIZE];
     int sp = 0;
-    int node = 0;
+    int entry = 0;
     int found = 0;
-    if (Aabb_Intersect(nodes[0].boundsMin, nodes[0].boundsMax, org, invDir, tMax) == INFINITY) return 0;
     for (;;) {
-        const __global BvhNode* n = &nodes[node];
-        if (n->count > 0) {
-            for (int i = 0; i < n->count; ++i) {
-                int ref = primRefs[n->first + i];
+        if (entry >= 0) {
+            const __global Bvh4Node* n = &nodes[entry];
+            const float4 tNx = ((negX ? n->maxX : n->minX) - org.x) * invDir.x;
+            const float4 tFx = ((negX ? n->minX : n->maxX) - org.x) * invDir.x;
+            const float4 tNy = ((negY ? n->maxY : n->minY) - org.y) * invDir.y;
+            const float4 tFy = ((negY ? n->minY : n->maxY) - org.y) * invDir.y;
+            const float4 tNz = ((negZ ? n->maxZ : n->minZ) - org.z) * invDir.z;
+            const float4 tFz = ((negZ ? n->minZ : n->maxZ) - org.z) * invDir.z;
+            const float4 tEnter = fmax(fmax(tNx, tNy), fmax(tNz, (float4)(0.0f)));
+            /* Widened by 1 + 2γ3 (pbrt): a hit the watertight triangle test accepts exactly on an
+             * edge may lie a few ULPs outside the triangle's tight box. */
+            const float4 tExit = fmin(fmin(fmin(tFx, tFy), tFz) * 1.0000004f, (float4)(tMax));
+            const int4 isHit = tEnter <= tExit;
+            const int nh = -(isHit.s0 + isHit.s1 + isHit.s2 + isHit.s3);
+            if (nh > 0) {
+                const int4 cnt = n->count, child = n->child;
+                const int4 e = select(child, ~((child << 4) | cnt), cnt > (int4)(0));
+                const float4 key = select((float4)(INFINITY), fmin(tEnter, (float4)(FLT_MAX)), isHit);
+                float k0 = key.s0, k1 = key.s1, k2 = key.s2, k3 = key.s3;
+                int e0 = e.s0, e1 = e.s1, e2 = e.s2, e3 = e.s3;
+                if (nh > 1) {
+                    CLRT_CSWAP(k0, e0, k1, e1);
+                    CLRT_CSWAP(k2, e2, k3, e3);
+                    CLRT_CSWAP(k0, e0, k2, e2);
+                    CLRT_CSWAP(k1, e1, k3, e3);
+                    CLRT_CSWAP(k1, e1, k2, e2);
+                    if (sp + nh - 1 <= CLRT_BVH4_STACK_SIZE) { /* always, by the host's bound */
+                        if (nh > 3) { stackEntry[sp] = e3; stackT[sp] = k3; ++sp; }
+                        if (nh > 2) { stackEntry[sp] = e2; stackT[sp] = k2; ++sp; }
+                        stackEntry[sp] = e1; stackT[sp] = k1; ++sp;
+                    }
+                } else {
+                    /* one hit: move it to lane 0 */
+                    e0 = isHit.s0 ? e0 : (isHit.s1 ? e1 : (isHit.s2 ? e2 : e3));
+                }
+                entry = e0;
+                continue;
+            }
+        } else {
+            const int packed = ~entry;
+            const int first = packed >> 4, count = packed & 15;
+            for (int i = first; i < first + count; ++i) {
+                const int ref = primRefs[i];
                 float t, b1 = 0.0f, b2 = 0.0f;
                 int h;
                 if (ref < numTriangles) {
@@ -154,27 +212,14 @@ inline int Bvh_Traverse(const __global BvhNode* nodes, const __global int* primR
                     if (anyHit) return 1;
                 }
             }
-            if (sp == 0) break;
-            node = stack[--sp];
-            continue;
         }
-        int left = node + 1, right = n->first;
-        float tl = Aabb_Intersect(nodes[left].boundsMin, nodes[left].boundsMax, org, invDir, tMax);
-        float tr = Aabb_Intersect(nodes[right].boundsMin, nodes[right].boundsMax, org, invDir, tMax);
-        if (tl == INFINITY && tr == INFINITY) {
-            if (sp == 0) break;
-            node = stack[--sp];
-            continue;
+        /* Pop the next entry that can still hold a closer hit. */
+        for (;;) {
+            if (sp == 0) return found;
+            --sp;
+            if (stackT[sp] <= tMax) { entry = stackEntry[sp]; break; }
         }
-        if (tl == INFINITY) { node = right; continue; }
-        if (tr == INFINITY) { node = left; continue; }
-        /* Both: visit the nearer first, push the other. */
-        int nearN = tl <= tr ? left : right;
-        int farN = tl <= tr ? right : left;
-        if (sp < CLRT_BVH_STACK_SIZE) stack[sp++] = farN;
-        node = nearN;
     }
-    return found;
 }
 
 /* Every plane against the ray (planes are unbounded, so not in the BVH). */
@@ -197,7 +242,7 @@ inline int Planes_Intersect(const __global Plane* planes, int numPlanes, int fir
 }
 
 /* Closest hit for each ray of the queue. */
-__kernel void intersect_closest(const __global BvhNode* nodes, const __global int* primRefs,
+__kernel void intersect_closest(const __global Bvh4Node* nodes, const __global int* primRefs,
                                 const __global Triangle* tris, const __global Sphere* spheres,
                                 int numTriangles, const __global Ray* rays, __global Hit* hits, int count,
                                 const __global Plane* planes, int numPlanes, int firstPlaneRef) {
@@ -216,7 +261,7 @@ __kernel void intersect_closest(const __global BvhNode* nodes, const __global in
 }
 
 /* Any hit for each shadow ray: an occluded ray's contribution is set to zero. */
-__kernel void intersect_shadow(const __global BvhNode* nodes, const __global int* primRefs,
+__kernel void intersect_shadow(const __global Bvh4Node* nodes, const __global int* primRefs,
                                const __global Triangle* tris, const __global Sphere* spheres,
                                int numTriangles, __global ShadowRay* shadows, int count,
                                const __global Plane* planes, int numPlanes, int firstPlaneRef) {

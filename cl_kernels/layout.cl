@@ -10,8 +10,8 @@
  * listed and that the listed members tile each struct exactly). */
 #ifndef CLRT_LAYOUT_TABLE
 #define CLRT_LAYOUT_TABLE(S, M)                                                                   \
-    S(BvhNode) M(BvhNode, boundsMin) M(BvhNode, boundsMax) M(BvhNode, first) M(BvhNode, count)    \
-        M(BvhNode, axis) M(BvhNode, pad0)                                                         \
+    S(Bvh4Node) M(Bvh4Node, minX) M(Bvh4Node, maxX) M(Bvh4Node, minY) M(Bvh4Node, maxY)          \
+        M(Bvh4Node, minZ) M(Bvh4Node, maxZ) M(Bvh4Node, child) M(Bvh4Node, count)                 \
     S(Triangle) M(Triangle, v0) M(Triangle, v1) M(Triangle, v2)                                   \
     S(TriangleShading) M(TriangleShading, n0) M(TriangleShading, n1) M(TriangleShading, n2)       \
         M(TriangleShading, uv01) M(TriangleShading, uv2) M(TriangleShading, material)             \

@@ -194,7 +194,11 @@ int cmdRender(const Args& a) {
     t = std::chrono::steady_clock::now();
     DeviceScene ds = flattenScene(scene);
     double tFlatten = since(t);
-    if (a.allFeatures) ds.features = FeatureSet::all();
+    if (a.allFeatures) {
+        const int stack = ds.features.bvhStack;  // not a feature: the tree's own need
+        ds.features = FeatureSet::all();
+        ds.features.bvhStack = stack;
+    }
 
     // One context and program per device; a device whose setup fails is dropped while others remain.
     t = std::chrono::steady_clock::now();

@@ -124,7 +124,7 @@ double areaD(const Aabb& b) {  // in double: exponential test scenes overflow fl
     if (!(dx >= 0 && dy >= 0 && dz >= 0)) return 0;
     return 2 * (dx * dy + dy * dz + dz * dx);
 }
-Aabb nodeBox(const dev::BvhNode& n) {
+Aabb nodeBox(const BvhNode& n) {
     Aabb a;
     a.min = {n.boundsMin.x, n.boundsMin.y, n.boundsMin.z};
     a.max = {n.boundsMax.x, n.boundsMax.y, n.boundsMax.z};
@@ -149,7 +149,7 @@ void checkStructure(const Bvh& bvh, const std::vector<Aabb>& boxes, int maxLeaf)
         REQUIRE(i == expectNext);
         ++expectNext;
         maxDepth = std::max(maxDepth, lvl);
-        const dev::BvhNode& nd = bvh.nodes[size_t(i)];
+        const BvhNode& nd = bvh.nodes[size_t(i)];
         Aabb box = nodeBox(nd);
         double rel = rootArea > 0 ? areaD(box) / rootArea : 1.0;
         if (nd.count > 0) {
@@ -345,7 +345,7 @@ TEST_CASE("BVH build is the same on any number of threads", "[bvh]") {
     Bvh a = buildBvh(boxes, one), b = buildBvh(boxes, three);
     checkStructure(b, boxes, 4);
     REQUIRE(a.nodes.size() == b.nodes.size());
-    CHECK(std::memcmp(a.nodes.data(), b.nodes.data(), a.nodes.size() * sizeof(dev::BvhNode)) == 0);
+    CHECK(std::memcmp(a.nodes.data(), b.nodes.data(), a.nodes.size() * sizeof(BvhNode)) == 0);
     CHECK(a.primRefs == b.primRefs);
     CHECK(a.depth == b.depth);
     CHECK(a.sahCost == b.sahCost);

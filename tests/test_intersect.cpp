@@ -6,6 +6,7 @@
 #include <random>
 
 #include "bvh/bvh.h"
+#include "bvh/bvh4.h"
 #include "bvh/host_intersect.h"
 #include "cl/check.h"
 #include "test_helpers.h"
@@ -89,7 +90,8 @@ TEST_CASE("intersection kernels match the host reference on random scenes", "[cl
         using T = typename std::decay_t<decltype(v)>::value_type;
         return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), v.data()));
     };
-    cl::Buffer nodes = ro(s.bvh.nodes), refs = ro(s.bvh.primRefs), tris = ro(s.tris), sph = ro(s.spheres);
+    std::vector<dev::Bvh4Node> nodes4 = collapseBvh4(s.bvh).nodes;
+    cl::Buffer nodes = ro(nodes4), refs = ro(s.bvh.primRefs), tris = ro(s.tris), sph = ro(s.spheres);
     cl::Buffer rayBuf = ro(rays);
     cl::Buffer hitBuf = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(dev::Hit) * numRays));
     cl::Buffer shadowBuf = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR,

@@ -12,6 +12,7 @@
 #include <random>
 
 #include "bvh/bvh.h"
+#include "bvh/bvh4.h"
 #include "bvh/host_intersect.h"
 #include "cl/check.h"
 #include "render/device_scene.h"
@@ -110,7 +111,8 @@ std::vector<dev::Hit> deviceClosest(const std::vector<dev::Triangle>& trisIn, co
         using T = typename std::decay_t<decltype(v)>::value_type;
         return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), (void*)v.data()));
     };
-    cl::Buffer nodes = ro(bvh.nodes), refs = ro(bvh.primRefs), tb = ro(tris), sb = ro(sph), rb = ro(rays);
+    std::vector<dev::Bvh4Node> nodes4 = collapseBvh4(bvh).nodes;
+    cl::Buffer nodes = ro(nodes4), refs = ro(bvh.primRefs), tb = ro(tris), sb = ro(sph), rb = ro(rays);
     const int n = int(rays.size());
     cl::Buffer hb = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(dev::Hit) * rays.size()));
     cl::Kernel& k = intersectProgram().closest;

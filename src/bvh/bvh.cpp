@@ -1,5 +1,5 @@
 // Binned SAH BVH builder. Works on a compact copy of the primitive boxes (32-byte items that are
-// partitioned in place), writes dev::BvhNode depth-first (left child = parent + 1) as it recurses,
+// partitioned in place), writes BvhNode depth-first (left child = parent + 1) as it recurses,
 // and caps the tree depth so the device traversal stack (CLRT_BVH_STACK_SIZE) can never overflow:
 // a node whose SAH split would leave a child too deep for a median-split subtree gets a median
 // split instead. Costs are evaluated in double so huge scenes cannot overflow to inf or NaN.
@@ -61,10 +61,10 @@ inline int ceilLog2(int n) {
 
 class Builder {
 public:
-    Builder(const BvhBuildOptions& o, std::vector<Item>& items, std::vector<dev::BvhNode>& nodes)
+    Builder(const BvhBuildOptions& o, std::vector<Item>& items, std::vector<BvhNode>& nodes)
         : opts_(o), items_(items), nodes_(nodes) {
         bins_ = std::max(2, std::min(kMaxBins, o.bins));
-        maxLeaf_ = std::max(1, o.maxLeafSize);
+        maxLeaf_ = std::min(CLRT_BVH4_MAX_LEAF, std::max(1, o.maxLeafSize));  // the device packs leaves in 4 bits
     }
 
     // Levels on the longest root-to-leaf path (root alone = 1); the builder keeps it <= kMaxLevels.
@@ -100,7 +100,7 @@ public:
         nodes_[idx].axis = axis;
         if (threads > 1 && n >= kParallelMin) {
             // Right subtree on a new thread into its own array; left subtree here.
-            std::vector<dev::BvhNode> rightNodes;
+            std::vector<BvhNode> rightNodes;
             rightNodes.reserve(size_t(2) * (end - mid));
             Builder right(opts_, items_, rightNodes);
             int rt = threads / 2;
@@ -113,7 +113,7 @@ public:
             build(begin, mid, level + 1, threads - rt);
             if (worker.joinable()) worker.join();
             const int offset = int(nodes_.size());
-            for (dev::BvhNode nd : rightNodes) {
+            for (BvhNode nd : rightNodes) {
                 if (nd.count == 0) nd.first += offset;
                 nodes_.push_back(nd);
             }
@@ -214,7 +214,7 @@ private:
     }
 
     void writeBounds(int idx, const Box& b) {
-        dev::BvhNode& nd = nodes_[idx];
+        BvhNode& nd = nodes_[idx];
         nd.boundsMin = {b.lo[0], b.lo[1], b.lo[2], 0.f};
         nd.boundsMax = {b.hi[0], b.hi[1], b.hi[2], 0.f};
         nd.pad0 = 0;
@@ -222,12 +222,12 @@ private:
 
     const BvhBuildOptions& opts_;
     std::vector<Item>& items_;
-    std::vector<dev::BvhNode>& nodes_;
+    std::vector<BvhNode>& nodes_;
     int bins_ = 16;
     int maxLeaf_ = 4;
 };
 
-double nodeArea(const dev::BvhNode& nd) {
+double nodeArea(const BvhNode& nd) {
     Box b;
     std::memcpy(b.lo, &nd.boundsMin, sizeof b.lo);
     std::memcpy(b.hi, &nd.boundsMax, sizeof b.hi);
@@ -241,7 +241,7 @@ Bvh buildBvh(const std::vector<Aabb>& primBounds, const BvhBuildOptions& opts) {
     const int n = int(primBounds.size());
     if (n == 0) {
         // Single empty node with inverted bounds; callers must not traverse (primRefs is empty).
-        dev::BvhNode root{};
+        BvhNode root{};
         root.boundsMin = {1e30f, 1e30f, 1e30f, 0.f};
         root.boundsMax = {-1e30f, -1e30f, -1e30f, 0.f};
         root.first = 0;
@@ -277,7 +277,7 @@ Bvh buildBvh(const std::vector<Aabb>& primBounds, const BvhBuildOptions& opts) {
 
     double rootArea = nodeArea(bvh.nodes[0]);
     double cost = 0;
-    for (const dev::BvhNode& nd : bvh.nodes) {
+    for (const BvhNode& nd : bvh.nodes) {
         double rel = rootArea > 0 ? nodeArea(nd) / rootArea : 1.0;
         cost += rel * (nd.count > 0 ? double(nd.count) : double(opts.traversalCost));
     }

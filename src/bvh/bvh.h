@@ -1,6 +1,6 @@
-// Bounding volume hierarchy over world-space primitives: binned SAH build on the host, flattened to
-// the device layout (dev::BvhNode, depth-first, left child next to its parent), and a plain C++
-// traversal used as the reference in tests.
+// Bounding volume hierarchy over world-space primitives: binned SAH build on the host into binary
+// nodes (BvhNode, depth-first, left child next to its parent). The device reads it collapsed to
+// 4-wide nodes (bvh4.h); the binary tree is also what the plain C++ reference traversal in tests walks.
 #pragma once
 #include <vector>
 
@@ -23,16 +23,27 @@ struct Aabb {
     bool valid() const { return min.x <= max.x && min.y <= max.y && min.z <= max.z; }
 };
 
+// A binary node. Leaf: count > 0 and first = first index into primRefs. Interior: count == 0,
+// first = index of the right child (the left child is the next node).
+struct BvhNode {
+    dev::float4 boundsMin;  // xyz; w unused
+    dev::float4 boundsMax;  // xyz; w unused
+    int first;
+    int count;
+    int axis;  // interior: split axis (0,1,2)
+    int pad0;
+};
+
 struct BvhBuildOptions {
     int bins = 16;            // SAH bins per axis
-    int maxLeafSize = 4;      // leaves never hold more (coincident centroids: median split)
+    int maxLeafSize = 4;      // leaves never hold more (coincident centroids: median split); <= 15
     float traversalCost = 1;  // SAH cost of an interior node relative to one primitive test
     int maxThreads = 0;       // threads for large subtrees; 0 = all hardware threads. The tree
                               // does not depend on it.
 };
 
 struct Bvh {
-    std::vector<dev::BvhNode> nodes;  // nodes[0] is the root
+    std::vector<BvhNode> nodes;  // nodes[0] is the root
     std::vector<int> primRefs;        // leaf ranges index this; values index the input boxes
     float sahCost = 0;                // SAH cost of the tree (root area normalised)
     int depth = 0;                    // levels on the longest root-to-leaf path (root alone = 1);

@@ -129,7 +129,7 @@ struct SlabRay {
 // Conservative slab test. The box is padded by a few ulps of its extent around the ray origin, so
 // rounding (here and in the watertight triangle test, whose hit may lie a few ulps outside the
 // triangle's box) never culls a primitive that the brute-force loop would hit.
-inline bool slab(const dev::BvhNode& nd, const SlabRay& r, float tMax, float& tNear) {
+inline bool slab(const BvhNode& nd, const SlabRay& r, float tMax, float& tNear) {
     float lo[3] = {nd.boundsMin.x - r.org.x, nd.boundsMin.y - r.org.y, nd.boundsMin.z - r.org.z};
     float hi[3] = {nd.boundsMax.x - r.org.x, nd.boundsMax.y - r.org.y, nd.boundsMax.z - r.org.z};
     float m = 0;
@@ -161,7 +161,7 @@ bool walkBvh(const Bvh& bvh, const Vec3& org, const Vec3& dir, float& tMax, F&& 
     int sp = 0;
     stack[sp++] = 0;
     while (sp > 0) {
-        const dev::BvhNode& nd = bvh.nodes[size_t(stack[--sp])];
+        const BvhNode& nd = bvh.nodes[size_t(stack[--sp])];
         float tNear;
         if (!slab(nd, ray, tMax, tNear)) continue;
         if (nd.count > 0) {

@@ -49,6 +49,8 @@ std::vector<std::string> FeatureSet::defines() const {
     add(conductor, "CLRT_HAS_CONDUCTOR");
     add(textures, "CLRT_HAS_TEXTURES");
     add(spheres, "CLRT_HAS_SPHERES");
+    // Rounded up to a multiple of 8 so that scenes of similar depth share a cached program.
+    if (bvhStack > 0) d.push_back("-DCLRT_BVH4_STACK_SIZE=" + std::to_string((bvhStack + 7) / 8 * 8));
     return d;
 }
 
@@ -352,6 +354,8 @@ DeviceScene flattenScene(const Scene& scene) {
     auto tb = std::chrono::steady_clock::now();
     boxes.insert(boxes.end(), sphereBoxes.begin(), sphereBoxes.end());
     ds.bvh = buildBvh(boxes);
+    ds.bvh4 = collapseBvh4(ds.bvh);
+    ds.features.bvhStack = std::max(1, ds.bvh4.maxStack);
     ds.bvhSeconds = secondsSince(tb);
     // Store triangles in BVH leaf order so a leaf's triangles are contiguous in memory.
     {

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "bvh/bvh.h"
+#include "bvh/bvh4.h"
 #include "scene/scene.h"
 #include "shared/device_types.h"
 
@@ -16,6 +17,7 @@ struct FeatureSet {
     bool mirror = false, dielectric = false, conductor = false;
     bool textures = false;
     bool spheres = false;
+    int bvhStack = 0;  // traversal stack entries the scene's BVH needs (0: the header's default)
     std::vector<std::string> defines() const;  // e.g. {"-DCLRT_HAS_POINT_LIGHT=1", ...}
     // Every feature on: the unspecialised program (clrt render --all-features).
     static FeatureSet all() {
@@ -27,7 +29,7 @@ struct FeatureSet {
 };
 
 struct DeviceScene {
-    std::vector<dev::Triangle> triangles;          // in BVH leaf order is NOT implied: see bvh.primRefs
+    std::vector<dev::Triangle> triangles;          // in BVH leaf order (bvh.primRefs still maps)
     std::vector<dev::TriangleShading> triangleShading;
     std::vector<dev::Sphere> spheres;
     std::vector<dev::Plane> planes;               // never empty (a dummy when the scene has none)
@@ -38,7 +40,8 @@ struct DeviceScene {
     std::vector<dev::float4> texels;
     std::vector<dev::Light> lights;
     std::vector<float> envDistribution;  // importance distributions of env lights (env_distribution.h)
-    Bvh bvh;
+    Bvh bvh;    // binary tree (host reference, statistics)
+    Bvh4 bvh4;  // what the device traverses
     dev::SceneParams params{};
     FeatureSet features;
     size_t skippedTriangles = 0;

@@ -46,7 +46,7 @@ struct Renderer::Impl {
         kAccumulate = mk("accumulate");
         kCompact = mk("compact_paths");
         cl::Context& ctx = dc.context();
-        nodes = uploadBuffer(ctx, scene.bvh.nodes);
+        nodes = uploadBuffer(ctx, scene.bvh4.nodes);
         primRefs = uploadBuffer(ctx, scene.bvh.primRefs);
         tris = uploadBuffer(ctx, scene.triangles);
         triShading = uploadBuffer(ctx, scene.triangleShading);

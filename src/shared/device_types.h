@@ -33,16 +33,29 @@ enum InterpKind { INTERP_NEAREST = 0, INTERP_BILINEAR = 1 };
 #define CLRT_BVH_STACK_SIZE 64
 #define CLRT_INVALID (-1)
 
-/* A BVH node (binary, flattened depth-first: the left child of an interior node is the next node).
- * Leaf: count > 0 and first = first index into primRefs. Interior: count == 0, first = right child. */
-typedef struct BvhNode {
-    float4 boundsMin;  /* xyz; w unused */
-    float4 boundsMax;  /* xyz; w unused */
-    int first;         /* leaf: first primRef; interior: index of the right child */
-    int count;         /* leaf: number of primRefs; interior: 0 */
-    int axis;          /* interior: split axis (0,1,2), for near-first traversal */
-    int pad0;
-} BvhNode;
+/* The binary SAH tree (src/bvh/bvh.cpp) keeps its depth <= CLRT_BVH_STACK_SIZE - 8 levels; the device
+ * traverses it collapsed to 4-wide nodes (src/bvh/bvh4.cpp), whose near-first traversal needs at most
+ * 3 stack entries per level. The renderer passes the exact need of a scene with -D; this default holds
+ * for every tree the builder can make. */
+#ifndef CLRT_BVH4_STACK_SIZE
+#define CLRT_BVH4_STACK_SIZE (3 * (CLRT_BVH_STACK_SIZE - 8))
+#endif
+
+/* A leaf enters the traversal stack as one int, ~(first << 4 | count). */
+#define CLRT_BVH4_MAX_LEAF 15
+#define CLRT_BVH4_MAX_PRIMS (1 << 27)
+
+/* A 4-wide BVH node, the device's BVH. Lane i of every vector belongs to child i (struct of arrays,
+ * so the four slab tests of a node are four-wide vector operations):
+ *   count[i] > 0                    leaf: primRefs [child[i], child[i] + count[i])
+ *   count[i] == 0, child[i] >= 0    interior: child[i] is the index of the child node
+ *   child[i] == CLRT_INVALID        empty lane: bounds min = +inf, max = -inf, never hit
+ * nodes[0] is the root. */
+typedef struct Bvh4Node {
+    float4 minX, maxX, minY, maxY, minZ, maxZ;
+    int4 child;
+    int4 count;
+} Bvh4Node;
 
 /* A world-space triangle. Vertex data for shading lives in TriangleShading at the same index. */
 typedef struct Triangle {

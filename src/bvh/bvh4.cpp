@@ -1,0 +1,114 @@
+// Binary -> 4-wide BVH collapse (see bvh4.h). Nodes are written depth-first, parent before children.
+#include "bvh/bvh4.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace clrt {
+namespace {
+
+double halfArea(const BvhNode& n) {
+    double dx = double(n.boundsMax.x) - n.boundsMin.x, dy = double(n.boundsMax.y) - n.boundsMin.y,
+           dz = double(n.boundsMax.z) - n.boundsMin.z;
+    if (!(dx >= 0 && dy >= 0 && dz >= 0)) return 0;
+    return dx * dy + dy * dz + dz * dx;
+}
+
+struct Collapser {
+    const Bvh& bin;
+    std::vector<dev::Bvh4Node>& out;
+    int depth = 0;
+
+    // Writes the 4-wide node for binary node b and its subtree; returns {index, stack need}.
+    // Stack need of a subtree: the most entries its traversal pushes, from an empty stack (a node
+    // with k hit children pushes k - 1 and goes on into one of them).
+    std::pair<int, int> emit(int b, int level) {
+        depth = std::max(depth, level);
+        const int idx = int(out.size());
+        out.emplace_back();
+        int lanes[4];
+        int k = 0;
+        const BvhNode& nb = bin.nodes[size_t(b)];
+        if (nb.count > 0) {
+            lanes[k++] = b;  // a leaf root: one lane
+        } else {
+            lanes[k++] = b + 1;
+            lanes[k++] = nb.first;
+            while (k < 4) {  // open the interior lane with the largest area
+                int best = -1;
+                double bestArea = -1;
+                for (int i = 0; i < k; ++i) {
+                    const BvhNode& c = bin.nodes[size_t(lanes[i])];
+                    if (c.count == 0 && halfArea(c) > bestArea) { bestArea = halfArea(c); best = i; }
+                }
+                if (best < 0) break;
+                const int c = lanes[best];
+                lanes[best] = c + 1;
+                lanes[k++] = bin.nodes[size_t(c)].first;
+            }
+        }
+        dev::Bvh4Node node;
+        float* mn[3] = {&node.minX.x, &node.minY.x, &node.minZ.x};
+        float* mx[3] = {&node.maxX.x, &node.maxY.x, &node.maxZ.x};
+        int* child = &node.child.x;
+        int* count = &node.count.x;
+        int need = 0;
+        for (int i = 0; i < 4; ++i) {
+            if (i >= k) {
+                for (int a = 0; a < 3; ++a) { mn[a][i] = INFINITY; mx[a][i] = -INFINITY; }
+                child[i] = CLRT_INVALID;
+                count[i] = 0;
+                continue;
+            }
+            const BvhNode& c = bin.nodes[size_t(lanes[i])];
+            const float* lo = &c.boundsMin.x;
+            const float* hi = &c.boundsMax.x;
+            for (int a = 0; a < 3; ++a) { mn[a][i] = lo[a]; mx[a][i] = hi[a]; }
+            if (c.count > 0) {
+                // The traversal packs a leaf into one stack entry: ~(first << 4 | count).
+                if (c.count > CLRT_BVH4_MAX_LEAF)
+                    throw std::logic_error("collapseBvh4: leaf of " + std::to_string(c.count) + " primitives");
+                if (c.first > CLRT_BVH4_MAX_PRIMS - c.count)
+                    throw std::runtime_error("scene has more than " + std::to_string(CLRT_BVH4_MAX_PRIMS) +
+                                             " primitives (the BVH's limit)");
+                child[i] = c.first;
+                count[i] = c.count;
+            } else {
+                auto sub = emit(lanes[i], level + 1);
+                child[i] = sub.first;
+                count[i] = 0;
+                need = std::max(need, sub.second);
+            }
+        }
+        out[size_t(idx)] = node;
+        return {idx, need + (k - 1)};
+    }
+};
+
+}  // namespace
+
+Bvh4 collapseBvh4(const Bvh& bvh) {
+    Bvh4 r;
+    if (bvh.primRefs.empty() || bvh.nodes.empty()) {
+        dev::Bvh4Node empty;
+        empty.minX = empty.minY = empty.minZ = {INFINITY, INFINITY, INFINITY, INFINITY};
+        empty.maxX = empty.maxY = empty.maxZ = {-INFINITY, -INFINITY, -INFINITY, -INFINITY};
+        empty.child = {CLRT_INVALID, CLRT_INVALID, CLRT_INVALID, CLRT_INVALID};
+        empty.count = {0, 0, 0, 0};
+        r.nodes.push_back(empty);
+        r.depth = 1;
+        return r;
+    }
+    r.nodes.reserve(bvh.nodes.size() / 2 + 1);
+    Collapser c{bvh, r.nodes};
+    r.maxStack = c.emit(0, 1).second;
+    r.depth = c.depth;
+    if (r.maxStack > CLRT_BVH4_STACK_SIZE)
+        throw std::logic_error("collapseBvh4: traversal stack need " + std::to_string(r.maxStack) +
+                               " exceeds CLRT_BVH4_STACK_SIZE");
+    return r;
+}
+
+}  // namespace clrt

@@ -1,0 +1,349 @@
+// Tests for the binary -> 4-wide BVH collapse (src/bvh/bvh4.cpp) and the device's 4-wide traversal
+// (Bvh_Traverse in cl_kernels/intersect.cl): structure of the collapsed tree (every primitive in
+// exactly one leaf lane, lanes inside their parent, empty lanes never hit), the traversal stack bound
+// the host computes (a host replica of the kernel's traversal never exceeds it; the kernel compiled
+// with exactly that stack finds what brute force finds on a deep tree built to fill its stack), and
+// the limits of the leaf packing.
+#include <catch.hpp>
+
+#include <array>
+#include <cfloat>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <vector>
+
+#include "bvh/bvh.h"
+#include "bvh/bvh4.h"
+#include "bvh/host_intersect.h"
+#include "cl/check.h"
+#include "test_helpers.h"
+
+using namespace clrt;
+using namespace clrt::test;
+
+namespace {
+
+using Tri = std::array<Vec3, 3>;
+
+std::vector<Aabb> triBoxes(const std::vector<Tri>& tris) {
+    std::vector<Aabb> boxes;
+    for (const Tri& t : tris) {
+        Aabb b;
+        for (const Vec3& v : t) b.grow(v);
+        boxes.push_back(b);
+    }
+    return boxes;
+}
+
+float lane(const dev::float4& v, int i) { return (&v.x)[i]; }
+int lane(const dev::int4& v, int i) { return (&v.x)[i]; }
+
+// Walks the 4-wide tree from the root: every node reached once, every primRef position covered by
+// exactly one leaf lane, every lane's box inside the box its parent lane gave, empty lanes marked.
+void checkStructure4(const Bvh& bin, const Bvh4& b4, const std::vector<Aabb>& boxes) {
+    const int n = int(bin.primRefs.size());
+    std::vector<int> covered(size_t(n), 0), reached(b4.nodes.size(), 0);
+    int badBox = 0, badEmpty = 0, badChild = 0, maxLevel = 0;
+    struct Item { int node, level; Aabb box; };
+    Aabb all;
+    all.min = Vec3(-INFINITY); all.max = Vec3(INFINITY);
+    std::vector<Item> stack{{0, 1, all}};
+    while (!stack.empty()) {
+        Item it = stack.back();
+        stack.pop_back();
+        REQUIRE(it.node >= 0);
+        REQUIRE(it.node < int(b4.nodes.size()));
+        reached[size_t(it.node)]++;
+        maxLevel = std::max(maxLevel, it.level);
+        const dev::Bvh4Node& nd = b4.nodes[size_t(it.node)];
+        for (int i = 0; i < 4; ++i) {
+            const int child = lane(nd.child, i), count = lane(nd.count, i);
+            Aabb box;
+            box.min = Vec3(lane(nd.minX, i), lane(nd.minY, i), lane(nd.minZ, i));
+            box.max = Vec3(lane(nd.maxX, i), lane(nd.maxY, i), lane(nd.maxZ, i));
+            if (child == CLRT_INVALID) {
+                badEmpty += !(count == 0 && box.min.x == INFINITY && box.max.x == -INFINITY &&
+                              box.min.z == INFINITY && box.max.z == -INFINITY);
+                continue;
+            }
+            const bool valid = box.valid();
+            if (valid && it.box.valid() &&
+                !(it.box.min.x <= box.min.x && it.box.min.y <= box.min.y && it.box.min.z <= box.min.z &&
+                  box.max.x <= it.box.max.x && box.max.y <= it.box.max.y && box.max.z <= it.box.max.z))
+                ++badBox;
+            if (count > 0) {
+                if (child < 0 || child + count > n) { ++badChild; continue; }
+                for (int k = child; k < child + count; ++k) {
+                    covered[size_t(k)]++;
+                    const Aabb& pb = boxes[size_t(bin.primRefs[size_t(k)])];
+                    if (pb.valid() && isFinite(pb.min) && isFinite(pb.max) &&
+                        !(box.min.x <= pb.min.x && box.min.y <= pb.min.y && box.min.z <= pb.min.z &&
+                          pb.max.x <= box.max.x && pb.max.y <= box.max.y && pb.max.z <= box.max.z))
+                        ++badBox;
+                }
+            } else {
+                if (child <= it.node) { ++badChild; continue; }  // children after parents
+                stack.push_back({child, it.level + 1, box});
+            }
+        }
+    }
+    int wrongCover = 0, wrongReach = 0;
+    for (int c : covered) wrongCover += (c != 1);
+    for (int r : reached) wrongReach += (r != 1);
+    CHECK(wrongCover == 0);
+    CHECK(wrongReach == 0);
+    CHECK(badBox == 0);
+    CHECK(badEmpty == 0);
+    CHECK(badChild == 0);
+    CHECK(maxLevel == b4.depth);
+    CHECK(b4.depth <= bin.depth);
+    CHECK(b4.maxStack <= CLRT_BVH4_STACK_SIZE);
+    // Collapsing opens about one binary level in two.
+    if (n > 1000) CHECK(b4.nodes.size() < bin.nodes.size() / 2);
+}
+
+// Host replica of the kernel's traversal (same near/far plane choice, fmin/fmax NaN handling, sorted
+// pushes, culling on pop). Returns the closest primitive (-1: none) and the deepest stack it used.
+struct Trace4 { int prim = -1; float t = INFINITY; int maxSp = 0; };
+Trace4 traverse4(const Bvh& bin, const Bvh4& b4, const std::vector<Tri>& tris, Vec3 o, Vec3 d, float tMax) {
+    Trace4 r;
+    Vec3 inv(1 / d.x, 1 / d.y, 1 / d.z);
+    std::vector<std::pair<float, int>> stack;
+    int entry = 0;
+    for (;;) {
+        if (entry >= 0) {
+            const dev::Bvh4Node& nd = b4.nodes[size_t(entry)];
+            std::vector<std::pair<float, int>> hits;
+            for (int i = 0; i < 4; ++i) {
+                float lo[3] = {lane(nd.minX, i), lane(nd.minY, i), lane(nd.minZ, i)};
+                float hi[3] = {lane(nd.maxX, i), lane(nd.maxY, i), lane(nd.maxZ, i)};
+                float tEnter = 0, tExit = INFINITY;
+                for (int a = 0; a < 3; ++a) {
+                    const bool neg = std::signbit(inv[a]);
+                    float tn = ((neg ? hi[a] : lo[a]) - o[a]) * inv[a];
+                    float tf = ((neg ? lo[a] : hi[a]) - o[a]) * inv[a];
+                    tEnter = std::fmax(tEnter, tn);
+                    tExit = std::fmin(tExit, tf);
+                }
+                tExit = std::fmin(tExit * 1.0000004f, tMax);
+                if (!(tEnter <= tExit)) continue;
+                const int child = lane(nd.child, i), count = lane(nd.count, i);
+                hits.push_back({std::fmin(tEnter, FLT_MAX), count > 0 ? ~((child << 4) | count) : child});
+            }
+            if (!hits.empty()) {
+                std::stable_sort(hits.begin(), hits.end(),
+                                 [](auto& a, auto& b) { return a.first < b.first; });
+                for (size_t k = hits.size() - 1; k >= 1; --k) stack.push_back(hits[k]);
+                r.maxSp = std::max(r.maxSp, int(stack.size()));
+                entry = hits[0].second;
+                continue;
+            }
+        } else {
+            const int first = (~entry) >> 4, count = (~entry) & 15;
+            for (int k = first; k < first + count; ++k) {
+                const int p = bin.primRefs[size_t(k)];
+                float t, b1, b2;
+                if (intersectTriangleWatertight(o, d, tris[size_t(p)][0], tris[size_t(p)][1], tris[size_t(p)][2],
+                                                tMax, t, b1, b2)) {
+                    tMax = t;
+                    r.prim = p;
+                    r.t = t;
+                }
+            }
+        }
+        bool next = false;
+        while (!stack.empty()) {
+            auto e = stack.back();
+            stack.pop_back();
+            if (e.first <= tMax) { entry = e.second; next = true; break; }
+        }
+        if (!next) return r;
+    }
+}
+
+// A stack of big triangles, each twice the size of the one below, all over the z axis: a ray from
+// near the origin going up passes through every box, so the traversal pushes at every level.
+std::vector<Tri> towerScene(int levels) {
+    std::vector<Tri> tris;
+    for (int i = -levels / 2; i < levels - levels / 2; ++i) {
+        const float s = std::ldexp(1.f, i);
+        tris.push_back({Vec3(-3 * s, -3 * s, s), Vec3(3 * s, -3 * s, s * 1.25f), Vec3(0, 3 * s, s * 1.5f)});
+    }
+    return tris;
+}
+
+}  // namespace
+
+TEST_CASE("BVH4 of an empty and of a one-primitive input", "[bvh4]") {
+    Bvh4 empty = collapseBvh4(buildBvh({}));
+    REQUIRE(empty.nodes.size() == 1);
+    CHECK(empty.nodes[0].child.x == CLRT_INVALID);
+    CHECK(empty.nodes[0].minX.x == INFINITY);
+    CHECK(empty.nodes[0].maxX.w == -INFINITY);
+    CHECK(empty.maxStack == 0);
+
+    Aabb a;
+    a.grow(Vec3(1, 2, 3));
+    a.grow(Vec3(2, 3, 4));
+    Bvh one = buildBvh({a});
+    Bvh4 one4 = collapseBvh4(one);
+    REQUIRE(one4.nodes.size() == 1);
+    CHECK(one4.nodes[0].count.x == 1);
+    CHECK(one4.nodes[0].child.x == 0);
+    CHECK(one4.nodes[0].minY.x == 2.f);
+    CHECK(one4.nodes[0].maxZ.x == 4.f);
+    CHECK(one4.nodes[0].child.y == CLRT_INVALID);
+    CHECK(one4.maxStack == 0);
+}
+
+TEST_CASE("BVH4 structure on random, degenerate and deep trees", "[bvh4]") {
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> pos(-10, 10), unit(-1, 1);
+    SECTION("random triangles, leaves of 1, 4 and 15") {
+        std::vector<Tri> tris;
+        for (int i = 0; i < 20000; ++i) {
+            Vec3 c(pos(rng), pos(rng), pos(rng));
+            float s = std::exp(unit(rng) * 3);
+            tris.push_back({c, c + Vec3(unit(rng), unit(rng), unit(rng)) * s, c + Vec3(unit(rng), unit(rng), unit(rng)) * s});
+        }
+        for (int leaf : {1, 4, 15}) {
+            BvhBuildOptions o;
+            o.maxLeafSize = leaf;
+            auto boxes = triBoxes(tris);
+            Bvh bin = buildBvh(boxes, o);
+            Bvh4 b4 = collapseBvh4(bin);
+            INFO("maxLeafSize " << leaf);
+            checkStructure4(bin, b4, boxes);
+        }
+    }
+    SECTION("identical and non-finite boxes") {
+        std::vector<Aabb> boxes(5000);
+        for (size_t i = 0; i < boxes.size(); ++i) {
+            boxes[i].grow(Vec3(1, 1, 1));
+            boxes[i].grow(Vec3(2, 2, 1));
+            if (i % 7 == 0) boxes[i].min.x = NAN;
+        }
+        Bvh bin = buildBvh(boxes);
+        checkStructure4(bin, collapseBvh4(bin), boxes);
+    }
+    SECTION("the builder's deepest trees stay within the default stack") {
+        // Exponentially spaced primitives: the binary builder's depth cap is what keeps this chain
+        // finite (see test_bvh.cpp); the collapsed tree's stack need must still fit.
+        std::vector<Aabb> boxes;
+        for (int i = -120; i <= 120; ++i) {
+            float x = std::ldexp(1.f, i);
+            Aabb b;
+            b.grow(Vec3(x, 0, 0));
+            b.grow(Vec3(x, 0, 0) + Vec3(x * 1e-3f));
+            boxes.push_back(b);
+        }
+        BvhBuildOptions o;
+        o.maxLeafSize = 1;
+        Bvh bin = buildBvh(boxes, o);
+        Bvh4 b4 = collapseBvh4(bin);
+        checkStructure4(bin, b4, boxes);
+        std::printf("exponential input: binary depth %d, 4-wide depth %d, stack need %d (default %d)\n", bin.depth,
+                    b4.depth, b4.maxStack, CLRT_BVH4_STACK_SIZE);
+    }
+}
+
+TEST_CASE("BVH4 leaf packing limits are enforced", "[bvh4]") {
+    Bvh bin;
+    BvhNode leaf{};
+    leaf.boundsMin = {0, 0, 0, 0};
+    leaf.boundsMax = {1, 1, 1, 0};
+    leaf.first = 0;
+    leaf.count = CLRT_BVH4_MAX_LEAF + 1;
+    bin.nodes.push_back(leaf);
+    bin.primRefs.assign(size_t(leaf.count), 0);
+    CHECK_THROWS_AS(collapseBvh4(bin), std::logic_error);
+    // The builder never makes such a leaf, whatever it is asked for.
+    std::vector<Aabb> boxes(100);
+    for (Aabb& b : boxes) { b.grow(Vec3(0)); b.grow(Vec3(1)); }
+    BvhBuildOptions o;
+    o.maxLeafSize = 64;
+    CHECK_NOTHROW(collapseBvh4(buildBvh(boxes, o)));
+}
+
+TEST_CASE("BVH4 traversal stack: the host bound holds, and the kernel with exactly that stack is exact",
+          "[bvh4][cl]") {
+    std::vector<Tri> tris = towerScene(60);
+    BvhBuildOptions o;
+    o.maxLeafSize = 1;
+    Bvh bin = buildBvh(triBoxes(tris), o);
+    Bvh4 b4 = collapseBvh4(bin);
+    checkStructure4(bin, b4, triBoxes(tris));
+
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> unit(-1, 1);
+    const int numRays = 4096;
+    std::vector<dev::Ray> rays(numRays);
+    std::vector<Vec3> org(numRays), dir(numRays);
+    int maxSp = 0, hostMismatch = 0;
+    for (int i = 0; i < numRays; ++i) {
+        // Mostly up the tower from near the origin (every level's boxes hit), some from far away.
+        org[i] = i % 4 ? Vec3(unit(rng), unit(rng), unit(rng)) * 1e-6f : Vec3(unit(rng), unit(rng), unit(rng)) * 1e6f;
+        dir[i] = i % 4 ? normalize(Vec3(unit(rng) * 0.3f, unit(rng) * 0.3f, 1)) : normalize(-org[i]);
+        rays[size_t(i)] = {{org[i].x, org[i].y, org[i].z, 0}, {dir[i].x, dir[i].y, dir[i].z, INFINITY}};
+        Trace4 t = traverse4(bin, b4, tris, org[i], dir[i], INFINITY);
+        maxSp = std::max(maxSp, t.maxSp);
+        // Brute force.
+        int best = -1;
+        float tBest = INFINITY;
+        for (size_t k = 0; k < tris.size(); ++k) {
+            float tt, b1, b2;
+            if (intersectTriangleWatertight(org[i], dir[i], tris[k][0], tris[k][1], tris[k][2], tBest, tt, b1, b2)) {
+                tBest = tt;
+                best = int(k);
+            }
+        }
+        // Compared by distance: from 1e6 away, tiny triangles of the tower tie at one float t.
+        hostMismatch += ((t.prim < 0) != (best < 0)) || (best >= 0 && t.t != tBest);
+    }
+    std::printf("tower: 4-wide depth %d, stack need %d, deepest stack used by the host replica %d\n", b4.depth,
+                b4.maxStack, maxSp);
+    CHECK(hostMismatch == 0);
+    CHECK(maxSp <= b4.maxStack);
+    CHECK(maxSp >= b4.maxStack / 2);  // the scene does exercise the stack
+
+    DeviceContext& dc = testContext();
+    auto sources = loadKernelSources({"common.cl", "intersect.cl"});
+    cl::Program program = buildProgramFromSources(
+        dc, sources, {"-DCLRT_BVH4_STACK_SIZE=" + std::to_string(b4.maxStack)});
+    cl::Kernel closest = CL_CPP(cl::Kernel(program, "intersect_closest"));
+    std::vector<dev::Triangle> devTris;
+    for (const Tri& t : tris) {
+        devTris.push_back({{t[0].x, t[0].y, t[0].z, 0}, {t[1].x, t[1].y, t[1].z, 0}, {t[2].x, t[2].y, t[2].z, 0}});
+    }
+    std::vector<dev::Sphere> noSpheres(1);
+    std::vector<dev::Plane> noPlanes(1);
+    cl::Context& ctx = dc.context();
+    auto ro = [&](auto& v) {
+        using T = typename std::decay_t<decltype(v)>::value_type;
+        return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), v.data()));
+    };
+    // primRef values index devTris directly (the renderer reorders triangles; here there is no need).
+    cl::Buffer nodes = ro(b4.nodes), refs = ro(bin.primRefs), tb = ro(devTris), sb = ro(noSpheres),
+               pb = ro(noPlanes), rb = ro(rays);
+    cl::Buffer hb = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(dev::Hit) * numRays));
+    closest.setArg(0, nodes); closest.setArg(1, refs); closest.setArg(2, tb); closest.setArg(3, sb);
+    closest.setArg(4, int(tris.size())); closest.setArg(5, rb); closest.setArg(6, hb); closest.setArg(7, numRays);
+    closest.setArg(8, pb); closest.setArg(9, 0); closest.setArg(10, int(tris.size()));
+    CL_CPP(dc.queue().enqueueNDRangeKernel(closest, cl::NullRange, cl::NDRange(roundUp(size_t(numRays), 64)),
+                                           cl::NDRange(64)));
+    std::vector<dev::Hit> hits(numRays);
+    CL_CPP(dc.queue().enqueueReadBuffer(hb, CL_TRUE, 0, sizeof(dev::Hit) * numRays, hits.data()));
+    int devMismatch = 0, hitRays = 0;
+    for (int i = 0; i < numRays; ++i) {
+        // Only the rays up the tower: those fired from 1e6 away at 0.01-wide triangles are decided by
+        // rounding, and the device's and host's triangle tests round differently (about 1% differ).
+        if (i % 4 == 0) continue;
+        Trace4 t = traverse4(bin, b4, tris, org[i], dir[i], INFINITY);
+        const dev::Hit& h = hits[size_t(i)];
+        devMismatch += ((h.prim < 0) != (t.prim < 0)) || (t.prim >= 0 && std::fabs(h.t - t.t) > 1e-6f * t.t);
+        hitRays += t.prim >= 0;
+    }
+    CHECK(hitRays > numRays / 2);  // of the 3/4 compared
+    CHECK(devMismatch == 0);
+}
