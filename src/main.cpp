@@ -206,7 +206,7 @@ int cmdRender(const Args& a) {
     std::vector<std::unique_ptr<Renderer>> renderers;
     for (const DeviceInfo& d : devs) {
         try {
-            auto dc = std::make_unique<DeviceContext>(d);
+            auto dc = std::make_unique<DeviceContext>(d, /*profiling=*/true);  // per-kernel times for stats
             auto r = std::make_unique<Renderer>(*dc, ds);
             contexts.push_back(std::move(dc));
             renderers.push_back(std::move(r));
@@ -224,6 +224,8 @@ int cmdRender(const Args& a) {
         for (auto& r : renderers) info("device: [" + std::to_string(r->context().info().index) + "] " + r->context().info().name +
                                        " (" + r->context().info().platformName + ")");
         info("kernel flags:" + flags + (renderer.buildInfo().cacheHit ? " (cached binary)" : ""));
+        info("flatten: images read in " + std::to_string(ds.imageSeconds) + " s, environment distributions built in " +
+             std::to_string(ds.envDistSeconds) + " s");
         info("primitives: " + std::to_string(ds.params.numTriangles) + " triangles, " + std::to_string(ds.params.numSpheres) +
              " spheres; BVH SAH cost " + std::to_string(ds.bvh.sahCost) + ", depth " + std::to_string(ds.bvh.depth));
     }
@@ -280,13 +282,39 @@ int cmdRender(const Args& a) {
         }
     double rays = double(counters.cameraRays + counters.secondaryRays + counters.shadowRays);
     double secs = std::max(counters.seconds, 1e-9);
+    // Ray throughput of each kind: its rays over its trace kernel's device time, summed over devices
+    // (they run concurrently); without profiling, over the whole render time.
+    auto rate = [&](uint64_t RenderCounters::*rayCount, int stage) {
+        double r = 0;
+        for (const DeviceWork& w : work) {
+            double t = w.counters.profiled ? w.counters.stageSeconds[stage] : w.counters.seconds;
+            if (t > 0) r += double(w.counters.*rayCount) / t * 1e-6;
+        }
+        return r;
+    };
+    if (verbose()) {
+        double stage[STAGE_COUNT] = {}, kernels = 0;
+        for (const DeviceWork& w : work)
+            for (int k = 0; k < STAGE_COUNT; ++k) stage[k] += w.counters.stageSeconds[k];
+        std::string line = "kernel time:";
+        for (int k = 0; k < STAGE_COUNT; ++k) {
+            char buf[64];
+            std::snprintf(buf, sizeof buf, " %s %.3fs", renderStageName(k), stage[k]);
+            line += buf;
+            kernels += stage[k];
+        }
+        char buf[96];
+        std::snprintf(buf, sizeof buf, "; all kernels %.3fs of %.3fs render", kernels, counters.seconds);
+        info(line + buf);
+    }
     std::fprintf(stderr, "times: parse %.3fs, bvh %.3fs (flatten %.3fs), kernel build %.3fs%s, render %.3fs, output %.3fs; %.2f Mrays/s\n",
                  tParse, ds.bvhSeconds, tFlatten - ds.bvhSeconds, tBuild, renderer.buildInfo().cacheHit ? " (cached)" : "",
                  counters.seconds, tOutput, rays / secs * 1e-6);
-    std::printf("stats: parse=%.3fs bvh=%.3fs build=%.3fs render=%.3fs output=%.3fs camera_mrays=%.2f shadow_mrays=%.2f "
-                "secondary_mrays=%.2f spp=%d\n",
-                tParse, ds.bvhSeconds, tBuild, counters.seconds, tOutput, counters.cameraRays / secs * 1e-6,
-                counters.shadowRays / secs * 1e-6, counters.secondaryRays / secs * 1e-6, a.spp > 0 ? a.spp : cams[0]->numSamples);
+    std::printf("stats: parse=%.3fs flatten=%.3fs bvh=%.3fs build=%.3fs render=%.3fs output=%.3fs camera_mrays=%.2f "
+                "shadow_mrays=%.2f secondary_mrays=%.2f spp=%d\n",
+                tParse, tFlatten - ds.bvhSeconds, ds.bvhSeconds, tBuild, counters.seconds, tOutput, rate(&RenderCounters::cameraRays, STAGE_TRACE_CAMERA),
+                rate(&RenderCounters::shadowRays, STAGE_TRACE_SHADOW),
+                rate(&RenderCounters::secondaryRays, STAGE_TRACE_SECONDARY), a.spp > 0 ? a.spp : cams[0]->numSamples);
     return 0;
 }
 

@@ -108,7 +108,9 @@ DeviceScene flattenScene(const Scene& scene) {
     auto useImage = [&](int sceneIndex) -> int {
         auto it = imageSlot.find(sceneIndex);
         if (it != imageSlot.end()) return it->second;
+        auto ti = std::chrono::steady_clock::now();
         ImageRGB img = readImage(scene.imagePaths.at(sceneIndex));
+        ds.imageSeconds += secondsSince(ti);
         dev::ImageInfo info{};
         info.offset = int(ds.texels.size());
         info.width = img.width;
@@ -184,6 +186,14 @@ DeviceScene flattenScene(const Scene& scene) {
     std::vector<Aabb> boxes;
     std::vector<Aabb> sphereBoxes;
     size_t nanSkipped = 0;
+    {
+        size_t total = 0;
+        for (const Shape& s : scene.shapes)
+            if (s.type == ShapeType::Mesh) total += scene.meshes.at(s.meshIndex).indices.size() / 3;
+        ds.triangles.reserve(total);
+        ds.triangleShading.reserve(total);
+        boxes.reserve(total + scene.shapes.size());
+    }
     for (const Shape& s : scene.shapes) {
         int texSet = textureSetFor(s);
         if (s.type == ShapeType::Plane) {
@@ -330,7 +340,9 @@ DeviceScene flattenScene(const Scene& scene) {
                                                               : dev::ENV_SAMPLE_MIS;
             const dev::ImageInfo& info = ds.images[d.image];
             EnvMapView view{&ds.texels[info.offset], info.width, info.height, d.mapping};
+            auto te = std::chrono::steady_clock::now();
             EnvDistribution dist = buildEnvDistribution(view);
+            ds.envDistSeconds += secondsSince(te);
             d.distribution = int(ds.envDistribution.size());
             ds.envDistribution.insert(ds.envDistribution.end(), dist.data.begin(), dist.data.end());
             if (ds.params.envLight == CLRT_INVALID) {
@@ -360,15 +372,14 @@ DeviceScene flattenScene(const Scene& scene) {
     // Store triangles in BVH leaf order so a leaf's triangles are contiguous in memory.
     {
         const int numTris = int(ds.triangles.size());
-        std::vector<dev::Triangle> tris;
-        std::vector<dev::TriangleShading> shading;
-        tris.reserve(ds.triangles.size());
-        shading.reserve(ds.triangleShading.size());
+        std::vector<dev::Triangle> tris(ds.triangles.size());
+        std::vector<dev::TriangleShading> shading(ds.triangleShading.size());
+        int next = 0;
         for (int& ref : ds.bvh.primRefs) {
             if (ref >= numTris) continue;  // spheres keep their indices
-            tris.push_back(ds.triangles[ref]);
-            shading.push_back(ds.triangleShading[ref]);
-            ref = int(tris.size()) - 1;
+            tris[size_t(next)] = ds.triangles[size_t(ref)];
+            shading[size_t(next)] = ds.triangleShading[size_t(ref)];
+            ref = next++;
         }
         ds.triangles.swap(tris);
         ds.triangleShading.swap(shading);

@@ -46,6 +46,7 @@ struct DeviceScene {
     FeatureSet features;
     size_t skippedTriangles = 0;
     double bvhSeconds = 0, flattenSeconds = 0;
+    double imageSeconds = 0, envDistSeconds = 0;  // parts of flattenSeconds: reading images, env distributions
 };
 
 DeviceScene flattenScene(const Scene& scene);

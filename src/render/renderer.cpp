@@ -34,6 +34,9 @@ struct Renderer::Impl {
     cl::Buffer paths, rays, hits, points, pathRadiance, nextPaths, nextRays, childValid, compactTarget, shadows;
 
     Impl(DeviceContext& d, const DeviceScene& s) : dc(d), scene(s) {
+        cl_command_queue_properties qp = 0;
+        CL_CHECK(clGetCommandQueueInfo(dc.queue()(), CL_QUEUE_PROPERTIES, sizeof qp, &qp, nullptr));
+        profiling = (qp & CL_QUEUE_PROFILING_ENABLE) != 0;
         std::vector<std::string> defines = scene.features.defines();
         program = buildProgram(dc, kKernelFiles, defines, &build);
         auto mk = [&](const char* name) { return CL_CPP(cl::Kernel(program, name)); };
@@ -85,12 +88,33 @@ struct Renderer::Impl {
     // A fixed work-group size: PoCL compiles a kernel once per distinct local size, so letting the
     // runtime choose (it varies with the global size) would recompile at every queue length.
     size_t localSize = 64;
-    void run(cl::Kernel& k, size_t n) {
+    // With a profiling queue, every launch keeps its event and stage until collectProfile().
+    bool profiling = false;
+    std::vector<std::pair<int, cl::Event>> events;
+    void run(cl::Kernel& k, size_t n, int stage) {
         if (n == 0) return;
+        cl::Event ev;
         CL_CPP(dc.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(roundUp(n, localSize)),
-                                               cl::NDRange(localSize)));
+                                               cl::NDRange(localSize), nullptr, profiling ? &ev : nullptr));
+        if (profiling) events.emplace_back(stage, ev);
+    }
+    // Adds the device time of the finished launches to `c` (the queue must have been drained).
+    void collectProfile(RenderCounters& c) {
+        for (auto& [stage, ev] : events) {
+            cl_ulong start = 0, end = 0;
+            CL_CHECK(clGetEventProfilingInfo(ev(), CL_PROFILING_COMMAND_START, sizeof start, &start, nullptr));
+            CL_CHECK(clGetEventProfilingInfo(ev(), CL_PROFILING_COMMAND_END, sizeof end, &end, nullptr));
+            c.stageSeconds[stage] += end > start ? double(end - start) * 1e-9 : 0.0;
+        }
+        events.clear();
     }
 };
+
+const char* renderStageName(int stage) {
+    static const char* names[STAGE_COUNT] = {"generate", "trace camera", "trace secondary", "shade", "sample lights",
+                                             "trace shadow", "gather", "accumulate", "compact"};
+    return stage >= 0 && stage < STAGE_COUNT ? names[stage] : "?";
+}
 
 Renderer::Renderer(DeviceContext& dc, const DeviceScene& scene) : impl_(new Impl(dc, scene)) {}
 Renderer::~Renderer() = default;
@@ -218,26 +242,26 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
             for (size_t first = tileFirst; first < tileEnd; first += batch) {
                 int n = int(std::min(batch, tileEnd - first));
                 kg.setArg(2, int(first)); kg.setArg(3, sample); kg.setArg(4, n);
-                m.run(kg, n);
+                m.run(kg, n, STAGE_GENERATE);
                 counters.cameraRays += n;
                 for (int depth = 0; n > 0; ++depth) {
                     m.kIntersect.setArg(7, n);
-                    m.run(m.kIntersect, n);
+                    m.run(m.kIntersect, n, depth == 0 ? STAGE_TRACE_CAMERA : STAGE_TRACE_SECONDARY);
                     ks.setArg(2, n);
-                    m.run(ks, n);
+                    m.run(ks, n, STAGE_SHADE);
                     for (int l0 = 0; l0 < numLights; l0 += int(lightChunk)) {
                         int l1 = std::min(numLights, l0 + int(lightChunk));
                         int slots = n * (l1 - l0);
                         kl.setArg(1, n); kl.setArg(2, l0); kl.setArg(3, l1);
-                        m.run(kl, n);
+                        m.run(kl, n, STAGE_SAMPLE_LIGHTS);
                         m.kShadow.setArg(6, slots);
-                        m.run(m.kShadow, slots);
+                        m.run(m.kShadow, slots, STAGE_TRACE_SHADOW);
                         m.kGather.setArg(0, n); m.kGather.setArg(1, l1 - l0);
-                        m.run(m.kGather, n);
+                        m.run(m.kGather, n, STAGE_GATHER);
                         counters.shadowRays += slots;
                     }
                     m.kAccumulate.setArg(0, n);
-                    m.run(m.kAccumulate, n);
+                    m.run(m.kAccumulate, n, STAGE_ACCUMULATE);
                     if (!bounces || depth >= sp.maxDepth) break;
                     // Order-preserving compaction of the children.
                     size_t slots = size_t(n) * 2;
@@ -250,7 +274,7 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
                     // Blocking: `target` is resized on the next pass, so the copy must be done before then.
                     CL_CPP(q.enqueueWriteBuffer(m.compactTarget, CL_TRUE, 0, slots * sizeof(int), target.data()));
                     m.kCompact.setArg(0, int(slots));
-                    m.run(m.kCompact, slots);
+                    m.run(m.kCompact, slots, STAGE_COMPACT);
                     n = next;
                     counters.secondaryRays += n;
                 }
@@ -273,7 +297,9 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
         }
         counters.tiles += 1;
         counters.pixels += tileEnd - tileFirst;
+        m.collectProfile(counters);  // the blocking read above drained the queue
     }
+    counters.profiled = counters.profiled || m.profiling;
     counters.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 

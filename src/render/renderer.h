@@ -15,10 +15,21 @@
 
 namespace clrt {
 
+// The kernels of one bounce, for per-stage device times.
+enum RenderStage {
+    STAGE_GENERATE, STAGE_TRACE_CAMERA, STAGE_TRACE_SECONDARY, STAGE_SHADE, STAGE_SAMPLE_LIGHTS,
+    STAGE_TRACE_SHADOW, STAGE_GATHER, STAGE_ACCUMULATE, STAGE_COMPACT, STAGE_COUNT
+};
+const char* renderStageName(int stage);
+
 struct RenderCounters {
     uint64_t cameraRays = 0, secondaryRays = 0, shadowRays = 0;
     uint64_t tiles = 0, pixels = 0;  // work done (tiles and pixels, all samples each)
     double seconds = 0;  // wall time of the render loop (device work included)
+    // Device time of each stage's kernels from OpenCL profiling events (all zero when the queue was
+    // made without profiling). Ray throughputs: rays of a kind / time of its trace kernel.
+    double stageSeconds[STAGE_COUNT] = {};
+    bool profiled = false;
 };
 
 struct RenderSettings {

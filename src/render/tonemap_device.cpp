@@ -7,6 +7,10 @@
 #include <cmath>
 #include <cstring>
 #include <string>
+#include <chrono>
+#include <cstdio>
+static double tnow(){return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();}
+#define TLAP(name) do{ dc.queue().finish(); double t1=tnow(); std::fprintf(stderr,"  tm %-12s %.4f\n",name,t1-tl); tl=t1;}while(0)
 
 #include "cl/check.h"
 #include "shared/device_types.h"
@@ -65,7 +69,9 @@ struct TonemapDevice::Impl {
             outFloat = cl::Buffer();  // allocated on first use
             capacity = n;
         }
+        double tl=tnow();
         CL_CPP(dc.queue().enqueueWriteBuffer(rgb, CL_FALSE, 0, n * 3 * sizeof(float), img.pixels.data()));
+        TLAP("upload");
         numPixels = n;
         width = img.width;
         height = img.height;
@@ -82,7 +88,9 @@ struct TonemapDevice::Impl {
         CL_CPP(kLum.setArg(2, float(delta)));
         CL_CPP(kLum.setArg(3, lum));
         CL_CPP(kLum.setArg(4, partials));
+        double tl=tnow();
         launch(kLum, workItems);
+        TLAP("lum");
         std::vector<float> p(roundUp(workItems, kLocal) * 2);
         CL_CPP(dc.queue().enqueueReadBuffer(partials, CL_TRUE, 0, p.size() * sizeof(float), p.data()));
         double sum = 0;
@@ -94,6 +102,7 @@ struct TonemapDevice::Impl {
 
     // Radix select over the bit patterns of the (non-negative) luminances: exact k-th smallest.
     float select(size_t k) {
+        double tl=tnow();
         cl_uint prefix = 0, mask = 0;
         size_t rank = std::min(k, numPixels - 1);
         for (int shift = 24; shift >= 0; shift -= 8) {
@@ -105,7 +114,9 @@ struct TonemapDevice::Impl {
             CL_CPP(kHist.setArg(3, mask));
             CL_CPP(kHist.setArg(4, cl_uint(shift)));
             CL_CPP(kHist.setArg(5, hist));
+            TLAP("fill");
             launch(kHist, workItems);
+            TLAP("hist");
             cl_uint h[256];
             CL_CPP(dc.queue().enqueueReadBuffer(hist, CL_TRUE, 0, sizeof(h), h));
             size_t below = 0;
@@ -159,12 +170,15 @@ struct TonemapDevice::Impl {
             CL_CPP(dc.queue().enqueueReadBuffer(outFloat, CL_TRUE, 0, r.display.size() * sizeof(float), r.display.data()));
             return r;
         }
+        double tl=tnow();
         CL_CPP(kMap.setArg(0, rgb));
         CL_CPP(kMap.setArg(1, sizeof(p), &p));
         CL_CPP(kMap.setArg(2, out));
         launch(kMap, numPixels);
+        TLAP("map");
         r.rgb8.resize(numPixels * 3);
         CL_CPP(dc.queue().enqueueReadBuffer(out, CL_TRUE, 0, r.rgb8.size(), r.rgb8.data()));
+        TLAP("read");
         return r;
     }
 };
