@@ -196,7 +196,11 @@ inline int Bvh_Traverse(const __global Bvh4Node* nodes, const __global int* prim
             const int packed = ~entry;
             const int first = packed >> 4, count = packed & 15;
             for (int i = first; i < first + count; ++i) {
+#ifdef CLRT_PRIMREFS_IDENTITY
+                const int ref = i; /* the host stored the primitives in leaf order: primRefs[i] == i */
+#else
                 const int ref = primRefs[i];
+#endif
                 float t, b1 = 0.0f, b2 = 0.0f;
                 int h;
                 if (ref < numTriangles) {

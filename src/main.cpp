@@ -196,7 +196,7 @@ int cmdRender(const Args& a) {
     double tFlatten = since(t);
     if (a.allFeatures) {
         const int stack = ds.features.bvhStack;  // not a feature: the tree's own need
-        ds.features = FeatureSet::all();
+        ds.features = FeatureSet::all();        // (primRefsIdentity off: the generic program)
         ds.features.bvhStack = stack;
     }
 

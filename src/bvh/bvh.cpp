@@ -3,55 +3,106 @@
 // and caps the tree depth so the device traversal stack (CLRT_BVH_STACK_SIZE) can never overflow:
 // a node whose SAH split would leave a child too deep for a median-split subtree gets a median
 // split instead. Costs are evaluated in double so huge scenes cannot overflow to inf or NaN.
+// Each node reads its items twice: one pass bins them on all three axes at once (4-wide SIMD: an
+// item is two vectors), and the partition pass gathers both children's bounds and centroid bounds
+// on the way, so a child never rescans its items for them.
 // Large subtrees are built on separate threads (right child into its own node array, appended
 // afterwards with its indices shifted), so the result is identical for any thread count.
 #include "bvh/bvh.h"
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <system_error>
 #include <thread>
+
+#if defined(__SSE2__) || defined(_M_X64)
+#include <emmintrin.h>
+#define CLRT_BVH_SSE 1
+#endif
 
 namespace clrt {
 namespace {
 
 constexpr int kMaxBins = 64;
 
-// One primitive as the builder sees it. c2 (= lo + hi, twice the centroid) is derived on the fly.
-struct Item {
+// ---- four floats (x, y, z and a fourth lane kept at 0): one SSE register where there is SSE,
+// else plain floats with the same results.
+#ifdef CLRT_BVH_SSE
+struct F4 {
+    __m128 v;
+};
+inline F4 f4(float x, float y, float z) { return {_mm_set_ps(0.f, z, y, x)}; }
+inline F4 f4(float s) { return {_mm_set_ps(0.f, s, s, s)}; }
+inline F4 load3(const float* p) {  // p[0..2], 16-byte aligned; the fourth lane reads as 0
+    return {_mm_and_ps(_mm_load_ps(p), _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1)))};
+}
+inline F4 operator+(F4 a, F4 b) { return {_mm_add_ps(a.v, b.v)}; }
+inline F4 operator-(F4 a, F4 b) { return {_mm_sub_ps(a.v, b.v)}; }
+inline F4 operator*(F4 a, F4 b) { return {_mm_mul_ps(a.v, b.v)}; }
+inline F4 min4(F4 a, F4 b) { return {_mm_min_ps(a.v, b.v)}; }  // a < b ? a : b per lane
+inline F4 max4(F4 a, F4 b) { return {_mm_max_ps(a.v, b.v)}; }  // a > b ? a : b per lane
+inline void store(F4 a, float out[4]) { _mm_storeu_ps(out, a.v); }
+inline void truncate(F4 a, int out[4]) { _mm_storeu_si128((__m128i*)out, _mm_cvttps_epi32(a.v)); }
+#else
+struct F4 {
+    float v[4];
+};
+inline F4 f4(float x, float y, float z) { return {{x, y, z, 0.f}}; }
+inline F4 f4(float s) { return {{s, s, s, 0.f}}; }
+inline F4 load3(const float* p) { return {{p[0], p[1], p[2], 0.f}}; }
+template <class Op>
+inline F4 lanes(F4 a, F4 b, Op op) {
+    return {{op(a.v[0], b.v[0]), op(a.v[1], b.v[1]), op(a.v[2], b.v[2]), op(a.v[3], b.v[3])}};
+}
+inline F4 operator+(F4 a, F4 b) { return lanes(a, b, [](float x, float y) { return x + y; }); }
+inline F4 operator-(F4 a, F4 b) { return lanes(a, b, [](float x, float y) { return x - y; }); }
+inline F4 operator*(F4 a, F4 b) { return lanes(a, b, [](float x, float y) { return x * y; }); }
+inline F4 min4(F4 a, F4 b) { return lanes(a, b, [](float x, float y) { return x < y ? x : y; }); }
+inline F4 max4(F4 a, F4 b) { return lanes(a, b, [](float x, float y) { return x > y ? x : y; }); }
+inline void store(F4 a, float out[4]) { std::memcpy(out, a.v, sizeof a.v); }
+inline void truncate(F4 a, int out[4]) {  // as cvttps2dq: NaN and out of range give INT_MIN
+    for (int k = 0; k < 4; ++k) out[k] = std::fabs(a.v[k]) < 2147483648.f ? int(a.v[k]) : INT32_MIN;
+}
+#endif
+
+// One primitive as the builder sees it: lo and hi load as one vector each; prim rides in lo's
+// fourth lane (load3 masks it off). c = lo + hi (twice the centroid) is derived on the fly.
+struct alignas(16) Item {
     float lo[3];
-    float hi[3];
     int prim;
+    float hi[3];
     int pad;
 };
 
 struct Box {
-    float lo[3] = {1e30f, 1e30f, 1e30f};
-    float hi[3] = {-1e30f, -1e30f, -1e30f};
-    void grow(const float* l, const float* h) {
-        for (int a = 0; a < 3; ++a) {
-            lo[a] = std::min(lo[a], l[a]);
-            hi[a] = std::max(hi[a], h[a]);
-        }
-    }
+    F4 lo = f4(1e30f), hi = f4(-1e30f);
+    void grow(F4 l, F4 h) { lo = min4(lo, l); hi = max4(hi, h); }
     void grow(const Box& b) { grow(b.lo, b.hi); }
-    bool empty() const { return !(lo[0] <= hi[0] && lo[1] <= hi[1] && lo[2] <= hi[2]); }
     // SAH metric: half surface area, or the half perimeter when the node itself is flat in two
     // axes (a segment or a point), so splits inside degenerate nodes can still be compared.
+    // 0 for an empty (inverted) box.
     double metric(bool perimeter) const {
-        if (empty()) return 0;
-        double dx = double(hi[0]) - lo[0], dy = double(hi[1]) - lo[1], dz = double(hi[2]) - lo[2];
+        float l[4], h[4];
+        store(lo, l);
+        store(hi, h);
+        if (!(l[0] <= h[0] && l[1] <= h[1] && l[2] <= h[2])) return 0;
+        double dx = double(h[0]) - l[0], dy = double(h[1]) - l[1], dz = double(h[2]) - l[2];
         return perimeter ? dx + dy + dz : dx * dy + dy * dz + dz * dx;
     }
 };
 
-struct Bin {
-    Box box;
-    int count = 0;
+// A node's item range with its bounds and centroid bounds (bounds of lo + hi).
+struct Range {
+    int begin, end;
+    Box bounds, cbounds;
 };
 
-inline float c2(const Item& it, int axis) { return it.lo[axis] + it.hi[axis]; }
+struct Bin {
+    Box box;
+    int count;
+};
 
 inline int ceilLog2(int n) {
     int l = 0;
@@ -72,26 +123,29 @@ public:
     static constexpr int kParallelMin = 65536;  // smaller subtrees are not worth a thread
     int depth = 0;
 
+    // Bounds and centroid bounds of items [begin, end), by a pass over them.
+    Range scan(int begin, int end) const {
+        Range r{begin, end, {}, {}};
+        for (int i = begin; i < end; ++i) {
+            F4 lo = load3(items_[i].lo), hi = load3(items_[i].hi);
+            r.bounds.grow(lo, hi);
+            r.cbounds.grow(lo + hi, lo + hi);
+        }
+        return r;
+    }
+
     // threads: how many threads this subtree may use (including the calling one).
-    void build(int begin, int end, int level, int threads = 1) {
+    void build(const Range& r, int level, int threads = 1) {
         depth = std::max(depth, level);
-        const int n = end - begin;
+        const int n = r.end - r.begin;
         const int idx = int(nodes_.size());
         nodes_.emplace_back();
+        writeBounds(idx, r.bounds);
 
-        Box bounds, cbounds;  // cbounds holds lo + hi (twice the centroid)
-        for (int i = begin; i < end; ++i) {
-            const Item& it = items_[i];
-            bounds.grow(it.lo, it.hi);
-            float c[3] = {c2(it, 0), c2(it, 1), c2(it, 2)};
-            cbounds.grow(c, c);
-        }
-        writeBounds(idx, bounds);
-
-        int axis = -1, mid = -1;
-        if (n > 1) chooseSplit(begin, end, level, bounds, cbounds, axis, mid);
+        Range left, right;
+        int axis = n > 1 ? split(r, level, left, right) : -1;
         if (axis < 0) {  // leaf
-            nodes_[idx].first = begin;
+            nodes_[idx].first = r.begin;
             nodes_[idx].count = n;
             nodes_[idx].axis = 0;
             return;
@@ -101,16 +155,16 @@ public:
         if (threads > 1 && n >= kParallelMin) {
             // Right subtree on a new thread into its own array; left subtree here.
             std::vector<BvhNode> rightNodes;
-            rightNodes.reserve(size_t(2) * (end - mid));
-            Builder right(opts_, items_, rightNodes);
+            rightNodes.reserve(size_t(2) * (right.end - right.begin));
+            Builder rightBuilder(opts_, items_, rightNodes);
             int rt = threads / 2;
             std::thread worker;
             try {
-                worker = std::thread([&] { right.build(mid, end, level + 1, rt); });
+                worker = std::thread([&] { rightBuilder.build(right, level + 1, rt); });
             } catch (const std::system_error&) {  // no thread to be had: do it here
-                right.build(mid, end, level + 1, 1);
+                rightBuilder.build(right, level + 1, 1);
             }
-            build(begin, mid, level + 1, threads - rt);
+            build(left, level + 1, threads - rt);
             if (worker.joinable()) worker.join();
             const int offset = int(nodes_.size());
             for (BvhNode nd : rightNodes) {
@@ -118,61 +172,69 @@ public:
                 nodes_.push_back(nd);
             }
             nodes_[idx].first = offset;
-            depth = std::max(depth, right.depth);
+            depth = std::max(depth, rightBuilder.depth);
             return;
         }
-        build(begin, mid, level + 1, threads);
+        build(left, level + 1, threads);
         nodes_[idx].first = int(nodes_.size());
-        build(mid, end, level + 1, threads);
+        build(right, level + 1, threads);
     }
 
 private:
-    // Picks a split for items [begin, end); returns axis = -1 for a leaf. On return items are
-    // partitioned so that [begin, mid) is the left child.
-    void chooseSplit(int begin, int end, int level, const Box& bounds, const Box& cbounds, int& axis,
-                     int& mid) {
-        const int n = end - begin;
-        const bool perimeter = bounds.metric(false) <= 0;
-        const double nodeMetric = bounds.metric(perimeter);
+    // Picks a split for node r; returns its axis, or -1 for a leaf. On a split, the items are
+    // partitioned so that left and right are the children's ranges, boxes included.
+    int split(const Range& r, int level, Range& left, Range& right) {
+        const int n = r.end - r.begin;
+        const bool perimeter = r.bounds.metric(false) <= 0;
+        const double nodeMetric = r.bounds.metric(perimeter);
 
         // ---- binning over the centroid bounds, all three axes at once
-        float scale[3];
+        float clo[4], chi[4], scale[4] = {0, 0, 0, 0};
+        store(r.cbounds.lo, clo);
+        store(r.cbounds.hi, chi);
         bool usable[3];
         for (int a = 0; a < 3; ++a) {
-            float ext = cbounds.hi[a] - cbounds.lo[a];
+            float ext = chi[a] - clo[a];
             scale[a] = ext > 0 ? float(bins_) / ext : 0.f;
             usable[a] = ext > 0 && std::isfinite(scale[a]);
         }
+        const Binner binner{r.cbounds.lo, f4(scale[0], scale[1], scale[2]), f4(float(bins_ - 1))};
         int bestAxis = -1, bestBin = -1;
         double bestCost = INFINITY;
         if (usable[0] || usable[1] || usable[2]) {
             Bin bins[3][kMaxBins];
-            for (int i = begin; i < end; ++i) {
-                const Item& it = items_[i];
-                for (int a = 0; a < 3; ++a) {
-                    if (!usable[a]) continue;
-                    Bin& b = bins[a][binOf(it, a, cbounds.lo[a], scale[a])];
-                    b.box.grow(it.lo, it.hi);
-                    b.count++;
+            for (auto& axisBins : bins)
+                for (int i = 0; i < bins_; ++i) axisBins[i] = Bin{Box(), 0};
+            for (int i = r.begin; i < r.end; ++i) {
+                F4 lo = load3(items_[i].lo), hi = load3(items_[i].hi);
+                int b[4];
+                binner.binsOf(lo + hi, b);
+                for (int a = 0; a < 3; ++a) {  // unusable axes are binned too, and ignored
+                    bins[a][b[a]].box.grow(lo, hi);
+                    bins[a][b[a]].count++;
                 }
             }
-            // Sweep: cost of splitting after bin i = sum of child metric * count.
-            double rightCost[kMaxBins];
+            // Sweep: cost of splitting after bin i = sum of child metric * count. An empty bin
+            // changes neither side, so its split costs what the one before it does: skipped.
+            double rightCost[kMaxBins + 1];
             for (int a = 0; a < 3; ++a) {
                 if (!usable[a]) continue;
                 Box acc;
                 int cnt = 0;
+                rightCost[bins_] = -1;
                 for (int i = bins_ - 1; i > 0; --i) {
+                    if (bins[a][i].count == 0) { rightCost[i] = rightCost[i + 1]; continue; }
                     acc.grow(bins[a][i].box);
                     cnt += bins[a][i].count;
-                    rightCost[i] = cnt ? acc.metric(perimeter) * cnt : -1;
+                    rightCost[i] = acc.metric(perimeter) * cnt;
                 }
                 acc = Box();
                 cnt = 0;
                 for (int i = 0; i < bins_ - 1; ++i) {
+                    if (bins[a][i].count == 0) continue;
                     acc.grow(bins[a][i].box);
                     cnt += bins[a][i].count;
-                    if (cnt == 0 || rightCost[i + 1] < 0) continue;
+                    if (rightCost[i + 1] < 0) continue;
                     double cost = acc.metric(perimeter) * cnt + rightCost[i + 1];
                     if (cost < bestCost) { bestCost = cost; bestAxis = a; bestBin = i; }
                 }
@@ -182,41 +244,69 @@ private:
         // ---- leaf or split?
         const double leafCost = nodeMetric * n;
         const double splitCost = nodeMetric * opts_.traversalCost + bestCost;
-        if (n <= maxLeaf_ && !(bestAxis >= 0 && splitCost < leafCost)) return;
+        if (n <= maxLeaf_ && !(bestAxis >= 0 && splitCost < leafCost)) return -1;
 
         if (bestAxis >= 0) {
-            Item* first = items_.data() + begin;
-            const float lo = cbounds.lo[bestAxis], sc = scale[bestAxis];
-            Item* m = std::partition(first, first + n, [&](const Item& it) {
-                return binOf(it, bestAxis, lo, sc) <= bestBin;
-            });
-            int nl = int(m - first), nr = n - nl;
+            partition(r, binner, bestAxis, bestBin, left, right);
+            int nl = left.end - left.begin, nr = right.end - right.begin;
             // Both children must still fit under the depth cap with median splits below them.
-            if (nl > 0 && nr > 0 && level + 1 + ceilLog2(std::max(nl, nr)) <= kMaxLevels) {
-                axis = bestAxis;
-                mid = begin + nl;
-                return;
-            }
+            if (nl > 0 && nr > 0 && level + 1 + ceilLog2(std::max(nl, nr)) <= kMaxLevels) return bestAxis;
         }
         // ---- fallback: object median along the widest centroid axis (any order if all coincide)
         int a = 0;
         for (int k = 1; k < 3; ++k)
-            if (cbounds.hi[k] - cbounds.lo[k] > cbounds.hi[a] - cbounds.lo[a]) a = k;
-        mid = begin + n / 2;
-        std::nth_element(items_.begin() + begin, items_.begin() + mid, items_.begin() + end,
-                         [a](const Item& x, const Item& y) { return c2(x, a) < c2(y, a); });
-        axis = a;
+            if (chi[k] - clo[k] > chi[a] - clo[a]) a = k;
+        const int mid = r.begin + n / 2;
+        auto c2 = [a](const Item& it) { return it.lo[a] + it.hi[a]; };
+        std::nth_element(items_.begin() + r.begin, items_.begin() + mid, items_.begin() + r.end,
+                         [&](const Item& x, const Item& y) { return c2(x) < c2(y); });
+        left = scan(r.begin, mid);
+        right = scan(mid, r.end);
+        return a;
     }
 
-    int binOf(const Item& it, int a, float lo, float scale) const {
-        int b = int((c2(it, a) - lo) * scale);
-        return std::min(bins_ - 1, std::max(0, b));
+    // Bin of an item on each axis from c = lo + hi: int((c - lo) * scale) clamped to
+    // [0, bins - 1] (clamping before truncating gives the same; NaN lands in bin 0).
+    struct Binner {
+        F4 lo, scale, maxBin;
+        void binsOf(F4 c, int out[4]) const { truncate(min4(max4((c - lo) * scale, f4(0.f)), maxBin), out); }
+    };
+
+    // Partitions r's items in place so that those in bins <= bin on axis come first (in the same
+    // order as std::partition), growing each side's bounds and centroid bounds as they are sorted.
+    void partition(const Range& r, const Binner& binner, int axis, int bin, Range& left, Range& right) {
+        left = right = Range{r.begin, r.end, {}, {}};
+        int i = r.begin, j = r.end;
+        for (;;) {
+            for (; i < j; ++i) {
+                F4 lo = load3(items_[i].lo), hi = load3(items_[i].hi);
+                int b[4];
+                binner.binsOf(lo + hi, b);
+                if (b[axis] > bin) break;
+                left.bounds.grow(lo, hi);
+                left.cbounds.grow(lo + hi, lo + hi);
+            }
+            for (; i < j; --j) {
+                F4 lo = load3(items_[j - 1].lo), hi = load3(items_[j - 1].hi);
+                int b[4];
+                binner.binsOf(lo + hi, b);
+                if (b[axis] <= bin) break;
+                right.bounds.grow(lo, hi);
+                right.cbounds.grow(lo + hi, lo + hi);
+            }
+            if (i == j) break;
+            std::swap(items_[i], items_[j - 1]);
+        }
+        left.end = right.begin = i;
     }
 
     void writeBounds(int idx, const Box& b) {
+        float lo[4], hi[4];
+        store(b.lo, lo);
+        store(b.hi, hi);
         BvhNode& nd = nodes_[idx];
-        nd.boundsMin = {b.lo[0], b.lo[1], b.lo[2], 0.f};
-        nd.boundsMax = {b.hi[0], b.hi[1], b.hi[2], 0.f};
+        nd.boundsMin = {lo[0], lo[1], lo[2], 0.f};
+        nd.boundsMax = {hi[0], hi[1], hi[2], 0.f};
         nd.pad0 = 0;
     }
 
@@ -229,8 +319,8 @@ private:
 
 double nodeArea(const BvhNode& nd) {
     Box b;
-    std::memcpy(b.lo, &nd.boundsMin, sizeof b.lo);
-    std::memcpy(b.hi, &nd.boundsMax, sizeof b.hi);
+    b.lo = f4(nd.boundsMin.x, nd.boundsMin.y, nd.boundsMin.z);
+    b.hi = f4(nd.boundsMax.x, nd.boundsMax.y, nd.boundsMax.z);
     return b.metric(false);
 }
 
@@ -269,7 +359,7 @@ Bvh buildBvh(const std::vector<Aabb>& primBounds, const BvhBuildOptions& opts) {
     bvh.nodes.reserve(size_t(2) * n);
     Builder builder(opts, items, bvh.nodes);
     int threads = opts.maxThreads > 0 ? opts.maxThreads : int(std::thread::hardware_concurrency());
-    builder.build(0, n, 1, std::max(1, threads));
+    builder.build(builder.scan(0, n), 1, std::max(1, threads));
     bvh.depth = builder.depth;
 
     bvh.primRefs.resize(n);

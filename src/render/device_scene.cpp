@@ -49,6 +49,7 @@ std::vector<std::string> FeatureSet::defines() const {
     add(conductor, "CLRT_HAS_CONDUCTOR");
     add(textures, "CLRT_HAS_TEXTURES");
     add(spheres, "CLRT_HAS_SPHERES");
+    add(primRefsIdentity, "CLRT_PRIMREFS_IDENTITY");
     // Rounded up to a multiple of 8 so that scenes of similar depth share a cached program.
     if (bvhStack > 0) d.push_back("-DCLRT_BVH4_STACK_SIZE=" + std::to_string((bvhStack + 7) / 8 * 8));
     return d;
@@ -383,6 +384,10 @@ DeviceScene flattenScene(const Scene& scene) {
         }
         ds.triangles.swap(tris);
         ds.triangleShading.swap(shading);
+        // Without spheres every reference is now its own position: the kernels can skip primRefs.
+        bool identity = true;
+        for (size_t i = 0; i < ds.bvh.primRefs.size() && identity; ++i) identity = ds.bvh.primRefs[i] == int(i);
+        ds.features.primRefsIdentity = identity;
     }
     if (ds.triangles.empty()) { ds.triangles.push_back(dev::Triangle{}); ds.triangleShading.push_back(dev::TriangleShading{}); }
     if (ds.spheres.empty()) ds.spheres.push_back(dev::Sphere{});

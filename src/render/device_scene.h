@@ -17,6 +17,7 @@ struct FeatureSet {
     bool mirror = false, dielectric = false, conductor = false;
     bool textures = false;
     bool spheres = false;
+    bool primRefsIdentity = false;  // primRefs[i] == i (triangles only, stored in leaf order)
     int bvhStack = 0;  // traversal stack entries the scene's BVH needs (0: the header's default)
     std::vector<std::string> defines() const;  // e.g. {"-DCLRT_HAS_POINT_LIGHT=1", ...}
     // Every feature on: the unspecialised program (clrt render --all-features).

@@ -9,8 +9,11 @@
 #include <string>
 #include <chrono>
 #include <cstdio>
+#include <ctime>
+static double tcpu(){timespec ts; clock_gettime(CLOCK_PROCESS_CPUTIME_ID,&ts); return ts.tv_sec+1e-9*ts.tv_nsec;}
 static double tnow(){return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();}
-#define TLAP(name) do{ dc.queue().finish(); double t1=tnow(); std::fprintf(stderr,"  tm %-12s %.4f\n",name,t1-tl); tl=t1;}while(0)
+static double tlc=0;
+#define TLAP(name) do{ dc.queue().finish(); double t1=tnow(), c1=tcpu(); std::fprintf(stderr,"  tm %-12s %.4f cpu %.4f\n",name,t1-tl,c1-tlc); tl=t1; tlc=c1;}while(0)
 
 #include "cl/check.h"
 #include "shared/device_types.h"
@@ -69,7 +72,7 @@ struct TonemapDevice::Impl {
             outFloat = cl::Buffer();  // allocated on first use
             capacity = n;
         }
-        double tl=tnow();
+        double tl=tnow(); tlc=tcpu();
         CL_CPP(dc.queue().enqueueWriteBuffer(rgb, CL_FALSE, 0, n * 3 * sizeof(float), img.pixels.data()));
         TLAP("upload");
         numPixels = n;
@@ -88,7 +91,7 @@ struct TonemapDevice::Impl {
         CL_CPP(kLum.setArg(2, float(delta)));
         CL_CPP(kLum.setArg(3, lum));
         CL_CPP(kLum.setArg(4, partials));
-        double tl=tnow();
+        double tl=tnow(); tlc=tcpu();
         launch(kLum, workItems);
         TLAP("lum");
         std::vector<float> p(roundUp(workItems, kLocal) * 2);
@@ -102,7 +105,7 @@ struct TonemapDevice::Impl {
 
     // Radix select over the bit patterns of the (non-negative) luminances: exact k-th smallest.
     float select(size_t k) {
-        double tl=tnow();
+        double tl=tnow(); tlc=tcpu();
         cl_uint prefix = 0, mask = 0;
         size_t rank = std::min(k, numPixels - 1);
         for (int shift = 24; shift >= 0; shift -= 8) {
@@ -170,12 +173,14 @@ struct TonemapDevice::Impl {
             CL_CPP(dc.queue().enqueueReadBuffer(outFloat, CL_TRUE, 0, r.display.size() * sizeof(float), r.display.data()));
             return r;
         }
-        double tl=tnow();
+        double tl=tnow(); tlc=tcpu();
         CL_CPP(kMap.setArg(0, rgb));
         CL_CPP(kMap.setArg(1, sizeof(p), &p));
         CL_CPP(kMap.setArg(2, out));
         launch(kMap, numPixels);
         TLAP("map");
+        launch(kMap, numPixels);
+        TLAP("map2");
         r.rgb8.resize(numPixels * 3);
         CL_CPP(dc.queue().enqueueReadBuffer(out, CL_TRUE, 0, r.rgb8.size(), r.rgb8.data()));
         TLAP("read");
