@@ -1,8 +1,9 @@
 // Tests for the BVH builder (src/bvh/bvh.cpp) and the host reference intersection routines
 // (src/bvh/host_intersect.h): structure of the flattened tree on random and degenerate inputs,
-// closest/any hit through the BVH against brute force, watertightness of the triangle test on a
-// closed mesh and on shared edges/vertices, and ray/sphere precision against a long-double
-// reference. The 1M-triangle build timing is tagged [.perf] (run: test_bvh "[.perf]").
+// the same tree bit for bit on any number of threads, closest/any hit through the BVH against
+// brute force, watertightness of the triangle test on a closed mesh and on shared edges/vertices,
+// and ray/sphere precision against a long-double reference. The 1M-triangle build timing is
+// tagged [.perf] (run: test_bvh "[.perf]").
 #include <catch.hpp>
 
 #include <array>
@@ -349,6 +350,52 @@ TEST_CASE("BVH build is the same on any number of threads", "[bvh]") {
     CHECK(a.primRefs == b.primRefs);
     CHECK(a.depth == b.depth);
     CHECK(a.sahCost == b.sahCost);
+}
+
+TEST_CASE("BVH build is the same on any number of threads, degenerate inputs and options too", "[bvh]") {
+    // Big enough for the parallel build: a far cluster (a lopsided root split), points with +0 and
+    // -0 coordinates (min/max must pick the same zero whoever builds what), identical boxes,
+    // non-finite and inverted boxes, and small random ones.
+    Rng rng(23);
+    std::vector<Aabb> boxes(200000);
+    for (size_t i = 0; i < boxes.size(); ++i) {
+        Aabb& b = boxes[i];
+        switch (i % 8) {
+            case 0: b.grow(Vec3(i % 16 ? 0.f : -0.f, rng.uni(-1, 1), i % 24 ? -0.f : 0.f)); break;
+            case 1: b.grow(Vec3(1, 2, 3)); b.grow(Vec3(1, 2, 3.5f)); break;
+            case 2:
+                b.grow(rng.inCube(5));
+                if (i % 48 == 2) b.min.y = std::numeric_limits<float>::quiet_NaN();
+                if (i % 48 == 10) b.max.z = INFINITY;
+                if (i % 48 == 18) b = Aabb();
+                break;
+            case 3: b.grow(Vec3(1e4f) + rng.inCube(1)); b.grow(Vec3(1e4f) + rng.inCube(1)); break;
+            default: {
+                Vec3 c = rng.inCube(20);
+                b.grow(c);
+                b.grow(c + rng.inCube(rng.logUni(1e-3f, 1.f)));
+            }
+        }
+    }
+    BvhBuildOptions plain, odd;
+    odd.bins = 7;  // not a multiple of 4
+    odd.maxLeafSize = 1;
+    for (BvhBuildOptions o : {plain, odd}) {
+        INFO("bins " << o.bins << ", maxLeafSize " << o.maxLeafSize);
+        o.maxThreads = 1;
+        Bvh ref = buildBvh(boxes, o);
+        checkStructure(ref, boxes, o.maxLeafSize);
+        for (int threads : {2, 3, 8}) {
+            INFO(threads << " threads");
+            o.maxThreads = threads;
+            Bvh b = buildBvh(boxes, o);
+            REQUIRE(b.nodes.size() == ref.nodes.size());
+            CHECK(std::memcmp(b.nodes.data(), ref.nodes.data(), b.nodes.size() * sizeof(BvhNode)) == 0);
+            CHECK(b.primRefs == ref.primRefs);
+            CHECK(b.depth == ref.depth);
+            CHECK(b.sahCost == ref.sahCost);
+        }
+    }
 }
 
 TEST_CASE("BVH structure on degenerate inputs", "[bvh]") {

@@ -1,19 +1,25 @@
 // Binned SAH BVH builder. Works on a compact copy of the primitive boxes (32-byte items that are
-// partitioned in place), writes BvhNode depth-first (left child = parent + 1) as it recurses,
-// and caps the tree depth so the device traversal stack (CLRT_BVH_STACK_SIZE) can never overflow:
-// a node whose SAH split would leave a child too deep for a median-split subtree gets a median
-// split instead. Costs are evaluated in double so huge scenes cannot overflow to inf or NaN.
-// Each node reads its items twice: one pass bins them on all three axes at once (4-wide SIMD: an
-// item is two vectors), and the partition pass gathers both children's bounds and centroid bounds
-// on the way, so a child never rescans its items for them.
-// Large subtrees are built on separate threads (right child into its own node array, appended
-// afterwards with its indices shifted), so the result is identical for any thread count.
+// partitioned in place), writes BvhNode depth-first (left child = parent + 1), and caps the tree
+// depth so the device traversal stack (CLRT_BVH_STACK_SIZE) can never overflow: a node whose SAH
+// split would leave a child too deep for a median-split subtree gets a median split instead.
+// Costs are evaluated in double so huge scenes cannot overflow to inf or NaN.
+// A node takes two passes over its items: binning, on all three axes at once (4-wide SIMD: an
+// item is two vectors), and the partition, which also gathers each child's bounds and centroid
+// bounds, so no node rescans its items for them. The SAH sweep visits only nonempty bins.
+// On several threads, big nodes are split as tasks of their own and smaller subtrees built whole
+// by any thread, while the calling thread assembles the tree depth-first, so the result is
+// identical for any thread count.
 #include "bvh/bvh.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <condition_variable>
 #include <cstring>
+#include <deque>
+#include <memory>
+#include <mutex>
 #include <system_error>
 #include <thread>
 
@@ -27,17 +33,16 @@ namespace {
 
 constexpr int kMaxBins = 64;
 
-// ---- four floats (x, y, z and a fourth lane kept at 0): one SSE register where there is SSE,
-// else plain floats with the same results.
+// ---- four floats (x, y, z and a fourth lane that only rides along): one SSE register where there
+// is SSE, else plain floats with the same results.
 #ifdef CLRT_BVH_SSE
 struct F4 {
     __m128 v;
 };
 inline F4 f4(float x, float y, float z) { return {_mm_set_ps(0.f, z, y, x)}; }
 inline F4 f4(float s) { return {_mm_set_ps(0.f, s, s, s)}; }
-inline F4 load3(const float* p) {  // p[0..2], 16-byte aligned; the fourth lane reads as 0
-    return {_mm_and_ps(_mm_load_ps(p), _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1)))};
-}
+inline F4 load4(const float* p) { return {_mm_load_ps(p)}; }  // p 16-byte aligned
+inline F4 xyz(F4 a) { return {_mm_and_ps(a.v, _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1)))}; }  // w = 0
 inline F4 operator+(F4 a, F4 b) { return {_mm_add_ps(a.v, b.v)}; }
 inline F4 operator-(F4 a, F4 b) { return {_mm_sub_ps(a.v, b.v)}; }
 inline F4 operator*(F4 a, F4 b) { return {_mm_mul_ps(a.v, b.v)}; }
@@ -45,13 +50,23 @@ inline F4 min4(F4 a, F4 b) { return {_mm_min_ps(a.v, b.v)}; }  // a < b ? a : b 
 inline F4 max4(F4 a, F4 b) { return {_mm_max_ps(a.v, b.v)}; }  // a > b ? a : b per lane
 inline void store(F4 a, float out[4]) { _mm_storeu_ps(out, a.v); }
 inline void truncate(F4 a, int out[4]) { _mm_storeu_si128((__m128i*)out, _mm_cvttps_epi32(a.v)); }
+// d = hi - lo in double (x, y, z); false if lo > hi on some axis.
+inline bool extent(F4 lo, F4 hi, double d[3]) {
+    if ((_mm_movemask_ps(_mm_cmple_ps(lo.v, hi.v)) & 7) != 7) return false;
+    __m128d xy = _mm_sub_pd(_mm_cvtps_pd(hi.v), _mm_cvtps_pd(lo.v));
+    __m128d z = _mm_sub_sd(_mm_cvtps_pd(_mm_movehl_ps(hi.v, hi.v)), _mm_cvtps_pd(_mm_movehl_ps(lo.v, lo.v)));
+    _mm_storeu_pd(d, xy);
+    _mm_store_sd(d + 2, z);
+    return true;
+}
 #else
 struct F4 {
     float v[4];
 };
 inline F4 f4(float x, float y, float z) { return {{x, y, z, 0.f}}; }
 inline F4 f4(float s) { return {{s, s, s, 0.f}}; }
-inline F4 load3(const float* p) { return {{p[0], p[1], p[2], 0.f}}; }
+inline F4 load4(const float* p) { return {{p[0], p[1], p[2], 0.f}}; }  // the fourth lane is never used
+inline F4 xyz(F4 a) { return {{a.v[0], a.v[1], a.v[2], 0.f}}; }
 template <class Op>
 inline F4 lanes(F4 a, F4 b, Op op) {
     return {{op(a.v[0], b.v[0]), op(a.v[1], b.v[1]), op(a.v[2], b.v[2]), op(a.v[3], b.v[3])}};
@@ -65,15 +80,28 @@ inline void store(F4 a, float out[4]) { std::memcpy(out, a.v, sizeof a.v); }
 inline void truncate(F4 a, int out[4]) {  // as cvttps2dq: NaN and out of range give INT_MIN
     for (int k = 0; k < 4; ++k) out[k] = std::fabs(a.v[k]) < 2147483648.f ? int(a.v[k]) : INT32_MIN;
 }
+inline bool extent(F4 lo, F4 hi, double d[3]) {
+    for (int k = 0; k < 3; ++k)
+        if (!(lo.v[k] <= hi.v[k])) return false;
+    for (int k = 0; k < 3; ++k) d[k] = double(hi.v[k]) - lo.v[k];
+    return true;
+}
 #endif
 
-// One primitive as the builder sees it: lo and hi load as one vector each; prim rides in lo's
-// fourth lane (load3 masks it off). c = lo + hi (twice the centroid) is derived on the fly.
+// One primitive as the builder sees it: lo and hi load as one vector each, prim riding in the
+// fourth lane of lo (pad, in that of hi, stays 0).
 struct alignas(16) Item {
     float lo[3];
     int prim;
     float hi[3];
     int pad;
+};
+
+// An item in registers: c = lo + hi is twice its centroid (fourth lane 0: prim is masked off
+// before the add, so no stray bits become a denormal).
+struct ItemV {
+    F4 lo, hi, c;
+    explicit ItemV(const Item& it) : lo(load4(it.lo)), hi(load4(it.hi)), c(xyz(lo) + hi) {}
 };
 
 struct Box {
@@ -84,12 +112,9 @@ struct Box {
     // axes (a segment or a point), so splits inside degenerate nodes can still be compared.
     // 0 for an empty (inverted) box.
     double metric(bool perimeter) const {
-        float l[4], h[4];
-        store(lo, l);
-        store(hi, h);
-        if (!(l[0] <= h[0] && l[1] <= h[1] && l[2] <= h[2])) return 0;
-        double dx = double(h[0]) - l[0], dy = double(h[1]) - l[1], dz = double(h[2]) - l[2];
-        return perimeter ? dx + dy + dz : dx * dy + dy * dz + dz * dx;
+        double d[3];
+        if (!extent(lo, hi, d)) return 0;
+        return perimeter ? d[0] + d[1] + d[2] : d[0] * d[1] + d[1] * d[2] + d[2] * d[0];
     }
 };
 
@@ -99,9 +124,20 @@ struct Range {
     Box bounds, cbounds;
 };
 
+// Bounds and centroid bounds of items [begin, end), by a pass over them.
+Range scan(const Item* items, int begin, int end) {
+    Range r{begin, end, {}, {}};
+    for (int i = begin; i < end; ++i) {
+        ItemV v(items[i]);
+        r.bounds.grow(v.lo, v.hi);
+        r.cbounds.grow(v.c, v.c);
+    }
+    return r;
+}
+
 struct Bin {
     Box box;
-    int count;
+    int count = 0;
 };
 
 inline int ceilLog2(int n) {
@@ -112,72 +148,42 @@ inline int ceilLog2(int n) {
 
 class Builder {
 public:
-    Builder(const BvhBuildOptions& o, std::vector<Item>& items, std::vector<BvhNode>& nodes)
-        : opts_(o), items_(items), nodes_(nodes) {
-        bins_ = std::max(2, std::min(kMaxBins, o.bins));
+    Builder(const BvhBuildOptions& o, Item* items) : opts_(o), items_(items) {
+        numBins_ = std::max(2, std::min(kMaxBins, o.bins));
         maxLeaf_ = std::min(CLRT_BVH4_MAX_LEAF, std::max(1, o.maxLeafSize));  // the device packs leaves in 4 bits
     }
 
     // Levels on the longest root-to-leaf path (root alone = 1); the builder keeps it <= kMaxLevels.
     static constexpr int kMaxLevels = CLRT_BVH_STACK_SIZE - 8;
-    static constexpr int kParallelMin = 65536;  // smaller subtrees are not worth a thread
     int depth = 0;
 
-    // Bounds and centroid bounds of items [begin, end), by a pass over them.
-    Range scan(int begin, int end) const {
-        Range r{begin, end, {}, {}};
-        for (int i = begin; i < end; ++i) {
-            F4 lo = load3(items_[i].lo), hi = load3(items_[i].hi);
-            r.bounds.grow(lo, hi);
-            r.cbounds.grow(lo + hi, lo + hi);
-        }
-        return r;
+    // Makes the node of r: a leaf (false), or an interior node whose children are left and right,
+    // its `first` still to be set.
+    bool makeNode(const Range& r, int level, BvhNode& node, Range& left, Range& right) {
+        depth = std::max(depth, level);
+        float lo[4], hi[4];
+        store(r.bounds.lo, lo);
+        store(r.bounds.hi, hi);
+        node.boundsMin = {lo[0], lo[1], lo[2], 0.f};
+        node.boundsMax = {hi[0], hi[1], hi[2], 0.f};
+        node.pad0 = 0;
+        const int n = r.end - r.begin;
+        const int axis = n > 1 ? split(r, level, left, right) : -1;
+        node.first = axis < 0 ? r.begin : 0;
+        node.count = axis < 0 ? n : 0;
+        node.axis = std::max(axis, 0);
+        return axis >= 0;
     }
 
-    // threads: how many threads this subtree may use (including the calling one).
-    void build(const Range& r, int level, int threads = 1) {
-        depth = std::max(depth, level);
-        const int n = r.end - r.begin;
-        const int idx = int(nodes_.size());
-        nodes_.emplace_back();
-        writeBounds(idx, r.bounds);
-
+    // Appends the subtree of r to nodes, depth-first.
+    void build(const Range& r, int level, std::vector<BvhNode>& nodes) {
+        const size_t idx = nodes.size();
+        nodes.emplace_back();
         Range left, right;
-        int axis = n > 1 ? split(r, level, left, right) : -1;
-        if (axis < 0) {  // leaf
-            nodes_[idx].first = r.begin;
-            nodes_[idx].count = n;
-            nodes_[idx].axis = 0;
-            return;
-        }
-        nodes_[idx].count = 0;
-        nodes_[idx].axis = axis;
-        if (threads > 1 && n >= kParallelMin) {
-            // Right subtree on a new thread into its own array; left subtree here.
-            std::vector<BvhNode> rightNodes;
-            rightNodes.reserve(size_t(2) * (right.end - right.begin));
-            Builder rightBuilder(opts_, items_, rightNodes);
-            int rt = threads / 2;
-            std::thread worker;
-            try {
-                worker = std::thread([&] { rightBuilder.build(right, level + 1, rt); });
-            } catch (const std::system_error&) {  // no thread to be had: do it here
-                rightBuilder.build(right, level + 1, 1);
-            }
-            build(left, level + 1, threads - rt);
-            if (worker.joinable()) worker.join();
-            const int offset = int(nodes_.size());
-            for (BvhNode nd : rightNodes) {
-                if (nd.count == 0) nd.first += offset;
-                nodes_.push_back(nd);
-            }
-            nodes_[idx].first = offset;
-            depth = std::max(depth, rightBuilder.depth);
-            return;
-        }
-        build(left, level + 1, threads);
-        nodes_[idx].first = int(nodes_.size());
-        build(right, level + 1, threads);
+        if (!makeNode(r, level, nodes[idx], left, right)) return;
+        build(left, level + 1, nodes);
+        nodes[idx].first = int(nodes.size());
+        build(right, level + 1, nodes);
     }
 
 private:
@@ -195,49 +201,69 @@ private:
         bool usable[3];
         for (int a = 0; a < 3; ++a) {
             float ext = chi[a] - clo[a];
-            scale[a] = ext > 0 ? float(bins_) / ext : 0.f;
+            scale[a] = ext > 0 ? float(numBins_) / ext : 0.f;
             usable[a] = ext > 0 && std::isfinite(scale[a]);
         }
-        const Binner binner{r.cbounds.lo, f4(scale[0], scale[1], scale[2]), f4(float(bins_ - 1))};
+        const Binner binner{r.cbounds.lo, f4(scale[0], scale[1], scale[2]), f4(float(numBins_ - 1))};
         int bestAxis = -1, bestBin = -1;
         double bestCost = INFINITY;
-        if (usable[0] || usable[1] || usable[2]) {
-            Bin bins[3][kMaxBins];
-            for (auto& axisBins : bins)
-                for (int i = 0; i < bins_; ++i) axisBins[i] = Bin{Box(), 0};
+        if (n == 2) {
+            // Two items (over a third of the nodes): each usable axis where they fall in different
+            // bins offers the one split that parts them, at the same cost; the first such axis wins.
+            const ItemV v0(items_[r.begin]), v1(items_[r.begin + 1]);
+            int b0[4], b1[4];
+            binner.binsOf(v0.c, b0);
+            binner.binsOf(v1.c, b1);
+            for (int a = 0; a < 3 && bestAxis < 0; ++a) {
+                if (!usable[a] || b0[a] == b1[a]) continue;
+                Box x, y;
+                x.grow(v0.lo, v0.hi);
+                y.grow(v1.lo, v1.hi);
+                bestCost = x.metric(perimeter) + y.metric(perimeter);
+                bestAxis = a;
+                bestBin = std::min(b0[a], b1[a]);
+            }
+        } else if (usable[0] || usable[1] || usable[2]) {
             for (int i = r.begin; i < r.end; ++i) {
-                F4 lo = load3(items_[i].lo), hi = load3(items_[i].hi);
+                ItemV v(items_[i]);
                 int b[4];
-                binner.binsOf(lo + hi, b);
+                binner.binsOf(v.c, b);
                 for (int a = 0; a < 3; ++a) {  // unusable axes are binned too, and ignored
-                    bins[a][b[a]].box.grow(lo, hi);
-                    bins[a][b[a]].count++;
+                    bins_[a][b[a]].box.grow(v.lo, v.hi);
+                    bins_[a][b[a]].count++;
                 }
             }
             // Sweep: cost of splitting after bin i = sum of child metric * count. An empty bin
-            // changes neither side, so its split costs what the one before it does: skipped.
-            double rightCost[kMaxBins + 1];
+            // changes neither side, so its split costs what the one before it does and never wins:
+            // only the nonempty bins are swept (a small node has few), and then emptied again.
             for (int a = 0; a < 3; ++a) {
-                if (!usable[a]) continue;
+                Bin* bins = bins_[a];
+                int used[kMaxBins], m = 0;  // the nonempty bins, in order
+                for (int i = 0; i < numBins_; i += 4) {  // by fours (bins past numBins_ stay empty)
+                    if ((bins[i].count | bins[i + 1].count | bins[i + 2].count | bins[i + 3].count) == 0)
+                        continue;
+                    for (int k = i; k < i + 4; ++k) {
+                        used[m] = k;
+                        m += bins[k].count != 0;
+                    }
+                }
+                double rightCost[kMaxBins];  // [k]: cost of bins used[k], used[k + 1], ...
                 Box acc;
                 int cnt = 0;
-                rightCost[bins_] = -1;
-                for (int i = bins_ - 1; i > 0; --i) {
-                    if (bins[a][i].count == 0) { rightCost[i] = rightCost[i + 1]; continue; }
-                    acc.grow(bins[a][i].box);
-                    cnt += bins[a][i].count;
-                    rightCost[i] = acc.metric(perimeter) * cnt;
+                for (int k = m - 1; k > 0 && usable[a]; --k) {
+                    acc.grow(bins[used[k]].box);
+                    cnt += bins[used[k]].count;
+                    rightCost[k] = acc.metric(perimeter) * cnt;
                 }
                 acc = Box();
                 cnt = 0;
-                for (int i = 0; i < bins_ - 1; ++i) {
-                    if (bins[a][i].count == 0) continue;
-                    acc.grow(bins[a][i].box);
-                    cnt += bins[a][i].count;
-                    if (rightCost[i + 1] < 0) continue;
-                    double cost = acc.metric(perimeter) * cnt + rightCost[i + 1];
-                    if (cost < bestCost) { bestCost = cost; bestAxis = a; bestBin = i; }
+                for (int k = 0; k < m - 1 && usable[a]; ++k) {
+                    acc.grow(bins[used[k]].box);
+                    cnt += bins[used[k]].count;
+                    double cost = acc.metric(perimeter) * cnt + rightCost[k + 1];
+                    if (cost < bestCost) { bestCost = cost; bestAxis = a; bestBin = used[k]; }
                 }
+                for (int k = 0; k < m; ++k) bins[used[k]] = Bin();
             }
         }
 
@@ -258,10 +284,10 @@ private:
             if (chi[k] - clo[k] > chi[a] - clo[a]) a = k;
         const int mid = r.begin + n / 2;
         auto c2 = [a](const Item& it) { return it.lo[a] + it.hi[a]; };
-        std::nth_element(items_.begin() + r.begin, items_.begin() + mid, items_.begin() + r.end,
+        std::nth_element(items_ + r.begin, items_ + mid, items_ + r.end,
                          [&](const Item& x, const Item& y) { return c2(x) < c2(y); });
-        left = scan(r.begin, mid);
-        right = scan(mid, r.end);
+        left = scan(items_, r.begin, mid);
+        right = scan(items_, mid, r.end);
         return a;
     }
 
@@ -275,54 +301,256 @@ private:
     // Partitions r's items in place so that those in bins <= bin on axis come first (in the same
     // order as std::partition), growing each side's bounds and centroid bounds as they are sorted.
     void partition(const Range& r, const Binner& binner, int axis, int bin, Range& left, Range& right) {
-        left = right = Range{r.begin, r.end, {}, {}};
+        Item* items = items_;
+        Box lb, lc, rb, rc;  // bounds and centroid bounds of each side
         int i = r.begin, j = r.end;
         for (;;) {
             for (; i < j; ++i) {
-                F4 lo = load3(items_[i].lo), hi = load3(items_[i].hi);
+                ItemV v(items[i]);
                 int b[4];
-                binner.binsOf(lo + hi, b);
+                binner.binsOf(v.c, b);
                 if (b[axis] > bin) break;
-                left.bounds.grow(lo, hi);
-                left.cbounds.grow(lo + hi, lo + hi);
+                lb.grow(v.lo, v.hi);
+                lc.grow(v.c, v.c);
             }
             for (; i < j; --j) {
-                F4 lo = load3(items_[j - 1].lo), hi = load3(items_[j - 1].hi);
+                ItemV v(items[j - 1]);
                 int b[4];
-                binner.binsOf(lo + hi, b);
+                binner.binsOf(v.c, b);
                 if (b[axis] <= bin) break;
-                right.bounds.grow(lo, hi);
-                right.cbounds.grow(lo + hi, lo + hi);
+                rb.grow(v.lo, v.hi);
+                rc.grow(v.c, v.c);
             }
             if (i == j) break;
-            std::swap(items_[i], items_[j - 1]);
+            std::swap(items[i], items[j - 1]);
         }
-        left.end = right.begin = i;
-    }
-
-    void writeBounds(int idx, const Box& b) {
-        float lo[4], hi[4];
-        store(b.lo, lo);
-        store(b.hi, hi);
-        BvhNode& nd = nodes_[idx];
-        nd.boundsMin = {lo[0], lo[1], lo[2], 0.f};
-        nd.boundsMax = {hi[0], hi[1], hi[2], 0.f};
-        nd.pad0 = 0;
+        left = Range{r.begin, i, lb, lc};
+        right = Range{i, r.end, rb, rc};
     }
 
     const BvhBuildOptions& opts_;
-    std::vector<Item>& items_;
-    std::vector<BvhNode>& nodes_;
-    int bins_ = 16;
+    Item* items_;
+    int numBins_ = 16;
     int maxLeaf_ = 4;
+    Bin bins_[3][kMaxBins];  // per axis; all empty between nodes
 };
 
-double nodeArea(const BvhNode& nd) {
-    Box b;
-    b.lo = f4(nd.boundsMin.x, nd.boundsMin.y, nd.boundsMin.z);
-    b.hi = f4(nd.boundsMax.x, nd.boundsMax.y, nd.boundsMax.z);
-    return b.metric(false);
+// The SAH cost of a tree, summed node by node in order: node area relative to the root's, times
+// the node's primitives (leaf) or the traversal cost (interior).
+struct SahSum {
+    double rootArea, traversalCost, cost = 0;
+    static double area(const BvhNode& nd) {
+        double dx = double(nd.boundsMax.x) - nd.boundsMin.x, dy = double(nd.boundsMax.y) - nd.boundsMin.y,
+               dz = double(nd.boundsMax.z) - nd.boundsMin.z;
+        return dx >= 0 && dy >= 0 && dz >= 0 ? dx * dy + dy * dz + dz * dx : 0;
+    }
+    SahSum(const Box& root, float traversal) : rootArea(root.metric(false)), traversalCost(traversal) {}
+    void add(const BvhNode& nd) {
+        double rel = rootArea > 0 ? area(nd) / rootArea : 1.0;
+        cost += rel * (nd.count > 0 ? double(nd.count) : traversalCost);
+    }
+};
+
+// Runs body(c) for c = 0 .. count - 1 on up to `threads` threads, this one included.
+template <class Body>
+void parallelFor(int count, int threads, const Body& body) {
+    std::atomic<int> next{0};
+    auto run = [&] {
+        for (int c = next++; c < count; c = next++) body(c);
+    };
+    std::vector<std::thread> helpers;
+    for (int i = 1; i < std::min(threads, count); ++i) {
+        try {
+            helpers.emplace_back(run);
+        } catch (const std::system_error&) {  // fewer threads to be had: fine
+            break;
+        }
+    }
+    run();
+    for (std::thread& h : helpers) h.join();
 }
+
+// A node range for some thread to build. A big one (more than the task size) is only split: its
+// node is made and its children become tasks. A smaller one is built whole: straight into place
+// by the thread that assembles the tree, or by another into an array of its own, copied later.
+struct Task {
+    Range range;
+    int level;
+    uint64_t path;  // its turns from the root (1 = right), the first one in the top bit
+    bool taken = false, done = false;
+    BvhNode node{};              // split: its node
+    int left = -1, right = -1;   // split: its children's tasks (none: it made a leaf)
+    std::vector<BvhNode> nodes;  // built whole apart: its subtree
+    int depth = 0;
+    Task(const Range& r, int lvl, uint64_t p) : range(r), level(lvl), path(p) {}
+};
+
+// The build on several threads. The calling thread assembles the tree in bvh.nodes depth-first,
+// left to right, running each task it comes to that nobody took yet; the other threads take tasks
+// from the right end. So most of the caller's work lands in place at once, the two ends meet
+// somewhere in the middle, and the tree is the same whoever built which part.
+class ParallelBuild {
+public:
+    ParallelBuild(const BvhBuildOptions& opts, Item* items, int threads, Bvh& bvh)
+        : opts_(opts), items_(items), threads_(threads), bvh_(bvh) {}
+
+    // Fills bvh (nodes, primRefs, depth, sahCost); primRefs is already sized.
+    void run(const Range& root) {
+        taskSize_ = std::max(kTaskMin, (root.end - root.begin) / (8 * threads_));  // ~8 per thread
+        sah_ = SahSum(root.bounds, opts_.traversalCost);
+        const int rootTask = push(root, 1, 0);
+        std::vector<std::thread> workers;
+        for (int i = 1; i < threads_; ++i) {
+            try {
+                workers.emplace_back([this] {
+                    while (runNext(nullptr)) {}
+                });
+            } catch (const std::system_error&) {  // fewer threads to be had: fine
+                break;
+            }
+        }
+        place(rootTask);
+        for (std::thread& w : workers) w.join();
+        bvh_.sahCost = float(sah_.cost);
+    }
+
+private:
+    static constexpr int kTaskMin = 4096;  // no smaller tasks (unless the tree is)
+
+    bool whole(const Task& t) const { return t.range.end - t.range.begin <= taskSize_; }
+
+    int push(const Range& r, int level, uint64_t path) {
+        std::lock_guard<std::mutex> lock(m_);
+        tasks_.emplace_back(r, level, path);
+        waiting_.push_back(int(tasks_.size()) - 1);
+        cv_.notify_all();
+        return int(tasks_.size()) - 1;
+    }
+
+    // Task k if nobody has taken it yet (this thread then runs it and completes it), else null.
+    Task* claim(int k) {
+        std::lock_guard<std::mutex> lock(m_);
+        Task& t = tasks_[size_t(k)];
+        if (t.taken) return nullptr;
+        waiting_.erase(std::find(waiting_.begin(), waiting_.end(), k));
+        t.taken = true;
+        ++running_;
+        return &t;
+    }
+
+    void complete(Task& t) {
+        std::lock_guard<std::mutex> lock(m_);
+        t.done = true;
+        --running_;
+        cv_.notify_all();
+    }
+
+    // Takes a waiting task and runs it apart: the rightmost, or with `until` (the assembling
+    // thread, while another builds that task) the leftmost. False, running nothing, once `until`
+    // is done, or without it once no task waits and none runs (so none can come).
+    bool runNext(const Task* until) {
+        Task* t;
+        {
+            std::unique_lock<std::mutex> lock(m_);
+            for (;;) {
+                if (until ? until->done : waiting_.empty() && running_ == 0) return false;
+                if (!waiting_.empty()) break;
+                cv_.wait(lock);
+            }
+            auto lefter = [&](int a, int b) { return tasks_[size_t(a)].path < tasks_[size_t(b)].path; };
+            auto pick = until ? std::min_element(waiting_.begin(), waiting_.end(), lefter)
+                              : std::max_element(waiting_.begin(), waiting_.end(), lefter);
+            t = &tasks_[size_t(*pick)];
+            waiting_.erase(pick);
+            t->taken = true;
+            ++running_;
+        }
+        runTask(*t);
+        complete(*t);
+        return true;
+    }
+
+    void runTask(Task& t) {
+        Builder b(opts_, items_);
+        Range left, right;
+        if (whole(t)) {
+            t.nodes.reserve(size_t(2) * (t.range.end - t.range.begin));
+            b.build(t.range, t.level, t.nodes);
+        } else if (b.makeNode(t.range, t.level, t.node, left, right)) {
+            const uint64_t right1 = uint64_t(1) << (64 - t.level);  // levels stay below 64
+            t.left = push(left, t.level + 1, t.path);
+            t.right = push(right, t.level + 1, t.path | right1);
+        }
+        t.depth = b.depth;
+        if (t.left < 0) setPrimRefs(t.range);
+    }
+
+    void setPrimRefs(const Range& r) {
+        for (int i = r.begin; i < r.end; ++i) bvh_.primRefs[size_t(i)] = items_[i].prim;
+    }
+
+    void append(const BvhNode& nd) {
+        bvh_.nodes.push_back(nd);
+        sah_.add(nd);
+    }
+
+    // Puts the subtree of task k in place: at the end of bvh.nodes, depth-first.
+    void place(int k) {
+        Task* t = claim(k);
+        if (t && whole(*t)) {  // nobody took it: built right here, in place
+            Builder b(opts_, items_);
+            const size_t first = bvh_.nodes.size();
+            b.build(t->range, t->level, bvh_.nodes);
+            for (size_t i = first; i < bvh_.nodes.size(); ++i) sah_.add(bvh_.nodes[i]);
+            setPrimRefs(t->range);
+            bvh_.depth = std::max(bvh_.depth, b.depth);
+            complete(*t);
+            return;
+        }
+        if (t) {  // a split nobody took
+            runTask(*t);
+            complete(*t);
+        } else {  // another thread has it: help with other tasks until it is done
+            {
+                std::lock_guard<std::mutex> lock(m_);
+                t = &tasks_[size_t(k)];
+            }
+            while (runNext(t)) {}
+        }
+        bvh_.depth = std::max(bvh_.depth, t->depth);
+        if (t->left >= 0) {
+            const size_t idx = bvh_.nodes.size();
+            append(t->node);
+            place(t->left);
+            bvh_.nodes[idx].first = int(bvh_.nodes.size());
+            place(t->right);
+        } else if (!whole(*t)) {  // a big node made a leaf: cannot happen, but would be fine
+            append(t->node);
+        } else {
+            const int offset = int(bvh_.nodes.size());
+            for (BvhNode nd : t->nodes) {
+                if (nd.count == 0) nd.first += offset;
+                append(nd);
+            }
+            std::vector<BvhNode>().swap(t->nodes);
+        }
+    }
+
+    const BvhBuildOptions& opts_;
+    Item* items_;
+    int threads_;
+    Bvh& bvh_;
+    int taskSize_ = 0;
+    SahSum sah_{Box(), 1.f};
+    std::mutex m_;
+    std::condition_variable cv_;
+    std::deque<Task> tasks_;    // a deque: a push never moves a task another thread is using
+    std::vector<int> waiting_;  // tasks nobody has taken yet
+    int running_ = 0;           // tasks taken and not done
+};
+
+constexpr int kParallelMin = 65536;  // smaller inputs are built on the calling thread alone
+constexpr int kChunk = 65536;        // items per chunk of the initial copy
 
 }  // namespace
 
@@ -340,38 +568,51 @@ Bvh buildBvh(const std::vector<Aabb>& primBounds, const BvhBuildOptions& opts) {
         bvh.depth = 1;
         return bvh;
     }
+    int threads = opts.maxThreads > 0 ? opts.maxThreads : int(std::thread::hardware_concurrency());
+    if (threads < 1 || n < kParallelMin) threads = 1;
 
-    // Boxes with NaN/inf or min > max become empty items (centroid 0); they are still referenced
-    // once, in some leaf, and never widen any node's bounds.
-    std::vector<Item> items(n);
-    for (int i = 0; i < n; ++i) {
-        const Aabb& b = primBounds[i];
-        Item& it = items[i];
-        it.prim = i;
-        it.pad = 0;
-        if (isFinite(b.min) && isFinite(b.max) && b.valid()) {
-            for (int a = 0; a < 3; ++a) { it.lo[a] = b.min[a]; it.hi[a] = b.max[a]; }
-        } else {
-            for (int a = 0; a < 3; ++a) { it.lo[a] = 1e30f; it.hi[a] = -1e30f; }
+    // The items, copied in chunks (in parallel: fresh pages are slow to touch) with each chunk's
+    // bounds; merged in order they give the root's bounds bit for bit as one pass would. Boxes with
+    // NaN/inf or min > max become empty items (centroid 0); they are still referenced once, in some
+    // leaf, and never widen any node's bounds.
+    std::unique_ptr<Item[]> itemStore(new Item[size_t(n)]);  // not zeroed first
+    Item* items = itemStore.get();
+    const int chunks = (n + kChunk - 1) / kChunk;
+    std::vector<Range> chunkBounds(static_cast<size_t>(chunks));
+    parallelFor(chunks, threads, [&](int c) {
+        const int begin = c * kChunk, end = std::min(n, begin + kChunk);
+        Box bounds, cbounds;
+        for (int i = begin; i < end; ++i) {
+            const Aabb& b = primBounds[size_t(i)];
+            bool ok = isFinite(b.min) && isFinite(b.max) && b.valid();
+            items[i] = ok ? Item{{b.min.x, b.min.y, b.min.z}, i, {b.max.x, b.max.y, b.max.z}, 0}
+                          : Item{{1e30f, 1e30f, 1e30f}, i, {-1e30f, -1e30f, -1e30f}, 0};
+            ItemV v(items[i]);
+            bounds.grow(v.lo, v.hi);
+            cbounds.grow(v.c, v.c);
         }
+        chunkBounds[size_t(c)] = Range{begin, end, bounds, cbounds};
+    });
+    Range root{0, n, {}, {}};
+    for (const Range& r : chunkBounds) {
+        root.bounds.grow(r.bounds);
+        root.cbounds.grow(r.cbounds);
     }
 
     bvh.nodes.reserve(size_t(2) * n);
-    Builder builder(opts, items, bvh.nodes);
-    int threads = opts.maxThreads > 0 ? opts.maxThreads : int(std::thread::hardware_concurrency());
-    builder.build(builder.scan(0, n), 1, std::max(1, threads));
-    bvh.depth = builder.depth;
-
-    bvh.primRefs.resize(n);
-    for (int i = 0; i < n; ++i) bvh.primRefs[i] = items[i].prim;
-
-    double rootArea = nodeArea(bvh.nodes[0]);
-    double cost = 0;
-    for (const BvhNode& nd : bvh.nodes) {
-        double rel = rootArea > 0 ? nodeArea(nd) / rootArea : 1.0;
-        cost += rel * (nd.count > 0 ? double(nd.count) : double(opts.traversalCost));
+    bvh.primRefs.resize(size_t(n));
+    if (threads == 1) {
+        Builder builder(opts, items);
+        builder.build(root, 1, bvh.nodes);
+        bvh.depth = builder.depth;
+        SahSum sah(root.bounds, opts.traversalCost);
+        for (const BvhNode& nd : bvh.nodes) sah.add(nd);
+        bvh.sahCost = float(sah.cost);
+        for (int i = 0; i < n; ++i) bvh.primRefs[size_t(i)] = items[i].prim;
+        return bvh;
     }
-    bvh.sahCost = float(cost);
+
+    ParallelBuild(opts, items, threads, bvh).run(root);
     return bvh;
 }
 

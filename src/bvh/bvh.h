@@ -38,8 +38,8 @@ struct BvhBuildOptions {
     int bins = 16;            // SAH bins per axis
     int maxLeafSize = 4;      // leaves never hold more (coincident centroids: median split); <= 15
     float traversalCost = 1;  // SAH cost of an interior node relative to one primitive test
-    int maxThreads = 0;       // threads for large subtrees; 0 = all hardware threads. The tree
-                              // does not depend on it.
+    int maxThreads = 0;       // threads for inputs of 65536 primitives or more; 0 = all hardware
+                              // threads. The tree does not depend on it.
 };
 
 struct Bvh {
