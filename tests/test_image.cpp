@@ -1,6 +1,8 @@
-// Tests for image IO: EXR float/half round trips (bit-exact for float), PNG round trips, grey/Y and
-// tiled/RGBA EXR layouts, NaN/negative clamping with one warning, the shared env maps and textures,
-// corrupt and truncated inputs, and atomic writes (a failed write leaves the old file intact).
+// Tests for image IO: EXR float/half round trips (bit-exact for float), the EXR writer's file layout
+// (header attributes, multi-chunk and incompressible chunks, long attribute names), PNG round trips and
+// the PNG encoder's chunks (CRCs, zlib stream, filter types), grey/Y and tiled/RGBA EXR layouts,
+// NaN/negative clamping with one warning, the shared env maps and textures, corrupt and truncated
+// inputs, and atomic writes (a failed write leaves the old file intact; uncommitted writes).
 #include <catch.hpp>
 
 #include <algorithm>
@@ -24,8 +26,11 @@
 #include <ImfOutputFile.h>
 #include <ImfStringAttribute.h>
 #include <ImfTiledOutputFile.h>
+#include <ImfBoxAttribute.h>
+#include <ImfLineOrderAttribute.h>
 #include <Imath/half.h>
 #include <stb/stb_image_write.h>
+#include <zlib.h>
 
 #include "image/image.h"
 #include "util/error.h"
@@ -458,4 +463,191 @@ TEST_CASE("a PNG with a zero-length IDAT chunk (valid, found by the fuzzer) read
     CHECK(img.at(0, 0, 0) == 255.0f);
     CHECK(img.at(0, 0, 1) == 0.0f);
     CHECK(img.at(0, 0, 2) == 0.0f);
+}
+
+TEST_CASE("EXR writer: multi-chunk, incompressible and long-name files read back through OpenEXR", "[image]") {
+    SECTION("300x250 (16 chunks, the last of 10 lines): bit-exact, standard header attributes") {
+        ImageRGB img = makeImage(300, 250);
+        for (int y = 0; y < img.height; ++y)
+            for (int x = 0; x < img.width; ++x)
+                for (int c = 0; c < 3; ++c) img.at(x, y, c) = float(x * (c + 1)) * 0.01f + std::sin(float(y) * 0.1f) + 1.5f;
+        std::string path = imgTemp("chunks.exr");
+        clrt::writeExr(path, img);
+        ImageRGB back = clrt::readImage(path);
+        REQUIRE(back.pixels.size() == img.pixels.size());
+        size_t mismatches = 0;
+        for (size_t i = 0; i < img.pixels.size(); ++i) mismatches += bits(img.pixels[i]) != bits(back.pixels[i]);
+        CHECK(mismatches == 0);
+        CHECK(fs::file_size(path) < img.pixels.size() * sizeof(float));  // compressed
+        Imf::InputFile f(path.c_str());
+        const Imf::Header& h = f.header();
+        CHECK(h.dataWindow() == Imath::Box2i({0, 0}, {299, 249}));
+        CHECK(h.displayWindow() == Imath::Box2i({0, 0}, {299, 249}));
+        CHECK(h.lineOrder() == Imf::INCREASING_Y);
+        CHECK(h.pixelAspectRatio() == 1.0f);
+        CHECK(h.screenWindowWidth() == 1.0f);
+        CHECK(h.compression() == Imf::ZIP_COMPRESSION);
+        int channels = 0;
+        for (auto it = h.channels().begin(); it != h.channels().end(); ++it) ++channels;
+        CHECK(channels == 3);
+        CHECK(f.isComplete());
+    }
+    SECTION("random bits do not compress: chunks stored raw, still bit-exact") {
+        ImageRGB img = makeImage(64, 20);
+        std::mt19937 rng(5);
+        for (float& v : img.pixels) {
+            uint32_t u = rng() & 0x7F7FFFFFu;  // positive, finite
+            std::memcpy(&v, &u, 4);
+        }
+        for (bool half : {false, true}) {
+            std::string path = imgTemp(half ? "random_half.exr" : "random.exr");
+            clrt::ExrWriteOptions o;
+            o.half = half;
+            clrt::writeExr(path, img, o);
+            if (!half) CHECK(fs::file_size(path) >= img.pixels.size() * 4);  // (as halves most are 0 or Inf)
+            Imf::InputFile f(path.c_str());
+            const Imath::Box2i dw = f.header().dataWindow();
+            std::vector<float> px(img.pixels.size());
+            Imf::FrameBuffer fb;
+            const char* names[3] = {"R", "G", "B"};
+            for (int c = 0; c < 3; ++c) fb.insert(names[c], Imf::Slice::Make(Imf::FLOAT, px.data() + c, dw, 12, 12 * 64));
+            f.setFrameBuffer(fb);
+            f.readPixels(dw.min.y, dw.max.y);
+            size_t mismatches = 0;
+            for (size_t i = 0; i < px.size(); ++i)
+                mismatches += bits(px[i]) != bits(half ? float(Imath::half(img.pixels[i])) : img.pixels[i]);
+            CHECK(mismatches == 0);
+        }
+    }
+    SECTION("flat content (a constant background) compresses") {
+        // A constant float repeats with period 4 bytes: ZIP's LZ77 matching leaves about 1% of it.
+        ImageRGB img = makeImage(400, 300);
+        std::fill(img.pixels.begin(), img.pixels.end(), 0.25f);
+        for (int y = 100; y < 140; ++y)
+            for (int x = 50; x < 90; ++x) img.at(x, y, 1) = float(x * y) * 1e-3f;
+        std::string path = imgTemp("flat.exr");
+        clrt::writeExr(path, img);
+        CHECK(fs::file_size(path) * 50 < img.pixels.size() * sizeof(float));
+        CHECK(clrt::readImage(path).pixels == img.pixels);
+    }
+    SECTION("attribute names: long ones are written, reserved or empty ones refused") {
+        ImageRGB img = makeImage(5, 3);
+        const std::string longName = "aHeaderAttributeNameLongerThanThirtyOneCharacters";
+        clrt::ExrWriteOptions o;
+        o.attributes[longName] = "value";
+        o.attributes["empty"] = "";
+        std::string path = imgTemp("long_name.exr");
+        clrt::writeExr(path, img, o);
+        Imf::InputFile f(path.c_str());
+        const auto* a = f.header().findTypedAttribute<Imf::StringAttribute>(longName);
+        REQUIRE(a);
+        CHECK(a->value() == "value");
+        const auto* e = f.header().findTypedAttribute<Imf::StringAttribute>("empty");
+        REQUIRE(e);
+        CHECK(e->value().empty());
+        for (const std::string bad : {"channels", "dataWindow", ""}) {
+            clrt::ExrWriteOptions ob;
+            ob.attributes[bad] = "x";
+            std::string p = imgTemp("bad_attr.exr");
+            requireWriteError([&] { clrt::writeExr(p, img, ob); }, p);
+            CHECK(!fs::exists(p));
+            CHECK(!fs::exists(clrt::temporarySiblingPath(p)));
+        }
+    }
+}
+
+TEST_CASE("PNG encoder: valid chunks and zlib stream, every filter type, exact round trips", "[image]") {
+    // Smooth gradients, flat areas, noise and sharp edges: rows where each of the five filters wins.
+    auto makeRgb = [](int w, int h, unsigned seed) {
+        std::vector<unsigned char> rgb(size_t(w) * h * 3);
+        std::mt19937 rng(seed);
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x)
+                for (int c = 0; c < 3; ++c) {
+                    unsigned char v;
+                    switch ((y / 4) % 5) {
+                        case 0: v = static_cast<unsigned char>(x * 3 + c); break;           // horizontal ramp
+                        case 1: v = static_cast<unsigned char>(y * 5 + c * 40); break;      // vertical ramp
+                        case 2: v = static_cast<unsigned char>(rng() & 0xFF); break;        // noise
+                        case 3: v = static_cast<unsigned char>((x + y) * 2); break;         // diagonal
+                        default: v = static_cast<unsigned char>(x < w / 2 ? 17 : 230); break;  // flat halves
+                    }
+                    rgb[(size_t(y) * w + x) * 3 + c] = v;
+                }
+        return rgb;
+    };
+    for (auto [w, h] : {std::pair{1, 1}, {1, 9}, {2, 1}, {3, 5}, {129, 60}, {640, 41}}) {
+        INFO(w << "x" << h);
+        const std::vector<unsigned char> rgb = makeRgb(w, h, unsigned(w * 1000 + h));
+        const std::string png = clrt::encodePng8("x.png", w, h, rgb);
+        REQUIRE(png.compare(0, 8, std::string("\x89PNG\r\n\x1a\n", 8)) == 0);
+        // Walk the chunks: lengths, CRCs, IHDR fields, the IDAT zlib stream, IEND last.
+        auto be32 = [&](size_t at) {
+            return uint32_t(uint8_t(png[at])) << 24 | uint32_t(uint8_t(png[at + 1])) << 16 |
+                   uint32_t(uint8_t(png[at + 2])) << 8 | uint32_t(uint8_t(png[at + 3]));
+        };
+        std::string idat, last;
+        size_t at = 8;
+        while (at < png.size()) {
+            REQUIRE(at + 12 <= png.size());
+            const uint32_t len = be32(at);
+            REQUIRE(at + 12 + len <= png.size());
+            const std::string type = png.substr(at + 4, 4);
+            const uLong crc = crc32(0, reinterpret_cast<const Bytef*>(png.data() + at + 4), uInt(len + 4));
+            CHECK(be32(at + 8 + len) == uint32_t(crc));
+            if (type == "IHDR") {
+                REQUIRE(len == 13);
+                CHECK(be32(at + 8) == uint32_t(w));
+                CHECK(be32(at + 12) == uint32_t(h));
+                CHECK(png.substr(at + 16, 5) == std::string("\x08\x02\x00\x00\x00", 5));  // 8-bit RGB
+            }
+            if (type == "IDAT") idat += png.substr(at + 8, len);
+            last = type;
+            at += 12 + len;
+        }
+        CHECK(last == "IEND");
+        const size_t stride = size_t(w) * 3 + 1;
+        std::vector<unsigned char> raw(stride * h + 1);
+        uLongf rawLen = uLongf(raw.size());
+        REQUIRE(uncompress(raw.data(), &rawLen, reinterpret_cast<const Bytef*>(idat.data()), uLong(idat.size())) == Z_OK);
+        REQUIRE(rawLen == stride * h);
+        std::vector<int> used(5, 0);
+        for (int y = 0; y < h; ++y) {
+            REQUIRE(raw[size_t(y) * stride] <= 4);
+            ++used[raw[size_t(y) * stride]];
+        }
+        if (w == 640)
+            for (int f = 0; f < 5; ++f) CHECK(used[f] > 0);
+        // Decoded by stb_image: the same pixels.
+        const std::string path = imgTemp("enc.png");
+        clrt::writePng8(path, w, h, rgb);
+        CHECK(slurp(path) == png);
+        ImageRGB back = clrt::readImage(path);
+        REQUIRE(back.width == w);
+        REQUIRE(back.height == h);
+        size_t mismatches = 0;
+        for (size_t i = 0; i < rgb.size(); ++i) mismatches += back.pixels[i] != float(rgb[i]);
+        CHECK(mismatches == 0);
+    }
+}
+
+TEST_CASE("uncommitted writes leave the target alone until committed", "[image]") {
+    ImageRGB img = makeImage(6, 4);
+    for (size_t i = 0; i < img.pixels.size(); ++i) img.pixels[i] = float(i);
+    std::vector<unsigned char> rgb(6 * 4 * 3, 9);
+    const std::string exr = imgTemp("pending.exr"), png = imgTemp("pending.png");
+    spit(exr, "old exr");
+    spit(png, "old png");
+    const std::string exrTmp = clrt::writeExrUncommitted(exr, img);
+    const std::string pngTmp = clrt::writePng8Uncommitted(png, 6, 4, rgb);
+    CHECK(exrTmp == clrt::temporarySiblingPath(exr));
+    CHECK(pngTmp == clrt::temporarySiblingPath(png));
+    CHECK(slurp(exr) == "old exr");
+    CHECK(slurp(png) == "old png");
+    clrt::commitTemporary(exrTmp, exr);
+    clrt::commitTemporary(pngTmp, png);
+    CHECK(clrt::readImage(exr).pixels == img.pixels);
+    CHECK(clrt::readImage(png).pixels == std::vector<float>(6 * 4 * 3, 9.0f));
+    CHECK(!fs::exists(exrTmp));
+    CHECK(!fs::exists(pngTmp));
 }

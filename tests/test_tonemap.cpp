@@ -1,7 +1,9 @@
 // Tests for tone mapping: the host reference (curves, percentile rank, conventions) against the
 // course's reference PNGs (PSNR), the OpenCL kernels against the host reference (max 1 LSB) on edge
-// cases, the exact device percentile and the precision of the device log-sum, the camera outputs
-// (.exr + tone-mapped PNGs, names, attributes) and the `clrt tonemap` subcommand.
+// cases, the 16-pixel vector map kernels against the scalar one-pixel-per-work-item kernels they
+// replaced (byte for byte), the exact device percentile and the precision of the device log-sum, the
+// camera outputs (.exr + tone-mapped PNGs, names, attributes, no partial sets on failure) and the
+// `clrt tonemap` subcommand.
 #include <catch.hpp>
 
 #include <ImfChannelList.h>
@@ -12,9 +14,13 @@
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iterator>
 #include <limits>
 #include <random>
 
+#include "cl/check.h"
 #include "image/tonemap.h"
 #include "render/output.h"
 #include "render/tonemap_device.h"
@@ -84,6 +90,110 @@ TonemapDeviceResult checkDeviceMatchesHost(const ImageRGB& img, const TonemapSet
     CHECK(maxDiff(dev.rgb8, host) <= 1);
     return dev;
 }
+
+// Tonemap_Map / Tonemap_MapFloat as they were before they took 16 pixels per work-item on float16
+// vectors (cl_kernels/tonemap.cl): one pixel per work-item, scalar pow. The vector kernels must give
+// the same bytes (and the same float bits) on every image and setting.
+const char* const kScalarMapKernels = R"CLC(
+#pragma OPENCL FP_CONTRACT OFF
+#define REF_FLT_MAX 3.402823466e+38f
+
+/* NaN, ±Inf and negative channels count as 0. */
+inline float Ref_Sanitize(float c) { return (isfinite(c) && c > 0.0f) ? c : 0.0f; }
+
+inline float Ref_Luma(float r, float g, float b) {
+    float y = 0.2126f * Ref_Sanitize(r);
+    y = y + 0.7152f * Ref_Sanitize(g);
+    y = y + 0.0722f * Ref_Sanitize(b);
+    return fmin(y, REF_FLT_MAX);
+}
+
+/* Reinhard et al. 2002 (global): L/(1+L), or L(1 + L/Lw²)/(1+L) with a white point. */
+inline float RefTmo_Photographic(float L, int hasWhite, float whiteL) {
+    if (!(L > 0.0f)) return 0.0f;
+    float a = L / (1.0f + L);
+    if (!hasWhite) return a;
+    if (!(whiteL > 0.0f)) return REF_FLT_MAX;
+    float b = 1.0f + L / (whiteL * whiteL);
+    return a * b;
+}
+
+/* Narkowicz 2015 ACES fit; divided through by L² above 1 so huge inputs cannot overflow. */
+inline float RefTmo_Aces(float L) {
+    if (!(L > 0.0f)) return 0.0f;
+    if (L <= 1.0f) return (L * (2.51f * L + 0.03f)) / (L * (2.43f * L + 0.59f) + 0.14f);
+    float t = 1.0f / L;
+    return (2.51f + 0.03f * t) / (2.43f + 0.59f * t + 0.14f * t * t);
+}
+
+/* Hable's Uncharted 2 curve (A..F as published), exposure bias 2, white point W = 11.2. */
+inline float RefTmo_HableCurve(float x) {
+    const float A = 0.15f, B = 0.50f, C = 0.10f, D = 0.20f, E = 0.02f, F = 0.30f;
+    if (x <= 1.0f) return (x * (A * x + C * B) + D * E) / (x * (A * x + B) + D * F) - E / F;
+    float t = 1.0f / x;
+    return (A + C * B * t + D * E * t * t) / (A + B * t + D * F * t * t) - E / F;
+}
+
+inline float RefTmo_Filmic(float L) {
+    if (!(L > 0.0f)) return 0.0f;
+    return RefTmo_HableCurve(2.0f * L) / RefTmo_HableCurve(11.2f);
+}
+
+/* The one dispatcher over operators. */
+inline float RefTmo_Apply(const TonemapParams* p, float L) {
+    switch (p->op) {
+        case 0: return RefTmo_Photographic(L, p->hasWhite, p->whiteL);
+        case 1: return RefTmo_Aces(L);
+        case 2: return RefTmo_Filmic(L);
+        default: return 0.0f;
+    }
+}
+
+inline uchar Ref_Encode(float v, const TonemapParams* p) {
+    float x = 255.0f * pow(v, p->invGamma);
+    x = p->truncate ? floor(x) : floor(x + 0.5f);
+    return (uchar)(x > 0.0f ? fmin(x, 255.0f) : 0.0f);
+}
+
+/* The display value of one pixel in [0,1] before gamma (operator, saturation, clamp). */
+inline float3 Ref_Display(__global const float* rgb, size_t base, const TonemapParams* p) {
+    float c[3];
+    for (int k = 0; k < 3; ++k) c[k] = Ref_Sanitize(rgb[base + k]);
+    const float Y = Ref_Luma(c[0], c[1], c[2]);
+    if (!(Y > 0.0f)) return (float3)(0.0f);
+    const float L = fmin(Y * p->scale, REF_FLT_MAX);
+    float Yo = RefTmo_Apply(p, L);
+    Yo = Yo >= 0.0f ? fmin(Yo, REF_FLT_MAX) : 0.0f;
+    float v[3];
+    for (int k = 0; k < 3; ++k) {
+        v[k] = Yo * pow(c[k] / Y, p->saturation);
+        v[k] = v[k] > 0.0f ? fmin(v[k], 1.0f) : 0.0f;
+    }
+    return (float3)(v[0], v[1], v[2]);
+}
+
+/* 8-bit output. */
+__kernel void Ref_Map(__global const float* rgb, TonemapParams p, __global uchar* out) {
+    const uint i = get_global_id(0);
+    if (i >= p.numPixels) return;
+    const size_t base = 3 * (size_t)i;
+    const float3 v = Ref_Display(rgb, base, &p);
+    out[base + 0] = Ref_Encode(v.x, &p);
+    out[base + 1] = Ref_Encode(v.y, &p);
+    out[base + 2] = Ref_Encode(v.z, &p);
+}
+
+/* Float output: the gamma-encoded display values in [0,1], not quantised. */
+__kernel void Ref_MapFloat(__global const float* rgb, TonemapParams p, __global float* out) {
+    const uint i = get_global_id(0);
+    if (i >= p.numPixels) return;
+    const size_t base = 3 * (size_t)i;
+    const float3 v = Ref_Display(rgb, base, &p);
+    out[base + 0] = pow(v.x, p.invGamma);
+    out[base + 1] = pow(v.y, p.invGamma);
+    out[base + 2] = pow(v.z, p.invGamma);
+}
+)CLC";
 
 }  // namespace
 
@@ -307,6 +417,33 @@ TEST_CASE("camera outputs: EXR with attributes plus one tone-mapped PNG per Tone
         o.outDir = tmp.file("nope");
         CHECK_THROWS_AS(writeCameraOutputs(cam, img, o, testContext()), Error);
     }
+    SECTION("a tone-mapping failure (while the EXR is being written) commits no file, leaves no temporary") {
+        std::ofstream(tmp.file("shot.exr")) << "old";
+        a.key = -1.0f;  // refused by the device tone mapper
+        cam.tonemaps = {a};
+        CHECK_THROWS_AS(writeCameraOutputs(cam, img, o, testContext()), Error);
+        std::ifstream old(tmp.file("shot.exr"));
+        std::string content((std::istreambuf_iterator<char>(old)), std::istreambuf_iterator<char>());
+        CHECK(content == "old");
+        CHECK_FALSE(std::filesystem::exists(tmp.file("shot.png")));
+        size_t files = 0;
+        for (const auto& e : std::filesystem::directory_iterator(tmp.path)) files += e.path().filename() != "shot.exr";
+        CHECK(files == 0);
+    }
+    SECTION("a PNG that cannot be renamed into place: an output error, no temporary left") {
+        std::filesystem::create_directories(tmp.path / "shot.png" / "child");
+        cam.tonemaps = {a};
+        try {
+            writeCameraOutputs(cam, img, o, testContext());
+            FAIL("expected an output error");
+        } catch (const Error& e) {
+            CHECK(e.code() == ExitCode::Output);
+            CHECK(std::string(e.what()).find("shot.png") != std::string::npos);
+        }
+        for (const auto& e : std::filesystem::directory_iterator(tmp.path))
+            CHECK(e.path().filename().string().find(".tmp-") == std::string::npos);
+        CHECK(std::filesystem::is_directory(tmp.path / "shot.png" / "child"));
+    }
 }
 
 TEST_CASE("clrt tonemap subcommand: options, scene camera settings, errors", "[tonemap]") {
@@ -386,4 +523,96 @@ TEST_CASE("float display output of the device equals the host reference", "[tone
         INFO(tmoKindName(op) << ": max |device - host| = " << worst);
         CHECK(worst <= 2e-5f);
     }
+}
+
+TEST_CASE("vector map kernels equal the scalar one-pixel-per-work-item kernels byte for byte", "[tonemap]") {
+    DeviceContext& dc = testContext();
+    std::vector<NamedSource> sources = loadKernelSources({"common.cl", "tonemap.cl"});
+    sources.push_back({"tests/test_tonemap.cpp", kScalarMapKernels});
+    cl::Program program = buildProgramFromSources(dc, sources, {});
+    cl::Kernel ref8 = CL_CPP(cl::Kernel(program, "Ref_Map"));
+    cl::Kernel refFloat = CL_CPP(cl::Kernel(program, "Ref_MapFloat"));
+    size_t cases = 0;
+    auto check = [&](const ImageRGB& img, const TonemapSettings& s) {
+        TonemapDevice& tm = tmDevice();
+        tm.upload(img);
+        const TonemapDeviceResult r = tm.map(s), rf = tm.map(s, true);
+        const size_t n = size_t(img.width) * img.height;
+        dev::TonemapParams p{};  // as tonemap_device.cpp fills it
+        p.op = int(s.op);
+        p.scale = r.stats.scale;
+        p.whiteL = r.stats.whiteL;
+        p.hasWhite = r.stats.hasWhite ? 1 : 0;
+        p.saturation = s.saturation;
+        p.invGamma = 1.0f / s.gamma;
+        p.truncate = s.truncate ? 1 : 0;
+        p.numPixels = cl_uint(n);
+        cl::Buffer in = CL_CPP(cl::Buffer(dc.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * 3 * sizeof(float),
+                                          const_cast<float*>(img.pixels.data())));
+        cl::Buffer out8 = CL_CPP(cl::Buffer(dc.context(), CL_MEM_WRITE_ONLY, n * 3));
+        cl::Buffer outFloat = CL_CPP(cl::Buffer(dc.context(), CL_MEM_WRITE_ONLY, n * 3 * sizeof(float)));
+        CL_CPP(ref8.setArg(0, in));
+        CL_CPP(ref8.setArg(1, sizeof(p), &p));
+        CL_CPP(ref8.setArg(2, out8));
+        CL_CPP(refFloat.setArg(0, in));
+        CL_CPP(refFloat.setArg(1, sizeof(p), &p));
+        CL_CPP(refFloat.setArg(2, outFloat));
+        for (cl::Kernel* k : {&ref8, &refFloat})
+            CL_CPP(dc.queue().enqueueNDRangeKernel(*k, cl::NullRange, cl::NDRange(roundUp(n, 64)), cl::NDRange(64)));
+        std::vector<unsigned char> want8(n * 3);
+        std::vector<float> wantFloat(n * 3);
+        CL_CPP(dc.queue().enqueueReadBuffer(out8, CL_TRUE, 0, want8.size(), want8.data()));
+        CL_CPP(dc.queue().enqueueReadBuffer(outFloat, CL_TRUE, 0, wantFloat.size() * sizeof(float), wantFloat.data()));
+        INFO("op " << tmoKindName(s.op) << " key " << s.key << " burn " << s.burnPercent << " sat " << s.saturation
+                   << " gamma " << s.gamma << " truncate " << s.truncate << " image " << img.width << "x" << img.height);
+        size_t diff8 = 0, diffFloat = 0;
+        for (size_t i = 0; i < n * 3; ++i) {
+            diff8 += r.rgb8[i] != want8[i];
+            diffFloat += std::memcmp(&rf.display[i], &wantFloat[i], sizeof(float)) != 0;
+        }
+        CHECK(diff8 == 0);
+        CHECK(diffFloat == 0);
+        ++cases;
+    };
+
+    // Edge values in every channel position, pixel counts that are not multiples of 16.
+    ImageRGB edges = randomHdr(61, 37, 23);
+    const float special[] = {NAN, INFINITY, -INFINITY, -1.0f, 0.0f, -0.0f, FLT_MAX, 1e30f, 1e-40f, FLT_MIN,
+                             1.0f, 1e-7f, 3e38f, 0.5f, 65504.0f};
+    for (size_t i = 0; i < 900; ++i) edges.pixels[(i * 37) % edges.pixels.size()] = special[i % 15];
+    ImageRGB wideRange = makeImage(50, 3);  // luminances from 1e-30 to 1e30: both sides of the curves' L <= 1
+    for (size_t i = 0; i < wideRange.pixels.size(); ++i) wideRange.pixels[i] = std::pow(10.0f, -30.0f + 60.0f * float(i) / 450.0f);
+    ImageRGB mostlyBlack = makeImage(33, 7);  // burn 50: L_white = 0, every lit pixel burns out
+    for (int i = 0; i < 20; ++i) mostlyBlack.pixels[size_t(i) * 31 % mostlyBlack.pixels.size()] = 2.0f + float(i);
+    ImageRGB one = makeImage(1, 1);
+    one.pixels = {0.3f, 2.0f, 0.01f};
+
+    TonemapSettings s;
+    for (const ImageRGB* img : {&edges, &wideRange, &one})
+        for (TmoKind op : {TmoKind::Photographic, TmoKind::Aces, TmoKind::Filmic})
+            for (float sat : {0.0f, 0.7f, 1.0f, 3.0f}) {
+                s = TonemapSettings();
+                s.op = op;
+                s.saturation = sat;
+                check(*img, s);
+            }
+    ImageRGB noisy = randomHdr(97, 61, 7);
+    for (float burn : {0.0f, 1.0f, 100.0f}) {
+        s = TonemapSettings();
+        s.burnPercent = burn;
+        check(noisy, s);
+    }
+    s = TonemapSettings();
+    s.gamma = 1.0f;
+    check(noisy, s);
+    s.gamma = 3.7f;
+    s.truncate = false;
+    check(noisy, s);
+    s.key = 20.0f;
+    check(edges, s);
+    s = TonemapSettings();
+    s.burnPercent = 50.0f;
+    check(mostlyBlack, s);
+    CHECK(cases == 43);
+    CHECK(tonemapStatsHost(mostlyBlack, s).whiteL == 0.0f);
 }

@@ -1,6 +1,7 @@
-// Float RGB images on the host and their files: PNG/JPG read (stb_image), PNG write (stb_image_write),
-// EXR read/write (OpenEXR). Every writer writes to a temporary file in the target directory and
-// renames it over the target, so a failure never leaves a truncated image over a good one.
+// Float RGB images on the host and their files: PNG/JPG read (stb_image), PNG write (own encoder on
+// zlib, image_write.cpp), EXR read/write (OpenEXR). Every writer writes to a temporary file in the target directory and
+// renames it over the target, so a failure never leaves a truncated image over a good one; the
+// *Uncommitted forms stop before the rename, for callers that commit several files together.
 // All readers and writers throw clrt::Error naming the file.
 #pragma once
 #include <cstdio>
@@ -25,7 +26,12 @@ struct ImageRGB {
 ImageRGB readImage(const std::string& path);
 
 // Writes an 8-bit RGB PNG of already-quantised values (0..255 per channel, row 0 at the top).
+// Per row the PNG filter with the smallest sum of |residual| (as stb_image_write and libpng choose),
+// then zlib with its run-length strategy (Z_RLE: fast, and smaller than stb_image_write's output on
+// renders; very compressible images are also tried at zlib's default level, keeping the smaller).
 void writePng8(const std::string& path, int width, int height, const std::vector<unsigned char>& rgb);
+// The PNG file's bytes, as writePng8 writes them (`path` only names the image in errors).
+std::string encodePng8(const std::string& path, int width, int height, const std::vector<unsigned char>& rgb);
 
 // Writes a PNG from linear values: clamp to [0,255] and round (truncate = true: floor, which is what
 // the course's reference renders do; see README "Conventions").
@@ -35,15 +41,25 @@ struct ExrWriteOptions {
     bool half = false;                            // HALF instead of FLOAT channels
     std::map<std::string, std::string> attributes; // extra string header attributes (renderer, spp, ...)
 };
+// Single-part scanline RGB OpenEXR (OpenEXR's writer), ZIP compression, FLOAT or HALF channels, plus
+// string attributes; compressed on OpenEXR's thread pool (all cores).
 void writeExr(const std::string& path, const ImageRGB& img, const ExrWriteOptions& opts = {});
+
+// writePng8 / writeExr up to the rename: the complete file is left in the returned temporary sibling
+// of `path`, which the caller renames with commitTemporary(tmp, path) or deletes. On failure nothing
+// is left behind and clrt::Error names `path`. Safe to call from several threads at once.
+std::string writePng8Uncommitted(const std::string& path, int width, int height, const std::vector<unsigned char>& rgb);
+std::string writeExrUncommitted(const std::string& path, const ImageRGB& img, const ExrWriteOptions& opts = {});
 
 // Writes `path` via a temporary sibling file and rename(); `writer` receives the temporary path.
 // Throws clrt::Error (ExitCode::Output) if the directory does not exist or is not writable.
+// writeTemporary stops before the rename and returns the temporary path (see above).
 template <class F> void writeAtomically(const std::string& path, F writer);
+template <class F> std::string writeTemporary(const std::string& path, F writer);
 std::string temporarySiblingPath(const std::string& path);
 void commitTemporary(const std::string& tmpPath, const std::string& path);
 
-template <class F> void writeAtomically(const std::string& path, F writer) {
+template <class F> std::string writeTemporary(const std::string& path, F writer) {
     std::string tmp = temporarySiblingPath(path);
     try {
         writer(tmp);
@@ -51,7 +67,11 @@ template <class F> void writeAtomically(const std::string& path, F writer) {
         std::remove(tmp.c_str());
         throw;
     }
-    commitTemporary(tmp, path);
+    return tmp;
+}
+
+template <class F> void writeAtomically(const std::string& path, F writer) {
+    commitTemporary(writeTemporary(path, writer), path);
 }
 
 }  // namespace clrt

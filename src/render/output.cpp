@@ -1,5 +1,6 @@
 // output.cpp — camera outputs (.png / .exr + tone-mapped .png) and the `clrt tonemap` subcommand
-// (see output.h). Tone mapping runs on the OpenCL device through TonemapDevice.
+// (see output.h). Tone mapping runs on the OpenCL device through TonemapDevice while the EXR is
+// written on a second thread; all files of a camera are renamed into place together at the end.
 #include "render/output.h"
 
 #include <cerrno>
@@ -7,8 +8,11 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <filesystem>
 #include <set>
+#include <thread>
+#include <utility>
 
 #include "cl/devices.h"
 #include "render/tonemap_device.h"
@@ -81,44 +85,90 @@ std::vector<std::string> writeCameraOutputs(const Camera& cam, const ImageRGB& r
         return written;
     }
 
-    // Tone-map every block first, so a device failure leaves no partial set of files.
+    // The EXR does not depend on the tone mapping: it is written on its own thread (which compresses
+    // its chunks on all cores, see writeExr) while this one tone-maps on the device and encodes the
+    // PNGs. Every file goes to its temporary sibling first and nothing is renamed into place before all
+    // of them are complete, so a device or write failure changes none of the outputs.
     const std::vector<std::string> pngPaths = tonemapPngPaths(out.string(), cam.tonemaps);
-    std::vector<std::vector<unsigned char>> pngs;
-    auto t0 = std::chrono::steady_clock::now();
-    auto lap = [&](const char* what) {  // -v: where the output stage spends its time
-        auto t1 = std::chrono::steady_clock::now();
-        info(std::string("output: ") + what + " " + std::to_string(std::chrono::duration<double>(t1 - t0).count()) + " s");
+    using Clock = std::chrono::steady_clock;
+    auto seconds = [](Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); };
+    auto t0 = Clock::now();
+    auto lap = [&](const std::string& what) {  // -v: where the output stage spends its time
+        auto t1 = Clock::now();
+        info("output: " + what + " " + std::to_string(seconds(t0, t1)) + " s");
         t0 = t1;
     };
-    if (!cam.tonemaps.empty()) {
-        TonemapDevice tm(dc);
-        lap("tone-map program");
-        tm.upload(radiance);
-        for (const Tonemap& t : cam.tonemaps) {
-            TonemapSettings s = tonemapSettingsFrom(t);
-            s.truncate = opts.tonemapTruncate;
-            TonemapDeviceResult r = tm.map(s);
-            if (verbose())
-                info(cam.imageName + ": " + tmoKindName(s.op) + " log-average " + std::to_string(r.stats.logAverage) +
-                     (r.stats.hasWhite ? ", L_white " + std::to_string(r.stats.whiteL) : std::string()));
-            pngs.push_back(std::move(r.rgb8));
-        }
-        lap("tone mapping");
-    }
     ExrWriteOptions eo;
     eo.half = opts.exrHalf;
     eo.attributes["renderer"] = "clrt";
     eo.attributes["spp"] = std::to_string(opts.spp);
     eo.attributes["renderTime"] = formatSeconds(opts.renderSeconds) + " s";
     eo.attributes["device"] = opts.deviceName.empty() ? dc.info().name : opts.deviceName;
-    writeExr(out.string(), radiance, eo);
-    written.push_back(out.string());
-    lap("EXR");
-    for (size_t i = 0; i < pngs.size(); ++i) {
-        writePng8(pngPaths[i], radiance.width, radiance.height, pngs[i]);
-        written.push_back(pngPaths[i]);
+    const std::string exrPath = out.string();
+    std::string exrTmp;
+    std::exception_ptr exrError;
+    Clock::time_point exrStart = Clock::now(), exrEnd = exrStart;
+    std::thread exrThread([&] {
+        try {
+            exrTmp = writeExrUncommitted(exrPath, radiance, eo);
+        } catch (...) {
+            exrError = std::current_exception();
+        }
+        exrEnd = Clock::now();
+    });
+
+    std::exception_ptr error;  // the first failure: tone mapping, else the EXR, else a PNG
+    std::vector<std::string> pngTmps;
+    try {
+        std::vector<std::vector<unsigned char>> pngs;
+        if (!cam.tonemaps.empty()) {
+            TonemapDevice tm(dc);
+            lap("tone-map program");
+            tm.upload(radiance);
+            for (const Tonemap& t : cam.tonemaps) {
+                TonemapSettings s = tonemapSettingsFrom(t);
+                s.truncate = opts.tonemapTruncate;
+                TonemapDeviceResult r = tm.map(s);
+                if (verbose())
+                    info(cam.imageName + ": " + tmoKindName(s.op) + " log-average " + std::to_string(r.stats.logAverage) +
+                         (r.stats.hasWhite ? ", L_white " + std::to_string(r.stats.whiteL) : std::string()));
+                pngs.push_back(std::move(r.rgb8));
+            }
+            lap("tone mapping");
+        }
+        try {
+            for (size_t i = 0; i < pngs.size(); ++i)
+                pngTmps.push_back(writePng8Uncommitted(pngPaths[i], radiance.width, radiance.height, pngs[i]));
+            if (!pngs.empty()) lap("PNG");
+        } catch (...) {
+            exrThread.join();
+            error = exrError ? exrError : std::current_exception();
+        }
+    } catch (...) {
+        error = std::current_exception();
     }
-    if (!pngs.empty()) lap("PNG");
+    if (exrThread.joinable()) exrThread.join();
+    if (!error) error = exrError;
+    const double waited = seconds(t0, Clock::now());
+    if (!error)
+        info("output: EXR " + std::to_string(seconds(exrStart, exrEnd)) + " s (on its own thread; waited " +
+             std::to_string(waited) + " s for it)");
+
+    // Commit: EXR first, then the PNGs; on any failure remove every temporary not yet renamed.
+    std::vector<std::pair<std::string, std::string>> commits;  // (temporary, final path)
+    if (!exrTmp.empty()) commits.emplace_back(exrTmp, exrPath);
+    for (size_t i = 0; i < pngTmps.size(); ++i) commits.emplace_back(pngTmps[i], pngPaths[i]);
+    size_t done = 0;
+    try {
+        if (error) std::rethrow_exception(error);
+        for (; done < commits.size(); ++done) {
+            commitTemporary(commits[done].first, commits[done].second);
+            written.push_back(commits[done].second);
+        }
+    } catch (...) {
+        for (size_t i = done; i < commits.size(); ++i) std::remove(commits[i].first.c_str());
+        throw;
+    }
     return written;
 }
 

@@ -2,8 +2,10 @@
 // An ImageName ending in .png is clamped and quantised (round, or floor with --ldr-quantize floor);
 // one ending in .exr is written as float (or half) RGB OpenEXR, ZIP-compressed, with header
 // attributes (renderer, spp, renderTime, device), and next to it one tone-mapped PNG per Tonemap block
-// of the camera, tone-mapped on the OpenCL device (render/tonemap_device.h). Every file is written
-// through a temporary sibling and rename(); all tone mapping is done before the first file is written.
+// of the camera, tone-mapped on the OpenCL device (render/tonemap_device.h) while the EXR is written on
+// a second thread. Every file is written to a temporary sibling; they are renamed into place only when
+// all of them are complete, so a tone-mapping or write failure changes none of them (only a failing
+// rename, after the others succeeded, can leave a partial set).
 #pragma once
 #include <string>
 #include <vector>
