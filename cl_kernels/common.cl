@@ -46,6 +46,13 @@ inline float Rng_Uniform(RngKey k, uint dim) {
     return (float)(h >> 8) * (1.0f / 16777216.0f);
 }
 
+/* x^e for x >= 0 (Phong lobes). exp2(e·log2 x) instead of pow(): PoCL's one-value pow() costs about
+ * as much as the rest of sample_lights (TT at 1 spp: 0.36 -> 0.30 s for the kernel); the relative
+ * error, ~3 ulp of log2 times e·|log2 x|, stays below 1e-5 wherever the lobe is not negligible. */
+inline float Math_PowNonNegative(float x, float e) {
+    return x > 0.0f ? exp2(e * log2(x)) : pow(x, e); /* pow for x = 0: 0^0 = 1, 0^e = 0 */
+}
+
 /* ---- Warps ------------------------------------------------------------------------------------ */
 inline float3 Warp_CosineHemisphere(float u1, float u2) {
     float r = sqrt(u1);

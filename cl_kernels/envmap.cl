@@ -92,9 +92,8 @@ inline int EnvDist_FindInterval(const __global float* cdf, int n, float x) {
 
 /* pdf over solid angle of unit direction d (lat-long: uniform in solid angle within a cell; probe:
  * uniform in (u, v) over the cell's part inside the disc). */
-inline float EnvDist_Pdf(const __global float* dist, float3 d) {
+inline float EnvDist_PdfUv(const __global float* dist, float2 uv) {
     int W = (int)dist[0], H = (int)dist[1], mapping = (int)dist[2];
-    float2 uv = EnvMap_DirToUv(mapping, d);
     int i = clamp((int)(uv.x * (float)W), 0, W - 1), j = clamp((int)(uv.y * (float)H), 0, H - 1);
     const __global float* marg = dist + 4;
     const __global float* cond = dist + 4 + H + 1 + j * (W + 1);
@@ -107,9 +106,13 @@ inline float EnvDist_Pdf(const __global float* dist, float3 d) {
     float f = dist[4 + H + 1 + H * (W + 1) + j * W + i];
     return f > 0.0f ? p * (float)W * (float)H / f * EnvMap_UvToSolidAngle(mapping, uv.x, uv.y) : 0.0f;
 }
+inline float EnvDist_Pdf(const __global float* dist, float3 d) {
+    return EnvDist_PdfUv(dist, EnvMap_DirToUv((int)dist[2], d));
+}
 
-/* Importance sample: returns 1 and the direction and its solid-angle pdf, or 0 (no direction). */
-inline int EnvDist_Sample(const __global float* dist, float u1, float u2, float3* dir, float* pdf) {
+/* Importance sample: returns 1 and the direction, its solid-angle pdf and its map coordinates (for
+ * the radiance lookup, sparing the direction -> (u, v) round trip), or 0 (no direction). */
+inline int EnvDist_SampleUv(const __global float* dist, float u1, float u2, float3* dir, float* pdf, float2* uvOut) {
     int W = (int)dist[0], H = (int)dist[1], mapping = (int)dist[2];
     *pdf = 0.0f;
     const __global float* marg = dist + 4;
@@ -125,6 +128,7 @@ inline int EnvDist_Sample(const __global float* dist, float u1, float u2, float3
         float st = sqrt(fmax(0.0f, 1.0f - z * z));
         float phi = CLRT_PI * (2.0f * (((float)i + du) / (float)W) - 1.0f);
         *dir = (float3)(st * sin(phi), z, -st * cos(phi));
+        *uvOut = (float2)(((float)i + du) / (float)W, acos(clamp(z, -1.0f, 1.0f)) * CLRT_INV_PI);
         float omega = 2.0f * CLRT_PI / (float)W * (zr[j] - zr[j + 1]);
         *pdf = omega > 0.0f ? p / omega : 0.0f;
         return *pdf > 0.0f && isfinite(*pdf);
@@ -144,8 +148,13 @@ inline int EnvDist_Sample(const __global float* dist, float u1, float u2, float3
         if (!inside) return 0;
     }
     if (!EnvMap_UvToDir(mapping, u, v, dir)) return 0;
+    *uvOut = (float2)(u, v);
     float f = dist[4 + H + 1 + H * (W + 1) + j * W + i];
     float pUv = f > 0.0f ? p * (float)W * (float)H / f : 0.0f;
     *pdf = pUv * EnvMap_UvToSolidAngle(mapping, u, v);
     return *pdf > 0.0f && isfinite(*pdf);
+}
+inline int EnvDist_Sample(const __global float* dist, float u1, float u2, float3* dir, float* pdf) {
+    float2 uv;
+    return EnvDist_SampleUv(dist, u1, u2, dir, pdf, &uv);
 }

@@ -86,8 +86,10 @@ inline float3 EnvironmentLight_Sample(const __global Light* light, float3 n, flo
     if (light->distribution == CLRT_INVALID && (sampler == ENV_SAMPLE_IMPORTANCE || sampler == ENV_SAMPLE_MIS))
         sampler = ENV_SAMPLE_COSINE;
     const __global float* d = envDist + (light->distribution == CLRT_INVALID ? 0 : light->distribution);
+    const int mapping = light->mapping;
     float3 w = n;
     float pdf = 0.0f;
+    float2 uv = (float2)(-1.0f); /* map coordinates of w when a branch knows them */
     switch (sampler) {
     case ENV_SAMPLE_UNIFORM:
         w = EnvSample_Uniform(n, u);
@@ -98,15 +100,16 @@ inline float3 EnvironmentLight_Sample(const __global Light* light, float3 n, flo
         pdf = fmax(dot(w, n), 0.0f) * CLRT_INV_PI;
         break;
     case ENV_SAMPLE_IMPORTANCE:
-        if (!EnvDist_Sample(d, u.x, u.y, &w, &pdf)) return (float3)(0.0f);
+        if (!EnvDist_SampleUv(d, u.x, u.y, &w, &pdf, &uv)) return (float3)(0.0f);
         break;
     default: { /* ENV_SAMPLE_MIS */
         float pImp;
         if (u.x < 0.5f) {
-            if (!EnvDist_Sample(d, 2.0f * u.x, u.y, &w, &pImp)) return (float3)(0.0f);
+            if (!EnvDist_SampleUv(d, 2.0f * u.x, u.y, &w, &pImp, &uv)) return (float3)(0.0f);
         } else {
             w = EnvSample_Cosine(n, (float2)(fmin(2.0f * u.x - 1.0f, CLRT_ONE_MINUS_EPS), u.y));
-            pImp = EnvDist_Pdf(d, w);
+            uv = EnvMap_DirToUv(mapping, w); /* once, for the pdf and the lookup */
+            pImp = EnvDist_PdfUv(d, uv);
         }
         pdf = 0.5f * pImp + 0.5f * fmax(dot(w, n), 0.0f) * CLRT_INV_PI;
         break;
@@ -114,7 +117,8 @@ inline float3 EnvironmentLight_Sample(const __global Light* light, float3 n, flo
     }
     *wi = w;
     if (!(pdf > 0.0f) || !isfinite(pdf)) return (float3)(0.0f);
-    float3 l = EnvMap_Radiance(texels, images[light->image], light->mapping, light->radiance.xyz, w);
+    if (uv.x < 0.0f) uv = EnvMap_DirToUv(mapping, w);
+    float3 l = EnvMap_Lookup(texels, images[light->image], mapping, uv.x, uv.y) * light->radiance.xyz;
     return finiteOrZero(l / pdf);
 }
 

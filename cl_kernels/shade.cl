@@ -282,7 +282,7 @@ __kernel void sample_lights(SceneParams scene, int count, int lightBegin, int li
             float cosTheta = dot(n, wi);
             if (cosTheta > 0.0f && dot(ng, wi) > 0.0f && maxComponent(e) > 0.0f) {
                 float3 hv = normalize(wi + sp.wo.xyz);
-                float spec = pow(fmax(0.0f, dot(n, hv)), sp.ks.w);
+                float spec = Math_PowNonNegative(fmax(0.0f, dot(n, hv)), sp.ks.w);
                 float3 c = path.throughput.xyz * (sp.kd.xyz * cosTheta + sp.ks.xyz * spec) * e;
                 float3 org = Ray_OffsetOrigin(p, ng);
                 float tMax = isinf(dist) ? INFINITY : length(p + dist * wi - org) * (1.0f - 1e-5f);

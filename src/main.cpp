@@ -206,7 +206,7 @@ int cmdRender(const Args& a) {
     std::vector<std::unique_ptr<Renderer>> renderers;
     for (const DeviceInfo& d : devs) {
         try {
-            auto dc = std::make_unique<DeviceContext>(d, /*profiling=*/true);  // per-kernel times for stats
+            auto dc = std::make_unique<DeviceContext>(d, /*profiling=*/!std::getenv("CLRT_NO_PROFILE"));  // per-kernel times for stats
             auto r = std::make_unique<Renderer>(*dc, ds);
             contexts.push_back(std::move(dc));
             renderers.push_back(std::move(r));
