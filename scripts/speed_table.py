@@ -36,8 +36,12 @@ def machine(clrt, device):
     for line in sh(["lscpu"]).stdout.splitlines():
         if line.startswith("Model name:"):
             cpu = line.split(":", 1)[1].strip()
-    dev = sh([clrt, "devices"]).stdout.strip().splitlines()
-    return cpu, os.cpu_count(), dev[0].strip() if dev else "?"
+    lines = sh([clrt, "devices"]).stdout.strip().splitlines()
+    dev = lines[0].strip() if lines else "?"
+    m = re.match(r"\[\d+\]\s+\S+\s+(.*?)\s+\(platform: ([^)]*)\).*?driver:\s*(\S+)", dev)
+    if m:  # "[0] CPU  NAME  (platform: P) ... driver: D" -> "NAME (P D)"
+        dev = "%s (%s %s)" % (m.group(1), m.group(2), m.group(3))
+    return cpu, os.cpu_count(), dev
 
 
 def med(xs):
