@@ -3,7 +3,12 @@
 // materials, textures and the texel atlas, lights, the BVH over all primitives, and the feature set.
 #include "render/device_scene.h"
 
+#include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <exception>
+#include <system_error>
+#include <thread>
 #include <cmath>
 #include <map>
 
@@ -81,6 +86,76 @@ void setSamplesPerPixel(dev::CameraParams& c, int spp) {
     c.strataY = sx;
 }
 
+namespace {
+
+// The triangles of one mesh shape in world space, in index order (degenerate and non-finite ones
+// counted and left out). Independent per shape, so shapes are flattened on several threads.
+struct MeshTriangles {
+    std::vector<dev::Triangle> triangles;
+    std::vector<dev::TriangleShading> shading;
+    std::vector<Aabb> boxes;
+    size_t degenerate = 0, nonFinite = 0;
+};
+
+void flattenMesh(const Scene& scene, const Shape& s, int texSet, MeshTriangles& out) {
+    const MeshData& mesh = scene.meshes.at(s.meshIndex);
+    out.triangles.reserve(mesh.indices.size() / 3);
+    out.shading.reserve(mesh.indices.size() / 3);
+    out.boxes.reserve(mesh.indices.size() / 3);
+    std::vector<Vec3> pw(mesh.positions.size());
+    for (size_t v = 0; v < pw.size(); ++v) pw[v] = s.transform.transformPoint(mesh.positions[v]);
+    // Smooth shading: given normals (transformed by the inverse transpose) or area-weighted ones.
+    std::vector<Vec3> nw;
+    if (s.smooth) {
+        nw.assign(pw.size(), Vec3(0, 0, 0));
+        if (mesh.normals.size() == mesh.positions.size()) {
+            Mat4 inv;
+            Mat4 invT = s.transform.inverse(inv) ? inv.transposed() : Mat4::identity();
+            for (size_t v = 0; v < nw.size(); ++v) nw[v] = normalize(invT.transformVector(mesh.normals[v]));
+        } else {
+            for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+                int a = mesh.indices[t], b = mesh.indices[t + 1], c = mesh.indices[t + 2];
+                Vec3 n = cross(pw[b] - pw[a], pw[c] - pw[a]);  // length = 2·area: area weighting
+                if (!isFinite(n)) continue;
+                nw[a] += n; nw[b] += n; nw[c] += n;
+            }
+            for (Vec3& n : nw) n = normalize(n);
+        }
+    }
+    bool hasUv = mesh.uvs.size() == mesh.positions.size();
+    for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+        int a = mesh.indices[t], b = mesh.indices[t + 1], c = mesh.indices[t + 2];
+        const Vec3 &p0 = pw[a], &p1 = pw[b], &p2 = pw[c];
+        if (!isFinite(p0) || !isFinite(p1) || !isFinite(p2)) { ++out.nonFinite; continue; }
+        Vec3 n = cross(p1 - p0, p2 - p0);
+        float len = length(n);
+        if (p0 == p1 || p1 == p2 || p0 == p2 || !(len > 0) || !std::isfinite(len)) {
+            ++out.degenerate;
+            continue;
+        }
+        n = n / len;
+        dev::Triangle tri{toFloat4(p0), toFloat4(p1), toFloat4(p2)};
+        dev::TriangleShading sh{};
+        auto normalAt = [&](int v) { return (s.smooth && nw[v] != Vec3(0, 0, 0) && isFinite(nw[v])) ? nw[v] : n; };
+        sh.n0 = toFloat4(normalAt(a));
+        sh.n1 = toFloat4(normalAt(b));
+        sh.n2 = toFloat4(normalAt(c));
+        if (hasUv) {
+            sh.uv01 = {mesh.uvs[a].x, mesh.uvs[a].y, mesh.uvs[b].x, mesh.uvs[b].y};
+            sh.uv2 = {mesh.uvs[c].x, mesh.uvs[c].y, 0, 0};
+        }
+        sh.material = s.materialIndex;
+        sh.textureSet = texSet;
+        Aabb box;
+        box.grow(p0); box.grow(p1); box.grow(p2);
+        out.triangles.push_back(tri);
+        out.shading.push_back(sh);
+        out.boxes.push_back(box);
+    }
+}
+
+}  // namespace
+
 DeviceScene flattenScene(const Scene& scene) {
     auto t0 = std::chrono::steady_clock::now();
     DeviceScene ds;
@@ -118,8 +193,11 @@ DeviceScene flattenScene(const Scene& scene) {
         info.height = img.height;
         if (ds.texels.size() + size_t(img.width) * img.height > size_t(INT32_MAX))
             throw Error(scene.path + ": textures exceed 2^31 texels");
-        for (size_t p = 0; p < size_t(img.width) * img.height; ++p)
-            ds.texels.push_back({img.pixels[p * 3], img.pixels[p * 3 + 1], img.pixels[p * 3 + 2], 0});
+        const size_t n = size_t(img.width) * img.height;
+        ds.texels.resize(size_t(info.offset) + n);
+        dev::float4* dst = ds.texels.data() + info.offset;
+        const float* src = img.pixels.data();
+        for (size_t p = 0; p < n; ++p) dst[p] = {src[p * 3], src[p * 3 + 1], src[p * 3 + 2], 0};
         int slot = int(ds.images.size());
         ds.images.push_back(info);
         imageIsHdr.push_back(img.isHdr);
@@ -195,6 +273,7 @@ DeviceScene flattenScene(const Scene& scene) {
         ds.triangleShading.reserve(total);
         boxes.reserve(total + scene.shapes.size());
     }
+    std::vector<std::pair<const Shape*, int>> meshJobs;  // (shape, texture set)
     for (const Shape& s : scene.shapes) {
         int texSet = textureSetFor(s);
         if (s.type == ShapeType::Plane) {
@@ -235,56 +314,39 @@ DeviceScene flattenScene(const Scene& scene) {
             sphereBoxes.push_back(box);
             continue;
         }
-        const MeshData& mesh = scene.meshes.at(s.meshIndex);
-        std::vector<Vec3> pw(mesh.positions.size());
-        for (size_t v = 0; v < pw.size(); ++v) pw[v] = s.transform.transformPoint(mesh.positions[v]);
-        // Smooth shading: given normals (transformed by the inverse transpose) or area-weighted ones.
-        std::vector<Vec3> nw;
-        if (s.smooth) {
-            nw.assign(pw.size(), Vec3(0, 0, 0));
-            if (mesh.normals.size() == mesh.positions.size()) {
-                Mat4 inv;
-                Mat4 invT = s.transform.inverse(inv) ? inv.transposed() : Mat4::identity();
-                for (size_t v = 0; v < nw.size(); ++v) nw[v] = normalize(invT.transformVector(mesh.normals[v]));
-            } else {
-                for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
-                    int a = mesh.indices[t], b = mesh.indices[t + 1], c = mesh.indices[t + 2];
-                    Vec3 n = cross(pw[b] - pw[a], pw[c] - pw[a]);  // length = 2·area: area weighting
-                    if (!isFinite(n)) continue;
-                    nw[a] += n; nw[b] += n; nw[c] += n;
-                }
-                for (Vec3& n : nw) n = normalize(n);
+        meshJobs.push_back({&s, texSet});
+    }
+    // Meshes on all hardware threads (each job writes only its own result), then concatenated in
+    // shape order: the same arrays as a sequential loop.
+    {
+        std::vector<MeshTriangles> results(meshJobs.size());
+        std::atomic<size_t> next{0};
+        const size_t threads = std::min<size_t>(meshJobs.size(), std::max(1u, std::thread::hardware_concurrency()));
+        std::vector<std::exception_ptr> errors(std::max<size_t>(threads, 1));
+        auto worker = [&](size_t t) {
+            try {
+                for (size_t j; (j = next++) < meshJobs.size();)
+                    flattenMesh(scene, *meshJobs[j].first, meshJobs[j].second, results[j]);
+            } catch (...) {
+                errors[t] = std::current_exception();
+                next = meshJobs.size();  // the others stop too
             }
+        };
+        std::vector<std::thread> pool;
+        try {
+            for (size_t t = 1; t < threads; ++t) pool.emplace_back(worker, t);
+        } catch (const std::system_error&) {  // no thread to be had: the others (and this one) do it
         }
-        bool hasUv = mesh.uvs.size() == mesh.positions.size();
-        for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
-            int a = mesh.indices[t], b = mesh.indices[t + 1], c = mesh.indices[t + 2];
-            const Vec3 &p0 = pw[a], &p1 = pw[b], &p2 = pw[c];
-            if (!isFinite(p0) || !isFinite(p1) || !isFinite(p2)) { ++nanSkipped; continue; }
-            Vec3 n = cross(p1 - p0, p2 - p0);
-            float len = length(n);
-            if (p0 == p1 || p1 == p2 || p0 == p2 || !(len > 0) || !std::isfinite(len)) {
-                ++ds.skippedTriangles;
-                continue;
-            }
-            n = n / len;
-            dev::Triangle tri{toFloat4(p0), toFloat4(p1), toFloat4(p2)};
-            dev::TriangleShading sh{};
-            auto normalAt = [&](int v) { return (s.smooth && nw[v] != Vec3(0, 0, 0) && isFinite(nw[v])) ? nw[v] : n; };
-            sh.n0 = toFloat4(normalAt(a));
-            sh.n1 = toFloat4(normalAt(b));
-            sh.n2 = toFloat4(normalAt(c));
-            if (hasUv) {
-                sh.uv01 = {mesh.uvs[a].x, mesh.uvs[a].y, mesh.uvs[b].x, mesh.uvs[b].y};
-                sh.uv2 = {mesh.uvs[c].x, mesh.uvs[c].y, 0, 0};
-            }
-            sh.material = s.materialIndex;
-            sh.textureSet = texSet;
-            Aabb box;
-            box.grow(p0); box.grow(p1); box.grow(p2);
-            ds.triangles.push_back(tri);
-            ds.triangleShading.push_back(sh);
-            boxes.push_back(box);
+        worker(0);
+        for (std::thread& t : pool) t.join();
+        for (const std::exception_ptr& e : errors)
+            if (e) std::rethrow_exception(e);
+        for (MeshTriangles& r : results) {
+            ds.triangles.insert(ds.triangles.end(), r.triangles.begin(), r.triangles.end());
+            ds.triangleShading.insert(ds.triangleShading.end(), r.shading.begin(), r.shading.end());
+            boxes.insert(boxes.end(), r.boxes.begin(), r.boxes.end());
+            ds.skippedTriangles += r.degenerate;
+            nanSkipped += r.nonFinite;
         }
     }
     if (ds.skippedTriangles) warn(scene.path + ": skipped " + std::to_string(ds.skippedTriangles) + " degenerate triangles");
