@@ -41,7 +41,9 @@ struct Collapser {
                 double bestArea = -1;
                 for (int i = 0; i < k; ++i) {
                     const BvhNode& c = bin.nodes[size_t(lanes[i])];
-                    if (c.count == 0 && halfArea(c) > bestArea) { bestArea = halfArea(c); best = i; }
+                    if (c.count > 0) continue;
+                    const double area = halfArea(c);
+                    if (area > bestArea) { bestArea = area; best = i; }
                 }
                 if (best < 0) break;
                 const int c = lanes[best];
