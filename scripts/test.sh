@@ -1,10 +1,14 @@
 #!/usr/bin/env bash
-# Sets up (scripts/setup.sh), runs the whole Catch2 test suite on the PoCL CPU device, then a short
+# Sets up (scripts/setup.sh), runs the whole Catch2 test suite on the PoCL CPU device, then the
+# OpenCL-implementation checks (scripts/test_implementations.sh: the device tests on Intel's CPU
+# runtime, the oclgrind suite, GPU-target compiles of every kernel variant), then a short
 # libFuzzer smoke run of the scene/PLY/image readers (scripts/fuzz.sh; skip with CLRT_NO_FUZZ=1).
 # Usage: bash scripts/test.sh [catch2 args...]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
+# Intel's OpenCL CPU runtime beside PoCL when scripts/setup_intel_ocl.sh installed it; "cpu" is PoCL.
+[ -f build/opencl-env.sh ] && . build/opencl-env.sh
 # Tests run on PoCL's CPU device; a private kernel-binary cache keeps reruns fast.
 export CLRT_TEST_DEVICE="${CLRT_TEST_DEVICE:-cpu}"
 export CLRT_CACHE_DIR="${CLRT_CACHE_DIR:-$PWD/build/kernel-cache}"
@@ -23,6 +27,7 @@ else
   echo "tests: ${p:-0} passed, ${f:-1} failed"
 fi
 [ "$rc" -eq 0 ] || exit "$rc"
+[ $# -eq 0 ] && { bash scripts/test_implementations.sh || exit 1; }
 if [ -z "${CLRT_NO_FUZZ:-}" ] && [ $# -eq 0 ]; then
   command -v clang++ >/dev/null || { [ "$(id -u)" -eq 0 ] && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq clang >/dev/null; }
   echo "fuzz smoke run (6 s per target):"
