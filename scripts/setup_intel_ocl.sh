@@ -6,9 +6,11 @@
 # scripts/test.sh sources it when present. Without it (or when this script is skipped or cannot reach
 # PyPI) clrt sees only the system's ICDs, as before.
 # The wheel's own libOpenCL.so (a loader) is never put on the library path: Debian's ocl-icd loader
-# reads the ICD folder. libintelocl.so finds its libsvml/libimf/libirng/libintlc/libtbb next to itself
-# through its RUNPATH ($ORIGIN); if a wheel lacks that, a folder of links to just those libraries is
-# put on LD_LIBRARY_PATH by opencl-env.sh.
+# reads the ICD folder. libintelocl.so needs the wheel's libsvml/libimf/libirng/libintlc/libtbb: its
+# RUNPATH finds them, except when the process has already loaded Debian's older libtbb.so.12 (e.g.
+# build/ray_bench through Embree): then Intel's platform silently fails to load. opencl-env.sh
+# therefore puts build/intel-ocl-deps, links to just those libraries, on LD_LIBRARY_PATH (TBB keeps
+# backward compatibility within a soname, so Embree runs on the wheel's newer TBB).
 # Usage: bash scripts/setup_intel_ocl.sh     (idempotent; CLRT_NO_INTEL_OCL=1 skips it)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -38,17 +40,13 @@ rm -rf "$ICD"; mkdir -p "$ICD"
 cp /etc/OpenCL/vendors/*.icd "$ICD/" 2>/dev/null || true
 echo "$lib" > "$ICD/intel-cpu.icd"
 
-# Dependencies that the RUNPATH does not resolve: links to those libraries only (never libOpenCL.so).
-extra=""
-if ldd "$lib" | grep -q "not found"; then
-  deps=$ROOT/build/intel-ocl-deps; rm -rf "$deps"; mkdir -p "$deps"
-  for f in "$VENV"/lib/lib{svml,imf,irng,intlc,tbb,tbbmalloc,common_clang}*.so*; do [ -e "$f" ] && ln -sf "$f" "$deps/"; done
-  extra="export LD_LIBRARY_PATH=$deps\${LD_LIBRARY_PATH:+:\$LD_LIBRARY_PATH}"
-fi
+# Links to the runtime libraries libintelocl.so needs (never libOpenCL.so).
+deps=$ROOT/build/intel-ocl-deps; rm -rf "$deps"; mkdir -p "$deps"
+for f in "$VENV"/lib/lib{svml,imf,irng,intlc,tbb,tbbmalloc}.so*; do [ -e "$f" ] && ln -sf "$f" "$deps/"; done
 cat > "$ENVF" <<ENV
 # Written by scripts/setup_intel_ocl.sh: OpenCL ICDs = the system's (PoCL) + Intel's CPU runtime.
 export OCL_ICD_VENDORS=$ICD
-$extra
+export LD_LIBRARY_PATH=$deps\${LD_LIBRARY_PATH:+:\$LD_LIBRARY_PATH}
 ENV
 # Check that the loader now sees Intel's platform (clrt may not be built yet: use clinfo if present).
 if command -v clinfo >/dev/null && ! (OCL_ICD_VENDORS=$ICD clinfo -l 2>/dev/null | grep -q "Intel(R) OpenCL"); then
