@@ -10,7 +10,9 @@
 # clEnqueueFillBuffer is turned into a host write (tests/oclgrind/fill_as_write.c, LD_PRELOAD):
 # oclgrind 21.10 does not count a fill as initialising memory, which reports every read of a
 # zero-filled buffer. Oclgrind's reports go to a log per run (OCLGRIND_LOG); the suite fails on any
-# report, on a clrt failure, or when oclgrind is missing. Logs: build/oclgrind/.
+# report, on a clrt failure, on a render that did not run on the Oclgrind device, or when oclgrind is
+# missing. A negative control runs first: tests/oclgrind/oob_probe.c (an out-of-bounds read and an
+# uninitialised value) must be reported in each pass. Logs: build/oclgrind/.
 # Usage: bash scripts/oclgrind_suite.sh [--quick]   (--quick: pass 1 only)
 set -uo pipefail
 cd "$(dirname "$0")/.."
@@ -29,6 +31,10 @@ PASSES="races uninit"
 rm -rf "$OUT"; mkdir -p "$OUT/img"
 if [ ! -f "$SHIM" ] || [ tests/oclgrind/fill_as_write.c -nt "$SHIM" ]; then
   cc -shared -fPIC -O2 -o "$SHIM" tests/oclgrind/fill_as_write.c -lOpenCL || fail "cannot build $SHIM"
+fi
+PROBE=$ROOT/build/oclgrind-oob-probe
+if [ ! -x "$PROBE" ] || [ tests/oclgrind/oob_probe.c -nt "$PROBE" ]; then
+  cc -O1 -o "$PROBE" tests/oclgrind/oob_probe.c -lOpenCL || fail "cannot build $PROBE"
 fi
 
 runs=0; bad=0
@@ -51,12 +57,23 @@ check() {
   fi
 }
 
+# Negative control: the probe's faults must be reported in every pass.
+for pass in $PASSES; do
+  check probe "$pass" "$PROBE" > /dev/null
+  grep -q "Invalid read" "$OUT/probe.$pass.oclgrind.log" ||
+    fail "oclgrind did not report the probe's out-of-bounds read ($pass pass): it would not see real faults either"
+  if [ "$pass" = uninit ]; then grep -qi "uninitiali" "$OUT/probe.$pass.oclgrind.log" ||
+    fail "oclgrind did not report the probe's uninitialised value"; fi
+done
+runs=0; bad=0
+
 n=0
 while read -r scene args; do
   case "$scene" in ''|\#*) continue ;; esac
   n=$((n + 1)); name=$(printf "%02d-%s" $n "$(basename "${scene%.*}")")
   for pass in $PASSES; do
-    check "$name" "$pass" build/clrt render "$SCENES/$scene" --resolution 8x8 --spp 1 -o "$OUT/img" $args
+    check "$name" "$pass" build/clrt render "$SCENES/$scene" --resolution 8x8 --spp 1 -o "$OUT/img" -v $args
+    grep -q "(Oclgrind)" "$OUT/$name.$pass.out" || { bad=$((bad + 1)); echo "oclgrind_suite: $name did not run on Oclgrind"; }
   done
 done < scripts/kernel_variants.txt
 
