@@ -22,7 +22,7 @@ if [ -f build/opencl-env.sh ] && ! build/clrt devices | grep -q "(platform: Inte
   echo "implementations: FAIL: build/opencl-env.sh is set up but Intel's OpenCL platform is not listed:"
   build/clrt devices; rc=1
 fi
-platforms=$(build/clrt devices | sed -n 's/^\[[0-9]*\] *CPU .*(platform: \([^)]*\)).*/\1/p' | sort -u |
+platforms=$(build/clrt devices | sed -n 's/^\[[0-9]*\] *CPU .*(platform: \(.*\))  compute units.*/\1/p' | sort -u |
             grep -v "^Portable Computing Language$" || true)
 while read -r plat; do
   [ -n "$plat" ] || continue
