@@ -19,8 +19,8 @@ VENV=$ROOT/build/venv-intel
 ICD=$ROOT/build/opencl-vendors
 ENVF=$ROOT/build/opencl-env.sh
 say() { echo "setup_intel_ocl: $*"; }
-[ -n "${CLRT_NO_INTEL_OCL:-}" ] && { say "skipped (CLRT_NO_INTEL_OCL set)"; exit 0; }
 mkdir -p build
+[ -n "${CLRT_NO_INTEL_OCL:-}" ] && { rm -f "$ENVF"; say "skipped (CLRT_NO_INTEL_OCL set; $ENVF removed)"; exit 0; }
 
 lib=$VENV/lib/libintelocl.so
 if [ ! -e "$lib" ]; then
