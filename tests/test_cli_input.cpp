@@ -254,6 +254,13 @@ TEST_CASE("cli input: a value beyond float range in an XML scene is exit 2 namin
         s = sub(s, "<Triangle id=\"1\">", "<Triangle id=\"4294967297\">");
         expectBadInput(d, run(s), {"s.xml:", "id='4294967297' is out of range"});
     }
+    SECTION("a transformation reference beyond int range (would wrap onto t1)") {
+        expectBadInput(d, run(xmlScene("0 0 0 1 0 0 0 1 0",
+                                       "<Triangle id=\"1\"><Indices>1 2 3</Indices><Material>1</Material>"
+                                       "<Transformations>t4294967297</Transformations></Triangle>",
+                                       "<Transformations><Translation id=\"1\">0 0 0</Translation></Transformations>\n")),
+                       {"s.xml:", "'t4294967297': id out of range"});
+    }
 }
 
 TEST_CASE("cli input: PLY vertex data that is not a finite float is exit 2 naming the PLY", "[cli][cli-input]") {

@@ -53,6 +53,7 @@ const std::map<std::string, std::string> kExpected = {
     {"ply_dev_zero.xml", "/dev/zero: cannot open PLY file: not a regular file"},
     {"binaryfile_is_directory.xml", "not a regular file"},
     {"id_overflow.xml", "attribute id='99999999999' is out of range"},
+    {"transform_id_overflow.xml", "transformation 't4294967297': id out of range"},
     {"camera_huge_gaze.xml", ""},
 };
 
