@@ -326,7 +326,8 @@ struct Walker {
                 out = vec3(*c);
                 if (degamma)
                     out = Vec3(std::pow(out.x, 2.2f), std::pow(out.y, 2.2f), std::pow(out.z, 2.2f));
-                if (!isFinite(out)) fail(*c, describe(n) + ": <" + name + "> overflows a 32-bit float after degamma");
+                if (!isFinite(out))  // pow of a negative value, or beyond float range
+                    fail(*c, describe(n) + ": <" + name + "> is not finite after degamma (negative, or overflows a 32-bit float)");
             }
         };
         colour("AmbientReflectance", m.ambient);
