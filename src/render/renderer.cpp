@@ -119,6 +119,21 @@ struct Renderer::Impl {
     // image; `bounces` says whether any material makes children.
     void traceBatch(int n, const dev::SceneParams& sp, bool bounces, size_t lightChunk, RenderCounters& counters);
     std::vector<int> valid, target;  // compaction scratch, at most 2 * queueCapacity each
+
+    // Reads pixels [first, end) back into `out`, scaled by `inv` (each tile's pixels are written by
+    // exactly one device). Blocking, so the queue is drained afterwards.
+    void readTile(cl::Buffer& image, size_t first, size_t end, float inv, ImageRGB& out) {
+        tilePixels.resize(end - first);
+        CL_CPP(dc.queue().enqueueReadBuffer(image, CL_TRUE, first * sizeof(dev::float4),
+                                            tilePixels.size() * sizeof(dev::float4), tilePixels.data()));
+        for (size_t i = 0; i < tilePixels.size(); ++i) {
+            float* o = &out.pixels[(first + i) * 3];
+            o[0] = tilePixels[i].x * inv;
+            o[1] = tilePixels[i].y * inv;
+            o[2] = tilePixels[i].z * inv;
+        }
+    }
+    std::vector<dev::float4> tilePixels;
 };
 
 void Renderer::Impl::setRenderArgs(const dev::CameraParams& cp, const dev::SceneParams& sp, cl::Buffer& image) {
@@ -254,7 +269,9 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     auto t0 = std::chrono::steady_clock::now();
     const DeviceScene& ds = m.scene;
     dev::CameraParams cp = makeCameraParams(cam);
-    setSamplesPerPixel(cp, settings.spp);
+    // The loader and the command line already cap both (with a warning); this is the backstop for
+    // scenes built in code.
+    setSamplesPerPixel(cp, std::min(settings.spp, kMaxSamplesPerPixel));
     const size_t numPixels = size_t(cam.width) * cam.height;
     const size_t imageBytes = numPixels * sizeof(dev::float4);
     checkImageFits(m.dc.info(), cam);
@@ -268,6 +285,7 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     const bool bounces = ds.features.mirror || ds.features.dielectric || ds.features.conductor;
     dev::SceneParams sp = ds.params;
     sp.seed = settings.seed;
+    sp.maxDepth = std::min(sp.maxDepth, kMaxRecursionDepth);
     // Dielectrics split into both children while the queue can hold them and few samples are taken;
     // beyond that (or with many samples) one child is chosen by Fresnel weight (same expectation).
     int split = 0;
@@ -289,7 +307,6 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     CL_CPP(q.enqueueFillBuffer(image, dev::float4{0, 0, 0, 0}, 0, imageBytes));
     m.setRenderArgs(cp, sp, image);
 
-    std::vector<dev::float4> tilePixels;
     const float inv = 1.0f / float(cp.spp);
     size_t tileFirst = 0, tileCount = 0;
     while (nextTile(tileFirst, tileCount)) {
@@ -313,16 +330,7 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
                 }
             }
         }
-        // Read the tile back: each tile's pixels are written by exactly one device.
-        tilePixels.resize(tileEnd - tileFirst);
-        CL_CPP(q.enqueueReadBuffer(image, CL_TRUE, tileFirst * sizeof(dev::float4),
-                                   tilePixels.size() * sizeof(dev::float4), tilePixels.data()));
-        for (size_t i = 0; i < tilePixels.size(); ++i) {
-            float* o = &out.pixels[(tileFirst + i) * 3];
-            o[0] = tilePixels[i].x * inv;
-            o[1] = tilePixels[i].y * inv;
-            o[2] = tilePixels[i].z * inv;
-        }
+        m.readTile(image, tileFirst, tileEnd, inv, out);
         counters.tiles += 1;
         counters.pixels += tileEnd - tileFirst;
         m.collectProfile(counters);  // the blocking read above drained the queue
