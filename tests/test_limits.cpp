@@ -212,24 +212,30 @@ TEST_CASE("limits: NumSamples above 1048576 is capped with a warning naming the 
 TEST_CASE("limits: two facing mirrors at MaxRecursionDepth 1e9 finish at depth 256 with a warning", "[limits][cli]") {
     TempDir d;
     const std::vector<std::string> env = {"CLRT_CACHE_DIR=" + d.file("cache")};
-    auto render = [&](const std::string& depth, const std::string& name) {
+    auto render = [&](const std::string& depth, const std::string& name, const std::string& spp = "4") {
         writeText(d.file(name + ".xml"),
                   oneByOne("<MaxRecursionDepth>" + depth + "</MaxRecursionDepth>", "", name + ".exr", kMirrors));
         return runChild(d, {"render", d.file(name + ".xml"), "-o", d.path.string(), "--device", testDeviceSpec(),
-                            "--spp", "4"}, env);
+                            "--spp", spp}, env);
     };
     Child capped = render("1e9", "deep");
     expectClean(capped);
     INFO(capped.log);
     CHECK(capped.log.find("warning: " + d.file("deep.xml") + ":") != std::string::npos);
     CHECK(capped.log.find("MaxRecursionDepth 1000000000 is above the limit 256; capped to 256") != std::string::npos);
-    expectClean(render("256", "d256"));
+    Child at256 = render("256", "d256");
+    expectClean(at256);
     expectClean(render("255", "d255"));
     ImageRGB a = readImage(d.file("deep.exr")), b = readImage(d.file("d256.exr")), c = readImage(d.file("d255.exr"));
     REQUIRE(a.pixels.size() == 3);
     CHECK(a.pixels == b.pixels);  // rendered at exactly the limit
     CHECK(a.pixels[0] > c.pixels[0]);  // each bounce adds light: the 256th bounce was traced
     CHECK(std::isfinite(a.pixels[0]));
+    // 16 batches of 256 samples, 256 bounces each: no more memory than 4 samples (kernels cached).
+    Child many = render("256", "many", "4096");
+    expectClean(many);
+    INFO("max RSS: " << at256.maxRssKb << " KB at 4 spp, " << many.maxRssKb << " KB at 4096 spp");
+    CHECK(many.maxRssKb - at256.maxRssKb < 4096);
 }
 
 TEST_CASE("limits: samples batched together do not change a pixel whatever the tiling", "[limits][render]") {

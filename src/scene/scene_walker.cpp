@@ -105,7 +105,7 @@ int cappedInteger(const SceneNode& n, int limit) {
     if (v != std::floor(v)) fail(n, "<" + n.name() + ">: '" + std::to_string(v) + "' is not an integer");
     if (v <= double(limit)) return int(std::max(v, -1.0));
     char buf[64];
-    std::snprintf(buf, sizeof buf, "%.17g", v);
+    std::snprintf(buf, sizeof buf, "%.15g", v);
     warn(n.location() + ": " + n.name() + " " + buf + " is above the limit " + std::to_string(limit) + "; capped to " +
          std::to_string(limit));
     return limit;
