@@ -14,6 +14,7 @@
 #include <OpenEXR/ImfInputFile.h>
 #include <OpenEXR/ImfStringAttribute.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -317,4 +318,14 @@ TEST_CASE("limits: a damaged kernel cache entry is rebuilt and rewritten, never 
         CHECK(size_t(std::distance(fs::directory_iterator(d.file("cache")), fs::directory_iterator())) ==
               entries.size());
     }
+    // A temporary entry left by a writer killed mid-write goes when an entry is next written, once it
+    // is ten minutes old (a younger one may belong to a writer still running).
+    const std::string stale = d.file("cache/0000000000000000.bin.tmp.1.0"), fresh = d.file("cache/1.bin.tmp.2.0");
+    writeText(stale, "half an entry");
+    writeText(fresh, "half an entry");
+    fs::last_write_time(stale, fs::file_time_type::clock::now() - std::chrono::hours(1));
+    for (const std::string& e : entries) writeText(e, "");
+    expectClean(runChild(d, args, env));
+    CHECK(!fs::exists(stale));
+    CHECK(fs::exists(fresh));
 }

@@ -113,6 +113,20 @@ CacheRead readCache(const std::string& path, uint64_t key, std::vector<unsigned 
     return fnv1a64(binary.data(), binary.size()) == sum ? CacheRead::Ok : CacheRead::Corrupt;
 }
 
+// Removes temporary entries ("<key>.bin.tmp.<pid>.<n>") older than ten minutes: what a writer
+// killed mid-write left behind (a younger one may belong to a writer still running).
+void removeStaleTemporaries(const std::string& dir) {
+    std::error_code ec;
+    const auto now = fs::file_time_type::clock::now();
+    for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+        const std::string name = it->path().filename().string();
+        if (name.find(".bin.tmp.") == std::string::npos) continue;
+        std::error_code e2;
+        auto t = fs::last_write_time(it->path(), e2);
+        if (!e2 && now - t > std::chrono::minutes(10)) fs::remove(it->path(), e2);
+    }
+}
+
 // Writes the entry to a temporary file in the cache folder and renames it over `path` (atomic on
 // POSIX): a reader sees the old entry or the new one, never a partial file.
 void writeCache(const std::string& dir, const std::string& path, uint64_t key,
@@ -139,6 +153,7 @@ void writeCache(const std::string& dir, const std::string& path, uint64_t key,
         fs::rename(tmp, path, ec);  // atomic replace on POSIX
         ok = !ec;
     }
+    removeStaleTemporaries(dir);
     if (!ok) {
         fs::remove(tmp, ec);
         warnOnce("cannot write the OpenCL program cache in " + dir + " (set CLRT_CACHE_DIR or CLRT_NO_CACHE=1)");
