@@ -87,11 +87,20 @@ void checkJpegHuffmanTables(const std::string& path, const std::string& b) {
     }
 }
 
+// Images larger than kMaxImageTexels are refused before any pixel is decoded (memory stays bounded).
+void checkImageSize(const std::string& path, int64_t w, int64_t h) {
+    if (w > 0 && h > 0 && w * h <= kMaxImageTexels) return;
+    throw Error(path + ": image is " + std::to_string(w) + "x" + std::to_string(h) + ", more than the limit of " +
+                std::to_string(kMaxImageTexels) + " texels (16384x8192)");
+}
+
 ImageRGB readStb(const std::string& path, const std::string& bytes, bool png) {
     const auto* data = reinterpret_cast<const stbi_uc*>(bytes.data());
     if (bytes.size() > size_t(INT32_MAX)) throw Error(path + ": image file too large");
     int len = int(bytes.size());
     int w = 0, h = 0, comp = 0;
+    // The header's size is checked before decoding: a few KB of PNG can declare gigabytes of pixels.
+    if (stbi_info_from_memory(data, len, &w, &h, &comp)) checkImageSize(path, w, h);
     ImageRGB img;
     if (png && stbi_is_16_bit_from_memory(data, len)) {
         stbi_us* px = stbi_load_16_from_memory(data, len, &w, &h, &comp, 3);
@@ -122,9 +131,16 @@ void sanitize(const std::string& path, ImageRGB& img) {
         warn(path + ": " + std::to_string(bad) + " NaN, infinite or negative texel values replaced by 0");
 }
 
+// OpenEXR decodes and compresses on a thread pool of one thread per core. CLRT_EXR_THREADS fixes the
+// count at build time (the fuzz build uses 0, the calling thread only, so a run does not depend on
+// the machine's core count or on thread timing).
 void initExrThreads() {
     static bool done = [] {
+#ifdef CLRT_EXR_THREADS
+        unsigned n = CLRT_EXR_THREADS;
+#else
         unsigned n = std::thread::hardware_concurrency();
+#endif
         Imf::setGlobalThreadCount(n > 1 ? int(n) : 0);
         return true;
     }();
@@ -174,8 +190,8 @@ ImageRGB readExr(const std::string& path) {
             const Imf::Header& hdr = file.header();
             const Imath::Box2i dw = hdr.dataWindow();
             const int64_t w = int64_t(dw.max.x) - dw.min.x + 1, h = int64_t(dw.max.y) - dw.min.y + 1;
-            if (w <= 0 || h <= 0 || w * h > (int64_t(1) << 30))
-                throw Error(path + ": EXR data window has a bad size");
+            if (w <= 0 || h <= 0) throw Error(path + ": EXR data window has a bad size");
+            checkImageSize(path, w, h);
             img.width = int(w);
             img.height = int(h);
             img.pixels.assign(size_t(w) * size_t(h) * 3, 0.0f);
