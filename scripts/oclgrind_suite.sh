@@ -49,14 +49,6 @@ check() {
   : > "$log"
   env "${env[@]}" "$@" > "$out" 2>&1
   local rc=$?
-  # Seen once in ~40 runs of clrt_tests "[layout]" on a loaded machine: glibc aborted at process exit
-  # ("corrupted double-linked list") after every assertion had passed, with no oclgrind report. Such a
-  # crash (killed by a signal, empty oclgrind log) is rerun once, saying so; a second one fails.
-  if [ $rc -ge 128 ] && [ ! -s "$log" ]; then
-    echo "oclgrind_suite: NOTE: $name ($pass) died with signal $((rc - 128)) and no oclgrind report; rerunning once"
-    env "${env[@]}" "$@" > "$out" 2>&1
-    rc=$?
-  fi
   runs=$((runs + 1))
   if [ $rc -ne 0 ] || [ -s "$log" ] || grep -q "OCLGRIND\|Oclgrind - " "$out"; then
     bad=$((bad + 1))
