@@ -22,6 +22,7 @@
 
 #include "cl/check.h"
 #include "image/tonemap.h"
+#include "cli/tonemap_cmd.h"
 #include "render/output.h"
 #include "render/tonemap_device.h"
 #include "scene/scene_loader.h"

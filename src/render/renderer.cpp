@@ -232,13 +232,21 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
 
     std::vector<int> valid, target;
     std::vector<dev::float4> tilePixels;
-    const float inv = 1.0f / float(cp.spp);
-    size_t tileFirst = 0, tileCount = 0;
-    while (nextTile(tileFirst, tileCount)) {
+    // settings.stop: a tile in progress ends after its current sample pass (at least one), no new
+    // tile is started after the first.
+    auto stopped = [&] { return settings.stop && settings.stop->load(); };
+    size_t tileFirst = 0, tileCount = 0, tilesHere = 0;
+    while (!(tilesHere++ > 0 && stopped()) && nextTile(tileFirst, tileCount)) {
         const size_t tileEnd = std::min(numPixels, tileFirst + tileCount);
         const size_t totalBatches = size_t(cp.spp) * ((tileEnd - tileFirst + batch - 1) / batch);
         size_t doneBatches = 0;
+        int samples = cp.spp;  // fewer when stopped
         for (int sample = 0; sample < cp.spp; ++sample) {
+            if (sample > 0 && stopped()) {
+                samples = sample;
+                counters.stoppedAtSample = counters.stoppedAtSample < 0 ? sample : std::min(counters.stoppedAtSample, sample);
+                break;
+            }
             for (size_t first = tileFirst; first < tileEnd; first += batch) {
                 int n = int(std::min(batch, tileEnd - first));
                 kg.setArg(2, int(first)); kg.setArg(3, sample); kg.setArg(4, n);
@@ -286,6 +294,7 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
             }
         }
         // Read the tile back: each tile's pixels are written by exactly one device.
+        const float inv = 1.0f / float(samples);
         tilePixels.resize(tileEnd - tileFirst);
         CL_CPP(q.enqueueReadBuffer(image, CL_TRUE, tileFirst * sizeof(dev::float4),
                                    tilePixels.size() * sizeof(dev::float4), tilePixels.data()));

@@ -4,6 +4,7 @@
 //   -> compact children] until no path is left or MaxRecursionDepth is reached.
 // Every figure of the result is a pure function of (scene, camera, seed): deterministic.
 #pragma once
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -30,6 +31,8 @@ struct RenderCounters {
     // made without profiling). Ray throughputs: rays of a kind / time of its trace kernel.
     double stageSeconds[STAGE_COUNT] = {};
     bool profiled = false;
+    int stoppedAtSample = -1;  // >= 0: RenderSettings::stop ended the render early; the fewest samples
+                               // any pixel got (tiles in progress finish their current pass, >= 1)
 };
 
 struct RenderSettings {
@@ -37,6 +40,7 @@ struct RenderSettings {
     uint32_t seed = 0;
     size_t maxBatchPixels = 1u << 18;  // pixels per batch (one sample each)
     int splitDepthOverride = -1;       // >= 0: force the dielectric split depth
+    const std::atomic<bool>* stop = nullptr;  // set (from any thread): end after the current sample pass
 };
 
 class Renderer {
