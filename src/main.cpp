@@ -168,6 +168,51 @@ int cmdDevices() {
     return 0;
 }
 
+// Renders one camera on every renderer and writes its outputs. Returns true if the render was
+// interrupted (stopRequested) before all its samples: the images written are partial.
+bool renderAndWriteCamera(const Args& a, const Camera& cam, std::vector<std::unique_ptr<Renderer>>& renderers,
+                          std::vector<DeviceWork>& work, RenderCounters& counters, double& tOutput) {
+    RenderSettings rs;
+    rs.spp = a.spp > 0 ? a.spp : cam.numSamples;
+    rs.seed = a.seed;
+    rs.stop = &stopRequested();
+    for (DeviceWork& w : work) w.counters.stoppedAtSample = -1;
+    Progress prog("camera " + std::to_string(cam.id) + " (" + cam.imageName + ", " + std::to_string(cam.width) + "x" +
+                  std::to_string(cam.height) + ", " + std::to_string(rs.spp) + " spp)");
+    ImageRGB img;
+    auto tr = std::chrono::steady_clock::now();
+    if (renderers.size() == 1) {
+        img = renderers.front()->render(cam, rs, work[0].counters, [&](size_t d, size_t n) { prog.update(d, n); });
+    } else {
+        std::vector<Renderer*> rp;
+        for (auto& r : renderers) rp.push_back(r.get());
+        auto w0 = std::chrono::steady_clock::now();
+        img = renderOnDevices(rp, cam, rs, work, [&](size_t d, size_t n) { prog.update(d, n); });
+        counters.seconds += since(w0);
+    }
+    const double camSeconds = since(tr);
+    auto to = std::chrono::steady_clock::now();
+    OutputOptions oo;
+    oo.outDir = a.outDir;
+    oo.truncatePng = a.truncatePng;
+    oo.exrHalf = a.exrHalf;
+    oo.spp = rs.spp;
+    for (const DeviceWork& w : work)  // an interrupted render: the samples every pixel has
+        if (w.counters.stoppedAtSample >= 0) oo.spp = std::min(oo.spp, w.counters.stoppedAtSample);
+    if (oo.spp < rs.spp) {
+        prog.interrupted(oo.spp, rs.spp);
+        oo.partial = "interrupted after " + std::to_string(oo.spp) + " of " + std::to_string(rs.spp) +
+                     " samples per pixel" + (oo.spp == 0 ? " (some tiles not rendered)" : "");
+    }
+    oo.renderSeconds = camSeconds;
+    for (auto& r : renderers) oo.deviceName += (oo.deviceName.empty() ? "" : ", ") + r->context().info().name;
+    std::vector<std::string> written = writeCameraOutputs(cam, img, oo, renderers.front()->context());
+    tOutput += since(to);
+    for (const std::string& w : written)
+        std::fprintf(stderr, "wrote %s%s\n", w.c_str(), oo.partial.empty() ? "" : " (partial image)");
+    return !oo.partial.empty();
+}
+
 int cmdRender(const Args& a) {
     if (a.positional.size() != 1) throw Error("render: expected exactly one scene file (see clrt render --help)", ExitCode::Usage);
     setVerbose(a.verbose);
@@ -262,45 +307,7 @@ int cmdRender(const Args& a) {
             notRendered += (notRendered.empty() ? "" : ", ") + std::to_string(cam->id);
             continue;
         }
-        RenderSettings rs;
-        rs.spp = a.spp > 0 ? a.spp : cam->numSamples;
-        rs.seed = a.seed;
-        rs.stop = &stopRequested();
-        for (DeviceWork& w : work) w.counters.stoppedAtSample = -1;
-        Progress prog("camera " + std::to_string(cam->id) + " (" + cam->imageName + ", " + std::to_string(cam->width) + "x" +
-                      std::to_string(cam->height) + ", " + std::to_string(rs.spp) + " spp)");
-        ImageRGB img;
-        auto tr = std::chrono::steady_clock::now();
-        if (renderers.size() == 1) {
-            img = renderer.render(*cam, rs, work[0].counters, [&](size_t d, size_t n) { prog.update(d, n); });
-        } else {
-            std::vector<Renderer*> rp;
-            for (auto& r : renderers) rp.push_back(r.get());
-            auto w0 = std::chrono::steady_clock::now();
-            img = renderOnDevices(rp, *cam, rs, work, [&](size_t d, size_t n) { prog.update(d, n); });
-            counters.seconds += since(w0);
-        }
-        const double camSeconds = since(tr);
-        auto to = std::chrono::steady_clock::now();
-        OutputOptions oo;
-        oo.outDir = a.outDir;
-        oo.truncatePng = a.truncatePng;
-        oo.exrHalf = a.exrHalf;
-        oo.spp = rs.spp;
-        for (const DeviceWork& w : work)  // an interrupted render: the samples every pixel has
-            if (w.counters.stoppedAtSample >= 0) oo.spp = std::min(oo.spp, w.counters.stoppedAtSample);
-        if (oo.spp < rs.spp) {
-            anyPartial = true;
-            prog.interrupted(oo.spp, rs.spp);
-            oo.partial = "interrupted after " + std::to_string(oo.spp) + " of " + std::to_string(rs.spp) +
-                         " samples per pixel" + (oo.spp == 0 ? " (some tiles not rendered)" : "");
-        }
-        oo.renderSeconds = camSeconds;
-        for (auto& r : renderers) oo.deviceName += (oo.deviceName.empty() ? "" : ", ") + r->context().info().name;
-        std::vector<std::string> written = writeCameraOutputs(*cam, img, oo, renderer.context());
-        tOutput += since(to);
-        for (const std::string& w : written)
-            std::fprintf(stderr, "wrote %s%s\n", w.c_str(), oo.partial.empty() ? "" : " (partial image)");
+        if (renderAndWriteCamera(a, *cam, renderers, work, counters, tOutput)) anyPartial = true;
     }
     double deviceSeconds = 0;
     for (const DeviceWork& w : work) {
