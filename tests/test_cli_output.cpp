@@ -295,6 +295,9 @@ TEST_CASE("cli output: an output directory that cannot be written is reported be
     TempDir d;
     const std::string f = d.file("s.xml");
     putFile(f, sceneXml(camera(1, "out.exr", tonemap(""))));
+    fs::create_directories(d.path / "out" / "out.png");  // the tone-mapped PNG's name is taken by a directory
+    expectRefused(run(d, "render " + f + " -o " + d.file("out") + deviceArgs()), 4, {"out.png", "a directory has its name"});
+    CHECK(!fs::exists(d.path / "out" / "out.exr"));
     // As root, permissions do not stop a write: /proc/self is a directory no one can create files in.
     if (!fs::is_directory("/proc/self")) {
         WARN("no /proc: skipped");

@@ -90,6 +90,8 @@ void checkOutputsAreNotInputs(const std::vector<PlannedOutput>& outputs, const s
     for (const PlannedOutput& o : outputs) {
         std::error_code ec;
         if (!fs::exists(o.path, ec)) continue;  // a dangling symlink is replaced, never followed
+        if (fs::is_directory(fs::symlink_status(o.path, ec)))
+            throw Error(o.path + ": cannot write output file: a directory has its name", ExitCode::Output);
         for (const std::string& in : inputs)
             if (fs::equivalent(o.path, in, ec))
                 throw Error(who + ": " + o.what + ": writing " + o.path + " would overwrite the input file " + in);

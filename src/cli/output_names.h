@@ -33,7 +33,8 @@ std::vector<PlannedOutput> planRenderOutputs(const Scene& scene, const std::vect
 std::vector<std::string> sceneInputs(const Scene& scene);
 
 // Throws clrt::Error (ExitCode::BadInput), naming `who` and the input, if an output is the same file
-// as an input (std::filesystem::equivalent: through symlinks and hard links alike).
+// as an input (std::filesystem::equivalent: through symlinks and hard links alike); ExitCode::Output
+// if a directory has an output's name (the rename would fail after the whole render).
 void checkOutputsAreNotInputs(const std::vector<PlannedOutput>& outputs, const std::vector<std::string>& inputs,
                               const std::string& who);
 
