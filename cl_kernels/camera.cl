@@ -1,4 +1,5 @@
-/* camera.cl — camera ray generation for one sample of a range of pixels. One sample per pixel: the
+/* camera.cl — camera ray generation for samples [firstSample, firstSample + samples) of a range of
+ * pixels, pixel-major (the samples of one pixel are adjacent). One sample per pixel: the
  * pixel centre (as the course does); more: stratified jitter over a strataX × strataY grid (box
  * filter). ApertureSize > 0: thin lens focused at FocusDistance, square aperture as in the course. */
 
@@ -10,11 +11,12 @@ inline float3 Camera_Direction(CameraParams cam, float px, float py) {
     return uc * cam.u.xyz + vc * cam.v.xyz - cam.nearDistance * cam.w.xyz;
 }
 
-__kernel void generate_camera_rays(CameraParams cam, SceneParams scene, int firstPixel, int sample, int count,
-                                   __global PathState* paths, __global Ray* rays) {
+__kernel void generate_camera_rays(CameraParams cam, SceneParams scene, int firstPixel, int firstSample, int count,
+                                   __global PathState* paths, __global Ray* rays, int samples) {
     int i = get_global_id(0);
     if (i >= count) return;
-    int pixel = firstPixel + i;
+    int pixel = firstPixel + i / samples;
+    int sample = firstSample + i % samples;
     int x = pixel % cam.width, y = pixel / cam.width;
     RngKey key = Rng_Key(scene.seed, pixel, sample, 1u);
     float jx = 0.5f, jy = 0.5f;

@@ -4,8 +4,9 @@
 // checks the exit code, exactly one "clrt: error:" line naming the file, that nothing was written
 // outside OUTDIR, that no input changed, and that no temporary file was left behind. The signal cases
 // start the binary in the background, wait (with a generous bound) for its "rendering" line, signal
-// it, and use --spp 1048576 so that the render can never finish before the signal: the outcome does
-// not depend on the machine's speed.
+// it, and render 256x256 pixels at --spp 1048576 (one sample of every pixel per batch, a million
+// batches) so that the render can never finish before the signal: the outcome does not depend on the
+// machine's speed.
 #include <catch.hpp>
 
 #include <csignal>
@@ -438,11 +439,11 @@ TEST_CASE("cli output: the first SIGINT/SIGTERM writes the partial image, the se
     TempDir d;
     fs::create_directories(d.path / "out");
     // Two cameras: the second is not rendered after the interrupt.
-    putFile(d.file("s.xml"), sceneXml(camera(1, "shot.exr", tonemap(""), "16 16") + camera(2, "second.png")));
+    putFile(d.file("s.xml"), sceneXml(camera(1, "shot.exr", tonemap(""), "256 256") + camera(2, "second.png")));
     for (int sig : {SIGINT, SIGTERM}) {
         DYNAMIC_SECTION("one signal: " << (sig == SIGINT ? "SIGINT" : "SIGTERM")) {
             Background b = spawn(renderArgs(d), d.file("clrt.log"));
-            REQUIRE(waitForLog(b, "shot.exr, 16x16, 1048576 spp): rendering"));
+            REQUIRE(waitForLog(b, "shot.exr, 256x256, 1048576 spp): rendering"));
             kill(b.pid, sig);
             const int rc = waitExit(b);
             const std::string log = slurpFile(b.log);
@@ -454,7 +455,7 @@ TEST_CASE("cli output: the first SIGINT/SIGTERM writes the partial image, the se
             CHECK(spp >= 1);
             CHECK(spp < 1048576);
             CHECK(exrAttribute(d.file("out/shot.exr"), "partial").find("interrupted after " + std::to_string(spp)) == 0);
-            CHECK(readImage(d.file("out/shot.png")).width == 16);  // the tone-mapped PNG is made too
+            CHECK(readImage(d.file("out/shot.png")).width == 256);  // the tone-mapped PNG is made too
             CHECK(!fs::exists(d.path / "out" / "second.png"));
             CHECK(log.find("partial images written") != std::string::npos);
             CHECK(log.find("cameras not rendered: 2") != std::string::npos);

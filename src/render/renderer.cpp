@@ -88,7 +88,10 @@ struct Renderer::Impl {
     // A fixed work-group size: PoCL compiles a kernel once per distinct local size, so letting the
     // runtime choose (it varies with the global size) would recompile at every queue length.
     size_t localSize = 64;
-    // With a profiling queue, every launch keeps its event and stage until collectProfile().
+    // With a profiling queue, each launch keeps its event and stage until collectProfile(), which runs
+    // whenever the queue is drained (at least every batch and every kProfileEvents launches), so
+    // host memory stays flat however many samples or bounces a render takes.
+    static constexpr size_t kProfileEvents = 256;
     bool profiling = false;
     std::vector<std::pair<int, cl::Event>> events;
     void run(cl::Kernel& k, size_t n, int stage) {
@@ -98,7 +101,8 @@ struct Renderer::Impl {
                                                cl::NDRange(localSize), nullptr, profiling ? &ev : nullptr));
         if (profiling) events.emplace_back(stage, ev);
     }
-    // Adds the device time of the finished launches to `c` (the queue must have been drained).
+    // Adds the device time of the finished launches to `c` and releases their events (the queue
+    // must have been drained).
     void collectProfile(RenderCounters& c) {
         for (auto& [stage, ev] : events) {
             cl_ulong start = 0, end = 0;
@@ -108,7 +112,102 @@ struct Renderer::Impl {
         }
         events.clear();
     }
+
+    // Sets the kernel arguments that do not change within a render.
+    void setRenderArgs(const dev::CameraParams& cp, const dev::SceneParams& sp, cl::Buffer& image);
+    // Traces `n` camera paths (already generated) through every bounce and accumulates them into the
+    // image; `bounces` says whether any material makes children.
+    void traceBatch(int n, const dev::SceneParams& sp, bool bounces, size_t lightChunk, RenderCounters& counters);
+    std::vector<int> valid, target;  // compaction scratch, at most 2 * queueCapacity each
+
+    // Reads pixels [first, end) back into `out`, scaled by `inv` (each tile's pixels are written by
+    // exactly one device). Blocking, so the queue is drained afterwards.
+    void readTile(cl::Buffer& image, size_t first, size_t end, float inv, ImageRGB& out) {
+        tilePixels.resize(end - first);
+        CL_CPP(dc.queue().enqueueReadBuffer(image, CL_TRUE, first * sizeof(dev::float4),
+                                            tilePixels.size() * sizeof(dev::float4), tilePixels.data()));
+        for (size_t i = 0; i < tilePixels.size(); ++i) {
+            float* o = &out.pixels[(first + i) * 3];
+            o[0] = tilePixels[i].x * inv;
+            o[1] = tilePixels[i].y * inv;
+            o[2] = tilePixels[i].z * inv;
+        }
+    }
+    std::vector<dev::float4> tilePixels;
 };
+
+void Renderer::Impl::setRenderArgs(const dev::CameraParams& cp, const dev::SceneParams& sp, cl::Buffer& image) {
+    kGenerate.setArg(0, sizeof(cp), &cp);
+    kGenerate.setArg(1, sizeof(sp), &sp);
+    kGenerate.setArg(5, paths);
+    kGenerate.setArg(6, rays);
+    auto setGeometry = [&](cl::Kernel& k) {
+        k.setArg(0, nodes); k.setArg(1, primRefs); k.setArg(2, tris); k.setArg(3, spheres);
+        k.setArg(4, sp.numTriangles);
+    };
+    setGeometry(kIntersect);
+    kIntersect.setArg(5, rays);
+    kIntersect.setArg(6, hits);
+    const int firstPlaneRef = sp.numTriangles + sp.numSpheres;
+    kIntersect.setArg(8, planes); kIntersect.setArg(9, sp.numPlanes); kIntersect.setArg(10, firstPlaneRef);
+    kShadow.setArg(7, planes); kShadow.setArg(8, sp.numPlanes); kShadow.setArg(9, firstPlaneRef);
+    setGeometry(kShadow);
+    kShadow.setArg(5, shadows);
+    kShade.setArg(0, sizeof(sp), &sp);
+    kShade.setArg(1, sizeof(cp), &cp);
+    int a = 3;
+    for (cl::Buffer* b : {&paths, &rays, &hits, &tris, &triShading, &spheres, &materials, &textureSets, &textures,
+                          &images, &texels, &points, &pathRadiance, &nextPaths, &nextRays, &childValid, &planes})
+        kShade.setArg(a++, *b);
+    kLights.setArg(0, sizeof(sp), &sp);
+    kLights.setArg(4, paths); kLights.setArg(5, points); kLights.setArg(6, lights); kLights.setArg(7, shadows);
+    kLights.setArg(8, images); kLights.setArg(9, texels); kLights.setArg(10, envDist);
+    kGather.setArg(2, shadows); kGather.setArg(3, pathRadiance);
+    kAccumulate.setArg(1, paths); kAccumulate.setArg(2, pathRadiance); kAccumulate.setArg(3, image);
+    kCompact.setArg(1, compactTarget); kCompact.setArg(2, nextPaths); kCompact.setArg(3, nextRays);
+    kCompact.setArg(4, paths); kCompact.setArg(5, rays);
+}
+
+void Renderer::Impl::traceBatch(int n, const dev::SceneParams& sp, bool bounces, size_t lightChunk,
+                                RenderCounters& counters) {
+    cl::CommandQueue& q = dc.queue();
+    const int numLights = sp.numLights;
+    for (int depth = 0; n > 0; ++depth) {
+        kIntersect.setArg(7, n);
+        run(kIntersect, n, depth == 0 ? STAGE_TRACE_CAMERA : STAGE_TRACE_SECONDARY);
+        kShade.setArg(2, n);
+        run(kShade, n, STAGE_SHADE);
+        for (int l0 = 0; l0 < numLights; l0 += int(lightChunk)) {
+            int l1 = std::min(numLights, l0 + int(lightChunk));
+            int slots = n * (l1 - l0);
+            kLights.setArg(1, n); kLights.setArg(2, l0); kLights.setArg(3, l1);
+            run(kLights, n, STAGE_SAMPLE_LIGHTS);
+            kShadow.setArg(6, slots);
+            run(kShadow, slots, STAGE_TRACE_SHADOW);
+            kGather.setArg(0, n); kGather.setArg(1, l1 - l0);
+            run(kGather, n, STAGE_GATHER);
+            counters.shadowRays += slots;
+        }
+        kAccumulate.setArg(0, n);
+        run(kAccumulate, n, STAGE_ACCUMULATE);
+        if (!bounces || depth >= sp.maxDepth) break;
+        // Order-preserving compaction of the children.
+        size_t slots = size_t(n) * 2;
+        valid.resize(slots);
+        target.resize(slots);
+        CL_CPP(q.enqueueReadBuffer(childValid, CL_TRUE, 0, slots * sizeof(int), valid.data()));
+        if (events.size() >= kProfileEvents) collectProfile(counters);  // the blocking read drained the queue
+        int next = 0;
+        for (size_t i = 0; i < slots; ++i) target[i] = valid[i] ? next++ : -1;
+        if (next == 0) break;
+        // Blocking: `target` is resized on the next pass, so the copy must be done before then.
+        CL_CPP(q.enqueueWriteBuffer(compactTarget, CL_TRUE, 0, slots * sizeof(int), target.data()));
+        kCompact.setArg(0, int(slots));
+        run(kCompact, slots, STAGE_COMPACT);
+        n = next;
+        counters.secondaryRays += n;
+    }
+}
 
 const char* renderStageName(int stage) {
     static const char* names[STAGE_COUNT] = {"generate", "trace camera", "trace secondary", "shade", "sample lights",
@@ -154,6 +253,15 @@ ImageRGB Renderer::render(const Camera& cam, const RenderSettings& settings, Ren
     return out;
 }
 
+// Samples of each pixel per batch. A small image takes several, so that a launch has enough work
+// (a 1x1 image at 1M spp: 4096 batches instead of 1M). A function of the image size and spp only,
+// never of the tile or the batch limit: each pixel sums its paths in the same order on every device
+// and under every tiling, so its value does not depend on them.
+static int samplesPerBatch(size_t numPixels, int spp) {
+    const size_t targetPaths = size_t(1) << 16, maxSamples = 256;
+    return int(std::min({std::max<size_t>(1, targetPaths / std::max<size_t>(numPixels, 1)), maxSamples, size_t(spp)}));
+}
+
 void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, RenderCounters& counters,
                            const std::function<bool(size_t&, size_t&)>& nextTile, ImageRGB& out,
                            const std::function<void(size_t, size_t)>& progress) {
@@ -161,149 +269,76 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     auto t0 = std::chrono::steady_clock::now();
     const DeviceScene& ds = m.scene;
     dev::CameraParams cp = makeCameraParams(cam);
-    setSamplesPerPixel(cp, settings.spp);
+    // The loader and the command line already cap both (with a warning); this is the backstop for
+    // scenes built in code.
+    setSamplesPerPixel(cp, std::min(settings.spp, kMaxSamplesPerPixel));
     const size_t numPixels = size_t(cam.width) * cam.height;
     const size_t imageBytes = numPixels * sizeof(dev::float4);
     checkImageFits(m.dc.info(), cam);
 
-    // The split depth depends only on the image and the batch limit, never on the tile: every
-    // device and every tiling computes each pixel identically.
-    const size_t batch = std::min(numPixels, settings.maxBatchPixels);
+    // A batch is `group` samples of each of `batch` pixels, pixel-major. The split depth depends only
+    // on the image and the batch limit, never on the tile: every device and every tiling computes
+    // each pixel identically.
+    const int group = samplesPerBatch(numPixels, cp.spp);
+    const size_t batch = std::max<size_t>(1, std::min(numPixels, settings.maxBatchPixels / size_t(group)));
+    const size_t batchPaths = batch * size_t(group);
     const bool bounces = ds.features.mirror || ds.features.dielectric || ds.features.conductor;
     dev::SceneParams sp = ds.params;
     sp.seed = settings.seed;
+    sp.maxDepth = std::min(sp.maxDepth, kMaxRecursionDepth);
     // Dielectrics split into both children while the queue can hold them and few samples are taken;
     // beyond that (or with many samples) one child is chosen by Fresnel weight (same expectation).
     int split = 0;
     if (ds.features.dielectric && cp.spp <= 4) {
-        while (split < sp.maxDepth && (batch << (split + 1)) <= (size_t(1) << 21)) ++split;
+        while (split < sp.maxDepth && (batchPaths << (split + 1)) <= (size_t(1) << 21)) ++split;
     }
     if (settings.splitDepthOverride >= 0) split = settings.splitDepthOverride;
     sp.splitDepth = split;
-    const size_t capacity = bounces ? batch << split : batch;
-    const int numLights = sp.numLights;
+    const size_t capacity = bounces ? batchPaths << split : batchPaths;
     size_t lightChunk = 0;
-    if (numLights > 0) {
+    if (sp.numLights > 0) {
         size_t budget = (size_t(256) << 20) / sizeof(dev::ShadowRay);
-        lightChunk = std::max<size_t>(1, std::min<size_t>(numLights, budget / capacity));
+        lightChunk = std::max<size_t>(1, std::min<size_t>(sp.numLights, budget / capacity));
     }
     m.ensureQueues(capacity, capacity * std::max<size_t>(lightChunk, 1));
 
     cl::CommandQueue& q = m.dc.queue();
     cl::Buffer image = CL_CPP(cl::Buffer(m.dc.context(), CL_MEM_READ_WRITE, imageBytes));
     CL_CPP(q.enqueueFillBuffer(image, dev::float4{0, 0, 0, 0}, 0, imageBytes));
+    m.setRenderArgs(cp, sp, image);
 
-    // Kernel arguments that do not change within the render.
-    cl::Kernel& kg = m.kGenerate;
-    kg.setArg(0, sizeof(cp), &cp);
-    kg.setArg(1, sizeof(sp), &sp);
-    kg.setArg(5, m.paths);
-    kg.setArg(6, m.rays);
-    auto setGeometry = [&](cl::Kernel& k) {
-        k.setArg(0, m.nodes); k.setArg(1, m.primRefs); k.setArg(2, m.tris); k.setArg(3, m.spheres);
-        k.setArg(4, sp.numTriangles);
-    };
-    setGeometry(m.kIntersect);
-    m.kIntersect.setArg(5, m.rays);
-    m.kIntersect.setArg(6, m.hits);
-    const int firstPlaneRef = sp.numTriangles + sp.numSpheres;
-    m.kIntersect.setArg(8, m.planes); m.kIntersect.setArg(9, sp.numPlanes); m.kIntersect.setArg(10, firstPlaneRef);
-    m.kShadow.setArg(7, m.planes); m.kShadow.setArg(8, sp.numPlanes); m.kShadow.setArg(9, firstPlaneRef);
-    setGeometry(m.kShadow);
-    m.kShadow.setArg(5, m.shadows);
-    cl::Kernel& ks = m.kShade;
-    ks.setArg(0, sizeof(sp), &sp);
-    ks.setArg(1, sizeof(cp), &cp);
-    {
-        int a = 3;
-        for (cl::Buffer* b : {&m.paths, &m.rays, &m.hits, &m.tris, &m.triShading, &m.spheres, &m.materials,
-                              &m.textureSets, &m.textures, &m.images, &m.texels, &m.points, &m.pathRadiance,
-                              &m.nextPaths, &m.nextRays, &m.childValid, &m.planes})
-            ks.setArg(a++, *b);
-    }
-    cl::Kernel& kl = m.kLights;
-    kl.setArg(0, sizeof(sp), &sp);
-    kl.setArg(4, m.paths); kl.setArg(5, m.points); kl.setArg(6, m.lights); kl.setArg(7, m.shadows);
-    kl.setArg(8, m.images); kl.setArg(9, m.texels); kl.setArg(10, m.envDist);
-    m.kGather.setArg(2, m.shadows); m.kGather.setArg(3, m.pathRadiance);
-    m.kAccumulate.setArg(1, m.paths); m.kAccumulate.setArg(2, m.pathRadiance); m.kAccumulate.setArg(3, image);
-    m.kCompact.setArg(1, m.compactTarget); m.kCompact.setArg(2, m.nextPaths); m.kCompact.setArg(3, m.nextRays);
-    m.kCompact.setArg(4, m.paths); m.kCompact.setArg(5, m.rays);
-
-    std::vector<int> valid, target;
-    std::vector<dev::float4> tilePixels;
-    // settings.stop: a tile in progress ends after its current sample pass (at least one), no new
-    // tile is started after the first.
+    // settings.stop: a tile in progress ends after its current group of samples (at least one), no
+    // new tile is started after the first.
     auto stopped = [&] { return settings.stop && settings.stop->load(); };
     size_t tileFirst = 0, tileCount = 0, tilesHere = 0;
     while (!(tilesHere++ > 0 && stopped()) && nextTile(tileFirst, tileCount)) {
         const size_t tileEnd = std::min(numPixels, tileFirst + tileCount);
-        const size_t totalBatches = size_t(cp.spp) * ((tileEnd - tileFirst + batch - 1) / batch);
+        const size_t totalBatches = ((size_t(cp.spp) + group - 1) / group) * ((tileEnd - tileFirst + batch - 1) / batch);
         size_t doneBatches = 0;
-        int samples = cp.spp;  // fewer when stopped
-        for (int sample = 0; sample < cp.spp; ++sample) {
+        int reached = cp.spp;  // fewer when stopped
+        for (int sample = 0; sample < cp.spp; sample += group) {
             if (sample > 0 && stopped()) {
-                samples = sample;
+                reached = sample;
                 counters.stoppedAtSample = counters.stoppedAtSample < 0 ? sample : std::min(counters.stoppedAtSample, sample);
                 break;
             }
+            const int samples = std::min(group, cp.spp - sample);
             for (size_t first = tileFirst; first < tileEnd; first += batch) {
-                int n = int(std::min(batch, tileEnd - first));
-                kg.setArg(2, int(first)); kg.setArg(3, sample); kg.setArg(4, n);
-                m.run(kg, n, STAGE_GENERATE);
+                const int n = int(std::min(batch, tileEnd - first)) * samples;
+                m.kGenerate.setArg(2, int(first)); m.kGenerate.setArg(3, sample); m.kGenerate.setArg(4, n);
+                m.kGenerate.setArg(7, samples);
+                m.run(m.kGenerate, n, STAGE_GENERATE);
                 counters.cameraRays += n;
-                for (int depth = 0; n > 0; ++depth) {
-                    m.kIntersect.setArg(7, n);
-                    m.run(m.kIntersect, n, depth == 0 ? STAGE_TRACE_CAMERA : STAGE_TRACE_SECONDARY);
-                    ks.setArg(2, n);
-                    m.run(ks, n, STAGE_SHADE);
-                    for (int l0 = 0; l0 < numLights; l0 += int(lightChunk)) {
-                        int l1 = std::min(numLights, l0 + int(lightChunk));
-                        int slots = n * (l1 - l0);
-                        kl.setArg(1, n); kl.setArg(2, l0); kl.setArg(3, l1);
-                        m.run(kl, n, STAGE_SAMPLE_LIGHTS);
-                        m.kShadow.setArg(6, slots);
-                        m.run(m.kShadow, slots, STAGE_TRACE_SHADOW);
-                        m.kGather.setArg(0, n); m.kGather.setArg(1, l1 - l0);
-                        m.run(m.kGather, n, STAGE_GATHER);
-                        counters.shadowRays += slots;
-                    }
-                    m.kAccumulate.setArg(0, n);
-                    m.run(m.kAccumulate, n, STAGE_ACCUMULATE);
-                    if (!bounces || depth >= sp.maxDepth) break;
-                    // Order-preserving compaction of the children.
-                    size_t slots = size_t(n) * 2;
-                    valid.resize(slots);
-                    target.resize(slots);
-                    CL_CPP(q.enqueueReadBuffer(m.childValid, CL_TRUE, 0, slots * sizeof(int), valid.data()));
-                    int next = 0;
-                    for (size_t i = 0; i < slots; ++i) target[i] = valid[i] ? next++ : -1;
-                    if (next == 0) break;
-                    // Blocking: `target` is resized on the next pass, so the copy must be done before then.
-                    CL_CPP(q.enqueueWriteBuffer(m.compactTarget, CL_TRUE, 0, slots * sizeof(int), target.data()));
-                    m.kCompact.setArg(0, int(slots));
-                    m.run(m.kCompact, slots, STAGE_COMPACT);
-                    n = next;
-                    counters.secondaryRays += n;
-                }
+                m.traceBatch(n, sp, bounces, lightChunk, counters);
                 ++doneBatches;
-                if (progress) {
+                if (progress || m.events.size() >= Impl::kProfileEvents) {
                     CL_CPP(q.finish());
-                    progress(doneBatches, totalBatches);
+                    m.collectProfile(counters);
+                    if (progress) progress(doneBatches, totalBatches);
                 }
             }
         }
-        // Read the tile back: each tile's pixels are written by exactly one device.
-        const float inv = 1.0f / float(samples);
-        tilePixels.resize(tileEnd - tileFirst);
-        CL_CPP(q.enqueueReadBuffer(image, CL_TRUE, tileFirst * sizeof(dev::float4),
-                                   tilePixels.size() * sizeof(dev::float4), tilePixels.data()));
-        for (size_t i = 0; i < tilePixels.size(); ++i) {
-            float* o = &out.pixels[(tileFirst + i) * 3];
-            o[0] = tilePixels[i].x * inv;
-            o[1] = tilePixels[i].y * inv;
-            o[2] = tilePixels[i].z * inv;
-        }
+        m.readTile(image, tileFirst, tileEnd, 1.0f / float(reached), out);
         counters.tiles += 1;
         counters.pixels += tileEnd - tileFirst;
         m.collectProfile(counters);  // the blocking read above drained the queue

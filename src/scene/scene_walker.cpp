@@ -21,6 +21,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -95,6 +96,19 @@ double toInteger(const SceneNode& n, double v) {
     if (v != std::floor(v) || std::fabs(v) > 2147483647.0)
         fail(n, "<" + n.name() + ">: '" + std::to_string(v) + "' is not an integer");
     return v;
+}
+
+// A non-negative integer count above which the renderer would only spend unbounded time: values over
+// `limit` (any size, 1e12 included) are capped to it with a warning naming the file.
+int cappedInteger(const SceneNode& n, int limit) {
+    double v = numbers(n, 1)[0];
+    if (v != std::floor(v)) fail(n, "<" + n.name() + ">: '" + std::to_string(v) + "' is not an integer");
+    if (v <= double(limit)) return int(std::max(v, -1.0));
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.15g", v);
+    warn(n.location() + ": " + n.name() + " " + buf + " is above the limit " + std::to_string(limit) + "; capped to " +
+         std::to_string(limit));
+    return limit;
 }
 
 float number(const SceneNode& n) { return float(numbers(n, 1)[0]); }
@@ -190,7 +204,7 @@ struct Walker {
         if (auto c = root.child("ShadowRayEpsilon")) scene.shadowRayEpsilon = number(*c);
         if (auto c = root.child("IntersectionTestEpsilon")) scene.intersectionTestEpsilon = number(*c);
         if (auto c = root.child("MaxRecursionDepth")) {
-            scene.maxRecursionDepth = integer(*c);
+            scene.maxRecursionDepth = cappedInteger(*c, kMaxRecursionDepth);
             if (scene.maxRecursionDepth < 0) fail(*c, "MaxRecursionDepth must not be negative");
         }
         if (auto c = root.child("ZeroBasedIndexing")) zeroBased = boolean(*c, c->text(), "ZeroBasedIndexing");
@@ -469,7 +483,7 @@ struct Walker {
         cam.imageName = trim(nameNode->text());
         if (cam.imageName.empty()) fail(*nameNode, who + ": ImageName is empty");
         if (auto c = n.child("NumSamples")) {
-            cam.numSamples = integer(*c);
+            cam.numSamples = cappedInteger(*c, kMaxSamplesPerPixel);
             if (cam.numSamples < 1) fail(*c, who + ": NumSamples must be at least 1");
         }
         if (auto c = n.child("FocusDistance")) cam.focusDistance = number(*c);
