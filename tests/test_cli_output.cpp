@@ -337,13 +337,16 @@ TEST_CASE("cli output: no OpenCL device, and an unusable HOME, are one error lin
             return;
         }
         fs::copy_file(pocl, d.path / "vendors" / "pocl.icd");  // PoCL alone, whatever else is installed
-        const std::string env = "env -u POCL_CACHE_DIR -u XDG_CACHE_HOME HOME=/proc/nonexistent " + noIcd;
+        // HOME is a regular file: no one (root included, /proc mounted or not) can create a directory in it.
+        const std::string home = d.file("home-is-a-file");
+        putFile(home, "x");
+        const std::string env = "env -u POCL_CACHE_DIR -u XDG_CACHE_HOME HOME='" + home + "' " + noIcd;
         Result r = run(d, "devices", env);
         INFO(r.log);
         CHECK(r.rc == 3);
         CHECK(r.errorLines == 1);
-        CHECK(r.errorLine.find("kernel cache directory /proc/nonexistent/.cache/pocl/kcache") != std::string::npos);
-        CHECK(r.errorLine.find("HOME=/proc/nonexistent") != std::string::npos);
+        CHECK(r.errorLine.find("kernel cache directory " + home + "/.cache/pocl/kcache") != std::string::npos);
+        CHECK(r.errorLine.find("HOME=" + home) != std::string::npos);
         const std::string f = d.file("s.xml");
         putFile(f, sceneXml(camera(1, "out.png")));
         fs::create_directories(d.path / "out");
@@ -351,11 +354,11 @@ TEST_CASE("cli output: no OpenCL device, and an unusable HOME, are one error lin
         INFO(rr.log);
         CHECK(rr.rc == 3);
         CHECK(rr.errorLines == 1);
-        CHECK(rr.errorLine.find("HOME=/proc/nonexistent") != std::string::npos);
+        CHECK(rr.errorLine.find("HOME=" + home) != std::string::npos);
         CHECK(fs::is_empty(d.path / "out"));
         // With a writable cache directory the same setup finds the device.
-        Result ok = run(d, "devices", "env -u POCL_CACHE_DIR XDG_CACHE_HOME='" + d.file("cache") +
-                                          "' HOME=/proc/nonexistent " + noIcd);
+        Result ok = run(d, "devices", "env -u POCL_CACHE_DIR XDG_CACHE_HOME='" + d.file("cache") + "' HOME='" + home +
+                                          "' " + noIcd);
         INFO(ok.log);
         CHECK(ok.rc == 0);
     }
