@@ -121,7 +121,6 @@ void sanitize(const std::string& path, ImageRGB& img) {
         warn(path + ": " + std::to_string(bad) + " NaN, infinite or negative texel values replaced by 0");
 }
 
-
 // Finds the RGB channel names: "R","G","B", or one layer's "<layer>.R" etc. Returns false if none.
 bool findRgbChannels(const Imf::ChannelList& ch, std::string names[3]) {
     if (ch.findChannel("R") || ch.findChannel("G") || ch.findChannel("B")) {
@@ -208,9 +207,16 @@ ImageRGB readExr(const std::string& path) {
 
 }  // namespace
 
+// OpenEXR decodes and compresses on a thread pool of one thread per core. CLRT_EXR_THREADS fixes the
+// count at build time (the fuzz build uses 0, the calling thread only, so a run does not depend on
+// the machine's core count or on thread timing).
 void initExrThreads() {
     static bool done = [] {
+#ifdef CLRT_EXR_THREADS
+        unsigned n = CLRT_EXR_THREADS;
+#else
         unsigned n = std::thread::hardware_concurrency();
+#endif
         Imf::setGlobalThreadCount(n > 1 ? int(n) : 0);
         return true;
     }();

@@ -16,9 +16,13 @@ namespace {
 const std::vector<std::string> kKernelFiles = {"common.cl", "intersect.cl", "camera.cl", "textures.cl",
                                                "envmap.cl", "lights.cl", "shade.cl"};
 
+// A read-only copy of v. OpenCL has no zero-size buffers and refuses a null host pointer, so an empty
+// array (an empty BVH's primRefs) becomes one zero-filled element that the kernels never read.
 template <class T> cl::Buffer uploadBuffer(cl::Context& ctx, const std::vector<T>& v) {
+    const T zero{};
+    const T* src = v.empty() ? &zero : v.data();
     return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * std::max<size_t>(v.size(), 1),
-                             const_cast<T*>(v.data())));
+                             const_cast<T*>(src)));
 }
 }  // namespace
 
