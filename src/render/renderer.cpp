@@ -311,13 +311,21 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     CL_CPP(q.enqueueFillBuffer(image, dev::float4{0, 0, 0, 0}, 0, imageBytes));
     m.setRenderArgs(cp, sp, image);
 
-    const float inv = 1.0f / float(cp.spp);
-    size_t tileFirst = 0, tileCount = 0;
-    while (nextTile(tileFirst, tileCount)) {
+    // settings.stop: a tile in progress ends after its current group of samples (at least one), no
+    // new tile is started after the first.
+    auto stopped = [&] { return settings.stop && settings.stop->load(); };
+    size_t tileFirst = 0, tileCount = 0, tilesHere = 0;
+    while (!(tilesHere++ > 0 && stopped()) && nextTile(tileFirst, tileCount)) {
         const size_t tileEnd = std::min(numPixels, tileFirst + tileCount);
         const size_t totalBatches = ((size_t(cp.spp) + group - 1) / group) * ((tileEnd - tileFirst + batch - 1) / batch);
         size_t doneBatches = 0;
+        int reached = cp.spp;  // fewer when stopped
         for (int sample = 0; sample < cp.spp; sample += group) {
+            if (sample > 0 && stopped()) {
+                reached = sample;
+                counters.stoppedAtSample = counters.stoppedAtSample < 0 ? sample : std::min(counters.stoppedAtSample, sample);
+                break;
+            }
             const int samples = std::min(group, cp.spp - sample);
             for (size_t first = tileFirst; first < tileEnd; first += batch) {
                 const int n = int(std::min(batch, tileEnd - first)) * samples;
@@ -334,7 +342,7 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
                 }
             }
         }
-        m.readTile(image, tileFirst, tileEnd, inv, out);
+        m.readTile(image, tileFirst, tileEnd, 1.0f / float(reached), out);
         counters.tiles += 1;
         counters.pixels += tileEnd - tileFirst;
         m.collectProfile(counters);  // the blocking read above drained the queue
