@@ -137,7 +137,7 @@ int main(int argc, char** argv) {
         // ---- clrt: intersection program and buffers.
         DeviceInfo di = selectDevices(deviceSpec).front();
         DeviceContext dc(di);
-        cl::Program prog = buildProgram(dc, {"common.cl", "intersect.cl"}, ds.features.defines());
+        cl::Program prog = buildProgram(dc, KernelProgram::Intersect, ds.features.defines());
         cl::Kernel kClosest = CL_CPP(cl::Kernel(prog, "intersect_closest"));
         cl::Kernel kShadow = CL_CPP(cl::Kernel(prog, "intersect_shadow"));
         auto upload = [&](auto& v) {

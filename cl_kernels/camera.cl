@@ -1,6 +1,11 @@
 /* camera.cl — camera ray generation for one sample of a range of pixels. One sample per pixel: the
  * pixel centre (as the course does); more: stratified jitter over a strataX × strataY grid (box
  * filter). ApertureSize > 0: thin lens focused at FocusDistance, square aperture as in the course. */
+#ifndef CLRT_CAMERA_CL
+#define CLRT_CAMERA_CL
+
+#include "../src/shared/device_types.h"
+#include "common.cl"
 
 inline float3 Camera_Direction(CameraParams cam, float px, float py) {
     float su = (px / (float)cam.width);
@@ -48,3 +53,5 @@ __kernel void generate_camera_rays(CameraParams cam, SceneParams scene, int firs
     p.pathId = 1u;
     paths[i] = p;
 }
+
+#endif /* CLRT_CAMERA_CL */

@@ -1,5 +1,9 @@
 /* common.cl — math helpers, the counter-based random number generator, sampling warps and the
  * robust ray-origin offset shared by every kernel. No kernels here. */
+#ifndef CLRT_COMMON_CL
+#define CLRT_COMMON_CL
+
+#include "../src/shared/device_types.h"
 
 #define CLRT_PI 3.14159265358979323846f
 #define CLRT_INV_PI 0.31830988618379067154f
@@ -90,3 +94,5 @@ inline float3 Ray_OffsetOrigin(float3 p, float3 n) {
 inline float3 finiteOrZero(float3 c) {
     return (float3)(isfinite(c.x) ? c.x : 0.0f, isfinite(c.y) ? c.y : 0.0f, isfinite(c.z) ? c.z : 0.0f);
 }
+
+#endif /* CLRT_COMMON_CL */

@@ -2,6 +2,11 @@
  * their (u,v) -> solid-angle Jacobians, the bilinear radiance lookup, and sampling / pdf of the
  * piecewise-constant importance distribution built by src/render/env_distribution.cpp (whose host
  * functions mirror these float-for-float; see the layout and within-cell rules there). No kernels. */
+#ifndef CLRT_ENVMAP_CL
+#define CLRT_ENVMAP_CL
+
+#include "../src/shared/device_types.h"
+#include "common.cl"
 
 #define CLRT_ENV_MAX_REJECTIONS 32
 #define CLRT_ONE_MINUS_EPS 0.99999994f
@@ -158,3 +163,5 @@ inline int EnvDist_Sample(const __global float* dist, float u1, float u2, float3
     float2 uv;
     return EnvDist_SampleUv(dist, u1, u2, dir, pdf, &uv);
 }
+
+#endif /* CLRT_ENVMAP_CL */

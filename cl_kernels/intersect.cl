@@ -1,13 +1,19 @@
 /* intersect.cl — ray/primitive tests and BVH traversal: watertight triangles (Woop, Benthin & Wald
  * 2013), spheres under an affine transform with the stable quadratic of Ray Tracing Gems ch. 7, a
  * near-first stack traversal, and the two wavefront kernels: closest hit and any hit (shadow rays). */
+#ifndef CLRT_INTERSECT_CL
+#define CLRT_INTERSECT_CL
+
+#include "../src/shared/device_types.h"
+#include "common.cl"
 
 #ifdef cl_khr_fp64
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #define CLRT_HAVE_FP64 1
 #endif
 
-/* No contraction of a*b - c*d into fma() here: the watertight test relies on a shared edge's function
+/* FP_CONTRACT OFF from here to the end of this file:
+ * no contraction of a*b - c*d into fma() here: the watertight test relies on a shared edge's function
  * coming out as the exact negation in both triangles (and, when non-zero, with the exact sign), which
  * fma breaks; with it, rays aimed at shared edges slipped through closed meshes. */
 #pragma OPENCL FP_CONTRACT OFF
@@ -280,5 +286,8 @@ __kernel void intersect_shadow(const __global Bvh4Node* nodes, const __global in
         s->contribution = (float4)(0.0f);
 }
 
-/* Contraction back to the OpenCL default for the files that follow (shading gains from fma). */
+/* End of the FP_CONTRACT OFF scope: contraction back to ON, the OpenCL default, which every other
+ * file is compiled with (shading gains from fma; tests/test_cl.cpp checks each file leaves it ON). */
 #pragma OPENCL FP_CONTRACT ON
+
+#endif /* CLRT_INTERSECT_CL */

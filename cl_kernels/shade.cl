@@ -8,6 +8,14 @@
  *   accumulate:      adds each pixel's paths to the float image (paths of one pixel are adjacent);
  *   compact_paths:   order-preserving compaction of the children with host-computed indices.
  * Deterministic by construction: no float atomics, fixed summation order. */
+#ifndef CLRT_SHADE_CL
+#define CLRT_SHADE_CL
+
+#include "../src/shared/device_types.h"
+#include "common.cl"
+#include "intersect.cl"
+#include "textures.cl"
+#include "lights.cl"
 
 typedef struct {
     float3 p, ng, ns, dir;
@@ -324,3 +332,5 @@ __kernel void compact_paths(int slots, const __global int* target, const __globa
     paths[t] = nextPaths[i];
     rays[t] = nextRays[i];
 }
+
+#endif /* CLRT_SHADE_CL */

@@ -14,6 +14,11 @@
  * one-pixel-per-work-item form (pow checked exhaustively for the exponents 1/2.2 and 1 on PoCL;
  * tests/test_tonemap.cpp compares the kernels with that form, kept there, byte for byte). Branches
  * become select() over both sides; every other operation is IEEE-exact, so lanes equal scalars. */
+#ifndef CLRT_TONEMAP_CL
+#define CLRT_TONEMAP_CL
+
+#include "../src/shared/device_types.h"
+/* FP_CONTRACT OFF from here to the end of this file: the same float operations as the host. */
 #pragma OPENCL FP_CONTRACT OFF
 
 #define TONEMAP_BINS 256
@@ -173,3 +178,8 @@ __kernel void Tonemap_MapFloat(__global const float* rgb, TonemapParams p, __glo
     for (uint j = 0; j < count; ++j)
         for (int k = 0; k < 3; ++k) o[3 * j + k] = q[k][j];
 }
+
+/* End of the FP_CONTRACT OFF scope (back to the OpenCL default). */
+#pragma OPENCL FP_CONTRACT ON
+
+#endif /* CLRT_TONEMAP_CL */

@@ -308,7 +308,7 @@ TEST_CASE("BVH4 traversal stack: the host bound holds, and the kernel with exact
     CHECK(maxSp >= b4.maxStack / 2);  // the scene does exercise the stack
 
     DeviceContext& dc = testContext();
-    auto sources = loadKernelSources({"common.cl", "intersect.cl"});
+    auto sources = loadKernelSources(KernelProgram::Intersect);
     cl::Program program = buildProgramFromSources(
         dc, sources, {"-DCLRT_BVH4_STACK_SIZE=" + std::to_string(b4.maxStack)});
     cl::Kernel closest = CL_CPP(cl::Kernel(program, "intersect_closest"));

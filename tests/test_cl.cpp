@@ -236,10 +236,87 @@ TEST_CASE("kernel sources: embedded by name, or read from CLRT_KERNEL_DIR", "[cl
         EnvGuard g("CLRT_KERNEL_DIR", dir.c_str());
         auto srcs = loadKernelSources({"layout.cl"});
         REQUIRE(srcs.size() == 2);
-        std::string typesPath = dir + "/../src/shared/device_types.h";
+        std::string typesPath = fs::path(dir + "/../src/shared/device_types.h").lexically_normal().string();
+        CHECK(srcs[0].first == typesPath);
         CHECK(srcs[0].second == "#line 1 \"" + typesPath + "\"\n" + readText(typesPath));
-        CHECK(srcs[1].second == "#line 1 \"" + dir + "/layout.cl\"\n" + readText(dir + "/layout.cl"));
+        CHECK(srcs[1].first == dir + "/layout.cl");
+        // The file's text, with its #include line turned into a comment (same line count).
+        std::string expected = "#line 1 \"" + dir + "/layout.cl\"\n" + readText(dir + "/layout.cl");
+        const std::string inc = "#include \"../src/shared/device_types.h\"";
+        REQUIRE(expected.find(inc) != std::string::npos);
+        expected.replace(expected.find(inc), inc.size(),
+                         "/* #include \"../src/shared/device_types.h\": placed before this file by the kernel loader */");
+        CHECK(srcs[1].second == expected);
         CHECK_THROWS_AS(loadKernelSources({"no_such_kernel.cl"}), Error);
+    }
+}
+
+namespace {
+std::vector<std::string> sourceNames(const std::vector<NamedSource>& srcs) {
+    std::vector<std::string> names;
+    for (const NamedSource& s : srcs) names.push_back(fs::path(s.first).filename().string());
+    return names;
+}
+}  // namespace
+
+TEST_CASE("kernel sources: each file brings in what it #includes, once, before itself", "[cl]") {
+    EnvGuard g("CLRT_KERNEL_DIR", nullptr);
+    // The render program: the order the files were concatenated in before they stated their includes.
+    auto render = loadKernelSources(KernelProgram::Render);
+    CHECK(sourceNames(render) == std::vector<std::string>{"device_types.h", "common.cl", "intersect.cl", "camera.cl",
+                                                          "textures.cl", "envmap.cl", "lights.cl", "shade.cl"});
+    CHECK(sourceNames(loadKernelSources(KernelProgram::Tonemap)) ==
+          std::vector<std::string>{"device_types.h", "tonemap.cl"});
+    CHECK(sourceNames(loadKernelSources(KernelProgram::Intersect)) ==
+          std::vector<std::string>{"device_types.h", "common.cl", "intersect.cl"});
+    CHECK(sourceNames(loadKernelSources({"lights.cl"})) ==
+          std::vector<std::string>{"device_types.h", "common.cl", "envmap.cl", "lights.cl"});
+    std::regex include(R"((^|\n)[ \t]*#[ \t]*include[ \t]*")");
+    for (const NamedSource& s : render) {
+        INFO(s.first);
+        CHECK_FALSE(std::regex_search(s.second, include));  // the OpenCL compiler resolves no include
+    }
+    // Every program builds from its roots alone (each file states its dependencies).
+    DeviceContext& dc = cpuContext();
+    for (KernelProgram p : {KernelProgram::Render, KernelProgram::Tonemap, KernelProgram::Intersect, KernelProgram::Layout})
+        CHECK_NOTHROW(buildProgram(dc, p, {}));
+    // Each module of cl_kernels/ compiles on its own with what it includes.
+    for (auto& e : fs::directory_iterator(std::string(CLRT_SOURCE_DIR) + "/cl_kernels")) {
+        INFO(e.path());
+        CHECK_NOTHROW(buildProgram(dc, {e.path().filename().string()}, {}));
+    }
+}
+
+TEST_CASE("kernel sources: a missing #include names the including file and line", "[cl]") {
+    fs::path dir = makeTempDir("include");
+    fs::create_directories(dir / "cl_kernels");
+    {
+        std::ofstream(dir / "cl_kernels/a.cl") << "/* a */\n#include \"b.cl\"\n";
+        std::ofstream(dir / "cl_kernels/b.cl") << "/* b */\n\n#include \"missing.cl\"\n";
+    }
+    EnvGuard g("CLRT_KERNEL_DIR", (dir / "cl_kernels").c_str());
+    try {
+        loadKernelSources({"a.cl"});
+        FAIL("missing include accepted");
+    } catch (const Error& e) {
+        std::string msg = e.what();
+        INFO(msg);
+        CHECK(e.code() == ExitCode::Device);
+        CHECK(msg.find("b.cl:3: #include \"missing.cl\"") != std::string::npos);
+    }
+    fs::remove_all(dir);
+}
+
+TEST_CASE("kernel sources: FP_CONTRACT OFF is scoped to the file that sets it", "[cl]") {
+    // A file that turns contraction off turns it back on (the OpenCL default) before it ends, so the
+    // files after it in a program compile as they would alone.
+    std::regex pragma(R"(#pragma OPENCL FP_CONTRACT (ON|OFF|DEFAULT))");
+    for (auto& e : fs::directory_iterator(std::string(CLRT_SOURCE_DIR) + "/cl_kernels")) {
+        std::string text = readText(e.path().string());
+        std::string last;
+        for (std::sregex_iterator it(text.begin(), text.end(), pragma), end; it != end; ++it) last = (*it)[1].str();
+        INFO(e.path());
+        CHECK((last.empty() || last == "ON"));
     }
 }
 

@@ -65,7 +65,7 @@ RandomScene makeScene(uint32_t seed, int numTris, int numSpheres) {
 
 TEST_CASE("intersection kernels match the host reference on random scenes", "[cl][intersect]") {
     DeviceContext& dc = testContext();
-    auto sources = loadKernelSources({"common.cl", "intersect.cl"});
+    auto sources = loadKernelSources(KernelProgram::Intersect);
     cl::Program program = buildProgramFromSources(dc, sources, {});
     cl::Kernel closest = CL_CPP(cl::Kernel(program, "intersect_closest"));
     cl::Kernel shadow = CL_CPP(cl::Kernel(program, "intersect_shadow"));

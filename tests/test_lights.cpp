@@ -317,7 +317,7 @@ __kernel void env_test(const __global float* dist, const __global float4* texels
 }
 )CLC";
     DeviceContext& dc = testContext();
-    auto sources = loadKernelSources({"common.cl", "envmap.cl"});
+    auto sources = loadKernelSources({"envmap.cl"});
     sources.push_back({"env_test.cl", src});
     cl::Program program = buildProgramFromSources(dc, sources, {});
     cl::Kernel k = CL_CPP(cl::Kernel(program, "env_test"));
@@ -443,7 +443,7 @@ __kernel void light_test(const __global Light* lights, int numLights, const __gl
 }
 )CLC";
     DeviceContext& dc = testContext();
-    auto sources = loadKernelSources({"common.cl", "envmap.cl", "lights.cl"});
+    auto sources = loadKernelSources({"lights.cl"});
     sources.push_back({"light_test.cl", src});
     cl::Program program = buildProgramFromSources(
         dc, sources, {"-DCLRT_HAS_SPOT_LIGHT=1", "-DCLRT_HAS_DIRECTIONAL_LIGHT=1", "-DCLRT_HAS_AREA_LIGHT=1",
@@ -728,7 +728,7 @@ __kernel void edge_test(const __global Light* lights, int numLights, const __glo
     for (int i = 0; i < 2046; ++i) pts.push_back({pos(rng), i % 3 == 0 ? 0.0f : pos(rng), pos(rng), uni(rng)});
     const int n = int(pts.size());
     DeviceContext& dc = testContext();
-    auto sources = loadKernelSources({"common.cl", "envmap.cl", "lights.cl"});
+    auto sources = loadKernelSources({"lights.cl"});
     sources.push_back({"edge_test.cl", src});
     cl::Program program = buildProgramFromSources(
         dc, sources, {"-DCLRT_HAS_SPOT_LIGHT=1", "-DCLRT_HAS_AREA_LIGHT=1", "-DCLRT_HAS_POINT_LIGHT=1"});

@@ -72,7 +72,7 @@ struct IntersectProgram {
     cl::Kernel closest;
     IntersectProgram() {
         DeviceContext& dc = testContext();
-        program = buildProgramFromSources(dc, loadKernelSources({"common.cl", "intersect.cl"}), {});
+        program = buildProgramFromSources(dc, loadKernelSources(KernelProgram::Intersect), {});
         closest = CL_CPP(cl::Kernel(program, "intersect_closest"));
     }
 };

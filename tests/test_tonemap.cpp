@@ -527,7 +527,7 @@ TEST_CASE("float display output of the device equals the host reference", "[tone
 
 TEST_CASE("vector map kernels equal the scalar one-pixel-per-work-item kernels byte for byte", "[tonemap]") {
     DeviceContext& dc = testContext();
-    std::vector<NamedSource> sources = loadKernelSources({"common.cl", "tonemap.cl"});
+    std::vector<NamedSource> sources = loadKernelSources(KernelProgram::Tonemap);
     sources.push_back({"tests/test_tonemap.cpp", kScalarMapKernels});
     cl::Program program = buildProgramFromSources(dc, sources, {});
     cl::Kernel ref8 = CL_CPP(cl::Kernel(program, "Ref_Map"));

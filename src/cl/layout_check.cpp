@@ -34,7 +34,7 @@ const std::vector<LayoutEntry>& hostLayout() {
 
 std::vector<int> deviceLayout(DeviceContext& dc, BuildInfo* info) {
     const size_t n = 1 + 2 * hostLayout().size();
-    cl::Program prog = buildProgram(dc, {"layout.cl"}, {}, info);
+    cl::Program prog = buildProgram(dc, KernelProgram::Layout, {}, info);
     cl::Kernel kernel = CL_CPP(cl::Kernel(prog, "layout_report"));
     std::vector<int> out(n, -1);
     cl::Buffer buf = CL_CPP(cl::Buffer(dc.context(), CL_MEM_WRITE_ONLY, n * sizeof(int)));

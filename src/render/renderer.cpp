@@ -13,9 +13,6 @@
 namespace clrt {
 
 namespace {
-const std::vector<std::string> kKernelFiles = {"common.cl", "intersect.cl", "camera.cl", "textures.cl",
-                                               "envmap.cl", "lights.cl", "shade.cl"};
-
 template <class T> cl::Buffer uploadBuffer(cl::Context& ctx, const std::vector<T>& v) {
     return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * std::max<size_t>(v.size(), 1),
                              const_cast<T*>(v.data())));
@@ -38,7 +35,7 @@ struct Renderer::Impl {
         CL_CHECK(clGetCommandQueueInfo(dc.queue()(), CL_QUEUE_PROPERTIES, sizeof qp, &qp, nullptr));
         profiling = (qp & CL_QUEUE_PROFILING_ENABLE) != 0;
         std::vector<std::string> defines = scene.features.defines();
-        program = buildProgram(dc, kKernelFiles, defines, &build);
+        program = buildProgram(dc, KernelProgram::Render, defines, &build);
         auto mk = [&](const char* name) { return CL_CPP(cl::Kernel(program, name)); };
         kGenerate = mk("generate_camera_rays");
         kIntersect = mk("intersect_closest");

@@ -37,7 +37,7 @@ struct TonemapDevice::Impl {
     double lumDelta = -1, logSum = 0;
 
     explicit Impl(DeviceContext& d) : dc(d) {
-        program = buildProgram(dc, {"common.cl", "tonemap.cl"}, {}, &build);
+        program = buildProgram(dc, KernelProgram::Tonemap, {}, &build);
         kLum = CL_CPP(cl::Kernel(program, "Tonemap_Luminance"));
         kHist = CL_CPP(cl::Kernel(program, "Tonemap_Histogram"));
         kMap = CL_CPP(cl::Kernel(program, "Tonemap_Map"));
