@@ -28,7 +28,10 @@ SCENES = [("cube_point", "hw5/cube_point.xml"), ("veachAjar", "classic/veachAjar
 
 
 def sh(cmd):
-    return subprocess.run(cmd, capture_output=True, text=True)
+    try:
+        return subprocess.run(cmd, capture_output=True, text=True)
+    except OSError as e:  # a missing tool (lscpu on a bare machine) is reported, not fatal
+        return subprocess.CompletedProcess(cmd, 127, "", str(e))
 
 
 def machine(clrt, device):
