@@ -5,6 +5,7 @@
 #define CLRT_CAMERA_CL
 
 #include "../src/shared/device_types.h"
+#include "../src/shared/kernel_params.h"
 #include "common.cl"
 
 inline float3 Camera_Direction(CameraParams cam, float px, float py) {
@@ -15,8 +16,8 @@ inline float3 Camera_Direction(CameraParams cam, float px, float py) {
     return uc * cam.u.xyz + vc * cam.v.xyz - cam.nearDistance * cam.w.xyz;
 }
 
-__kernel void generate_camera_rays(CameraParams cam, SceneParams scene, int firstPixel, int sample, int count,
-                                   __global PathState* paths, __global Ray* rays) {
+/* Parameters: src/shared/kernel_params.h. */
+__kernel void generate_camera_rays(CLRT_KERNEL_PARAMS(generate_camera_rays)) {
     int i = get_global_id(0);
     if (i >= count) return;
     int pixel = firstPixel + i;

@@ -5,6 +5,7 @@
 #define CLRT_INTERSECT_CL
 
 #include "../src/shared/device_types.h"
+#include "../src/shared/kernel_params.h"
 #include "common.cl"
 
 #ifdef cl_khr_fp64
@@ -252,12 +253,12 @@ inline int Planes_Intersect(const __global Plane* planes, int numPlanes, int fir
 }
 
 /* Closest hit for each ray of the queue. */
-__kernel void intersect_closest(const __global Bvh4Node* nodes, const __global int* primRefs,
-                                const __global Triangle* tris, const __global Sphere* spheres,
-                                int numTriangles, const __global Ray* rays, __global Hit* hits, int count,
-                                const __global Plane* planes, int numPlanes, int firstPlaneRef) {
+/* Parameters of both kernels: src/shared/kernel_params.h. */
+__kernel void intersect_closest(CLRT_KERNEL_PARAMS(intersect_closest)) {
     int i = get_global_id(0);
     if (i >= count) return;
+    const int numTriangles = scene.numTriangles, numPlanes = scene.numPlanes;
+    const int firstPlaneRef = scene.numTriangles + scene.numSpheres;
     Ray r = rays[i];
     Hit h;
     h.t = -1.0f; h.prim = CLRT_INVALID; h.u = 0.0f; h.v = 0.0f;
@@ -271,12 +272,11 @@ __kernel void intersect_closest(const __global Bvh4Node* nodes, const __global i
 }
 
 /* Any hit for each shadow ray: an occluded ray's contribution is set to zero. */
-__kernel void intersect_shadow(const __global Bvh4Node* nodes, const __global int* primRefs,
-                               const __global Triangle* tris, const __global Sphere* spheres,
-                               int numTriangles, __global ShadowRay* shadows, int count,
-                               const __global Plane* planes, int numPlanes, int firstPlaneRef) {
+__kernel void intersect_shadow(CLRT_KERNEL_PARAMS(intersect_shadow)) {
     int i = get_global_id(0);
     if (i >= count) return;
+    const int numTriangles = scene.numTriangles, numPlanes = scene.numPlanes;
+    const int firstPlaneRef = scene.numTriangles + scene.numSpheres;
     __global ShadowRay* s = &shadows[i];
     float4 c = s->contribution;
     if (c.x == 0.0f && c.y == 0.0f && c.z == 0.0f) return;

@@ -11,6 +11,7 @@
 #ifndef CLRT_LAYOUT_CL
 #define CLRT_LAYOUT_CL
 #include "../src/shared/device_types.h"
+#include "../src/shared/kernel_params.h"
 #ifndef CLRT_LAYOUT_TABLE
 #define CLRT_LAYOUT_TABLE(S, M)                                                                   \
     S(Bvh4Node) M(Bvh4Node, minX) M(Bvh4Node, maxX) M(Bvh4Node, minY) M(Bvh4Node, maxY)          \
@@ -61,7 +62,7 @@
 #endif
 
 #ifdef __OPENCL_C_VERSION__
-__kernel void layout_report(__global int* out) {
+__kernel void layout_report(CLRT_KERNEL_PARAMS(layout_report)) { /* src/shared/kernel_params.h */
     if (get_global_id(0) != 0) return;
     int i = 1;
 #define CLRT_LAYOUT_S(T)                 \

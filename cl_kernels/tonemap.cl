@@ -18,6 +18,7 @@
 #define CLRT_TONEMAP_CL
 
 #include "../src/shared/device_types.h"
+#include "../src/shared/kernel_params.h"
 /* FP_CONTRACT OFF from here to the end of this file: the same float operations as the host. */
 #pragma OPENCL FP_CONTRACT OFF
 
@@ -84,8 +85,8 @@ inline uchar16 Tonemap_Encode16(float16 v, const TonemapParams* p) {
     return convert_uchar16(select((float16)(0.0f), fmin(x, 255.0f), x > 0.0f));
 }
 
-__kernel void Tonemap_Luminance(__global const float* rgb, uint n, float delta,
-                                __global float* lum, __global float2* partials) {
+/* Parameters of every kernel here: src/shared/kernel_params.h. */
+__kernel void Tonemap_Luminance(CLRT_KERNEL_PARAMS(Tonemap_Luminance)) {
     const uint gid = get_global_id(0), stride = get_global_size(0);
     float sum = 0.0f, comp = 0.0f;  /* Neumaier: sum + comp is the exact running total */
     for (uint i = gid; i < n; i += stride) {
@@ -101,8 +102,7 @@ __kernel void Tonemap_Luminance(__global const float* rgb, uint n, float delta,
 
 /* Counts, among the Y whose bits under `mask` equal `prefix`, the 8-bit digit at `shift`.
  * hist (256 uints) must be zero before the launch; any local size works. */
-__kernel void Tonemap_Histogram(__global const float* lum, uint n, uint prefix, uint mask, uint shift,
-                                __global uint* hist) {
+__kernel void Tonemap_Histogram(CLRT_KERNEL_PARAMS(Tonemap_Histogram)) {
     __local uint local_hist[TONEMAP_BINS];
     const uint lid = get_local_id(0), lsize = get_local_size(0);
     for (uint b = lid; b < TONEMAP_BINS; b += lsize) local_hist[b] = 0;
@@ -151,7 +151,7 @@ inline void Tonemap_Display16(__global const float* rgb, uint first, uint count,
 }
 
 /* 8-bit output: TONEMAP_VEC pixels per work-item. */
-__kernel void Tonemap_Map(__global const float* rgb, TonemapParams p, __global uchar* out) {
+__kernel void Tonemap_Map(CLRT_KERNEL_PARAMS(Tonemap_Map)) {
     const uint first = get_global_id(0) * TONEMAP_VEC;
     if (first >= p.numPixels) return;
     const uint count = min(p.numPixels - first, (uint)TONEMAP_VEC);
@@ -166,7 +166,7 @@ __kernel void Tonemap_Map(__global const float* rgb, TonemapParams p, __global u
 
 /* Float output: the gamma-encoded display values in [0,1], not quantised; TONEMAP_VEC pixels per
  * work-item. */
-__kernel void Tonemap_MapFloat(__global const float* rgb, TonemapParams p, __global float* out) {
+__kernel void Tonemap_MapFloat(CLRT_KERNEL_PARAMS(Tonemap_MapFloat)) {
     const uint first = get_global_id(0) * TONEMAP_VEC;
     if (first >= p.numPixels) return;
     const uint count = min(p.numPixels - first, (uint)TONEMAP_VEC);

@@ -8,6 +8,8 @@
 #include <cmath>
 
 #include "cl/check.h"
+#include "cl/kernel_args.h"
+#include "shared/kernel_params.h"
 #include "util/error.h"
 
 namespace clrt {
@@ -21,44 +23,63 @@ template <class T> cl::Buffer uploadBuffer(cl::Context& ctx, const std::vector<T
 
 struct Renderer::Impl {
     DeviceContext& dc;
-    const DeviceScene& scene;
+    const DeviceScene& ds;
     BuildInfo build;
     cl::Program program;
-    cl::Kernel kGenerate, kIntersect, kShadow, kShade, kLights, kGather, kAccumulate, kCompact;
+    KernelArgs kGenerate, kIntersect, kShadow, kShade, kLights, kGather, kAccumulate, kCompact;
+    // Every kernel argument, each named as the kernel parameter it is bound to (src/shared/kernel_params.h):
+    // bindAll() binds each kernel's whole parameter list from these members, by name.
     cl::Buffer nodes, primRefs, tris, triShading, spheres, planes, materials, textureSets, textures, images, texels, lights, envDist;
     // Queue buffers (sized per render).
     size_t queueCapacity = 0, shadowCapacity = 0;
     cl::Buffer paths, rays, hits, points, pathRadiance, nextPaths, nextRays, childValid, compactTarget, shadows;
+    // Per render: the image and the parameter blocks. Per launch (set again before each): the rest.
+    cl::Buffer image;
+    dev::SceneParams scene{};
+    dev::CameraParams cam{};
+    int count = 0, firstPixel = 0, sample = 0, lightBegin = 0, lightEnd = 0, chunk = 0;
 
-    Impl(DeviceContext& d, const DeviceScene& s) : dc(d), scene(s) {
+    Impl(DeviceContext& d, const DeviceScene& s) : dc(d), ds(s) {
         cl_command_queue_properties qp = 0;
         CL_CHECK(clGetCommandQueueInfo(dc.queue()(), CL_QUEUE_PROPERTIES, sizeof qp, &qp, nullptr));
         profiling = (qp & CL_QUEUE_PROFILING_ENABLE) != 0;
-        std::vector<std::string> defines = scene.features.defines();
+        std::vector<std::string> defines = ds.features.defines();
         program = buildProgram(dc, KernelProgram::Render, defines, &build);
-        auto mk = [&](const char* name) { return CL_CPP(cl::Kernel(program, name)); };
-        kGenerate = mk("generate_camera_rays");
-        kIntersect = mk("intersect_closest");
-        kShadow = mk("intersect_shadow");
-        kShade = mk("shade_hits");
-        kLights = mk("sample_lights");
-        kGather = mk("gather_shadows");
-        kAccumulate = mk("accumulate");
-        kCompact = mk("compact_paths");
+        kGenerate = KernelArgs(program, "generate_camera_rays");
+        kIntersect = KernelArgs(program, "intersect_closest");
+        kShadow = KernelArgs(program, "intersect_shadow");
+        kShade = KernelArgs(program, "shade_hits");
+        kLights = KernelArgs(program, "sample_lights");
+        kGather = KernelArgs(program, "gather_shadows");
+        kAccumulate = KernelArgs(program, "accumulate");
+        kCompact = KernelArgs(program, "compact_paths");
         cl::Context& ctx = dc.context();
-        nodes = uploadBuffer(ctx, scene.bvh4.nodes);
-        primRefs = uploadBuffer(ctx, scene.bvh.primRefs);
-        tris = uploadBuffer(ctx, scene.triangles);
-        triShading = uploadBuffer(ctx, scene.triangleShading);
-        spheres = uploadBuffer(ctx, scene.spheres);
-        planes = uploadBuffer(ctx, scene.planes);
-        materials = uploadBuffer(ctx, scene.materials);
-        textureSets = uploadBuffer(ctx, scene.textureSets);
-        textures = uploadBuffer(ctx, scene.textures);
-        images = uploadBuffer(ctx, scene.images);
-        texels = uploadBuffer(ctx, scene.texels);
-        lights = uploadBuffer(ctx, scene.lights);
-        envDist = uploadBuffer(ctx, scene.envDistribution);
+        nodes = uploadBuffer(ctx, ds.bvh4.nodes);
+        primRefs = uploadBuffer(ctx, ds.bvh.primRefs);
+        tris = uploadBuffer(ctx, ds.triangles);
+        triShading = uploadBuffer(ctx, ds.triangleShading);
+        spheres = uploadBuffer(ctx, ds.spheres);
+        planes = uploadBuffer(ctx, ds.planes);
+        materials = uploadBuffer(ctx, ds.materials);
+        textureSets = uploadBuffer(ctx, ds.textureSets);
+        textures = uploadBuffer(ctx, ds.textures);
+        images = uploadBuffer(ctx, ds.images);
+        texels = uploadBuffer(ctx, ds.texels);
+        lights = uploadBuffer(ctx, ds.lights);
+        envDist = uploadBuffer(ctx, ds.envDistribution);
+    }
+
+    // Binds every parameter of every kernel from the member of the same name (the per-launch ones
+    // with their current values; run() callers set those again).
+    void bindAll() {
+        CLRT_BIND_GROUP(kGenerate, CLRT_KERNEL_generate_camera_rays, *this);
+        CLRT_BIND_GROUP(kIntersect, CLRT_KERNEL_intersect_closest, *this);
+        CLRT_BIND_GROUP(kShadow, CLRT_KERNEL_intersect_shadow, *this);
+        CLRT_BIND_GROUP(kShade, CLRT_KERNEL_shade_hits, *this);
+        CLRT_BIND_GROUP(kLights, CLRT_KERNEL_sample_lights, *this);
+        CLRT_BIND_GROUP(kGather, CLRT_KERNEL_gather_shadows, *this);
+        CLRT_BIND_GROUP(kAccumulate, CLRT_KERNEL_accumulate, *this);
+        CLRT_BIND_GROUP(kCompact, CLRT_KERNEL_compact_paths, *this);
     }
 
     void ensureQueues(size_t capacity, size_t shadowSlots) {
@@ -88,10 +109,10 @@ struct Renderer::Impl {
     // With a profiling queue, every launch keeps its event and stage until collectProfile().
     bool profiling = false;
     std::vector<std::pair<int, cl::Event>> events;
-    void run(cl::Kernel& k, size_t n, int stage) {
+    void run(KernelArgs& k, size_t n, int stage) {
         if (n == 0) return;
         cl::Event ev;
-        CL_CPP(dc.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(roundUp(n, localSize)),
+        CL_CPP(dc.queue().enqueueNDRangeKernel(k.ready(), cl::NullRange, cl::NDRange(roundUp(n, localSize)),
                                                cl::NDRange(localSize), nullptr, profiling ? &ev : nullptr));
         if (profiling) events.emplace_back(stage, ev);
     }
@@ -156,7 +177,7 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
                            const std::function<void(size_t, size_t)>& progress) {
     Impl& m = *impl_;
     auto t0 = std::chrono::steady_clock::now();
-    const DeviceScene& ds = m.scene;
+    const DeviceScene& ds = m.ds;
     dev::CameraParams cp = makeCameraParams(cam);
     setSamplesPerPixel(cp, settings.spp);
     const size_t numPixels = size_t(cam.width) * cam.height;
@@ -190,42 +211,14 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     cl::Buffer image = CL_CPP(cl::Buffer(m.dc.context(), CL_MEM_READ_WRITE, imageBytes));
     CL_CPP(q.enqueueFillBuffer(image, dev::float4{0, 0, 0, 0}, 0, imageBytes));
 
-    // Kernel arguments that do not change within the render.
-    cl::Kernel& kg = m.kGenerate;
-    kg.setArg(0, sizeof(cp), &cp);
-    kg.setArg(1, sizeof(sp), &sp);
-    kg.setArg(5, m.paths);
-    kg.setArg(6, m.rays);
-    auto setGeometry = [&](cl::Kernel& k) {
-        k.setArg(0, m.nodes); k.setArg(1, m.primRefs); k.setArg(2, m.tris); k.setArg(3, m.spheres);
-        k.setArg(4, sp.numTriangles);
-    };
-    setGeometry(m.kIntersect);
-    m.kIntersect.setArg(5, m.rays);
-    m.kIntersect.setArg(6, m.hits);
-    const int firstPlaneRef = sp.numTriangles + sp.numSpheres;
-    m.kIntersect.setArg(8, m.planes); m.kIntersect.setArg(9, sp.numPlanes); m.kIntersect.setArg(10, firstPlaneRef);
-    m.kShadow.setArg(7, m.planes); m.kShadow.setArg(8, sp.numPlanes); m.kShadow.setArg(9, firstPlaneRef);
-    setGeometry(m.kShadow);
-    m.kShadow.setArg(5, m.shadows);
-    cl::Kernel& ks = m.kShade;
-    ks.setArg(0, sizeof(sp), &sp);
-    ks.setArg(1, sizeof(cp), &cp);
-    {
-        int a = 3;
-        for (cl::Buffer* b : {&m.paths, &m.rays, &m.hits, &m.tris, &m.triShading, &m.spheres, &m.materials,
-                              &m.textureSets, &m.textures, &m.images, &m.texels, &m.points, &m.pathRadiance,
-                              &m.nextPaths, &m.nextRays, &m.childValid, &m.planes})
-            ks.setArg(a++, *b);
-    }
-    cl::Kernel& kl = m.kLights;
-    kl.setArg(0, sizeof(sp), &sp);
-    kl.setArg(4, m.paths); kl.setArg(5, m.points); kl.setArg(6, m.lights); kl.setArg(7, m.shadows);
-    kl.setArg(8, m.images); kl.setArg(9, m.texels); kl.setArg(10, m.envDist);
-    m.kGather.setArg(2, m.shadows); m.kGather.setArg(3, m.pathRadiance);
-    m.kAccumulate.setArg(1, m.paths); m.kAccumulate.setArg(2, m.pathRadiance); m.kAccumulate.setArg(3, image);
-    m.kCompact.setArg(1, m.compactTarget); m.kCompact.setArg(2, m.nextPaths); m.kCompact.setArg(3, m.nextRays);
-    m.kCompact.setArg(4, m.paths); m.kCompact.setArg(5, m.rays);
+    // Every argument of every kernel, by name; the loop below sets the per-launch ones again.
+    m.image = image;
+    m.scene = sp;
+    m.cam = cp;
+    m.bindAll();
+    KernelArgs& kg = m.kGenerate;
+    KernelArgs& ks = m.kShade;
+    KernelArgs& kl = m.kLights;
 
     std::vector<int> valid, target;
     std::vector<dev::float4> tilePixels;
@@ -238,26 +231,26 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
         for (int sample = 0; sample < cp.spp; ++sample) {
             for (size_t first = tileFirst; first < tileEnd; first += batch) {
                 int n = int(std::min(batch, tileEnd - first));
-                kg.setArg(2, int(first)); kg.setArg(3, sample); kg.setArg(4, n);
+                kg.set("firstPixel", int(first)).set("sample", sample).set("count", n);
                 m.run(kg, n, STAGE_GENERATE);
                 counters.cameraRays += n;
                 for (int depth = 0; n > 0; ++depth) {
-                    m.kIntersect.setArg(7, n);
+                    m.kIntersect.set("count", n);
                     m.run(m.kIntersect, n, depth == 0 ? STAGE_TRACE_CAMERA : STAGE_TRACE_SECONDARY);
-                    ks.setArg(2, n);
+                    ks.set("count", n);
                     m.run(ks, n, STAGE_SHADE);
                     for (int l0 = 0; l0 < numLights; l0 += int(lightChunk)) {
                         int l1 = std::min(numLights, l0 + int(lightChunk));
                         int slots = n * (l1 - l0);
-                        kl.setArg(1, n); kl.setArg(2, l0); kl.setArg(3, l1);
+                        kl.set("count", n).set("lightBegin", l0).set("lightEnd", l1);
                         m.run(kl, n, STAGE_SAMPLE_LIGHTS);
-                        m.kShadow.setArg(6, slots);
+                        m.kShadow.set("count", slots);
                         m.run(m.kShadow, slots, STAGE_TRACE_SHADOW);
-                        m.kGather.setArg(0, n); m.kGather.setArg(1, l1 - l0);
+                        m.kGather.set("count", n).set("chunk", l1 - l0);
                         m.run(m.kGather, n, STAGE_GATHER);
                         counters.shadowRays += slots;
                     }
-                    m.kAccumulate.setArg(0, n);
+                    m.kAccumulate.set("count", n);
                     m.run(m.kAccumulate, n, STAGE_ACCUMULATE);
                     if (!bounces || depth >= sp.maxDepth) break;
                     // Order-preserving compaction of the children.
@@ -270,7 +263,7 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
                     if (next == 0) break;
                     // Blocking: `target` is resized on the next pass, so the copy must be done before then.
                     CL_CPP(q.enqueueWriteBuffer(m.compactTarget, CL_TRUE, 0, slots * sizeof(int), target.data()));
-                    m.kCompact.setArg(0, int(slots));
+                    m.kCompact.set("count", int(slots));
                     m.run(m.kCompact, slots, STAGE_COMPACT);
                     n = next;
                     counters.secondaryRays += n;
@@ -296,6 +289,7 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
         counters.pixels += tileEnd - tileFirst;
         m.collectProfile(counters);  // the blocking read above drained the queue
     }
+    m.image = cl::Buffer();  // released with the render, as before (the kernels' binding is dropped on the next bind)
     counters.profiled = counters.profiled || m.profiling;
     counters.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
