@@ -71,9 +71,9 @@ inline float16 Tmo_Filmic(float16 L) {
 /* The one dispatcher over operators. */
 inline float16 Tmo_Apply(const TonemapParams* p, float16 L) {
     switch (p->op) {
-        case 0: return Tmo_Photographic(L, p->hasWhite, p->whiteL);
-        case 1: return Tmo_Aces(L);
-        case 2: return Tmo_Filmic(L);
+        case TMO_PHOTOGRAPHIC: return Tmo_Photographic(L, p->hasWhite, p->whiteL);
+        case TMO_ACES: return Tmo_Aces(L);
+        case TMO_FILMIC: return Tmo_Filmic(L);
         default: return (float16)(0.0f);
     }
 }

@@ -105,7 +105,7 @@ Args parseRenderArgs(int argc, char** argv, int start) {
         else if (s == "--all-features") a.allFeatures = true;
         else if (s == "--env-sampling") {
             a.envSampling = value();
-            EnvSampler es;
+            dev::EnvSamplerKind es;
             if (!parseEnvSampler(a.envSampling, es))
                 throw Error("--env-sampling: expected uniform, cosine, importance or mis, got '" + a.envSampling + "'",
                             ExitCode::Usage);
@@ -159,7 +159,7 @@ int cmdRender(const Args& a) {
     auto t = std::chrono::steady_clock::now();
     Scene scene = loadScene(a.positional[0]);
     if (!a.envSampling.empty()) {
-        EnvSampler es;
+        dev::EnvSamplerKind es;
         parseEnvSampler(a.envSampling, es);
         overrideEnvSampling(scene, es);
     }

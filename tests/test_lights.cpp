@@ -139,7 +139,15 @@ std::string envSceneXml(const std::string& image, const std::string& type, const
     return s.str();
 }
 
-ImageRGB renderFile(const std::string& path, int spp, EnvSampler* override = nullptr, uint32_t seed = 1) {
+// The light feature flags of the program for the light kinds in `kinds` (bit per dev::LightKind), from
+// the light table: the kernels compile the Light_Sample cases of these kinds only.
+std::vector<std::string> lightFlags(uint32_t kinds) {
+    FeatureSet f;
+    f.lightKinds = kinds;
+    return f.defines();
+}
+
+ImageRGB renderFile(const std::string& path, int spp, dev::EnvSamplerKind* override = nullptr, uint32_t seed = 1) {
     Scene scene = loadScene(path);
     if (override) overrideEnvSampling(scene, *override);
     return renderCamera(scene, scene.cameras.at(0), spp, seed);
@@ -446,8 +454,7 @@ __kernel void light_test(const __global Light* lights, int numLights, const __gl
     auto sources = loadKernelSources({"lights.cl"});
     sources.push_back({"light_test.cl", src});
     cl::Program program = buildProgramFromSources(
-        dc, sources, {"-DCLRT_HAS_SPOT_LIGHT=1", "-DCLRT_HAS_DIRECTIONAL_LIGHT=1", "-DCLRT_HAS_AREA_LIGHT=1",
-                      "-DCLRT_HAS_ENV_LIGHT=1", "-DCLRT_HAS_POINT_LIGHT=1"});
+        dc, sources, lightFlags(~0u));  // every light type
     cl::Kernel k = CL_CPP(cl::Kernel(program, "light_test"));
     const int n = 4096, L = 4;
     std::mt19937 rng(21);
@@ -622,12 +629,12 @@ TEST_CASE("env samplers on sunset.exr: importance and MIS beat uniform >= 10x in
     std::string path = writeFile(tmp.file("sunset.xml"),
                                  envSceneXml(image, "latlong", "mis", size, spp, "0.5 0.4 0.3", ground, "0.3 0.3 0.3", 60,
                                              "4.4 1.0 -11.0", "0 0 -5"));
-    EnvSampler mis = EnvSampler::Mis;
+    dev::EnvSamplerKind mis = dev::ENV_SAMPLE_MIS;
     ImageRGB ref = renderFile(path, refSpp, &mis, 12345);
     std::vector<ImageRGB> imgs;
     std::vector<double> err;
     for (int s = 0; s < 4; ++s) {
-        EnvSampler es = EnvSampler(s);
+        dev::EnvSamplerKind es = dev::EnvSamplerKind(s);
         imgs.push_back(renderFile(path, spp, &es, 7));
         err.push_back(relMse(imgs.back(), ref));
         WARN("sunset.exr, " << size << "x" << size << ", " << spp << " spp, " << kSamplerNames[s] << ": relMSE " << err.back()
@@ -731,7 +738,7 @@ __kernel void edge_test(const __global Light* lights, int numLights, const __glo
     auto sources = loadKernelSources({"lights.cl"});
     sources.push_back({"edge_test.cl", src});
     cl::Program program = buildProgramFromSources(
-        dc, sources, {"-DCLRT_HAS_SPOT_LIGHT=1", "-DCLRT_HAS_AREA_LIGHT=1", "-DCLRT_HAS_POINT_LIGHT=1"});
+        dc, sources, lightFlags((1u << dev::LIGHT_SPOT) | (1u << dev::LIGHT_AREA) | (1u << dev::LIGHT_POINT)));
     cl::Kernel k = CL_CPP(cl::Kernel(program, "edge_test"));
     cl::Context& ctx = dc.context();
     auto ro = [&](const auto& v) {

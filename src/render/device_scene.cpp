@@ -14,6 +14,7 @@
 
 #include "image/image.h"
 #include "render/env_distribution.h"
+#include "shared/type_tables.h"
 #include "util/error.h"
 
 namespace clrt {
@@ -28,30 +29,21 @@ void storeRows(dev::float4 rows[3], const Mat4& m) {
         rows[r] = {float(m.m[r][0]), float(m.m[r][1]), float(m.m[r][2]), float(m.m[r][3])};
 }
 
-int materialKind(MaterialType t) {
-    switch (t) {
-    case MaterialType::Mirror: return dev::MATERIAL_MIRROR;
-    case MaterialType::Dielectric: return dev::MATERIAL_DIELECTRIC;
-    case MaterialType::Conductor: return dev::MATERIAL_CONDUCTOR;
-    default: return dev::MATERIAL_BLINN_PHONG;
-    }
-}
-
 }  // namespace
+
+bool FeatureSet::bounces() const {
+    for (const auto& row : materialTypes())
+        if (row.bounces && has(row.kind)) return true;
+    return false;
+}
 
 std::vector<std::string> FeatureSet::defines() const {
     std::vector<std::string> d;
     auto add = [&](bool on, const char* name) {
-        if (on) d.push_back(std::string("-D") + name + "=1");
+        if (on && *name) d.push_back(std::string("-D") + name + "=1");
     };
-    add(pointLight, "CLRT_HAS_POINT_LIGHT");
-    add(spotLight, "CLRT_HAS_SPOT_LIGHT");
-    add(directionalLight, "CLRT_HAS_DIRECTIONAL_LIGHT");
-    add(areaLight, "CLRT_HAS_AREA_LIGHT");
-    add(envLight, "CLRT_HAS_ENV_LIGHT");
-    add(mirror, "CLRT_HAS_MIRROR");
-    add(dielectric, "CLRT_HAS_DIELECTRIC");
-    add(conductor, "CLRT_HAS_CONDUCTOR");
+    for (const auto& row : lightTypes()) add(has(row.kind), row.flag);
+    for (const auto& row : materialTypes()) add(has(row.kind), row.flag);
     add(textures, "CLRT_HAS_TEXTURES");
     add(spheres, "CLRT_HAS_SPHERES");
     add(primRefsIdentity, "CLRT_PRIMREFS_IDENTITY");
@@ -173,7 +165,7 @@ DeviceScene flattenScene(const Scene& scene) {
         d.refractionIndex = m.refractionIndex;
         d.absorptionIndex = m.absorptionIndex;
         d.roughness = m.roughness;
-        d.kind = materialKind(m.type);
+        d.kind = m.type;
         ds.materials.push_back(d);
     }
     if (ds.materials.empty()) ds.materials.push_back(dev::Material{});
@@ -209,10 +201,10 @@ DeviceScene flattenScene(const Scene& scene) {
         const Texture& t = scene.textures[ti];
         dev::TextureMap d{};
         d.image = CLRT_INVALID;
-        d.kind = t.type == TextureType::Image ? dev::TEXTURE_IMAGE
-                 : t.type == TextureType::Perlin ? dev::TEXTURE_PERLIN : dev::TEXTURE_CHECKERBOARD;
-        d.decal = int(t.decalMode);  // DecalMode and DecalKind list the modes in the same order
-        d.interpolation = t.interpolation == Interpolation::Nearest ? dev::INTERP_NEAREST : dev::INTERP_BILINEAR;
+        d.kind = t.type;
+        d.decal = t.decalMode;
+        // No mip-maps on the device: trilinear is filtered bilinearly.
+        d.interpolation = t.interpolation == dev::INTERP_TRILINEAR ? dev::INTERP_BILINEAR : t.interpolation;
         d.normalizer = t.normalizer;
         d.bumpFactor = t.bumpFactor;
         d.scale = t.scale;
@@ -221,19 +213,19 @@ DeviceScene flattenScene(const Scene& scene) {
         d.noiseAbs = t.noiseConversion == "absval";
         d.blackColor = toFloat4(t.blackColor);
         d.whiteColor = toFloat4(t.whiteColor);
-        if (t.type == TextureType::Image && t.imageIndex >= 0) {
+        if (t.type == dev::TEXTURE_IMAGE && t.imageIndex >= 0) {
             bool used = false;
             for (const Shape& s : scene.shapes)
                 for (int x : s.textureIndices) used |= (x == int(ti));
-            used |= t.decalMode == DecalMode::ReplaceBackground;
+            used |= t.decalMode == dev::DECAL_REPLACE_BACKGROUND;
             if (used) {
                 d.image = useImage(t.imageIndex);
                 if (!t.normalizerGiven)
                     d.normalizer = imageIsHdr[d.image] ? 1.0f : 255.0f;
             }
         }
-        if (t.decalMode == DecalMode::ReplaceBackground && d.image != CLRT_INVALID) ds.params.backgroundTexture = int(ti);
-        if (t.decalMode == DecalMode::ReplaceNormal || t.decalMode == DecalMode::BumpNormal)
+        if (t.decalMode == dev::DECAL_REPLACE_BACKGROUND && d.image != CLRT_INVALID) ds.params.backgroundTexture = int(ti);
+        if (t.decalMode == dev::DECAL_REPLACE_NORMAL || t.decalMode == dev::DECAL_BUMP_NORMAL)
             warnOnce(scene.path + ": texture id=" + std::to_string(t.id) +
                      ": normal/bump decal modes are not supported yet; ignored");
         ds.textures.push_back(d);
@@ -248,7 +240,7 @@ DeviceScene flattenScene(const Scene& scene) {
         for (int k = 0; k < CLRT_MAX_TEXTURES_PER_SHAPE; ++k) set.texture[k] = CLRT_INVALID;
         int k = 0;
         for (int x : s.textureIndices) {
-            if (scene.textures[x].decalMode == DecalMode::ReplaceBackground) continue;
+            if (scene.textures[x].decalMode == dev::DECAL_REPLACE_BACKGROUND) continue;
             if (k == CLRT_MAX_TEXTURES_PER_SHAPE) {
                 warnOnce(s.source + ": more than 4 textures; the rest are ignored");
                 break;
@@ -354,9 +346,7 @@ DeviceScene flattenScene(const Scene& scene) {
     ds.skippedTriangles += nanSkipped;
     f.spheres = !ds.spheres.empty();
     for (const Material& m : scene.materials) {
-        f.mirror |= m.type == MaterialType::Mirror;
-        f.dielectric |= m.type == MaterialType::Dielectric;
-        f.conductor |= m.type == MaterialType::Conductor;
+        f.add(m.type);
     }
 
     // ---- lights
@@ -368,20 +358,18 @@ DeviceScene flattenScene(const Scene& scene) {
         d.direction = toFloat4(normalize(l.direction));
         d.image = CLRT_INVALID;
         d.distribution = CLRT_INVALID;
+        d.kind = l.type;
+        f.add(l.type);
         switch (l.type) {
-        case LightType::Point: d.kind = dev::LIGHT_POINT; f.pointLight = true; break;
-        case LightType::Directional: d.kind = dev::LIGHT_DIRECTIONAL; f.directionalLight = true; break;
-        case LightType::Spot: {
-            d.kind = dev::LIGHT_SPOT;
-            f.spotLight = true;
+        case dev::LIGHT_POINT:
+        case dev::LIGHT_DIRECTIONAL: break;
+        case dev::LIGHT_SPOT: {
             float cov = std::clamp(l.coverageAngle, 0.0f, 360.0f), fall = std::clamp(l.falloffAngle, 0.0f, cov);
             d.cosCoverageHalf = std::cos(double(cov) * 0.5 * M_PI / 180.0);
             d.cosFalloffHalf = std::cos(double(fall) * 0.5 * M_PI / 180.0);
             break;
         }
-        case LightType::Area: {
-            d.kind = dev::LIGHT_AREA;
-            f.areaLight = true;
+        case dev::LIGHT_AREA: {
             Vec3 n = normalize(l.direction);
             Vec3 helper = std::fabs(n.x) > 0.9f ? Vec3(0, 1, 0) : Vec3(1, 0, 0);
             Vec3 u = normalize(cross(helper, n)), v = cross(n, u);
@@ -390,17 +378,12 @@ DeviceScene flattenScene(const Scene& scene) {
             d.area = l.size * l.size;
             break;
         }
-        case LightType::Environment: {
-            d.kind = dev::LIGHT_ENVIRONMENT;
-            f.envLight = true;
+        case dev::LIGHT_ENVIRONMENT: {
             d.radiance = {1, 1, 1, 0};
             d.direction = {0, 1, 0, 0};
             d.image = useImage(l.imageIndex);
-            d.mapping = l.mapping == EnvMapping::Probe ? dev::ENV_PROBE : dev::ENV_LATLONG;
-            d.sampler = l.sampler == EnvSampler::Uniform      ? dev::ENV_SAMPLE_UNIFORM
-                        : l.sampler == EnvSampler::Cosine     ? dev::ENV_SAMPLE_COSINE
-                        : l.sampler == EnvSampler::Importance ? dev::ENV_SAMPLE_IMPORTANCE
-                                                              : dev::ENV_SAMPLE_MIS;
+            d.mapping = l.mapping;
+            d.sampler = l.sampler;
             const dev::ImageInfo& info = ds.images[d.image];
             EnvMapView view{&ds.texels[info.offset], info.width, info.height, d.mapping};
             auto te = std::chrono::steady_clock::now();
@@ -466,23 +449,6 @@ DeviceScene flattenScene(const Scene& scene) {
     p.maxDepth = std::max(0, scene.maxRecursionDepth);
     ds.flattenSeconds = secondsSince(t0) - ds.bvhSeconds;
     return ds;
-}
-
-bool parseEnvSampler(const std::string& name, EnvSampler& out) {
-    if (name == "uniform") out = EnvSampler::Uniform;
-    else if (name == "cosine") out = EnvSampler::Cosine;
-    else if (name == "importance") out = EnvSampler::Importance;
-    else if (name == "mis") out = EnvSampler::Mis;
-    else return false;
-    return true;
-}
-
-void overrideEnvSampling(Scene& scene, EnvSampler sampler) {
-    for (Light& l : scene.lights)
-        if (l.type == LightType::Environment) {
-            l.sampler = sampler;
-            l.samplerGiven = true;
-        }
 }
 
 }  // namespace clrt

@@ -40,11 +40,7 @@ std::string formatSeconds(double s) {
 
 TonemapSettings tonemapSettingsFrom(const Tonemap& t) {
     TonemapSettings s;
-    switch (t.op) {
-        case TonemapOperator::Photographic: s.op = TmoKind::Photographic; break;
-        case TonemapOperator::ACES: s.op = TmoKind::Aces; break;
-        case TonemapOperator::Filmic: s.op = TmoKind::Filmic; break;
-    }
+    s.op = t.op;
     s.key = t.key;
     s.burnPercent = t.burnPercent;
     s.saturation = t.saturation;
@@ -285,8 +281,7 @@ int cmdTonemap(int argc, char** argv) {
         s.truncate = truncate;
         validateTonemapSettings(s, "tonemap");
         settings.push_back(s);
-        if (haveTmo) b.op = s.op == TmoKind::Aces ? TonemapOperator::ACES
-                          : s.op == TmoKind::Filmic ? TonemapOperator::Filmic : TonemapOperator::Photographic;
+        if (haveTmo) b.op = s.op;
     }
     // With several blocks, -o gives the stem the block names are added to.
     std::vector<std::string> outs = blocks.size() == 1 ? std::vector<std::string>{outPath} : tonemapPngPaths(outPath, blocks);

@@ -187,13 +187,13 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     // The split depth depends only on the image and the batch limit, never on the tile: every
     // device and every tiling computes each pixel identically.
     const size_t batch = std::min(numPixels, settings.maxBatchPixels);
-    const bool bounces = ds.features.mirror || ds.features.dielectric || ds.features.conductor;
+    const bool bounces = ds.features.bounces();
     dev::SceneParams sp = ds.params;
     sp.seed = settings.seed;
     // Dielectrics split into both children while the queue can hold them and few samples are taken;
     // beyond that (or with many samples) one child is chosen by Fresnel weight (same expectation).
     int split = 0;
-    if (ds.features.dielectric && cp.spp <= 4) {
+    if (ds.features.has(dev::MATERIAL_DIELECTRIC) && cp.spp <= 4) {
         while (split < sp.maxDepth && (batch << (split + 1)) <= (size_t(1) << 21)) ++split;
     }
     if (settings.splitDepthOverride >= 0) split = settings.splitDepthOverride;

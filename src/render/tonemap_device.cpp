@@ -133,7 +133,7 @@ struct TonemapDevice::Impl {
         luminance(s.delta);
         TonemapDeviceResult r;
         r.logSum = logSum;
-        const bool needWhite = s.op == TmoKind::Photographic && s.burnPercent > 0.0f;
+        const bool needWhite = s.op == dev::TMO_PHOTOGRAPHIC && s.burnPercent > 0.0f;
         const size_t k = percentileIndex(numPixels, 100.0 - double(s.burnPercent));
         r.kthLuminance = needWhite ? select(k) : 0.0f;
         r.stats = tonemapStatsFrom(logSum, numPixels, r.kthLuminance, s);
