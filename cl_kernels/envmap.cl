@@ -95,7 +95,7 @@ inline int EnvDist_FindInterval(const __global float* cdf, int n, float x) {
     return lo;
 }
 
-/* pdf over solid angle of unit direction d (lat-long: uniform in solid angle within a cell; probe:
+/* pdf over solid angle of the unit direction with map coordinates uv (lat-long: uniform in solid angle within a cell; probe:
  * uniform in (u, v) over the cell's part inside the disc). */
 inline float EnvDist_PdfUv(const __global float* dist, float2 uv) {
     int W = (int)dist[0], H = (int)dist[1], mapping = (int)dist[2];
@@ -110,9 +110,6 @@ inline float EnvDist_PdfUv(const __global float* dist, float2 uv) {
     }
     float f = dist[4 + H + 1 + H * (W + 1) + j * W + i];
     return f > 0.0f ? p * (float)W * (float)H / f * EnvMap_UvToSolidAngle(mapping, uv.x, uv.y) : 0.0f;
-}
-inline float EnvDist_Pdf(const __global float* dist, float3 d) {
-    return EnvDist_PdfUv(dist, EnvMap_DirToUv((int)dist[2], d));
 }
 
 /* Importance sample: returns 1 and the direction, its solid-angle pdf and its map coordinates (for

@@ -114,8 +114,6 @@ struct Differ {
 std::vector<std::string> modelDiffs(const Scene& A, const Scene& B) {
     Differ d;
     d.v("backgroundColor", A.backgroundColor, B.backgroundColor);
-    d.f("shadowRayEpsilon", A.shadowRayEpsilon, B.shadowRayEpsilon);
-    d.f("intersectionTestEpsilon", A.intersectionTestEpsilon, B.intersectionTestEpsilon);
     d.i("maxRecursionDepth", A.maxRecursionDepth, B.maxRecursionDepth);
     d.v("ambientLight", A.ambientLight, B.ambientLight);
     d.i("cameras.size", int(A.cameras.size()), int(B.cameras.size()));

@@ -316,7 +316,8 @@ __kernel void env_test(const __global float* dist, const __global float4* texels
     int ok = EnvDist_Sample(dist, a.x, a.y, &d, &pdf);
     out[4 * i] = (float4)(d, ok ? pdf : -1.0f);
     float3 q = normalize((float3)(a.z, a.w, a.x - 0.5f));
-    out[4 * i + 1] = (float4)(EnvMap_Radiance(texels, img, mapping, (float3)(1.0f), q), EnvDist_Pdf(dist, q));
+    out[4 * i + 1] = (float4)(EnvMap_Radiance(texels, img, mapping, (float3)(1.0f), q),
+                            EnvDist_PdfUv(dist, EnvMap_DirToUv(mapping, q)));
     float2 uv = EnvMap_DirToUv(mapping, q);
     float3 back;
     int okb = EnvMap_UvToDir(mapping, uv.x, uv.y, &back);

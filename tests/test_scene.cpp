@@ -165,7 +165,6 @@ TEST_CASE("scene: lookAt camera plane from FovY and aspect", "[scene]") {
 TEST_CASE("scene: globals and defaults", "[scene]") {
     Scene d = load("defaults.xml", sceneWith(""));
     CHECK(d.maxRecursionDepth == 6);
-    CHECK(d.shadowRayEpsilon == Approx(1e-3f));
     std::string body = R"(
   <!-- a comment -->
   <BackgroundColor>1 2 3</BackgroundColor>
@@ -176,8 +175,9 @@ TEST_CASE("scene: globals and defaults", "[scene]") {
 )";
     Scene s = load("globals.xml", "<!-- leading comment -->\n<?xml-stylesheet x?>\n" + sceneWith(body));
     CHECK(s.backgroundColor == Vec3(1, 2, 3));
-    CHECK(s.shadowRayEpsilon == Approx(1e-4f));
-    CHECK(s.intersectionTestEpsilon == Approx(1e-7f));
+    // ShadowRayEpsilon / IntersectionTestEpsilon are read but unused (robust ray origins); a
+    // malformed one is still an error.
+    CHECK_THROWS_AS(load("bad_eps.xml", sceneWith("<ShadowRayEpsilon>abc</ShadowRayEpsilon>")), Error);
     CHECK(s.maxRecursionDepth == 3);
     CHECK(s.ambientLight == Vec3(5, 6, 7));
     CHECK(s.materials.size() == 2);
@@ -639,12 +639,9 @@ bool sameMat(const Mat4& a, const Mat4& b) {
 // background colour, MaxRecursionDepth, shading mode) are not compared: structure, geometry, cameras,
 // light placement and references still are.
 std::string diffScenes(const Scene& a, const Scene& b, bool data = true) {
-    if (data && (a.backgroundColor != b.backgroundColor || a.shadowRayEpsilon != b.shadowRayEpsilon ||
-        a.intersectionTestEpsilon != b.intersectionTestEpsilon || a.maxRecursionDepth != b.maxRecursionDepth ||
+    if (data && (a.backgroundColor != b.backgroundColor || a.maxRecursionDepth != b.maxRecursionDepth ||
         a.ambientLight != b.ambientLight))
         return "globals";
-    if (a.shadowRayEpsilon != b.shadowRayEpsilon || a.intersectionTestEpsilon != b.intersectionTestEpsilon)
-        return "epsilons";
     if (a.cameras.size() != b.cameras.size()) return "camera count";
     for (size_t i = 0; i < a.cameras.size(); ++i) {
         const Camera &x = a.cameras[i], &y = b.cameras[i];

@@ -107,8 +107,6 @@ struct Shape {
 struct Scene {
     std::string path;              // the scene file
     Vec3 backgroundColor{0, 0, 0};
-    float shadowRayEpsilon = 1e-3f;
-    float intersectionTestEpsilon = 1e-6f;
     int maxRecursionDepth = 6;
     Vec3 ambientLight{0, 0, 0};
     std::vector<Camera> cameras;

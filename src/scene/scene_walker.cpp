@@ -191,8 +191,10 @@ struct Walker {
                              "ZeroBasedIndexing", "Cameras", "Lights", "Materials", "Transformations",
                              "VertexData", "TexCoordData", "Textures", "Objects"});
         if (auto c = root.child("BackgroundColor")) scene.backgroundColor = vec3(*c);
-        if (auto c = root.child("ShadowRayEpsilon")) scene.shadowRayEpsilon = number(*c);
-        if (auto c = root.child("IntersectionTestEpsilon")) scene.intersectionTestEpsilon = number(*c);
+        // Read (a malformed value is still an error) but not used: ray origins are offset robustly
+        // (cl_kernels/common.cl, Ray_OffsetOrigin) and the intersection tests need no epsilon.
+        for (const char* eps : {"ShadowRayEpsilon", "IntersectionTestEpsilon"})
+            if (auto c = root.child(eps)) (void)number(*c);
         if (auto c = root.child("MaxRecursionDepth")) {
             scene.maxRecursionDepth = integer(*c);
             if (scene.maxRecursionDepth < 0) fail(*c, "MaxRecursionDepth must not be negative");
