@@ -1,4 +1,5 @@
-/* camera.cl — camera ray generation for one sample of a range of pixels. One sample per pixel: the
+/* camera.cl — camera ray generation for samples [firstSample, firstSample + samples) of a range of
+ * pixels, pixel-major (the samples of one pixel are adjacent). One sample per pixel: the
  * pixel centre (as the course does); more: stratified jitter over a strataX × strataY grid (box
  * filter). ApertureSize > 0: thin lens focused at FocusDistance, square aperture as in the course. */
 #ifndef CLRT_CAMERA_CL
@@ -20,7 +21,8 @@ inline float3 Camera_Direction(CameraParams cam, float px, float py) {
 __kernel void generate_camera_rays(CLRT_KERNEL_PARAMS(generate_camera_rays)) {
     int i = get_global_id(0);
     if (i >= count) return;
-    int pixel = firstPixel + i;
+    int pixel = firstPixel + i / samples;
+    int sample = firstSample + i % samples;
     int x = pixel % cam.width, y = pixel / cam.width;
     RngKey key = Rng_Key(scene.seed, pixel, sample, 1u);
     float jx = 0.5f, jy = 0.5f;

@@ -131,7 +131,9 @@ inline void Child_Write(__global PathState* nextPaths, __global Ray* nextRays, _
     PathState c = parent;
     c.throughput = (float4)(parent.throughput.xyz * weight, 0.0f);
     c.depth = parent.depth + 1;
-    c.pathId = parent.pathId * 2u + childBit;
+    /* Saturates instead of wrapping: past 31 bounces a path has one child only (the split depth is
+     * at most 20), so lineages stay distinct; every RNG dimension has a depth term for the bounces. */
+    c.pathId = parent.pathId < 0x80000000u ? parent.pathId * 2u + childBit : parent.pathId;
     Ray r;
     r.origin = (float4)(org, 0.0f);
     r.direction = (float4)(dir, INFINITY);

@@ -1,5 +1,9 @@
 // Shared helpers of the libFuzzer targets: the readers take file paths, so every input is written to
-// one temporary file per process (in a private temporary folder) before the reader runs.
+// one file per process before the reader runs. By default that file lies in a private temporary
+// folder (mkdtemp, removed at exit). With CLRT_FUZZ_INPUT_DIR set (scripts/fuzz.sh --gate sets it to
+// "." and runs each target in a scratch folder of its own), inputs go there instead, so the path the
+// readers see ("./scene.xml") is the same on every machine and run: no random or machine-specific
+// bytes reach the comparisons libFuzzer learns from, which keeps a fixed-seed run repeatable.
 #pragma once
 #include <cstdint>
 #include <cstdio>
@@ -9,9 +13,9 @@
 
 namespace clrt::fuzz {
 
-// A private folder for this process, created once (mkdtemp) and removed at exit.
 inline const std::string& tempDir() {
     static std::string dir = [] {
+        if (const char* given = std::getenv("CLRT_FUZZ_INPUT_DIR"); given && *given) return std::string(given);
         std::string tmpl = "/tmp/clrt-fuzz-XXXXXX";
         if (!mkdtemp(tmpl.data())) std::abort();
         std::string d = tmpl;

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# Sets up (scripts/setup.sh), runs the whole Catch2 test suite on the PoCL CPU device, then a short
-# libFuzzer smoke run of the scene/PLY/image readers (scripts/fuzz.sh; skip with CLRT_NO_FUZZ=1).
+# Sets up (scripts/setup.sh), runs the whole Catch2 test suite on the PoCL CPU device, then the
+# deterministic fuzz check of the scene/PLY/image readers (scripts/fuzz.sh --gate: the committed
+# regressions and seeds replayed under ASan/UBSan, then a fixed number of fixed-seed libFuzzer runs;
+# skip with CLRT_NO_FUZZ=1).
 # Usage: bash scripts/test.sh [catch2 args...]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -25,8 +27,8 @@ fi
 [ "$rc" -eq 0 ] || exit "$rc"
 if [ -z "${CLRT_NO_FUZZ:-}" ] && [ $# -eq 0 ]; then
   command -v clang++ >/dev/null || { [ "$(id -u)" -eq 0 ] && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq clang >/dev/null; }
-  echo "fuzz smoke run (6 s per target):"
-  # A fixed seed: the smoke run explores the same inputs every time (longer runs: scripts/fuzz.sh).
-  FUZZ_SEED=1 bash scripts/fuzz.sh 6 > build/fuzz-log.txt 2>&1 || { tail -30 build/fuzz-log.txt; echo "fuzz: smoke run found a problem"; exit 1; }
-  tail -3 build/fuzz-log.txt
+  echo "fuzz gate (fuzz/regressions + fuzz/corpus replayed, then a fixed number of -seed=1 runs per target):"
+  # The same inputs on every machine and every run; time-limited exploration: bash scripts/fuzz.sh SECONDS.
+  bash scripts/fuzz.sh --gate > build/fuzz-log.txt 2>&1 || { tail -40 build/fuzz-log.txt; echo "fuzz: the gate found a problem"; exit 1; }
+  grep -E "^==|DONE" build/fuzz-log.txt
 fi

@@ -54,7 +54,7 @@ const char* kRenderHelp =
     "  --device SPEC         OpenCL device: an index from `clrt devices`, cpu, gpu, a name\n"
     "                        substring, `all`, or a comma list (0,2) to render on several devices\n"
     "                        at once (default: the first GPU, else the CPU device)\n"
-    "  --spp N               samples per pixel, overriding each camera's NumSamples\n"
+    "  --spp N               samples per pixel (1 to 1048576), overriding each camera's NumSamples\n"
     "  --seed N              random seed (default 0); the same seed gives the same image\n"
     "  --camera ID           render only the camera with this id\n"
     "  --ldr-quantize MODE   round (default) or floor: how .png outputs turn clamped radiance into\n"
@@ -65,7 +65,10 @@ const char* kRenderHelp =
     "                        (for measuring what specialisation gains)\n"
     "  --exr-half            write .exr outputs with half-float channels (default: float)\n"
     "  -v, --verbose         print the kernel build flags and other details\n"
-    "  -h, --help            this text\n";
+    "  -h, --help            this text\n"
+    "\n"
+    "limits: at most 1048576 samples per pixel and a MaxRecursionDepth of 256; larger scene values\n"
+    "are capped with a warning naming the scene file.\n";
 
 struct Args {
     std::vector<std::string> positional;
@@ -86,6 +89,8 @@ int parseInt(const std::string& opt, const std::string& v, long lo, long hi) {
     return int(x);
 }
 
+static_assert(kMaxSamplesPerPixel == 1048576 && kMaxRecursionDepth == 256, "update kRenderHelp and README");
+
 Args parseRenderArgs(int argc, char** argv, int start) {
     Args a;
     for (int i = start; i < argc; ++i) {
@@ -97,7 +102,7 @@ Args parseRenderArgs(int argc, char** argv, int start) {
         if (s == "-h" || s == "--help") a.help = true;
         else if (s == "-o" || s == "--output") a.outDir = value();
         else if (s == "--device") a.device = value();
-        else if (s == "--spp") a.spp = parseInt(s, value(), 1, 1 << 20);
+        else if (s == "--spp") a.spp = parseInt(s, value(), 1, kMaxSamplesPerPixel);
         else if (s == "--seed") a.seed = uint32_t(parseInt(s, value(), 0, 2147483647));
         else if (s == "--camera") a.cameraId = value();
         else if (s == "-v" || s == "--verbose") a.verbose = true;
@@ -127,15 +132,21 @@ double since(std::chrono::steady_clock::time_point t) {
 
 class Progress {
 public:
-    explicit Progress(std::string label) : label_(std::move(label)), tty_(isatty(STDERR_FILENO)) {}
+    explicit Progress(std::string label)
+        : label_(std::move(label)), tty_(isatty(STDERR_FILENO)), lastPct_(tty_ ? -1 : 0) {}
     void update(size_t done, size_t total) {
         int pct = total ? int(100 * done / total) : 100;
+        if (tty_ && pct == lastPct_ && done != total) return;  // redraw only when the percentage moves
         if (tty_) {
+            lastPct_ = pct;
             int bar = pct * 30 / 100;
             std::fprintf(stderr, "\r%s [%.*s%*s] %3d%%", label_.c_str(), bar, "##############################", 30 - bar, "", pct);
             if (done == total) std::fprintf(stderr, "\n");
         } else if (done == total) {
             std::fprintf(stderr, "%s done\n", label_.c_str());
+        } else if (pct >= lastPct_ + 10) {  // not a terminal: a line every 10%
+            lastPct_ = pct - pct % 10;
+            std::fprintf(stderr, "%s %d%%\n", label_.c_str(), lastPct_);
         }
         std::fflush(stderr);
     }
@@ -143,6 +154,7 @@ public:
 private:
     std::string label_;
     bool tty_;
+    int lastPct_;  // the percentage last drawn (tty) or printed (one line per 10% otherwise)
 };
 
 int cmdDevices() {

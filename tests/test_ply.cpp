@@ -144,15 +144,43 @@ TEST_CASE("PLY binary little and big endian read exactly", "[ply]") {
     checkQuadMesh(readPly(writeFile("bin_be.ply", binaryQuadPly(true))));
 }
 
-TEST_CASE("PLY NaN positions pass through", "[ply]") {
-    std::string text =
+TEST_CASE("PLY vertex values that are NaN, infinite or beyond float range are errors", "[ply]") {
+    const std::string head =
         "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-        "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
-        "nan 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
-    MeshData m = readPly(writeFile("nan.ply", text));
-    REQUIRE(m.positions.size() == 3);
-    CHECK(std::isnan(m.positions[0].x));
-    CHECK(m.indices.size() == 3);
+        "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    for (const char* bad : {"nan", "inf", "-inf", "1e39", "-3.5e38"}) {
+        INFO(bad);
+        std::string p = writeFile("nonfinite.ply", head + "0 0 0\n1 " + bad + " 0\n0 1 0\n3 0 1 2\n");
+        try {
+            readPly(p);
+            FAIL("no error");
+        } catch (const clrt::Error& e) {
+            std::string msg = e.what();
+            CHECK(msg.find(p + ": line 11: vertex 1 has y = ") == 0);
+            CHECK(msg.find("not a finite 32-bit float") != std::string::npos);
+        }
+    }
+    // The largest float is fine, and so is a double-typed value within float range.
+    MeshData m = readPly(writeFile("big.ply", head + "0 0 0\n1 3.4e38 0\n0 1 0\n3 0 1 2\n"));
+    CHECK(m.positions[1].y == 3.4e38f);
+}
+
+TEST_CASE("PLY face index far beyond int range is an error naming it (found by the fuzzer: UB)", "[ply]") {
+    const std::string head =
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+        "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n";
+    struct Case { const char* index; const char* shown; };
+    for (Case c : {Case{"666666666666666666666666666666666", "6.66666667e+32"}, Case{"2147483648", "2147483648"},
+                   Case{"-1", "-1"}, Case{"1e300", "1e+300"}}) {
+        INFO(c.index);
+        std::string p = writeFile("bigindex.ply", head + "3 0 1 " + c.index + "\n");
+        try {
+            readPly(p);
+            FAIL("no error");
+        } catch (const clrt::Error& e) {
+            CHECK(std::string(e.what()) == p + ": line 13: face 0 has vertex index " + c.shown + ", out of range");
+        }
+    }
 }
 
 TEST_CASE("PLY errors name the file", "[ply]") {

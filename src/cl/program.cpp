@@ -1,4 +1,5 @@
-// program.cpp — DeviceContext, kernel source assembly, program building and the on-disk binary cache.
+// program.cpp — DeviceContext, kernel source assembly, program building and the on-disk binary cache
+// (checksummed entries, written atomically; a damaged entry is rebuilt, never loaded).
 #include "cl/program.h"
 
 #include <unistd.h>
@@ -179,21 +180,52 @@ std::string buildLog(cl_program prog, cl_device_id dev) {
     return log;
 }
 
-// Cache file layout: 8-byte magic, 8-byte key, 8-byte binary size, binary.
-const char kMagic[8] = {'C', 'L', 'R', 'T', 'B', 'I', 'N', '1'};
+// Cache entry layout (native byte order; the key names the device and driver anyway):
+//   magic "CLRTBIN2" | key (u64) | payload length (u64) | FNV-1a 64 of the payload (u64) | payload.
+// An entry is used only when the magic, the key, the length (the file is exactly header + payload)
+// and the checksum all match, so a truncated, emptied, overwritten or bit-flipped file is never
+// handed to clCreateProgramWithBinary (PoCL aborts on some corrupt binaries); it is rebuilt.
+const char kMagic[8] = {'C', 'L', 'R', 'T', 'B', 'I', 'N', '2'};
+const char kOldMagic[8] = {'C', 'L', 'R', 'T', 'B', 'I', 'N', '1'};  // unchecked entries of older builds
+constexpr uint64_t kHeaderBytes = 32, kMaxPayload = uint64_t(1) << 31;
 
-bool readCache(const std::string& path, uint64_t key, std::vector<unsigned char>& binary) {
+enum class CacheRead { Ok, Missing, Stale, Corrupt };
+
+CacheRead readCache(const std::string& path, uint64_t key, std::vector<unsigned char>& binary) {
+    std::error_code ec;
+    const uint64_t fileBytes = fs::file_size(path, ec);
+    if (ec) return CacheRead::Missing;
     std::ifstream in(path, std::ios::binary);
-    if (!in) return false;
+    if (!in) return CacheRead::Missing;
     char magic[8];
-    uint64_t k = 0, size = 0;
-    if (!in.read(magic, 8) || std::memcmp(magic, kMagic, 8) != 0) return false;
-    if (!in.read((char*)&k, 8) || k != key) return false;
-    if (!in.read((char*)&size, 8) || size == 0 || size > (uint64_t(1) << 31)) return false;
+    uint64_t k = 0, size = 0, sum = 0;
+    if (!in.read(magic, 8)) return CacheRead::Corrupt;
+    if (std::memcmp(magic, kOldMagic, 8) == 0) return CacheRead::Stale;
+    if (std::memcmp(magic, kMagic, 8) != 0) return CacheRead::Corrupt;
+    if (!in.read((char*)&k, 8) || !in.read((char*)&size, 8) || !in.read((char*)&sum, 8)) return CacheRead::Corrupt;
+    if (k != key) return CacheRead::Stale;  // a file-name collision, not damage
+    if (size == 0 || size > kMaxPayload || fileBytes != kHeaderBytes + size) return CacheRead::Corrupt;
     binary.resize(size);
-    return bool(in.read((char*)binary.data(), (std::streamsize)size));
+    if (!in.read((char*)binary.data(), (std::streamsize)size)) return CacheRead::Corrupt;
+    return fnv1a64(binary.data(), binary.size()) == sum ? CacheRead::Ok : CacheRead::Corrupt;
 }
 
+// Removes temporary entries ("<key>.bin.tmp.<pid>.<n>") older than ten minutes: what a writer
+// killed mid-write left behind (a younger one may belong to a writer still running).
+void removeStaleTemporaries(const std::string& dir) {
+    std::error_code ec;
+    const auto now = fs::file_time_type::clock::now();
+    for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+        const std::string name = it->path().filename().string();
+        if (name.find(".bin.tmp.") == std::string::npos) continue;
+        std::error_code e2;
+        auto t = fs::last_write_time(it->path(), e2);
+        if (!e2 && now - t > std::chrono::minutes(10)) fs::remove(it->path(), e2);
+    }
+}
+
+// Writes the entry to a temporary file in the cache folder and renames it over `path` (atomic on
+// POSIX): a reader sees the old entry or the new one, never a partial file.
 void writeCache(const std::string& dir, const std::string& path, uint64_t key,
                 const std::vector<unsigned char>& binary) {
     static std::atomic<unsigned> counter{0};
@@ -203,11 +235,12 @@ void writeCache(const std::string& dir, const std::string& path, uint64_t key,
     bool ok = false;
     {
         std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-        uint64_t size = binary.size();
+        uint64_t size = binary.size(), sum = fnv1a64(binary.data(), binary.size());
         if (out) {
             out.write(kMagic, 8);
             out.write((const char*)&key, 8);
             out.write((const char*)&size, 8);
+            out.write((const char*)&sum, 8);
             out.write((const char*)binary.data(), (std::streamsize)binary.size());
             out.close();
             ok = !out.fail();
@@ -217,6 +250,7 @@ void writeCache(const std::string& dir, const std::string& path, uint64_t key,
         fs::rename(tmp, path, ec);  // atomic replace on POSIX
         ok = !ec;
     }
+    removeStaleTemporaries(dir);
     if (!ok) {
         fs::remove(tmp, ec);
         warnOnce("cannot write the OpenCL program cache in " + dir + " (set CLRT_CACHE_DIR or CLRT_NO_CACHE=1)");
@@ -304,12 +338,23 @@ std::string programCacheDir() {
     return "";
 }
 
-uint64_t fnv1a64(const std::string& s, uint64_t h) {
-    for (unsigned char c : s) {
-        h ^= c;
+uint64_t fnv1a64(const void* data, size_t size, uint64_t h) {
+    const unsigned char* p = static_cast<const unsigned char*>(data);
+    for (size_t i = 0; i < size; ++i) {
+        h ^= p[i];
         h *= 0x100000001b3ull;
     }
     return h;
+}
+
+uint64_t fnv1a64(const std::string& s, uint64_t h) { return fnv1a64(s.data(), s.size(), h); }
+
+bool programCacheEntryValid(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    uint64_t key = 0;
+    if (!in.seekg(8) || !in.read((char*)&key, 8)) return false;
+    std::vector<unsigned char> bin;
+    return readCache(path, key, bin) == CacheRead::Ok;
 }
 
 cl::Program buildProgram(DeviceContext& dc, const std::vector<std::string>& kernelFiles,
@@ -351,7 +396,8 @@ cl::Program buildProgramFromSources(DeviceContext& dc, const std::vector<NamedSo
             key = fnv1a64(*s, fnv1a64(std::string(1, '\0'), key));
         bi.cacheFile = cacheDir + "/" + hex64(key) + ".bin";
         std::vector<unsigned char> bin;
-        if (readCache(bi.cacheFile, key, bin)) {
+        const CacheRead r = readCache(bi.cacheFile, key, bin);
+        if (r == CacheRead::Ok) {
             cl::Program p = fromBinary(dc, bin, bi.options);
             if (p()) {
                 bi.cacheHit = true;
@@ -360,6 +406,10 @@ cl::Program buildProgramFromSources(DeviceContext& dc, const std::vector<NamedSo
                 return p;
             }
             clrt::info("OpenCL program cache entry " + bi.cacheFile + " unusable; building from source");
+        } else if (r == CacheRead::Corrupt) {
+            warn("OpenCL program cache entry " + bi.cacheFile + " is damaged (length or checksum); rebuilt");
+        } else if (r == CacheRead::Stale) {
+            clrt::info("OpenCL program cache entry " + bi.cacheFile + " is from another build; rebuilt");
         }
     }
 

@@ -2,7 +2,8 @@
 // sources are the named cl_kernels/ files with what they #include (embedded at build time, or read
 // from $CLRT_KERNEL_DIR so kernels can be edited without rebuilding), compiled with
 // "-cl-std=CL1.2" plus the caller's defines, and cached as device binaries on disk
-// ($CLRT_CACHE_DIR, else $XDG_CACHE_HOME/clrt, else ~/.cache/clrt; CLRT_NO_CACHE=1 disables).
+// ($CLRT_CACHE_DIR, else $XDG_CACHE_HOME/clrt, else ~/.cache/clrt; CLRT_NO_CACHE=1 disables); each
+// entry carries its length and an FNV-1a 64 checksum, and a damaged entry is rebuilt and rewritten.
 #pragma once
 #include <CL/opencl.hpp>
 
@@ -85,6 +86,10 @@ std::string programCacheDir();
 
 // FNV-1a 64-bit hash (chainable through `h`).
 uint64_t fnv1a64(const std::string& s, uint64_t h = 0xcbf29ce484222325ull);
+uint64_t fnv1a64(const void* data, size_t size, uint64_t h = 0xcbf29ce484222325ull);
+
+// Whether a program cache file is a complete, undamaged entry (magic, length and checksum match).
+bool programCacheEntryValid(const std::string& path);
 
 // Smallest multiple of `multiple` >= value (value itself when multiple is 0).
 inline size_t roundUp(size_t value, size_t multiple) {

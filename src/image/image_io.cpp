@@ -122,9 +122,16 @@ void sanitize(const std::string& path, ImageRGB& img) {
         warn(path + ": " + std::to_string(bad) + " NaN, infinite or negative texel values replaced by 0");
 }
 
+// OpenEXR decodes and compresses on a thread pool of one thread per core. CLRT_EXR_THREADS fixes the
+// count at build time (the fuzz build uses 0, the calling thread only, so a run does not depend on
+// the machine's core count or on thread timing).
 void initExrThreads() {
     static bool done = [] {
+#ifdef CLRT_EXR_THREADS
+        unsigned n = CLRT_EXR_THREADS;
+#else
         unsigned n = std::thread::hardware_concurrency();
+#endif
         Imf::setGlobalThreadCount(n > 1 ? int(n) : 0);
         return true;
     }();

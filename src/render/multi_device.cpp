@@ -34,6 +34,17 @@ ImageRGB renderOnDevices(const std::vector<Renderer*>& renderers, const Camera& 
     const size_t totalTiles = (numPixels + tile - 1) / tile;
     std::mutex mutex;
     size_t nextTile = 0, doneTiles = 0;
+    // Progress in thousandths of a tile: finished tiles plus each device's part of the tile in hand,
+    // so it moves within a tile too (a 1x1 image at many samples is one tile). Reported only when it
+    // grows (a failed device's partial tile goes back to the pool).
+    const size_t kUnits = 1000;
+    std::vector<size_t> partial(renderers.size(), 0);
+    size_t reported = 0;
+    auto report = [&] {  // with `mutex` held
+        size_t done = doneTiles * kUnits;
+        for (size_t p : partial) done += p;
+        if (progress && done > reported) progress(reported = done, totalTiles * kUnits);
+    };
     std::deque<size_t> returned;  // tiles of failed devices
     int throttleDev = -100, throttleMs = 0, failDev = -100, failAfter = 0;
     envPair("CLRT_THROTTLE_DEVICE", throttleDev, throttleMs);
@@ -47,7 +58,8 @@ ImageRGB renderOnDevices(const std::vector<Renderer*>& renderers, const Camera& 
             std::lock_guard<std::mutex> lock(mutex);
             if (current != SIZE_MAX) {
                 ++doneTiles;
-                if (progress) progress(doneTiles, totalTiles);
+                partial[d] = 0;
+                report();
                 current = SIZE_MAX;
             }
             if (!returned.empty()) {
@@ -71,11 +83,16 @@ ImageRGB renderOnDevices(const std::vector<Renderer*>& renderers, const Camera& 
                     throw Error("injected failure (CLRT_FAIL_DEVICE)", ExitCode::Device);
                 started += ok;
                 return ok;
-            }, out);
+            }, out, [&](size_t done, size_t total) {
+                std::lock_guard<std::mutex> lock(mutex);
+                partial[d] = total ? std::min(kUnits - 1, done * kUnits / total) : 0;
+                report();
+            });
         } catch (const std::exception& e) {
             std::lock_guard<std::mutex> lock(mutex);
             w.failed = true;
             w.error = e.what();
+            partial[d] = 0;
             if (current != SIZE_MAX) returned.push_back(current);
             warn("device '" + w.name + "' failed and was dropped: " + w.error);
         }

@@ -23,7 +23,8 @@ struct DeviceWork {
     std::string error;
 };
 
-// `work` gets one entry per renderer (created if empty). progress(doneTiles, totalTiles).
+// `work` gets one entry per renderer (created if empty). progress(done, total) in thousandths of a
+// tile, moving within tiles too; called from the device threads, one call at a time.
 ImageRGB renderOnDevices(const std::vector<Renderer*>& renderers, const Camera& cam, const RenderSettings& settings,
                          std::vector<DeviceWork>& work, const std::function<void(size_t, size_t)>& progress = {});
 

@@ -15,9 +15,13 @@
 namespace clrt {
 
 namespace {
+// A read-only copy of v. OpenCL has no zero-size buffers and refuses a null host pointer, so an empty
+// array (an empty BVH's primRefs) becomes one zero-filled element that the kernels never read.
 template <class T> cl::Buffer uploadBuffer(cl::Context& ctx, const std::vector<T>& v) {
+    const T zero{};
+    const T* src = v.empty() ? &zero : v.data();
     return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * std::max<size_t>(v.size(), 1),
-                             const_cast<T*>(v.data())));
+                             const_cast<T*>(src)));
 }
 }  // namespace
 
@@ -37,14 +41,13 @@ struct Renderer::Impl {
     cl::Buffer image;
     dev::SceneParams scene{};
     dev::CameraParams cam{};
-    int count = 0, firstPixel = 0, sample = 0, lightBegin = 0, lightEnd = 0, chunk = 0;
+    int count = 0, firstPixel = 0, firstSample = 0, samples = 1, lightBegin = 0, lightEnd = 0, chunk = 0;
 
     Impl(DeviceContext& d, const DeviceScene& s) : dc(d), ds(s) {
         cl_command_queue_properties qp = 0;
         CL_CHECK(clGetCommandQueueInfo(dc.queue()(), CL_QUEUE_PROPERTIES, sizeof qp, &qp, nullptr));
         profiling = (qp & CL_QUEUE_PROFILING_ENABLE) != 0;
-        std::vector<std::string> defines = ds.features.defines();
-        program = buildProgram(dc, KernelProgram::Render, defines, &build);
+        program = buildProgram(dc, KernelProgram::Render, ds.features.defines(), &build);
         kGenerate = KernelArgs(program, "generate_camera_rays");
         kIntersect = KernelArgs(program, "intersect_closest");
         kShadow = KernelArgs(program, "intersect_shadow");
@@ -67,19 +70,6 @@ struct Renderer::Impl {
         texels = uploadBuffer(ctx, ds.texels);
         lights = uploadBuffer(ctx, ds.lights);
         envDist = uploadBuffer(ctx, ds.envDistribution);
-    }
-
-    // Binds every parameter of every kernel from the member of the same name (the per-launch ones
-    // with their current values; run() callers set those again).
-    void bindAll() {
-        CLRT_BIND_GROUP(kGenerate, CLRT_KERNEL_generate_camera_rays, *this);
-        CLRT_BIND_GROUP(kIntersect, CLRT_KERNEL_intersect_closest, *this);
-        CLRT_BIND_GROUP(kShadow, CLRT_KERNEL_intersect_shadow, *this);
-        CLRT_BIND_GROUP(kShade, CLRT_KERNEL_shade_hits, *this);
-        CLRT_BIND_GROUP(kLights, CLRT_KERNEL_sample_lights, *this);
-        CLRT_BIND_GROUP(kGather, CLRT_KERNEL_gather_shadows, *this);
-        CLRT_BIND_GROUP(kAccumulate, CLRT_KERNEL_accumulate, *this);
-        CLRT_BIND_GROUP(kCompact, CLRT_KERNEL_compact_paths, *this);
     }
 
     void ensureQueues(size_t capacity, size_t shadowSlots) {
@@ -106,7 +96,10 @@ struct Renderer::Impl {
     // A fixed work-group size: PoCL compiles a kernel once per distinct local size, so letting the
     // runtime choose (it varies with the global size) would recompile at every queue length.
     size_t localSize = 64;
-    // With a profiling queue, every launch keeps its event and stage until collectProfile().
+    // With a profiling queue, each launch keeps its event and stage until collectProfile(), which runs
+    // whenever the queue is drained (at least every batch and every kProfileEvents launches), so
+    // host memory stays flat however many samples or bounces a render takes.
+    static constexpr size_t kProfileEvents = 256;
     bool profiling = false;
     std::vector<std::pair<int, cl::Event>> events;
     void run(KernelArgs& k, size_t n, int stage) {
@@ -116,7 +109,8 @@ struct Renderer::Impl {
                                                cl::NDRange(localSize), nullptr, profiling ? &ev : nullptr));
         if (profiling) events.emplace_back(stage, ev);
     }
-    // Adds the device time of the finished launches to `c` (the queue must have been drained).
+    // Adds the device time of the finished launches to `c` and releases their events (the queue
+    // must have been drained).
     void collectProfile(RenderCounters& c) {
         for (auto& [stage, ev] : events) {
             cl_ulong start = 0, end = 0;
@@ -126,7 +120,85 @@ struct Renderer::Impl {
         }
         events.clear();
     }
+
+    // Binds every parameter of every kernel from the member of the same name: the per-render values
+    // given here, the per-launch ones with their current values (the loop sets those again).
+    void setRenderArgs(const dev::CameraParams& cp, const dev::SceneParams& sp, const cl::Buffer& img);
+    // Traces `n` camera paths (already generated) through every bounce and accumulates them into the
+    // image; `bounces` says whether any material makes children.
+    void traceBatch(int n, const dev::SceneParams& sp, bool bounces, size_t lightChunk, RenderCounters& counters);
+    std::vector<int> valid, target;  // compaction scratch, at most 2 * queueCapacity each
+
+    // Reads pixels [first, end) back into `out`, scaled by `inv` (each tile's pixels are written by
+    // exactly one device). Blocking, so the queue is drained afterwards.
+    void readTile(cl::Buffer& image, size_t first, size_t end, float inv, ImageRGB& out) {
+        tilePixels.resize(end - first);
+        CL_CPP(dc.queue().enqueueReadBuffer(image, CL_TRUE, first * sizeof(dev::float4),
+                                            tilePixels.size() * sizeof(dev::float4), tilePixels.data()));
+        for (size_t i = 0; i < tilePixels.size(); ++i) {
+            float* o = &out.pixels[(first + i) * 3];
+            o[0] = tilePixels[i].x * inv;
+            o[1] = tilePixels[i].y * inv;
+            o[2] = tilePixels[i].z * inv;
+        }
+    }
+    std::vector<dev::float4> tilePixels;
 };
+
+void Renderer::Impl::setRenderArgs(const dev::CameraParams& cp, const dev::SceneParams& sp, const cl::Buffer& img) {
+    cam = cp;
+    scene = sp;
+    image = img;
+    CLRT_BIND_GROUP(kGenerate, CLRT_KERNEL_generate_camera_rays, *this);
+    CLRT_BIND_GROUP(kIntersect, CLRT_KERNEL_intersect_closest, *this);
+    CLRT_BIND_GROUP(kShadow, CLRT_KERNEL_intersect_shadow, *this);
+    CLRT_BIND_GROUP(kShade, CLRT_KERNEL_shade_hits, *this);
+    CLRT_BIND_GROUP(kLights, CLRT_KERNEL_sample_lights, *this);
+    CLRT_BIND_GROUP(kGather, CLRT_KERNEL_gather_shadows, *this);
+    CLRT_BIND_GROUP(kAccumulate, CLRT_KERNEL_accumulate, *this);
+    CLRT_BIND_GROUP(kCompact, CLRT_KERNEL_compact_paths, *this);
+}
+
+void Renderer::Impl::traceBatch(int n, const dev::SceneParams& sp, bool bounces, size_t lightChunk,
+                                RenderCounters& counters) {
+    cl::CommandQueue& q = dc.queue();
+    const int numLights = sp.numLights;
+    for (int depth = 0; n > 0; ++depth) {
+        kIntersect.set("count", n);
+        run(kIntersect, n, depth == 0 ? STAGE_TRACE_CAMERA : STAGE_TRACE_SECONDARY);
+        kShade.set("count", n);
+        run(kShade, n, STAGE_SHADE);
+        for (int l0 = 0; l0 < numLights; l0 += int(lightChunk)) {
+            int l1 = std::min(numLights, l0 + int(lightChunk));
+            int slots = n * (l1 - l0);
+            kLights.set("count", n).set("lightBegin", l0).set("lightEnd", l1);
+            run(kLights, n, STAGE_SAMPLE_LIGHTS);
+            kShadow.set("count", slots);
+            run(kShadow, slots, STAGE_TRACE_SHADOW);
+            kGather.set("count", n).set("chunk", l1 - l0);
+            run(kGather, n, STAGE_GATHER);
+            counters.shadowRays += slots;
+        }
+        kAccumulate.set("count", n);
+        run(kAccumulate, n, STAGE_ACCUMULATE);
+        if (!bounces || depth >= sp.maxDepth) break;
+        // Order-preserving compaction of the children.
+        size_t slots = size_t(n) * 2;
+        valid.resize(slots);
+        target.resize(slots);
+        CL_CPP(q.enqueueReadBuffer(childValid, CL_TRUE, 0, slots * sizeof(int), valid.data()));
+        if (events.size() >= kProfileEvents) collectProfile(counters);  // the blocking read drained the queue
+        int next = 0;
+        for (size_t i = 0; i < slots; ++i) target[i] = valid[i] ? next++ : -1;
+        if (next == 0) break;
+        // Blocking: `target` is resized on the next pass, so the copy must be done before then.
+        CL_CPP(q.enqueueWriteBuffer(compactTarget, CL_TRUE, 0, slots * sizeof(int), target.data()));
+        kCompact.set("count", int(slots));
+        run(kCompact, slots, STAGE_COMPACT);
+        n = next;
+        counters.secondaryRays += n;
+    }
+}
 
 const char* renderStageName(int stage) {
     static const char* names[STAGE_COUNT] = {"generate", "trace camera", "trace secondary", "shade", "sample lights",
@@ -172,6 +244,15 @@ ImageRGB Renderer::render(const Camera& cam, const RenderSettings& settings, Ren
     return out;
 }
 
+// Samples of each pixel per batch. A small image takes several, so that a launch has enough work
+// (a 1x1 image at 1M spp: 4096 batches instead of 1M). A function of the image size and spp only,
+// never of the tile or the batch limit: each pixel sums its paths in the same order on every device
+// and under every tiling, so its value does not depend on them.
+static int samplesPerBatch(size_t numPixels, int spp) {
+    const size_t targetPaths = size_t(1) << 16, maxSamples = 256;
+    return int(std::min({std::max<size_t>(1, targetPaths / std::max<size_t>(numPixels, 1)), maxSamples, size_t(spp)}));
+}
+
 void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, RenderCounters& counters,
                            const std::function<bool(size_t&, size_t&)>& nextTile, ImageRGB& out,
                            const std::function<void(size_t, size_t)>& progress) {
@@ -179,117 +260,73 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     auto t0 = std::chrono::steady_clock::now();
     const DeviceScene& ds = m.ds;
     dev::CameraParams cp = makeCameraParams(cam);
-    setSamplesPerPixel(cp, settings.spp);
+    // The loader and the command line already cap both (with a warning); this is the backstop for
+    // scenes built in code.
+    setSamplesPerPixel(cp, std::min(settings.spp, kMaxSamplesPerPixel));
     const size_t numPixels = size_t(cam.width) * cam.height;
     const size_t imageBytes = numPixels * sizeof(dev::float4);
     checkImageFits(m.dc.info(), cam);
 
-    // The split depth depends only on the image and the batch limit, never on the tile: every
-    // device and every tiling computes each pixel identically.
-    const size_t batch = std::min(numPixels, settings.maxBatchPixels);
+    // A batch is `group` samples of each of `batch` pixels, pixel-major. The split depth depends only
+    // on the image and the batch limit, never on the tile: every device and every tiling computes
+    // each pixel identically.
+    const int group = samplesPerBatch(numPixels, cp.spp);
+    const size_t batch = std::max<size_t>(1, std::min(numPixels, settings.maxBatchPixels / size_t(group)));
+    const size_t batchPaths = batch * size_t(group);
     const bool bounces = ds.features.bounces();
     dev::SceneParams sp = ds.params;
     sp.seed = settings.seed;
+    sp.maxDepth = std::min(sp.maxDepth, kMaxRecursionDepth);
     // Dielectrics split into both children while the queue can hold them and few samples are taken;
     // beyond that (or with many samples) one child is chosen by Fresnel weight (same expectation).
     int split = 0;
     if (ds.features.has(dev::MATERIAL_DIELECTRIC) && cp.spp <= 4) {
-        while (split < sp.maxDepth && (batch << (split + 1)) <= (size_t(1) << 21)) ++split;
+        while (split < sp.maxDepth && (batchPaths << (split + 1)) <= (size_t(1) << 21)) ++split;
     }
     if (settings.splitDepthOverride >= 0) split = settings.splitDepthOverride;
     sp.splitDepth = split;
-    const size_t capacity = bounces ? batch << split : batch;
-    const int numLights = sp.numLights;
+    const size_t capacity = bounces ? batchPaths << split : batchPaths;
     size_t lightChunk = 0;
-    if (numLights > 0) {
+    if (sp.numLights > 0) {
         size_t budget = (size_t(256) << 20) / sizeof(dev::ShadowRay);
-        lightChunk = std::max<size_t>(1, std::min<size_t>(numLights, budget / capacity));
+        lightChunk = std::max<size_t>(1, std::min<size_t>(sp.numLights, budget / capacity));
     }
     m.ensureQueues(capacity, capacity * std::max<size_t>(lightChunk, 1));
 
     cl::CommandQueue& q = m.dc.queue();
     cl::Buffer image = CL_CPP(cl::Buffer(m.dc.context(), CL_MEM_READ_WRITE, imageBytes));
     CL_CPP(q.enqueueFillBuffer(image, dev::float4{0, 0, 0, 0}, 0, imageBytes));
+    m.setRenderArgs(cp, sp, image);
 
-    // Every argument of every kernel, by name; the loop below sets the per-launch ones again.
-    m.image = image;
-    m.scene = sp;
-    m.cam = cp;
-    m.bindAll();
-    KernelArgs& kg = m.kGenerate;
-    KernelArgs& ks = m.kShade;
-    KernelArgs& kl = m.kLights;
-
-    std::vector<int> valid, target;
-    std::vector<dev::float4> tilePixels;
     const float inv = 1.0f / float(cp.spp);
     size_t tileFirst = 0, tileCount = 0;
     while (nextTile(tileFirst, tileCount)) {
         const size_t tileEnd = std::min(numPixels, tileFirst + tileCount);
-        const size_t totalBatches = size_t(cp.spp) * ((tileEnd - tileFirst + batch - 1) / batch);
+        const size_t totalBatches = ((size_t(cp.spp) + group - 1) / group) * ((tileEnd - tileFirst + batch - 1) / batch);
         size_t doneBatches = 0;
-        for (int sample = 0; sample < cp.spp; ++sample) {
+        for (int sample = 0; sample < cp.spp; sample += group) {
+            const int samples = std::min(group, cp.spp - sample);
             for (size_t first = tileFirst; first < tileEnd; first += batch) {
-                int n = int(std::min(batch, tileEnd - first));
-                kg.set("firstPixel", int(first)).set("sample", sample).set("count", n);
-                m.run(kg, n, STAGE_GENERATE);
+                const int n = int(std::min(batch, tileEnd - first)) * samples;
+                m.kGenerate.set("firstPixel", int(first)).set("firstSample", sample).set("samples", samples);
+                m.kGenerate.set("count", n);
+                m.run(m.kGenerate, n, STAGE_GENERATE);
                 counters.cameraRays += n;
-                for (int depth = 0; n > 0; ++depth) {
-                    m.kIntersect.set("count", n);
-                    m.run(m.kIntersect, n, depth == 0 ? STAGE_TRACE_CAMERA : STAGE_TRACE_SECONDARY);
-                    ks.set("count", n);
-                    m.run(ks, n, STAGE_SHADE);
-                    for (int l0 = 0; l0 < numLights; l0 += int(lightChunk)) {
-                        int l1 = std::min(numLights, l0 + int(lightChunk));
-                        int slots = n * (l1 - l0);
-                        kl.set("count", n).set("lightBegin", l0).set("lightEnd", l1);
-                        m.run(kl, n, STAGE_SAMPLE_LIGHTS);
-                        m.kShadow.set("count", slots);
-                        m.run(m.kShadow, slots, STAGE_TRACE_SHADOW);
-                        m.kGather.set("count", n).set("chunk", l1 - l0);
-                        m.run(m.kGather, n, STAGE_GATHER);
-                        counters.shadowRays += slots;
-                    }
-                    m.kAccumulate.set("count", n);
-                    m.run(m.kAccumulate, n, STAGE_ACCUMULATE);
-                    if (!bounces || depth >= sp.maxDepth) break;
-                    // Order-preserving compaction of the children.
-                    size_t slots = size_t(n) * 2;
-                    valid.resize(slots);
-                    target.resize(slots);
-                    CL_CPP(q.enqueueReadBuffer(m.childValid, CL_TRUE, 0, slots * sizeof(int), valid.data()));
-                    int next = 0;
-                    for (size_t i = 0; i < slots; ++i) target[i] = valid[i] ? next++ : -1;
-                    if (next == 0) break;
-                    // Blocking: `target` is resized on the next pass, so the copy must be done before then.
-                    CL_CPP(q.enqueueWriteBuffer(m.compactTarget, CL_TRUE, 0, slots * sizeof(int), target.data()));
-                    m.kCompact.set("count", int(slots));
-                    m.run(m.kCompact, slots, STAGE_COMPACT);
-                    n = next;
-                    counters.secondaryRays += n;
-                }
+                m.traceBatch(n, sp, bounces, lightChunk, counters);
                 ++doneBatches;
-                if (progress) {
+                if (progress || m.events.size() >= Impl::kProfileEvents) {
                     CL_CPP(q.finish());
-                    progress(doneBatches, totalBatches);
+                    m.collectProfile(counters);
+                    if (progress) progress(doneBatches, totalBatches);
                 }
             }
         }
-        // Read the tile back: each tile's pixels are written by exactly one device.
-        tilePixels.resize(tileEnd - tileFirst);
-        CL_CPP(q.enqueueReadBuffer(image, CL_TRUE, tileFirst * sizeof(dev::float4),
-                                   tilePixels.size() * sizeof(dev::float4), tilePixels.data()));
-        for (size_t i = 0; i < tilePixels.size(); ++i) {
-            float* o = &out.pixels[(tileFirst + i) * 3];
-            o[0] = tilePixels[i].x * inv;
-            o[1] = tilePixels[i].y * inv;
-            o[2] = tilePixels[i].z * inv;
-        }
+        m.readTile(image, tileFirst, tileEnd, inv, out);
         counters.tiles += 1;
         counters.pixels += tileEnd - tileFirst;
         m.collectProfile(counters);  // the blocking read above drained the queue
     }
-    m.image = cl::Buffer();  // released with the render, as before (the kernels' binding is dropped on the next bind)
+    m.image = cl::Buffer();  // released with the render (the kernels' binding is replaced on the next)
     counters.profiled = counters.profiled || m.profiling;
     counters.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }

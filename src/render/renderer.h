@@ -1,8 +1,11 @@
 // The wavefront renderer on one OpenCL device: uploads a DeviceScene, builds the program specialised
-// to its feature set, and renders a camera as a sequence of (sample, pixel range) batches:
+// to its feature set, and renders a camera as a sequence of batches (a few samples of a pixel range;
+// several samples per batch only for small images):
 //   generate -> [intersect -> shade -> (sample lights -> shadow rays -> gather) -> accumulate
 //   -> compact children] until no path is left or MaxRecursionDepth is reached.
-// Every figure of the result is a pure function of (scene, camera, seed): deterministic.
+// Every figure of the result is a pure function of (scene, camera, seed): deterministic. Host and
+// device memory stay flat however many samples or bounces a render takes (profiling events are
+// released as batches complete; queue sizes depend only on the batch size).
 #pragma once
 #include <cstdint>
 #include <functional>
@@ -35,7 +38,7 @@ struct RenderCounters {
 struct RenderSettings {
     int spp = 1;
     uint32_t seed = 0;
-    size_t maxBatchPixels = 1u << 18;  // pixels per batch (one sample each)
+    size_t maxBatchPixels = 1u << 18;  // camera paths per batch (pixels x samples of each)
     int splitDepthOverride = -1;       // >= 0: force the dielectric split depth
 };
 
@@ -44,14 +47,15 @@ public:
     Renderer(DeviceContext& dc, const DeviceScene& scene);
     ~Renderer();
     const BuildInfo& buildInfo() const;
-    // Renders one camera; `progress(done, total)` is called after each batch.
+    // Renders one camera; `progress(doneBatches, totalBatches)` is called after each batch.
     ImageRGB render(const Camera& cam, const RenderSettings& settings, RenderCounters& counters,
                     const std::function<void(size_t, size_t)>& progress = {});
 
     // Renders the pixel ranges handed out by nextTile(first, count) (false: none left), all samples
     // of each, into `out` (width*height*3 floats, already sized). Several Renderers on different
     // devices may share `out`: tiles are disjoint, and a pixel's value does not depend on which
-    // device or tile rendered it.
+    // device or tile rendered it. `progress(doneBatches, totalBatches)` of the tile in hand, after
+    // each batch.
     void renderTiles(const Camera& cam, const RenderSettings& settings, RenderCounters& counters,
                      const std::function<bool(size_t&, size_t&)>& nextTile, ImageRGB& out,
                      const std::function<void(size_t, size_t)>& progress = {});

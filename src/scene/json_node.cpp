@@ -3,7 +3,8 @@
 // '_' are attributes ("_id", "_type", "_plyFile", ...); an element's text is its string value, or its
 // "_data" key when it also has attributes; an array value means the element repeats. Numbers may be
 // strings or JSON numbers. Locations are key paths: "scene.json: Scene.Objects.Mesh[3].Faces".
-// Syntax errors become clrt::Error "scene.json:line:col: <description>".
+// Syntax errors, and numbers beyond double range (1e400), become clrt::Error "scene.json:line:col:
+// <description>".
 #include <nlohmann/json.hpp>
 
 #include "scene/scene_node.h"
@@ -81,23 +82,54 @@ private:
     std::string name_, path_;
 };
 
+// What Json::parse does (the DOM-building SAX parser), but an error also records where it happened:
+// nlohmann's number-overflow error (out_of_range.406, "1e400") carries no position of its own.
+struct LocatingParser : nlohmann::detail::json_sax_dom_parser<Json> {
+    using json_sax_dom_parser::json_sax_dom_parser;
+    size_t errorEnd = 0;     // characters read when the error was found (just past the bad token)
+    std::string errorToken;  // the token nlohmann was looking at
+    template <class Exception> bool parse_error(size_t position, const std::string& token, const Exception& ex) {
+        errorEnd = position;
+        errorToken = token;
+        throw ex;
+    }
+};
+
+// "path:line:col" of 0-based byte offset `off` in data.
+std::string lineCol(const std::string& path, const std::string& data, size_t off) {
+    size_t line = 1, col = 1;
+    for (size_t i = 0; i < off && i < data.size(); ++i) {
+        if (data[i] == '\n') { ++line; col = 1; } else ++col;
+    }
+    return path + ":" + std::to_string(line) + ":" + std::to_string(col);
+}
+
+// nlohmann's message without its "[json.exception.parse_error.101] parse error at line 1, column 2: "
+// prefix (the location is given separately).
+std::string plainMessage(const std::exception& e) {
+    std::string msg = e.what();
+    size_t colon = msg.find(": ");
+    if (colon != std::string::npos) return msg.substr(colon + 2);
+    size_t bracket = msg.find("] ");
+    return bracket != std::string::npos ? msg.substr(bracket + 2) : msg;
+}
+
 }  // namespace
 
 SceneNodePtr parseJsonScene(const std::string& path, const std::string& data) {
     auto doc = std::make_shared<JsonDoc>();
     doc->path = path;
+    LocatingParser parser(doc->root);
     try {
-        doc->root = Json::parse(data);
+        Json::sax_parse(data, &parser);
     } catch (const Json::parse_error& e) {
-        // e.byte is 1-based (the offending character); turn it into line:col.
-        size_t off = e.byte > 0 ? e.byte - 1 : 0, line = 1, col = 1;
-        for (size_t i = 0; i < off && i < data.size(); ++i) {
-            if (data[i] == '\n') { ++line; col = 1; } else ++col;
-        }
-        std::string msg = e.what();
-        size_t colon = msg.find(": ");  // drop "[json.exception.parse_error.101] parse error at line 1, column 2"
-        if (colon != std::string::npos) msg = msg.substr(colon + 2);
-        throw Error(path + ":" + std::to_string(line) + ":" + std::to_string(col) + ": " + msg);
+        // e.byte is 1-based (the offending character).
+        throw Error(lineCol(path, data, e.byte > 0 ? e.byte - 1 : 0) + ": " + plainMessage(e));
+    } catch (const Json::exception& e) {
+        // Number overflow: the token ends where the parser stopped.
+        size_t end = std::min(parser.errorEnd, data.size());
+        size_t start = end >= parser.errorToken.size() ? end - parser.errorToken.size() : 0;
+        throw Error(lineCol(path, data, start) + ": " + plainMessage(e) + " (beyond the range of a double)");
     }
     if (!doc->root.is_object() || !doc->root.contains("Scene") || !doc->root["Scene"].is_object())
         throw Error(path + ": the top-level object has no \"Scene\" object");

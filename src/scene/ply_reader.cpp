@@ -3,13 +3,17 @@
 // (ASCII tokens or little/big-endian binary). Only the vertex and face elements are kept; everything
 // else (edges, materials, extra properties, list properties on vertices) is read and dropped.
 // Counts are checked against the bytes left before anything is allocated, so a header that lies
-// about its counts gives an error instead of a huge allocation or a read past the end.
+// about its counts gives an error instead of a huge allocation or a read past the end. Every value is
+// read as a double and range-checked before it becomes a float or an int: a vertex coordinate, normal
+// or texture coordinate that is NaN, infinite or beyond float range (1e39) is an error naming the
+// vertex and its line (ASCII) or byte offset (binary), and so is a face index outside [0, INT_MAX].
 #include "scene/ply_reader.h"
 
 #include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -62,6 +66,22 @@ size_t typeSize(Type t) {
 }
 
 bool isIntegral(Type t) { return t != Type::Float32 && t != Type::Float64; }
+
+// A double as a message shows it: integers below 1e17 exactly, anything else with 9 significant
+// digits. (No cast to an integer type: the value may be far beyond any integer's range.)
+std::string numberText(double v) {
+    char buf[48];
+    if (std::fabs(v) < 1e17 && v == std::floor(v)) std::snprintf(buf, sizeof buf, "%.0f", v);
+    else std::snprintf(buf, sizeof buf, "%.9g", v);
+    return buf;
+}
+
+// v as a finite float, or false if v is NaN, infinite or beyond float range.
+bool finiteFloat(double v, float& out) {
+    if (!(std::fabs(v) <= double(std::numeric_limits<float>::max()))) return false;
+    out = float(v);
+    return true;
+}
 
 bool hostIsLittleEndian() {
     uint16_t one = 1;
@@ -139,7 +159,9 @@ private:
             throw Error(path_ + ": line " + std::to_string(line_) + ": '" + tok + "' is not a number (" + what + ")");
         if (isIntegral(t) && (!std::isfinite(v) || v != std::floor(v)))
             throw Error(path_ + ": line " + std::to_string(line_) + ": '" + tok + "' is not an integer (" + what + ")");
-        if (t == Type::Float32) v = static_cast<float>(v);
+        // Rounded to float as a binary file would store it; a value beyond float range stays as it
+        // is (converting it is undefined) and is refused where it is used (finiteFloat).
+        if (t == Type::Float32 && std::fabs(v) <= double(std::numeric_limits<float>::max())) v = static_cast<float>(v);
         return v;
     }
 
@@ -305,9 +327,18 @@ MeshData readPly(const std::string& path) {
                         vals[p] = rd.read(pr.valueType, "vertex data");
                     }
                 }
-                mesh.positions[i] = Vec3(float(vals[ix]), float(vals[iy]), float(vals[iz]));
-                if (hasN) mesh.normals[i] = Vec3(float(vals[inx]), float(vals[iny]), float(vals[inz]));
-                if (hasUv) mesh.uvs[i] = Vec2{float(vals[iu]), float(vals[iv])};
+                // x y z [nx ny nz] [u v] into out[0..7], each a finite float or an error.
+                const int want[8] = {ix, iy, iz, hasN ? inx : -1, hasN ? iny : -1, hasN ? inz : -1,
+                                     hasUv ? iu : -1, hasUv ? iv : -1};
+                float out[8] = {};
+                for (int k = 0; k < 8; ++k)
+                    if (want[k] >= 0 && !finiteFloat(vals[size_t(want[k])], out[k]))
+                        throw Error(path + ": " + rd.where() + ": vertex " + std::to_string(i) + " has " +
+                                    e.props[size_t(want[k])].name + " = " + numberText(vals[size_t(want[k])]) +
+                                    ", not a finite 32-bit float");
+                mesh.positions[i] = Vec3(out[0], out[1], out[2]);
+                if (hasN) mesh.normals[i] = Vec3(out[3], out[4], out[5]);
+                if (hasUv) mesh.uvs[i] = Vec2{out[6], out[7]};
             }
         } else if (isFace) {
             sawFace = true;
@@ -334,8 +365,8 @@ MeshData readPly(const std::string& path) {
                     for (double k = 0; k < n; ++k) {
                         double idx = rd.read(pr.valueType, "face indices");
                         if (idx < 0 || idx > double(std::numeric_limits<int>::max()))
-                            throw Error(path + ": face " + std::to_string(f) + " has vertex index " +
-                                        std::to_string(int64_t(idx)) + ", out of range");
+                            throw Error(path + ": " + rd.where() + ": face " + std::to_string(f) + " has vertex index " +
+                                        numberText(idx) + ", out of range");
                         poly.push_back(int(idx));
                     }
                     for (size_t k = 1; k + 1 < poly.size(); ++k) {

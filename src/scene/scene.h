@@ -13,6 +13,11 @@
 
 namespace clrt {
 
+// Limits applied alike to the scene file and the command line (a larger scene value is capped with a
+// warning naming the file; a larger --spp is a usage error). Documented in README and `render --help`.
+constexpr int kMaxSamplesPerPixel = 1 << 20;  // 1,048,576 samples per pixel
+constexpr int kMaxRecursionDepth = 256;       // bounces after the camera ray
+
 struct Tonemap {
     dev::TmoKind op = dev::TMO_PHOTOGRAPHIC;
     float key = 0.18f;          // TMOOptions[0]

@@ -16,15 +16,21 @@
 //          Triangle (Indices), Sphere (Center Radius), Plane (Point Normal; JSON 2025 scenes); LightMesh/LightSphere are warned about, skipped.
 // VertexData/TexCoordData may carry a binaryFile attribute instead of text: raw little-endian float32
 // values (no count prefix; no shared scene uses it). Faces binaryFile: raw little-endian int32.
-// Errors: clrt::Error "<location>: <what>", location from SceneNode::location().
+// Errors: clrt::Error "<location>: <what>", location from SceneNode::location(). Every number must be
+// finite and within float range (1e39 is an error, not an infinity), every integer within int range;
+// values derived from them (degamma'd colours, camera frame) are checked to stay finite.
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
+#include <cfloat>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <set>
 #include <unordered_map>
@@ -78,6 +84,10 @@ std::vector<double> numbers(const SceneNode& n) {
         double v = std::strtod(p, &e);
         if (e != tokEnd || !std::isfinite(v))
             fail(n, "<" + n.name() + ">: '" + std::string(p, tokEnd) + "' is not a number");
+        // Every value ends up a float (or an int, checked by toInteger): converting one beyond float
+        // range is undefined and would give an infinity.
+        if (std::fabs(v) > double(std::numeric_limits<float>::max()))
+            fail(n, "<" + n.name() + ">: '" + std::string(p, tokEnd) + "' is out of range (beyond a 32-bit float)");
         out.push_back(v);
         p = tokEnd;
     }
@@ -93,9 +103,25 @@ std::vector<double> numbers(const SceneNode& n, size_t count) {
 }
 
 double toInteger(const SceneNode& n, double v) {
-    if (v != std::floor(v) || std::fabs(v) > 2147483647.0)
-        fail(n, "<" + n.name() + ">: '" + std::to_string(v) + "' is not an integer");
+    if (v != std::floor(v) || std::fabs(v) > 2147483647.0) {
+        char buf[48];
+        std::snprintf(buf, sizeof buf, "%.10g", v);
+        fail(n, "<" + n.name() + ">: '" + buf + "' is not an integer in [-2147483647, 2147483647]");
+    }
     return v;
+}
+
+// A non-negative integer count above which the renderer would only spend unbounded time: values over
+// `limit` (any size, 1e12 included) are capped to it with a warning naming the file.
+int cappedInteger(const SceneNode& n, int limit) {
+    double v = numbers(n, 1)[0];
+    if (v != std::floor(v)) fail(n, "<" + n.name() + ">: '" + std::to_string(v) + "' is not an integer");
+    if (v <= double(limit)) return int(std::max(v, -1.0));
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.15g", v);
+    warn(n.location() + ": " + n.name() + " " + buf + " is above the limit " + std::to_string(limit) + "; capped to " +
+         std::to_string(limit));
+    return limit;
 }
 
 float number(const SceneNode& n) { return float(numbers(n, 1)[0]); }
@@ -103,6 +129,14 @@ int integer(const SceneNode& n) { return int(toInteger(n, numbers(n, 1)[0])); }
 Vec3 vec3(const SceneNode& n) {
     auto v = numbers(n, 3);
     return Vec3(float(v[0]), float(v[1]), float(v[2]));
+}
+// normalize(v), also when |v|² overflows or underflows a float (components of 1e30 or 1e-30): then
+// v is first scaled by its largest component. 0 for a zero vector.
+Vec3 unit(const Vec3& v) {
+    float l = length(v);
+    if (l > 0 && std::isfinite(l)) return v / l;
+    float m = std::max(std::fabs(v.x), std::max(std::fabs(v.y), std::fabs(v.z)));
+    return m > 0 && std::isfinite(m) ? normalize(v / m) : Vec3(0, 0, 0);
 }
 std::vector<int> integers(const SceneNode& n) {
     auto v = numbers(n);
@@ -129,8 +163,11 @@ int intAttribute(const SceneNode& n, const std::string& attr, int dflt) {
     if (!a) return dflt;
     std::string s = trim(*a);
     char* e = nullptr;
+    errno = 0;
     long v = std::strtol(s.c_str(), &e, 10);
     if (s.empty() || *e != '\0') fail(n, describe(n) + ": attribute " + attr + "='" + *a + "' is not an integer");
+    if (errno == ERANGE || v < std::numeric_limits<int>::min() || v > std::numeric_limits<int>::max())
+        fail(n, describe(n) + ": attribute " + attr + "='" + *a + "' is out of range");
     return int(v);
 }
 
@@ -196,7 +233,7 @@ struct Walker {
         for (const char* eps : {"ShadowRayEpsilon", "IntersectionTestEpsilon"})
             if (auto c = root.child(eps)) (void)number(*c);
         if (auto c = root.child("MaxRecursionDepth")) {
-            scene.maxRecursionDepth = integer(*c);
+            scene.maxRecursionDepth = cappedInteger(*c, kMaxRecursionDepth);
             if (scene.maxRecursionDepth < 0) fail(*c, "MaxRecursionDepth must not be negative");
         }
         if (auto c = root.child("ZeroBasedIndexing")) zeroBased = boolean(*c, c->text(), "ZeroBasedIndexing");
@@ -306,6 +343,8 @@ struct Walker {
                 out = vec3(*c);
                 if (degamma)
                     out = Vec3(std::pow(out.x, 2.2f), std::pow(out.y, 2.2f), std::pow(out.z, 2.2f));
+                if (!isFinite(out))  // pow of a negative value, or beyond float range
+                    fail(*c, describe(n) + ": <" + name + "> is not finite after degamma (negative, or overflows a 32-bit float)");
             }
         };
         colour("AmbientReflectance", m.ambient);
@@ -450,10 +489,14 @@ struct Walker {
             if (!(cam.left < cam.right) || !(cam.bottom < cam.top))
                 fail(*planeNode, who + ": NearPlane needs left < right and bottom < top");
         }
-        if (length(gaze) == 0) fail(n, who + ": gaze direction is zero");
-        cam.w = -normalize(gaze);
-        cam.u = normalize(cross(up, cam.w));
+        if (!isFinite(gaze)) fail(n, who + ": the gaze direction overflows a 32-bit float");
+        if (!(cam.left >= -FLT_MAX && cam.right <= FLT_MAX && cam.bottom >= -FLT_MAX && cam.top <= FLT_MAX))
+            fail(n, who + ": the image plane overflows a 32-bit float");
+        if (length(unit(gaze)) == 0) fail(n, who + ": gaze direction is zero");
+        cam.w = -unit(gaze);
+        cam.u = unit(cross(unit(up), cam.w));
         if (length(cam.u) == 0) fail(n, who + ": Up is parallel to the gaze direction");
+        if (!isFinite(cam.u) || !isFinite(cam.w)) fail(n, who + ": the camera frame overflows a 32-bit float");
         cam.v = cross(cam.w, cam.u);
         if (left) cam.u = -cam.u;
 
@@ -461,7 +504,7 @@ struct Walker {
         cam.imageName = trim(nameNode->text());
         if (cam.imageName.empty()) fail(*nameNode, who + ": ImageName is empty");
         if (auto c = n.child("NumSamples")) {
-            cam.numSamples = integer(*c);
+            cam.numSamples = cappedInteger(*c, kMaxSamplesPerPixel);
             if (cam.numSamples < 1) fail(*c, who + ": NumSamples must be at least 1");
         }
         if (auto c = n.child("FocusDistance")) cam.focusDistance = number(*c);
@@ -530,18 +573,19 @@ struct Walker {
             checkChildren(l, {"Position", "Normal", "Size", "Radiance"});
             light.position = vec3(*need(l, "Position"));
             auto nn = need(l, "Normal");
-            light.direction = normalize(vec3(*nn));
+            light.direction = unit(vec3(*nn));
             if (length(light.direction) == 0) fail(*nn, describe(l) + ": Normal is zero");
             auto sn = need(l, "Size");
             light.size = number(*sn);
             if (!(light.size > 0)) fail(*sn, describe(l) + ": Size must be positive");
+            if (!std::isfinite(light.size * light.size)) fail(*sn, describe(l) + ": Size² overflows a 32-bit float");
             light.intensity = vec3(*need(l, "Radiance"));
             break;
         }
         case dev::LIGHT_DIRECTIONAL: {
             checkChildren(l, {"Direction", "Radiance"});
             auto dn = need(l, "Direction");
-            light.direction = normalize(vec3(*dn));
+            light.direction = unit(vec3(*dn));
             if (length(light.direction) == 0) fail(*dn, describe(l) + ": Direction is zero");
             light.intensity = vec3(*need(l, "Radiance"));
             break;
@@ -550,7 +594,7 @@ struct Walker {
             checkChildren(l, {"Position", "Direction", "Intensity", "CoverageAngle", "FalloffAngle", "FallOffAngle"});
             light.position = vec3(*need(l, "Position"));
             auto dn = need(l, "Direction");
-            light.direction = normalize(vec3(*dn));
+            light.direction = unit(vec3(*dn));
             if (length(light.direction) == 0) fail(*dn, describe(l) + ": Direction is zero");
             light.intensity = vec3(*need(l, "Intensity"));
             light.coverageAngle = number(*need(l, "CoverageAngle"));

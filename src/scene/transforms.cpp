@@ -3,8 +3,10 @@
 #include "scene/transforms.h"
 
 #include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <sstream>
 
 #include "util/error.h"
@@ -49,10 +51,13 @@ Mat4 composeTransforms(const std::string& refs, const TransformTable& table, con
         }
         std::string digits = tok.substr(1);
         char* end = nullptr;
+        errno = 0;
         long id = digits.empty() ? 0 : std::strtol(digits.c_str(), &end, 10);
         if (digits.empty() || *end != '\0' || !std::isdigit(static_cast<unsigned char>(digits[0])))
             throw Error(where + ": bad transformation reference '" + tok +
                         "' (expected t<id>, s<id>, r<id> or c<id>)");
+        if (errno == ERANGE || id > std::numeric_limits<int>::max())  // would wrap onto another id
+            throw Error(where + ": transformation '" + tok + "': id out of range");
         auto it = map->find(int(id));
         if (it == map->end())
             throw Error(where + ": transformation '" + tok + "' references undefined " + what + " " +

@@ -31,9 +31,10 @@
 
 /* ---- render program (camera.cl, intersect.cl, shade.cl) -------------------------------------- */
 
+/* count = pixels x samples: samples [firstSample, firstSample + samples) of pixels from firstPixel. */
 #define CLRT_KERNEL_generate_camera_rays(P)                                                        \
-    P(VAL, int, count) P(VAL, int, firstPixel) P(VAL, int, sample) P(VAL, CameraParams, cam)      \
-    P(VAL, SceneParams, scene) P(BUF, PathState, paths) P(BUF, Ray, rays)
+    P(VAL, int, count) P(VAL, int, firstPixel) P(VAL, int, firstSample) P(VAL, int, samples)       \
+    P(VAL, CameraParams, cam) P(VAL, SceneParams, scene) P(BUF, PathState, paths) P(BUF, Ray, rays)
 
 #define CLRT_KERNEL_intersect_closest(P)                                                           \
     P(VAL, int, count) P(VAL, SceneParams, scene) CLRT_PARAMS_GEOMETRY(P) P(IN, Ray, rays) P(BUF, Hit, hits)
