@@ -651,3 +651,59 @@ TEST_CASE("uncommitted writes leave the target alone until committed", "[image]"
     CHECK(!fs::exists(exrTmp));
     CHECK(!fs::exists(pngTmp));
 }
+
+// A few bytes can declare gigabytes of pixels: the size is refused from the header, before decoding.
+TEST_CASE("images above the texel limit are refused from their header", "[image]") {
+    char tmpl[] = "/tmp/clrt-bomb-XXXXXX";
+    REQUIRE(mkdtemp(tmpl));
+    const std::string dir = tmpl;
+    auto be32 = [](std::string& s, uint32_t v) {
+        for (int i = 3; i >= 0; --i) s.push_back(char((v >> (8 * i)) & 0xFF));
+    };
+    auto chunk = [&](std::string& png, const char* type, const std::string& data) {
+        be32(png, uint32_t(data.size()));
+        std::string body = std::string(type, 4) + data;
+        png += body;
+        be32(png, uint32_t(crc32(0, reinterpret_cast<const Bytef*>(body.data()), uInt(body.size()))));
+    };
+    auto pngOf = [&](uint32_t w, uint32_t h) {
+        std::string png = "\x89PNG\r\n\x1a\n", ihdr;
+        be32(ihdr, w);
+        be32(ihdr, h);
+        ihdr += std::string("\x08\x02\x00\x00\x00", 5);  // 8-bit RGB
+        chunk(png, "IHDR", ihdr);
+        chunk(png, "IDAT", std::string("\x78\x9c\x03\x00\x00\x00\x00\x01", 8));
+        chunk(png, "IEND", "");
+        return png;
+    };
+    const std::string big = dir + "/big.png", fits = dir + "/fits.png";
+    std::ofstream(big, std::ios::binary) << pngOf(16384, 8193);
+    std::ofstream(fits, std::ios::binary) << pngOf(16384, 8192);
+    try {
+        clrt::readImage(big);
+        FAIL("a 16384x8193 PNG header was accepted");
+    } catch (const clrt::Error& e) {
+        CHECK(std::string(e.what()).find("big.png: image is 16384x8193, more than the limit") != std::string::npos);
+    }
+    // At the limit the header passes and the (empty) pixel data is what fails.
+    try {
+        clrt::readImage(fits);
+        FAIL("a PNG without pixel data was accepted");
+    } catch (const clrt::Error& e) {
+        CHECK(std::string(e.what()).find("more than the limit") == std::string::npos);
+    }
+    // An EXR whose data window is 20000x20000: the header is read, no pixel is allocated.
+    const std::string exr = dir + "/big.exr";
+    {
+        Imf::Header hdr(20000, 20000);
+        hdr.channels().insert("R", Imf::Channel(Imf::HALF));
+        Imf::OutputFile out(exr.c_str(), hdr);
+    }
+    try {
+        clrt::readImage(exr);
+        FAIL("a 20000x20000 EXR header was accepted");
+    } catch (const clrt::Error& e) {
+        CHECK(std::string(e.what()).find("big.exr: image is 20000x20000, more than the limit") != std::string::npos);
+    }
+    std::filesystem::remove_all(dir);
+}

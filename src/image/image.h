@@ -23,7 +23,9 @@ struct ImageRGB {
 // Chosen by content (magic bytes), not extension. EXR: any R,G,B channel layout (A ignored), half or
 // float, scanline or tiled, every compression; NaN/Inf/negative texels are replaced by 0 with one
 // warning that counts them. Grey images are expanded to RGB.
+// Images of more than kMaxImageTexels (16384x8192) are refused from their header, before decoding.
 ImageRGB readImage(const std::string& path);
+constexpr long long kMaxImageTexels = 16384LL * 8192LL;
 
 // Writes an 8-bit RGB PNG of already-quantised values (0..255 per channel, row 0 at the top).
 // Per row the PNG filter with the smallest sum of |residual| (as stb_image_write and libpng choose),

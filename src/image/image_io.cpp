@@ -87,11 +87,20 @@ void checkJpegHuffmanTables(const std::string& path, const std::string& b) {
     }
 }
 
+// Images larger than kMaxImageTexels are refused before any pixel is decoded (memory stays bounded).
+void checkImageSize(const std::string& path, int64_t w, int64_t h) {
+    if (w > 0 && h > 0 && w * h <= kMaxImageTexels) return;
+    throw Error(path + ": image is " + std::to_string(w) + "x" + std::to_string(h) + ", more than the limit of " +
+                std::to_string(kMaxImageTexels) + " texels (16384x8192)");
+}
+
 ImageRGB readStb(const std::string& path, const std::string& bytes, bool png) {
     const auto* data = reinterpret_cast<const stbi_uc*>(bytes.data());
     if (bytes.size() > size_t(INT32_MAX)) throw Error(path + ": image file too large");
     int len = int(bytes.size());
     int w = 0, h = 0, comp = 0;
+    // The header's size is checked before decoding: a few KB of PNG can declare gigabytes of pixels.
+    if (stbi_info_from_memory(data, len, &w, &h, &comp)) checkImageSize(path, w, h);
     ImageRGB img;
     if (png && stbi_is_16_bit_from_memory(data, len)) {
         stbi_us* px = stbi_load_16_from_memory(data, len, &w, &h, &comp, 3);
@@ -181,8 +190,8 @@ ImageRGB readExr(const std::string& path) {
             const Imf::Header& hdr = file.header();
             const Imath::Box2i dw = hdr.dataWindow();
             const int64_t w = int64_t(dw.max.x) - dw.min.x + 1, h = int64_t(dw.max.y) - dw.min.y + 1;
-            if (w <= 0 || h <= 0 || w * h > (int64_t(1) << 30))
-                throw Error(path + ": EXR data window has a bad size");
+            if (w <= 0 || h <= 0) throw Error(path + ": EXR data window has a bad size");
+            checkImageSize(path, w, h);
             img.width = int(w);
             img.height = int(h);
             img.pixels.assign(size_t(w) * size_t(h) * 3, 0.0f);
