@@ -1,3 +1,4 @@
+// src/cl/: the OpenCL layer (devices, checked calls, kernel source assembly, program build and cache, argument binding, layout check).
 // program.h — an OpenCL context + queue for one device (DeviceContext) and program building:
 // sources are the named cl_kernels/ files with what they #include (embedded at build time, or read
 // from $CLRT_KERNEL_DIR so kernels can be edited without rebuilding), compiled with

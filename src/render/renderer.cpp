@@ -14,6 +14,8 @@
 
 namespace clrt {
 
+struct BatchPlan;
+
 namespace {
 // A read-only copy of v. OpenCL has no zero-size buffers and refuses a null host pointer, so an empty
 // array (an empty BVH's primRefs) becomes one zero-filled element that the kernels never read.
@@ -127,6 +129,9 @@ struct Renderer::Impl {
     // Traces `n` camera paths (already generated) through every bounce and accumulates them into the
     // image; `bounces` says whether any material makes children.
     void traceBatch(int n, const dev::SceneParams& sp, bool bounces, size_t lightChunk, RenderCounters& counters);
+    // Every batch of pixels [tileFirst, tileEnd), all samples (after setRenderArgs).
+    void renderTile(size_t tileFirst, size_t tileEnd, const BatchPlan& plan, RenderCounters& counters,
+                    const std::function<void(size_t, size_t)>& progress);
     std::vector<int> valid, target;  // compaction scratch, at most 2 * queueCapacity each
 
     // Reads pixels [first, end) back into `out`, scaled by `inv` (each tile's pixels are written by
@@ -253,28 +258,25 @@ static int samplesPerBatch(size_t numPixels, int spp) {
     return int(std::min({std::max<size_t>(1, targetPaths / std::max<size_t>(numPixels, 1)), maxSamples, size_t(spp)}));
 }
 
-void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, RenderCounters& counters,
-                           const std::function<bool(size_t&, size_t&)>& nextTile, ImageRGB& out,
-                           const std::function<void(size_t, size_t)>& progress) {
-    Impl& m = *impl_;
-    auto t0 = std::chrono::steady_clock::now();
-    const DeviceScene& ds = m.ds;
-    dev::CameraParams cp = makeCameraParams(cam);
-    // The loader and the command line already cap both (with a warning); this is the backstop for
-    // scenes built in code.
-    setSamplesPerPixel(cp, std::min(settings.spp, kMaxSamplesPerPixel));
-    const size_t numPixels = size_t(cam.width) * cam.height;
-    const size_t imageBytes = numPixels * sizeof(dev::float4);
-    checkImageFits(m.dc.info(), cam);
+// How a render is cut into batches and how large the queues are. A batch is `group` samples of each
+// of `batch` pixels, pixel-major. Every figure depends only on the image, the settings and the scene,
+// never on the tile: every device and every tiling computes each pixel identically.
+struct BatchPlan {
+    int group = 1;          // samples of each pixel per batch
+    size_t batch = 1;       // pixels per batch
+    size_t capacity = 0;    // queue slots: batch * group paths, times 2^splitDepth when materials bounce
+    size_t lightChunk = 0;  // lights per sample_lights launch (0: the scene has none)
+    bool bounces = false;   // some material spawns children
+};
 
-    // A batch is `group` samples of each of `batch` pixels, pixel-major. The split depth depends only
-    // on the image and the batch limit, never on the tile: every device and every tiling computes
-    // each pixel identically.
-    const int group = samplesPerBatch(numPixels, cp.spp);
-    const size_t batch = std::max<size_t>(1, std::min(numPixels, settings.maxBatchPixels / size_t(group)));
-    const size_t batchPaths = batch * size_t(group);
-    const bool bounces = ds.features.bounces();
-    dev::SceneParams sp = ds.params;
+// The plan for `numPixels` pixels at cp.spp samples; sets the split depth (and seed, depth cap) in `sp`.
+static BatchPlan planBatches(const DeviceScene& ds, size_t numPixels, const RenderSettings& settings,
+                             const dev::CameraParams& cp, dev::SceneParams& sp) {
+    BatchPlan plan;
+    plan.group = samplesPerBatch(numPixels, cp.spp);
+    plan.batch = std::max<size_t>(1, std::min(numPixels, settings.maxBatchPixels / size_t(plan.group)));
+    const size_t batchPaths = plan.batch * size_t(plan.group);
+    plan.bounces = ds.features.bounces();
     sp.seed = settings.seed;
     sp.maxDepth = std::min(sp.maxDepth, kMaxRecursionDepth);
     // Dielectrics split into both children while the queue can hold them and few samples are taken;
@@ -285,43 +287,64 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     }
     if (settings.splitDepthOverride >= 0) split = settings.splitDepthOverride;
     sp.splitDepth = split;
-    const size_t capacity = bounces ? batchPaths << split : batchPaths;
-    size_t lightChunk = 0;
+    plan.capacity = plan.bounces ? batchPaths << split : batchPaths;
     if (sp.numLights > 0) {
         size_t budget = (size_t(256) << 20) / sizeof(dev::ShadowRay);
-        lightChunk = std::max<size_t>(1, std::min<size_t>(sp.numLights, budget / capacity));
+        plan.lightChunk = std::max<size_t>(1, std::min<size_t>(sp.numLights, budget / plan.capacity));
     }
-    m.ensureQueues(capacity, capacity * std::max<size_t>(lightChunk, 1));
+    return plan;
+}
 
-    cl::CommandQueue& q = m.dc.queue();
+void Renderer::Impl::renderTile(size_t tileFirst, size_t tileEnd, const BatchPlan& plan, RenderCounters& counters,
+                                const std::function<void(size_t, size_t)>& progress) {
+    const int spp = cam.spp;
+    const size_t totalBatches =
+        ((size_t(spp) + plan.group - 1) / plan.group) * ((tileEnd - tileFirst + plan.batch - 1) / plan.batch);
+    size_t doneBatches = 0;
+    for (int sample = 0; sample < spp; sample += plan.group) {
+        const int samples = std::min(plan.group, spp - sample);
+        for (size_t first = tileFirst; first < tileEnd; first += plan.batch) {
+            const int n = int(std::min(plan.batch, tileEnd - first)) * samples;
+            kGenerate.set("firstPixel", int(first)).set("firstSample", sample).set("samples", samples);
+            kGenerate.set("count", n);
+            run(kGenerate, n, STAGE_GENERATE);
+            counters.cameraRays += n;
+            traceBatch(n, scene, plan.bounces, plan.lightChunk, counters);
+            ++doneBatches;
+            if (progress || events.size() >= kProfileEvents) {
+                CL_CPP(dc.queue().finish());
+                collectProfile(counters);
+                if (progress) progress(doneBatches, totalBatches);
+            }
+        }
+    }
+}
+
+void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, RenderCounters& counters,
+                           const std::function<bool(size_t&, size_t&)>& nextTile, ImageRGB& out,
+                           const std::function<void(size_t, size_t)>& progress) {
+    Impl& m = *impl_;
+    auto t0 = std::chrono::steady_clock::now();
+    dev::CameraParams cp = makeCameraParams(cam);
+    // The loader and the command line already cap both (with a warning); this is the backstop for
+    // scenes built in code.
+    setSamplesPerPixel(cp, std::min(settings.spp, kMaxSamplesPerPixel));
+    const size_t numPixels = size_t(cam.width) * cam.height;
+    const size_t imageBytes = numPixels * sizeof(dev::float4);
+    checkImageFits(m.dc.info(), cam);
+    dev::SceneParams sp = m.ds.params;
+    const BatchPlan plan = planBatches(m.ds, numPixels, settings, cp, sp);
+    m.ensureQueues(plan.capacity, plan.capacity * std::max<size_t>(plan.lightChunk, 1));
+
     cl::Buffer image = CL_CPP(cl::Buffer(m.dc.context(), CL_MEM_READ_WRITE, imageBytes));
-    CL_CPP(q.enqueueFillBuffer(image, dev::float4{0, 0, 0, 0}, 0, imageBytes));
+    CL_CPP(m.dc.queue().enqueueFillBuffer(image, dev::float4{0, 0, 0, 0}, 0, imageBytes));
     m.setRenderArgs(cp, sp, image);
 
-    const float inv = 1.0f / float(cp.spp);
     size_t tileFirst = 0, tileCount = 0;
     while (nextTile(tileFirst, tileCount)) {
         const size_t tileEnd = std::min(numPixels, tileFirst + tileCount);
-        const size_t totalBatches = ((size_t(cp.spp) + group - 1) / group) * ((tileEnd - tileFirst + batch - 1) / batch);
-        size_t doneBatches = 0;
-        for (int sample = 0; sample < cp.spp; sample += group) {
-            const int samples = std::min(group, cp.spp - sample);
-            for (size_t first = tileFirst; first < tileEnd; first += batch) {
-                const int n = int(std::min(batch, tileEnd - first)) * samples;
-                m.kGenerate.set("firstPixel", int(first)).set("firstSample", sample).set("samples", samples);
-                m.kGenerate.set("count", n);
-                m.run(m.kGenerate, n, STAGE_GENERATE);
-                counters.cameraRays += n;
-                m.traceBatch(n, sp, bounces, lightChunk, counters);
-                ++doneBatches;
-                if (progress || m.events.size() >= Impl::kProfileEvents) {
-                    CL_CPP(q.finish());
-                    m.collectProfile(counters);
-                    if (progress) progress(doneBatches, totalBatches);
-                }
-            }
-        }
-        m.readTile(image, tileFirst, tileEnd, inv, out);
+        m.renderTile(tileFirst, tileEnd, plan, counters, progress);
+        m.readTile(image, tileFirst, tileEnd, 1.0f / float(cp.spp), out);
         counters.tiles += 1;
         counters.pixels += tileEnd - tileFirst;
         m.collectProfile(counters);  // the blocking read above drained the queue

@@ -1,3 +1,4 @@
+/* src/shared/: what the host and the kernels both compile (structs, enums and type tables, kernel parameter lists). */
 /* device_types.h — THE definition of every struct and enum that crosses the host/device boundary.
  *
  * Read by the C++ compiler (inside namespace clrt::dev, with float4/int4 defined below as 16-byte
