@@ -1,9 +1,11 @@
-// clrt command line: `clrt devices`, `clrt render SCENE [options]`. Parses arguments, runs the
-// pipeline (load -> flatten/BVH -> kernel build -> render -> write), prints progress and per-stage
-// times, and turns every clrt::Error into one line on stderr and its exit code.
+// clrt command line: `clrt devices`, `clrt render SCENE [options]`, `clrt tonemap` (src/cli/).
+// Parses arguments, checks the outputs (src/cli/output_names.h), runs the pipeline (load ->
+// flatten/BVH -> kernel build -> render -> write), prints progress and per-stage times, and turns
+// every clrt::Error into one line on stderr and its exit code. Ctrl-C / SIGTERM: src/cli/interrupt.h.
 #include <CL/opencl.hpp>
 
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -15,6 +17,9 @@
 
 #include "cl/devices.h"
 #include "cl/program.h"
+#include "cli/interrupt.h"
+#include "cli/output_names.h"
+#include "cli/tonemap_cmd.h"
 #include "image/image.h"
 #include "render/device_scene.h"
 #include "render/multi_device.h"
@@ -40,7 +45,8 @@ const char* kMainHelp =
     "options:\n"
     "  -h, --help              this text\n"
     "\n"
-    "exit codes: 0 ok, 1 usage, 2 bad input, 3 device failure, 4 output failure\n";
+    "exit codes: 0 ok, 1 usage, 2 bad input, 3 device failure, 4 output failure,\n"
+    "            130/143 interrupted by SIGINT/SIGTERM (a render writes its partial image first)\n";
 
 const char* kRenderHelp =
     "usage: clrt render SCENE [options]\n"
@@ -48,6 +54,10 @@ const char* kRenderHelp =
     "Renders every camera of SCENE (or one, with --camera) and writes each image under its ImageName\n"
     "into OUTDIR (.png: clamped and rounded; .exr: float radiance, plus one tone-mapped .png per\n"
     "Tonemap block of the camera: stem.png, or stem<Extension>.png / stem_<tmo>.png for several).\n"
+    "Before any work, every output must be a plain file name ending in .png/.exr, no two alike, none\n"
+    "of them a file the scene reads (exit 2), and OUTDIR must accept a new file (exit 4).\n"
+    "Ctrl-C (or SIGTERM) ends the render after its current pass and writes the partial image (the EXR's\n"
+    "spp attribute says how many samples it has); a second one exits at once.\n"
     "\n"
     "options:\n"
     "  -o, --output DIR      output directory (default: the current directory); must exist\n"
@@ -130,10 +140,14 @@ double since(std::chrono::steady_clock::time_point t) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 
+// A bar on a terminal; otherwise one line when a camera starts, one per 10% and one when it ends.
 class Progress {
 public:
     explicit Progress(std::string label)
-        : label_(std::move(label)), tty_(isatty(STDERR_FILENO)), lastPct_(tty_ ? -1 : 0) {}
+        : label_(std::move(label)), tty_(isatty(STDERR_FILENO)), lastPct_(tty_ ? -1 : 0) {
+        if (!tty_) std::fprintf(stderr, "%s: rendering\n", label_.c_str());
+        std::fflush(stderr);
+    }
     void update(size_t done, size_t total) {
         int pct = total ? int(100 * done / total) : 100;
         if (tty_ && pct == lastPct_ && done != total) return;  // redraw only when the percentage moves
@@ -150,6 +164,10 @@ public:
         }
         std::fflush(stderr);
     }
+    void interrupted(int reached, int spp) {
+        std::fprintf(stderr, "%s%s interrupted after %d of %d samples per pixel\n", tty_ ? "\n" : "", label_.c_str(), reached, spp);
+        std::fflush(stderr);
+    }
 
 private:
     std::string label_;
@@ -158,15 +176,59 @@ private:
 };
 
 int cmdDevices() {
-    printDevices(std::cout);
+    printDevices(std::cout);  // no device: clrt::Error (exit 3) naming the cause
     return 0;
+}
+
+// Renders one camera on every renderer and writes its outputs. Returns true if the render was
+// interrupted (stopRequested) before all its samples: the images written are partial.
+bool renderAndWriteCamera(const Args& a, const Camera& cam, std::vector<std::unique_ptr<Renderer>>& renderers,
+                          std::vector<DeviceWork>& work, RenderCounters& counters, double& tOutput) {
+    RenderSettings rs;
+    rs.spp = a.spp > 0 ? a.spp : cam.numSamples;
+    rs.seed = a.seed;
+    rs.stop = &stopRequested();
+    for (DeviceWork& w : work) w.counters.stoppedAtSample = -1;
+    Progress prog("camera " + std::to_string(cam.id) + " (" + cam.imageName + ", " + std::to_string(cam.width) + "x" +
+                  std::to_string(cam.height) + ", " + std::to_string(rs.spp) + " spp)");
+    ImageRGB img;
+    auto tr = std::chrono::steady_clock::now();
+    if (renderers.size() == 1) {
+        img = renderers.front()->render(cam, rs, work[0].counters, [&](size_t d, size_t n) { prog.update(d, n); });
+    } else {
+        std::vector<Renderer*> rp;
+        for (auto& r : renderers) rp.push_back(r.get());
+        auto w0 = std::chrono::steady_clock::now();
+        img = renderOnDevices(rp, cam, rs, work, [&](size_t d, size_t n) { prog.update(d, n); });
+        counters.seconds += since(w0);
+    }
+    const double camSeconds = since(tr);
+    auto to = std::chrono::steady_clock::now();
+    OutputOptions oo;
+    oo.outDir = a.outDir;
+    oo.truncatePng = a.truncatePng;
+    oo.exrHalf = a.exrHalf;
+    oo.spp = rs.spp;
+    for (const DeviceWork& w : work)  // an interrupted render: the samples every pixel has
+        if (w.counters.stoppedAtSample >= 0) oo.spp = std::min(oo.spp, w.counters.stoppedAtSample);
+    if (oo.spp < rs.spp) {
+        prog.interrupted(oo.spp, rs.spp);
+        oo.partial = "interrupted after " + std::to_string(oo.spp) + " of " + std::to_string(rs.spp) +
+                     " samples per pixel" + (oo.spp == 0 ? " (some tiles not rendered)" : "");
+    }
+    oo.renderSeconds = camSeconds;
+    for (auto& r : renderers) oo.deviceName += (oo.deviceName.empty() ? "" : ", ") + r->context().info().name;
+    std::vector<std::string> written = writeCameraOutputs(cam, img, oo, renderers.front()->context());
+    tOutput += since(to);
+    for (const std::string& w : written)
+        std::fprintf(stderr, "wrote %s%s\n", w.c_str(), oo.partial.empty() ? "" : " (partial image)");
+    return !oo.partial.empty();
 }
 
 int cmdRender(const Args& a) {
     if (a.positional.size() != 1) throw Error("render: expected exactly one scene file (see clrt render --help)", ExitCode::Usage);
     setVerbose(a.verbose);
-    namespace fs = std::filesystem;
-    if (!fs::is_directory(a.outDir)) throw Error(a.outDir + ": output directory does not exist", ExitCode::Output);
+    checkOutputDirectory(a.outDir);  // exists and accepts a new file: exit 4 before any work
 
     auto t = std::chrono::steady_clock::now();
     Scene scene = loadScene(a.positional[0]);
@@ -182,6 +244,8 @@ int cmdRender(const Args& a) {
         if (a.cameraId.empty() || std::to_string(c.id) == a.cameraId) cams.push_back(&c);
     if (cams.empty())
         throw Error(a.positional[0] + (a.cameraId.empty() ? ": the scene has no camera" : ": no camera with id " + a.cameraId));
+    // Plain .png/.exr names, no two alike, none of them a file the scene reads: exit 2 before any work.
+    checkOutputsAreNotInputs(planRenderOutputs(scene, cams, a.outDir), sceneInputs(scene), a.positional[0]);
 
     std::vector<DeviceInfo> devs = selectDevices(a.device);
     // An image no selected device can hold is refused here, before the BVH, the kernel build and any
@@ -247,35 +311,15 @@ int cmdRender(const Args& a) {
     for (size_t i = 0; i < renderers.size(); ++i)
         work[i].name = "[" + std::to_string(renderers[i]->context().info().index) + "] " + renderers[i]->context().info().name;
     double tOutput = 0;
+    std::string notRendered;  // cameras skipped after an interrupt
+    bool anyPartial = false;
+    setGracefulInterrupt(true);  // Ctrl-C from here on: finish the pass, write the partial image
     for (const Camera* cam : cams) {
-        RenderSettings rs;
-        rs.spp = a.spp > 0 ? a.spp : cam->numSamples;
-        rs.seed = a.seed;
-        Progress prog("camera " + std::to_string(cam->id) + " (" + cam->imageName + ", " + std::to_string(cam->width) + "x" +
-                      std::to_string(cam->height) + ", " + std::to_string(rs.spp) + " spp)");
-        ImageRGB img;
-        auto tr = std::chrono::steady_clock::now();
-        if (renderers.size() == 1) {
-            img = renderer.render(*cam, rs, work[0].counters, [&](size_t d, size_t n) { prog.update(d, n); });
-        } else {
-            std::vector<Renderer*> rp;
-            for (auto& r : renderers) rp.push_back(r.get());
-            auto w0 = std::chrono::steady_clock::now();
-            img = renderOnDevices(rp, *cam, rs, work, [&](size_t d, size_t n) { prog.update(d, n); });
-            counters.seconds += since(w0);
+        if (stopRequested().load()) {
+            notRendered += (notRendered.empty() ? "" : ", ") + std::to_string(cam->id);
+            continue;
         }
-        const double camSeconds = since(tr);
-        auto to = std::chrono::steady_clock::now();
-        OutputOptions oo;
-        oo.outDir = a.outDir;
-        oo.truncatePng = a.truncatePng;
-        oo.exrHalf = a.exrHalf;
-        oo.spp = rs.spp;
-        oo.renderSeconds = camSeconds;
-        for (auto& r : renderers) oo.deviceName += (oo.deviceName.empty() ? "" : ", ") + r->context().info().name;
-        std::vector<std::string> written = writeCameraOutputs(*cam, img, oo, renderer.context());
-        tOutput += since(to);
-        for (const std::string& w : written) std::fprintf(stderr, "wrote %s\n", w.c_str());
+        if (renderAndWriteCamera(a, *cam, renderers, work, counters, tOutput)) anyPartial = true;
     }
     double deviceSeconds = 0;
     for (const DeviceWork& w : work) {
@@ -327,12 +371,19 @@ int cmdRender(const Args& a) {
                 tParse, tFlatten - ds.bvhSeconds, ds.bvhSeconds, tBuild, counters.seconds, tOutput, rate(&RenderCounters::cameraRays, STAGE_TRACE_CAMERA),
                 rate(&RenderCounters::shadowRays, STAGE_TRACE_SHADOW),
                 rate(&RenderCounters::secondaryRays, STAGE_TRACE_SECONDARY), a.spp > 0 ? a.spp : cams[0]->numSamples);
+    if (stopRequested().load()) {
+        std::fprintf(stderr, "clrt: interrupted (%s)%s%s%s\n", stopSignal() == SIGTERM ? "SIGTERM" : "SIGINT",
+                     anyPartial ? ": partial images written (see above)" : "",
+                     notRendered.empty() ? "" : "; cameras not rendered: ", notRendered.c_str());
+        return 128 + stopSignal();
+    }
     return 0;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
+    installInterruptHandling();  // before any thread exists
     try {
         if (argc < 2 || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "--help")) {
             std::fputs(kMainHelp, argc < 2 ? stderr : stdout);

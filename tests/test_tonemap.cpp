@@ -22,6 +22,7 @@
 
 #include "cl/check.h"
 #include "image/tonemap.h"
+#include "cli/tonemap_cmd.h"
 #include "render/output.h"
 #include "render/tonemap_device.h"
 #include "scene/scene_loader.h"
@@ -356,7 +357,7 @@ TEST_CASE("camera outputs: EXR with attributes plus one tone-mapped PNG per Tone
     TempDir tmp;
     ImageRGB img = randomHdr(40, 30, 9);
     Camera cam;
-    cam.imageName = "some/dir/shot.exr";
+    cam.imageName = "shot.exr";
     Tonemap a, b, c;
     b.op = dev::TMO_ACES;
     c.op = dev::TMO_FILMIC;
@@ -412,6 +413,17 @@ TEST_CASE("camera outputs: EXR with attributes plus one tone-mapped PNG per Tone
         ImageRGB back = readImage(tmp.file("ldr.png"));
         CHECK(back.pixels == std::vector<float>{10, 255, 0, 0, 0, 254});
         CHECK_FALSE(std::filesystem::exists(tmp.file("ldr.exr")));
+    }
+    SECTION("a name that is not a plain .png/.exr file name is refused, nothing written") {
+        for (const char* bad : {"some/dir/shot.exr", "../shot.exr", ".shot.exr", "shot.jpg"}) {
+            cam.imageName = bad;
+            CHECK_THROWS_AS(writeCameraOutputs(cam, img, o, testContext()), Error);
+        }
+        cam.imageName = "shot.exr";
+        c.extension = "/../escaped";
+        cam.tonemaps = {a, c};
+        CHECK_THROWS_AS(writeCameraOutputs(cam, img, o, testContext()), Error);
+        CHECK(std::filesystem::is_empty(tmp.path));
     }
     SECTION("missing output directory") {
         o.outDir = tmp.file("nope");

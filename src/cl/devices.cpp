@@ -3,7 +3,11 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <sstream>
+#include <unistd.h>
 
 #include "cl/check.h"
 #include "util/error.h"
@@ -47,8 +51,69 @@ T deviceValue(cl_device_id d, cl_device_info what, const char* whatName) {
     return v;
 }
 
+// Whether an ICD file ocl-icd would load ($OCL_ICD_VENDORS: a directory or one file; else
+// /etc/OpenCL/vendors) names PoCL.
+bool poclRegistered() {
+    namespace fs = std::filesystem;
+    const char* env = std::getenv("OCL_ICD_VENDORS");
+    fs::path where = env && *env ? fs::path(env) : fs::path("/etc/OpenCL/vendors");
+    std::vector<fs::path> files;
+    std::error_code ec;
+    if (fs::is_directory(where, ec)) {
+        for (fs::directory_iterator it(where, ec), end; !ec && it != end; it.increment(ec))
+            if (it->path().extension() == ".icd") files.push_back(it->path());
+    } else if (fs::is_regular_file(where, ec)) {
+        files.push_back(where);
+    }
+    for (const fs::path& f : files) {
+        std::ifstream in(f);
+        std::string line;
+        std::getline(in, line);
+        if (lower(line).find("pocl") != std::string::npos) return true;
+    }
+    return false;
+}
+
+// "" if PoCL's kernel cache directory exists and is writable or can be created; else what is wrong.
+std::string poclCacheProblem() {
+    namespace fs = std::filesystem;
+    auto env = [](const char* n) -> std::string {
+        const char* v = std::getenv(n);
+        return v ? v : "";
+    };
+    fs::path dir;
+    std::string from;
+    if (!env("POCL_CACHE_DIR").empty()) {
+        dir = env("POCL_CACHE_DIR");
+        from = "POCL_CACHE_DIR";
+    } else if (!env("XDG_CACHE_HOME").empty()) {
+        dir = fs::path(env("XDG_CACHE_HOME")) / "pocl" / "kcache";
+        from = "XDG_CACHE_HOME=" + env("XDG_CACHE_HOME");
+    } else if (!env("HOME").empty()) {
+        dir = fs::path(env("HOME")) / ".cache" / "pocl" / "kcache";
+        from = "HOME=" + env("HOME");
+    } else {
+        return "";
+    }
+    // The nearest existing ancestor must be a directory this process can create a directory in
+    // (tried: access() says yes to root even on a read-only or pseudo file system).
+    std::error_code ec;
+    fs::path p = dir;
+    while (!p.empty() && !fs::exists(p, ec) && p != p.parent_path()) p = p.parent_path();
+    if (p.empty()) p = ".";
+    if (fs::is_directory(p, ec)) {
+        std::string probe = (p / ".clrt-probe-XXXXXX").string();
+        if (::mkdtemp(&probe[0])) {
+            ::rmdir(probe.c_str());
+            return "";
+        }
+    }
+    return "PoCL cannot create its kernel cache directory " + dir.string() + " (from " + from +
+           "; set POCL_CACHE_DIR or XDG_CACHE_HOME to a writable directory)";
+}
+
 std::string describeAll(const std::vector<DeviceInfo>& all) {
-    if (all.empty()) return "no OpenCL devices found (is an OpenCL driver / ICD installed?)";
+    if (all.empty()) return noDevicesMessage();
     std::ostringstream os;
     os << "available devices:";
     for (const DeviceInfo& d : all)
@@ -139,7 +204,7 @@ std::vector<DeviceInfo> listDevices() {
 
 std::vector<DeviceInfo> selectDevices(const std::string& spec) {
     std::vector<DeviceInfo> all = listDevices();
-    if (all.empty()) throw Error("no OpenCL devices found (is an OpenCL driver / ICD installed?)", ExitCode::Device);
+    if (all.empty()) throw Error(noDevicesMessage(), ExitCode::Device);
 
     std::vector<bool> chosen(all.size(), false);
     auto firstOfType = [&](cl_device_type t) -> int {
@@ -181,9 +246,12 @@ std::vector<DeviceInfo> selectDevices(const std::string& spec) {
             for (const DeviceInfo& d : all)
                 if (lower(d.name).find(key) != std::string::npos) chosen[d.index] = any = true;
         }
-        if (!any)
-            throw Error("--device \"" + spec + "\": \"" + item + "\" names no OpenCL device; " + describeAll(all),
+        if (!any) {
+            const std::string cache = poclRegistered() ? poclCacheProblem() : "";
+            throw Error("--device \"" + spec + "\": \"" + item + "\" names no OpenCL device; " + describeAll(all) +
+                            (cache.empty() ? "" : "; note: " + cache),
                         ExitCode::Device);
+        }
     }
     std::vector<DeviceInfo> out;
     for (const DeviceInfo& d : all)
@@ -191,12 +259,15 @@ std::vector<DeviceInfo> selectDevices(const std::string& spec) {
     return out;
 }
 
+std::string noDevicesMessage() {
+    const std::string cache = poclRegistered() ? poclCacheProblem() : "";
+    if (!cache.empty()) return "no OpenCL devices found: " + cache;
+    return "no OpenCL devices found (is an OpenCL driver / ICD installed?)";
+}
+
 void printDevices(std::ostream& os) {
     std::vector<DeviceInfo> all = listDevices();
-    if (all.empty()) {
-        os << "no OpenCL devices found (is an OpenCL driver / ICD installed?)\n";
-        return;
-    }
+    if (all.empty()) throw Error(noDevicesMessage(), ExitCode::Device);
     for (const DeviceInfo& d : all) {
         os << "[" << d.index << "] " << deviceTypeName(d.type) << "  " << d.name << "  (platform: " << d.platformName
            << ")  compute units: " << d.computeUnits << "  global memory: " << (d.globalMem >> 20) << " MiB  "

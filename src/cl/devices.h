@@ -35,8 +35,14 @@ std::vector<DeviceInfo> listDevices();
 // (ExitCode::Device), listing the available devices, when an item names no device or none exist.
 std::vector<DeviceInfo> selectDevices(const std::string& spec);
 
+// Why no device was found, for the one error line: "no OpenCL devices found", and the cause when it
+// can be seen: PoCL (registered with the ICD loader) cannot create its kernel cache directory
+// ($POCL_CACHE_DIR, else $XDG_CACHE_HOME/pocl/kcache, else $HOME/.cache/pocl/kcache), which makes
+// PoCL report no device at all.
+std::string noDevicesMessage();
+
 // One line per device: index, type, name, platform, compute units, global memory (MiB),
-// OpenCL C version, driver version.
+// OpenCL C version, driver version. No device: throws clrt::Error (ExitCode::Device, noDevicesMessage).
 void printDevices(std::ostream& os);
 
 }  // namespace clrt

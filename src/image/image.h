@@ -54,20 +54,36 @@ void writeExr(const std::string& path, const ImageRGB& img, const ExrWriteOption
 std::string writePng8Uncommitted(const std::string& path, int width, int height, const std::vector<unsigned char>& rgb);
 std::string writeExrUncommitted(const std::string& path, const ImageRGB& img, const ExrWriteOptions& opts = {});
 
-// Writes `path` via a temporary sibling file and rename(); `writer` receives the temporary path.
-// Throws clrt::Error (ExitCode::Output) if the directory does not exist or is not writable.
+// Writes `path` via a temporary sibling file and rename(); `writer` receives the temporary path, an
+// empty file already created (exclusively, never through a symlink), which it opens with
+// openTemporaryForWrite or by name. Throws clrt::Error (ExitCode::Output) if the directory does not
+// exist or is not writable. rename() replaces a final symlink itself: nothing is written through it.
 // writeTemporary stops before the rename and returns the temporary path (see above).
 template <class F> void writeAtomically(const std::string& path, F writer);
 template <class F> std::string writeTemporary(const std::string& path, F writer);
+// The temporary sibling's name: dir/.NAME.tmp-PID.
 std::string temporarySiblingPath(const std::string& path);
+// Creates the (empty) temporary sibling of `path` and records it; returns its path.
+std::string createTemporary(const std::string& path);
+// Opens a temporary made by createTemporary for writing (truncated; O_NOFOLLOW); returns the fd.
+int openTemporaryForWrite(const std::string& tmpPath, const std::string& path);
+// Renames a recorded temporary over `path` (on failure it is removed and clrt::Error names `path`).
 void commitTemporary(const std::string& tmpPath, const std::string& path);
+// Removes a recorded temporary (failed writes).
+void discardTemporary(const std::string& tmpPath);
+// Removes every temporary not yet committed or discarded and blocks any further create, commit or
+// discard for good: for a process about to _exit (the CLI's second Ctrl-C), so that no temporary
+// file is left behind. Safe to call from any thread (not from a signal handler).
+void removeTemporariesForExit();
+// OpenEXR's global thread pool sized to the machine, once (readers and writers).
+void initExrThreads();
 
 template <class F> std::string writeTemporary(const std::string& path, F writer) {
-    std::string tmp = temporarySiblingPath(path);
+    std::string tmp = createTemporary(path);
     try {
         writer(tmp);
     } catch (...) {
-        std::remove(tmp.c_str());
+        discardTemporary(tmp);
         throw;
     }
     return tmp;

@@ -1,8 +1,7 @@
 // Image files (see image.h): readImage picks a decoder from the magic bytes (PNG/JPEG via stb_image,
 // EXR via OpenEXR's generic InputFile so any R,G,B / Y layout, half or float, scanline or tiled,
-// reads); EXR written with OpenEXR (ZIP, RGB, float or half); and the temporary-file helpers of all
-// writers (PNG: image_write.cpp), which go through a temporary sibling file and rename() so a failed
-// write never truncates an existing image.
+// reads). Every writer (PNG and EXR) and the temporary-file helpers are in image_write.cpp, so the
+// fuzz targets, which compile this file alone, need neither zlib nor the writers.
 #include "image/image.h"
 
 #include <algorithm>
@@ -131,22 +130,6 @@ void sanitize(const std::string& path, ImageRGB& img) {
         warn(path + ": " + std::to_string(bad) + " NaN, infinite or negative texel values replaced by 0");
 }
 
-// OpenEXR decodes and compresses on a thread pool of one thread per core. CLRT_EXR_THREADS fixes the
-// count at build time (the fuzz build uses 0, the calling thread only, so a run does not depend on
-// the machine's core count or on thread timing).
-void initExrThreads() {
-    static bool done = [] {
-#ifdef CLRT_EXR_THREADS
-        unsigned n = CLRT_EXR_THREADS;
-#else
-        unsigned n = std::thread::hardware_concurrency();
-#endif
-        Imf::setGlobalThreadCount(n > 1 ? int(n) : 0);
-        return true;
-    }();
-    (void)done;
-}
-
 // Finds the RGB channel names: "R","G","B", or one layer's "<layer>.R" etc. Returns false if none.
 bool findRgbChannels(const Imf::ChannelList& ch, std::string names[3]) {
     if (ch.findChannel("R") || ch.findChannel("G") || ch.findChannel("B")) {
@@ -233,6 +216,22 @@ ImageRGB readExr(const std::string& path) {
 
 }  // namespace
 
+// OpenEXR decodes and compresses on a thread pool of one thread per core. CLRT_EXR_THREADS fixes the
+// count at build time (the fuzz build uses 0, the calling thread only, so a run does not depend on
+// the machine's core count or on thread timing).
+void initExrThreads() {
+    static bool done = [] {
+#ifdef CLRT_EXR_THREADS
+        unsigned n = CLRT_EXR_THREADS;
+#else
+        unsigned n = std::thread::hardware_concurrency();
+#endif
+        Imf::setGlobalThreadCount(n > 1 ? int(n) : 0);
+        return true;
+    }();
+    (void)done;
+}
+
 ImageRGB readImage(const std::string& path) {
     std::string bytes = readAll(path);
     if (startsWith(bytes, "\x89PNG", 4)) return readStb(path, bytes, true);
@@ -243,71 +242,6 @@ ImageRGB readImage(const std::string& path) {
         return readExr(path);
     }
     throw Error(path + ": unknown image format (not PNG, JPEG or EXR)");
-}
-
-std::string temporarySiblingPath(const std::string& path) {
-    fs::path p(path);
-    fs::path dir = p.parent_path();
-    if (p.filename().empty()) throw Error(path + ": output path names no file", ExitCode::Output);
-    if (!dir.empty() && !fs::is_directory(dir))
-        throw Error(path + ": output directory '" + dir.string() + "' does not exist", ExitCode::Output);
-    std::string name = "." + p.filename().string() + ".tmp-" + std::to_string(getpid());
-    return (dir / name).string();
-}
-
-void commitTemporary(const std::string& tmpPath, const std::string& path) {
-    if (std::rename(tmpPath.c_str(), path.c_str()) != 0) {
-        int err = errno;
-        std::remove(tmpPath.c_str());
-        throw Error(path + ": cannot write output file: " + std::strerror(err), ExitCode::Output);
-    }
-}
-
-std::string writeExrUncommitted(const std::string& path, const ImageRGB& img, const ExrWriteOptions& opts) {
-    if (img.width <= 0 || img.height <= 0 || img.pixels.size() != size_t(img.width) * size_t(img.height) * 3)
-        throw Error(path + ": cannot write an image of " + std::to_string(img.width) + "x" + std::to_string(img.height) +
-                        " with " + std::to_string(img.pixels.size()) + " values",
-                    ExitCode::Output);
-    initExrThreads();  // OpenEXR compresses the ZIP chunks on its thread pool
-    return writeTemporary(path, [&](const std::string& tmp) {
-        try {
-            Imf::Header hdr(img.width, img.height);
-            hdr.compression() = Imf::ZIP_COMPRESSION;
-            // zlib level 1 instead of OpenEXR's default 4: float radiance hardly compresses at any
-            // level (Audi TT 1500x833: +1.5% bytes), and compression is the EXR write's whole cost.
-            hdr.zipCompressionLevel() = 1;
-            const Imf::PixelType type = opts.half ? Imf::HALF : Imf::FLOAT;
-            const char* names[3] = {"R", "G", "B"};
-            for (const char* n : names) hdr.channels().insert(n, Imf::Channel(type));
-            for (const auto& kv : opts.attributes) hdr.insert(kv.first, Imf::StringAttribute(kv.second));
-
-            std::vector<Imath::half> halves;
-            const char* base = reinterpret_cast<const char*>(img.pixels.data());
-            size_t elem = sizeof(float);
-            if (opts.half) {
-                halves.assign(img.pixels.begin(), img.pixels.end());
-                base = reinterpret_cast<const char*>(halves.data());
-                elem = sizeof(Imath::half);
-            }
-            Imf::FrameBuffer fb;
-            for (int c = 0; c < 3; ++c)
-                fb.insert(names[c], Imf::Slice(type, const_cast<char*>(base + c * elem), 3 * elem,
-                                               3 * elem * size_t(img.width)));
-            Imf::OutputFile out(tmp.c_str(), hdr);
-            out.setFrameBuffer(fb);
-            out.writePixels(img.height);
-        } catch (const Error&) {
-            throw;
-        } catch (const std::exception& e) {
-            std::string what = e.what();
-            std::replace(what.begin(), what.end(), '\n', ' ');
-            throw Error(path + ": cannot write EXR: " + what, ExitCode::Output);
-        }
-    });
-}
-
-void writeExr(const std::string& path, const ImageRGB& img, const ExrWriteOptions& opts) {
-    commitTemporary(writeExrUncommitted(path, img, opts), path);
 }
 
 }  // namespace clrt

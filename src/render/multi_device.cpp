@@ -110,6 +110,10 @@ ImageRGB renderOnDevices(const std::vector<Renderer*>& renderers, const Camera& 
         for (std::thread& t : threads) t.join();
         std::lock_guard<std::mutex> lock(mutex);
         if (returned.empty() && nextTile >= totalTiles) break;
+        if (settings.stop && settings.stop->load()) {  // tiles never started: pixels with no sample
+            for (DeviceWork& w : work) w.counters.stoppedAtSample = 0;
+            break;
+        }
     }
     return out;
 }

@@ -1,4 +1,4 @@
-// output.h — writing a rendered camera image, and the `clrt tonemap` subcommand.
+// output.h — writing a rendered camera image (the `clrt tonemap` command is in src/cli/).
 // An ImageName ending in .png is clamped and quantised (round, or floor with --ldr-quantize floor);
 // one ending in .exr is written as float (or half) RGB OpenEXR, ZIP-compressed, with header
 // attributes (renderer, spp, renderTime, device), and next to it one tone-mapped PNG per Tonemap block
@@ -25,7 +25,15 @@ struct OutputOptions {
     int spp = 0;                   // header attributes of the EXR
     double renderSeconds = 0;
     std::string deviceName;
+    std::string partial;           // non-empty: an interrupted render; the EXR's "partial" attribute
 };
+
+// "" if `name` is a plain file name clrt may create: not empty, no '/' or '\\', no control
+// character, no leading '.' (".", "..", hidden files such as .bashrc, and clrt's own temporaries),
+// at most 200 bytes (room for the temporary's suffix); else the reason it is not.
+std::string plainNameProblem(const std::string& name);
+// The lowercase extension of a file name (".png", ".exr", ...; "" if none).
+std::string lowerExtension(const std::string& name);
 
 // The host TonemapSettings of a scene Tonemap block.
 TonemapSettings tonemapSettingsFrom(const Tonemap& t);
@@ -35,13 +43,9 @@ TonemapSettings tonemapSettingsFrom(const Tonemap& t);
 // name already taken getting "_<block number>" appended (with a warning).
 std::vector<std::string> tonemapPngPaths(const std::string& hdrPath, const std::vector<Tonemap>& blocks);
 
-// Writes the outputs of one camera (see above) into opts.outDir; returns the paths written.
+// Writes the outputs of one camera (see above) into opts.outDir; returns the paths written. Throws
+// clrt::Error if the ImageName or a derived name is not a plain .png/.exr file name.
 std::vector<std::string> writeCameraOutputs(const Camera& cam, const ImageRGB& radiance, const OutputOptions& opts,
                                             DeviceContext& dc);
-
-// `clrt tonemap IN.exr [-o OUT.png] [options]`; argv[1] is "tonemap". Returns the exit code; throws
-// clrt::Error on bad input.
-int cmdTonemap(int argc, char** argv);
-extern const char* const kTonemapHelp;
 
 }  // namespace clrt

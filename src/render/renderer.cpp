@@ -129,9 +129,10 @@ struct Renderer::Impl {
     // Traces `n` camera paths (already generated) through every bounce and accumulates them into the
     // image; `bounces` says whether any material makes children.
     void traceBatch(int n, const dev::SceneParams& sp, bool bounces, size_t lightChunk, RenderCounters& counters);
-    // Every batch of pixels [tileFirst, tileEnd), all samples (after setRenderArgs).
-    void renderTile(size_t tileFirst, size_t tileEnd, const BatchPlan& plan, RenderCounters& counters,
-                    const std::function<void(size_t, size_t)>& progress);
+    // Every batch of pixels [tileFirst, tileEnd), all samples (after setRenderArgs), unless stopped()
+    // turns true between two sample groups. Returns the samples each pixel got.
+    int renderTile(size_t tileFirst, size_t tileEnd, const BatchPlan& plan, RenderCounters& counters,
+                   const std::function<void(size_t, size_t)>& progress, const std::function<bool()>& stopped);
     std::vector<int> valid, target;  // compaction scratch, at most 2 * queueCapacity each
 
     // Reads pixels [first, end) back into `out`, scaled by `inv` (each tile's pixels are written by
@@ -295,13 +296,18 @@ static BatchPlan planBatches(const DeviceScene& ds, size_t numPixels, const Rend
     return plan;
 }
 
-void Renderer::Impl::renderTile(size_t tileFirst, size_t tileEnd, const BatchPlan& plan, RenderCounters& counters,
-                                const std::function<void(size_t, size_t)>& progress) {
+int Renderer::Impl::renderTile(size_t tileFirst, size_t tileEnd, const BatchPlan& plan, RenderCounters& counters,
+                               const std::function<void(size_t, size_t)>& progress,
+                               const std::function<bool()>& stopped) {
     const int spp = cam.spp;
     const size_t totalBatches =
         ((size_t(spp) + plan.group - 1) / plan.group) * ((tileEnd - tileFirst + plan.batch - 1) / plan.batch);
     size_t doneBatches = 0;
     for (int sample = 0; sample < spp; sample += plan.group) {
+        if (sample > 0 && stopped()) {
+            counters.stoppedAtSample = counters.stoppedAtSample < 0 ? sample : std::min(counters.stoppedAtSample, sample);
+            return sample;
+        }
         const int samples = std::min(plan.group, spp - sample);
         for (size_t first = tileFirst; first < tileEnd; first += plan.batch) {
             const int n = int(std::min(plan.batch, tileEnd - first)) * samples;
@@ -318,6 +324,7 @@ void Renderer::Impl::renderTile(size_t tileFirst, size_t tileEnd, const BatchPla
             }
         }
     }
+    return spp;
 }
 
 void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, RenderCounters& counters,
@@ -340,11 +347,14 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     CL_CPP(m.dc.queue().enqueueFillBuffer(image, dev::float4{0, 0, 0, 0}, 0, imageBytes));
     m.setRenderArgs(cp, sp, image);
 
-    size_t tileFirst = 0, tileCount = 0;
-    while (nextTile(tileFirst, tileCount)) {
+    // settings.stop: a tile in progress ends after its current group of samples (at least one), no
+    // new tile is started after the first.
+    const std::function<bool()> stopped = [&] { return settings.stop && settings.stop->load(); };
+    size_t tileFirst = 0, tileCount = 0, tilesHere = 0;
+    while (!(tilesHere++ > 0 && stopped()) && nextTile(tileFirst, tileCount)) {
         const size_t tileEnd = std::min(numPixels, tileFirst + tileCount);
-        m.renderTile(tileFirst, tileEnd, plan, counters, progress);
-        m.readTile(image, tileFirst, tileEnd, 1.0f / float(cp.spp), out);
+        const int reached = m.renderTile(tileFirst, tileEnd, plan, counters, progress, stopped);
+        m.readTile(image, tileFirst, tileEnd, 1.0f / float(reached), out);
         counters.tiles += 1;
         counters.pixels += tileEnd - tileFirst;
         m.collectProfile(counters);  // the blocking read above drained the queue

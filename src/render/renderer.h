@@ -8,6 +8,7 @@
 // device memory stay flat however many samples or bounces a render takes (profiling events are
 // released as batches complete; queue sizes depend only on the batch size).
 #pragma once
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -34,6 +35,8 @@ struct RenderCounters {
     // made without profiling). Ray throughputs: rays of a kind / time of its trace kernel.
     double stageSeconds[STAGE_COUNT] = {};
     bool profiled = false;
+    int stoppedAtSample = -1;  // >= 0: RenderSettings::stop ended the render early; the fewest samples
+                               // any pixel got (tiles in progress finish their current pass, >= 1)
 };
 
 struct RenderSettings {
@@ -41,6 +44,7 @@ struct RenderSettings {
     uint32_t seed = 0;
     size_t maxBatchPixels = 1u << 18;  // camera paths per batch (pixels x samples of each)
     int splitDepthOverride = -1;       // >= 0: force the dielectric split depth
+    const std::atomic<bool>* stop = nullptr;  // set (from any thread): end after the current sample pass
 };
 
 class Renderer {

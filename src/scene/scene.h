@@ -120,6 +120,7 @@ struct Scene {
     std::vector<Light> lights;     // all but ambient
     std::vector<Material> materials;
     std::vector<std::string> imagePaths;  // absolute or relative to the working dir, resolved by the loader
+    std::vector<std::string> plyPaths;    // every PLY file read, resolved as imagePaths (outputs must not overwrite inputs)
     std::vector<Texture> textures;
     std::vector<MeshData> meshes;
     std::vector<Shape> shapes;

@@ -737,6 +737,7 @@ struct Walker {
                 }
                 s.meshIndex = int(scene.meshes.size());
                 plyMeshes.emplace(p, s.meshIndex);
+                scene.plyPaths.push_back(p);
                 scene.meshes.push_back(std::move(md));
             }
             if (hasImageTexture(s.textureIndices) && scene.meshes[size_t(s.meshIndex)].uvs.empty())

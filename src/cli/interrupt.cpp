@@ -1,0 +1,57 @@
+// interrupt.cpp — the signal-waiting thread (see interrupt.h).
+#include "cli/interrupt.h"
+
+#include <csignal>
+#include <cstdio>
+#include <cstring>
+#include <pthread.h>
+#include <thread>
+#include <unistd.h>
+
+#include "image/image.h"
+
+namespace clrt {
+
+namespace {
+
+std::atomic<bool> gStop{false};
+std::atomic<bool> gGraceful{false};
+std::atomic<int> gSignal{0};
+
+[[noreturn]] void exitNow(int sig, const char* why) {
+    removeTemporariesForExit();
+    std::fprintf(stderr, "\nclrt: %s (%s); no temporary file left behind\n", why, sig == SIGTERM ? "SIGTERM" : "SIGINT");
+    std::fflush(stderr);
+    _exit(128 + sig);
+}
+
+void waitForSignals(sigset_t set) {
+    for (;;) {
+        int sig = 0;
+        if (sigwait(&set, &sig) != 0) continue;
+        if (!gGraceful.load() || gStop.load())
+            exitNow(sig, gStop.load() ? "interrupted again: exiting at once" : "interrupted");
+        gSignal.store(sig);
+        gStop.store(true);
+        std::fprintf(stderr, "\nclrt: interrupted: finishing the current pass and writing the partial image "
+                             "(interrupt again to quit at once)\n");
+        std::fflush(stderr);
+    }
+}
+
+}  // namespace
+
+void installInterruptHandling() {
+    sigset_t set;
+    sigemptyset(&set);
+    sigaddset(&set, SIGINT);
+    sigaddset(&set, SIGTERM);
+    pthread_sigmask(SIG_BLOCK, &set, nullptr);
+    std::thread(waitForSignals, set).detach();
+}
+
+void setGracefulInterrupt(bool graceful) { gGraceful.store(graceful); }
+const std::atomic<bool>& stopRequested() { return gStop; }
+int stopSignal() { return gSignal.load(); }
+
+}  // namespace clrt
