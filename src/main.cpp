@@ -46,7 +46,7 @@ const char* kMainHelp =
     "  -h, --help              this text\n"
     "\n"
     "exit codes: 0 ok, 1 usage, 2 bad input, 3 device failure, 4 output failure,\n"
-    "            130/143 interrupted by SIGINT/SIGTERM (a render writes its partial image first)\n";
+    "            130/143/129 interrupted by SIGINT/SIGTERM/SIGHUP (a render writes its partial image first)\n";
 
 const char* kRenderHelp =
     "usage: clrt render SCENE [options]\n"
@@ -407,7 +407,7 @@ int cmdRender(const Args& a) {
     sumDeviceCounters(work, counters);
     printTimes(times, ds, *renderers.front(), counters, work, a.spp > 0 ? a.spp : cams[0]->numSamples);
     if (stopRequested().load()) {
-        std::fprintf(stderr, "clrt: interrupted (%s)%s%s%s\n", stopSignal() == SIGTERM ? "SIGTERM" : "SIGINT",
+        std::fprintf(stderr, "clrt: interrupted (%s)%s%s%s\n", stopSignal() == SIGTERM ? "SIGTERM" : stopSignal() == SIGHUP ? "SIGHUP" : "SIGINT",
                      anyPartial ? ": partial images written (see above)" : "",
                      notRendered.empty() ? "" : "; cameras not rendered: ", notRendered.c_str());
         return 128 + stopSignal();

@@ -438,13 +438,13 @@ std::vector<std::string> renderArgs(const TempDir& d) {
 
 }  // namespace
 
-TEST_CASE("cli output: the first SIGINT/SIGTERM writes the partial image, the second exits at once", "[cli][output][signal]") {
+TEST_CASE("cli output: the first SIGINT/SIGTERM/SIGHUP writes the partial image, the second exits at once", "[cli][output][signal]") {
     TempDir d;
     fs::create_directories(d.path / "out");
     // Two cameras: the second is not rendered after the interrupt.
     putFile(d.file("s.xml"), sceneXml(camera(1, "shot.exr", tonemap(""), "256 256") + camera(2, "second.png")));
-    for (int sig : {SIGINT, SIGTERM}) {
-        DYNAMIC_SECTION("one signal: " << (sig == SIGINT ? "SIGINT" : "SIGTERM")) {
+    for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
+        DYNAMIC_SECTION("one signal: " << (sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "SIGHUP")) {
             Background b = spawn(renderArgs(d), d.file("clrt.log"));
             REQUIRE(waitForLog(b, "shot.exr, 256x256, 1048576 spp): rendering"));
             kill(b.pid, sig);

@@ -18,9 +18,11 @@ std::atomic<bool> gStop{false};
 std::atomic<bool> gGraceful{false};
 std::atomic<int> gSignal{0};
 
+const char* sigName(int sig) { return sig == SIGTERM ? "SIGTERM" : sig == SIGHUP ? "SIGHUP" : "SIGINT"; }
+
 [[noreturn]] void exitNow(int sig, const char* why) {
     removeTemporariesForExit();
-    std::fprintf(stderr, "\nclrt: %s (%s); no temporary file left behind\n", why, sig == SIGTERM ? "SIGTERM" : "SIGINT");
+    std::fprintf(stderr, "\nclrt: %s (%s); no temporary file left behind\n", why, sigName(sig));
     std::fflush(stderr);
     _exit(128 + sig);
 }
@@ -46,6 +48,7 @@ void installInterruptHandling() {
     sigemptyset(&set);
     sigaddset(&set, SIGINT);
     sigaddset(&set, SIGTERM);
+    sigaddset(&set, SIGHUP);  // the terminal closed: like SIGTERM, nothing half-written is left
     pthread_sigmask(SIG_BLOCK, &set, nullptr);
     std::thread(waitForSignals, set).detach();
 }

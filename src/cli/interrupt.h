@@ -1,4 +1,4 @@
-// interrupt.h — SIGINT/SIGTERM for the CLI. The signals are blocked in every thread and taken by one
+// interrupt.h — SIGINT/SIGTERM/SIGHUP for the CLI. The signals are blocked in every thread and taken by one
 // thread that waits for them (sigwait), so what happens on a signal is ordinary code, not a signal
 // handler. Immediate mode (the default): the first signal exits at once. Graceful mode (while a
 // render runs): the first signal only sets the stop flag, and the render finishes its current pass

@@ -98,6 +98,8 @@ ImageRGB readStb(const std::string& path, const std::string& bytes, bool png) {
     if (bytes.size() > size_t(INT32_MAX)) throw Error(path + ": image file too large");
     int len = int(bytes.size());
     int w = 0, h = 0, comp = 0;
+    // stb_image 2.27 overflows on JPEGs with more than 256 Huffman codes, in stbi_info too: refused first.
+    if (!png) checkJpegHuffmanTables(path, bytes);
     // The header's size is checked before decoding: a few KB of PNG can declare gigabytes of pixels.
     if (stbi_info_from_memory(data, len, &w, &h, &comp)) checkImageSize(path, w, h);
     ImageRGB img;
@@ -107,7 +109,6 @@ ImageRGB readStb(const std::string& path, const std::string& bytes, bool png) {
         img.pixels.assign(px, px + size_t(w) * h * 3);
         stbi_image_free(px);
     } else {
-        if (!png) checkJpegHuffmanTables(path, bytes);
         stbi_uc* px = stbi_load_from_memory(data, len, &w, &h, &comp, 3);
         if (!px) throw Error(path + ": cannot decode " + (png ? "PNG" : "JPEG") + ": " + stbi_failure_reason());
         img.pixels.assign(px, px + size_t(w) * h * 3);
