@@ -5,6 +5,7 @@
 
 #include <CL/opencl.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <cstdlib>
@@ -20,6 +21,8 @@
 #include "cl/kernel_args.h"
 #include "cl/layout_check.h"
 #include "cl/program.h"
+#include "render/device_scene.h"
+#include "shared/type_tables.h"
 #include "util/error.h"
 
 namespace fs = std::filesystem;
@@ -486,4 +489,35 @@ TEST_CASE("KernelArgs refuses a wrong binding before any launch", "[cl]") {
     k.set("pathRadiance", b);
     CHECK_NOTHROW(k.ready());
     CHECK_THROWS_AS(KernelArgs(prog, "no_such_kernel"), Error);
+}
+
+TEST_CASE("type tables: every light and material row has its device case under its feature flag", "[cl]") {
+    // README "Adding a light or a material": a table row in device_types.h, a `case` in the device
+    // dispatcher inside `#ifdef` the row's flag. Checked on the sources: a row without device code
+    // (or device code under another flag) fails here, not as a silently black light.
+    const std::string lights = readText(std::string(CLRT_SOURCE_DIR) + "/cl_kernels/lights.cl");
+    const std::string shade = readText(std::string(CLRT_SOURCE_DIR) + "/cl_kernels/shade.cl");
+    // The flag guarding `case K:` is the nearest #ifdef before it, closed by an #endif after it.
+    auto guardOf = [](const std::string& text, const std::string& constant) -> std::string {
+        size_t at = text.find("case " + constant + ":");
+        if (at == std::string::npos) return "(no case)";
+        size_t ifdef = text.rfind("#ifdef ", at), endif = text.rfind("#endif", at);
+        if (ifdef == std::string::npos || (endif != std::string::npos && endif > ifdef)) return "";
+        size_t end = text.find_first_of(" \n", ifdef + 7);
+        return text.substr(ifdef + 7, end - ifdef - 7);
+    };
+    for (const auto& row : lightTypes()) {
+        INFO("light " << row.constant);
+        CHECK(guardOf(lights, row.constant) == row.flag);
+    }
+    for (const auto& row : materialTypes()) {
+        INFO("material " << row.constant);
+        if (*row.flag) CHECK(guardOf(shade, row.constant) == row.flag);
+        // Materials that spawn children are those shade_hits writes children for.
+        if (row.bounces) CHECK(guardOf(shade, row.constant) != "(no case)");
+    }
+    // Every flag a scene can ask for is one FeatureSet::all() sets.
+    std::vector<std::string> all = FeatureSet::all().defines();
+    for (const auto& row : lightTypes())
+        CHECK(std::find(all.begin(), all.end(), std::string("-D") + row.flag + "=1") != all.end());
 }

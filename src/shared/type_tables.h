@@ -12,15 +12,16 @@ namespace clrt {
 
 template <class Kind> struct TypeRow {
     Kind kind;
+    const char* constant;    // the enum constant's name, e.g. "LIGHT_POINT"
     const char* name;        // in scene files / on the command line
     const char* flag = "";   // lights, materials: kernel feature flag, "" if always compiled
     bool bounces = false;    // materials: spawns reflection/refraction children
 };
 template <class Kind> using TypeTable = std::vector<TypeRow<Kind>>;
 
-#define CLRT_TYPE_ROW_L_(K, NAME, FLAG) {dev::K, NAME, FLAG, false},
-#define CLRT_TYPE_ROW_M_(K, NAME, FLAG, BOUNCES) {dev::K, NAME, FLAG, BOUNCES != 0},
-#define CLRT_TYPE_ROW_N_(K, NAME) {dev::K, NAME},
+#define CLRT_TYPE_ROW_L_(K, NAME, FLAG) {dev::K, #K, NAME, FLAG, false},
+#define CLRT_TYPE_ROW_M_(K, NAME, FLAG, BOUNCES) {dev::K, #K, NAME, FLAG, BOUNCES != 0},
+#define CLRT_TYPE_ROW_N_(K, NAME) {dev::K, #K, NAME},
 inline const TypeTable<dev::LightKind>& lightTypes() {
     static const TypeTable<dev::LightKind> t = {CLRT_LIGHT_TABLE(CLRT_TYPE_ROW_L_)};
     return t;
