@@ -23,6 +23,7 @@
 
 #include "cl/check.h"
 #include "cl/devices.h"
+#include "cl/kernel_args.h"
 #include "cl/program.h"
 #include "render/device_scene.h"
 #include "scene/scene_loader.h"
@@ -137,9 +138,8 @@ int main(int argc, char** argv) {
         // ---- clrt: intersection program and buffers.
         DeviceInfo di = selectDevices(deviceSpec).front();
         DeviceContext dc(di);
-        cl::Program prog = buildProgram(dc, {"common.cl", "intersect.cl"}, ds.features.defines());
-        cl::Kernel kClosest = CL_CPP(cl::Kernel(prog, "intersect_closest"));
-        cl::Kernel kShadow = CL_CPP(cl::Kernel(prog, "intersect_shadow"));
+        cl::Program prog = buildProgram(dc, KernelProgram::Intersect, ds.features.defines());
+        KernelArgs kClosest(prog, "intersect_closest"), kShadow(prog, "intersect_shadow");
         auto upload = [&](auto& v) {
             using T = typename std::decay_t<decltype(v)>::value_type;
             return CL_CPP(cl::Buffer(dc.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), v.data()));
@@ -148,11 +148,11 @@ int main(int argc, char** argv) {
                    sph = upload(ds.spheres);
         cl::Buffer planes = upload(ds.planes);
         if (ds.params.numPlanes > 0) std::fprintf(stderr, "note: planes are ignored by this benchmark\n");
-        kClosest.setArg(8, planes); kClosest.setArg(9, 0); kClosest.setArg(10, 0);
-        kShadow.setArg(7, planes); kShadow.setArg(8, 0); kShadow.setArg(9, 0);
-        for (cl::Kernel* k : {&kClosest, &kShadow}) {
-            k->setArg(0, nodes); k->setArg(1, refs); k->setArg(2, tris); k->setArg(3, sph); k->setArg(4, numTris);
-        }
+        dev::SceneParams sp = ds.params;
+        sp.numPlanes = 0;  // planes left out (Embree has none)
+        for (KernelArgs* k : {&kClosest, &kShadow})
+            k->set("scene", sp).set("nodes", nodes).set("primRefs", refs).set("tris", tris).set("spheres", sph)
+                .set("planes", planes);
         auto traceClrt = [&](const std::vector<dev::Ray>& rays, bool shadow, std::vector<int>& prim) {
             const int n = int(rays.size());
             prim.assign(rays.size(), -1);
@@ -162,10 +162,10 @@ int main(int argc, char** argv) {
             if (!shadow) {
                 cl::Buffer rb = upload(const_cast<std::vector<dev::Ray>&>(rays));
                 cl::Buffer hb = CL_CPP(cl::Buffer(dc.context(), CL_MEM_READ_WRITE, sizeof(dev::Hit) * rays.size()));
-                kClosest.setArg(5, rb); kClosest.setArg(6, hb); kClosest.setArg(7, n);
+                kClosest.set("rays", rb).set("hits", hb).set("count", n);
                 CL_CPP(q.finish());
                 auto t0 = std::chrono::steady_clock::now();
-                CL_CPP(q.enqueueNDRangeKernel(kClosest, cl::NullRange, cl::NDRange(global), cl::NDRange(local)));
+                CL_CPP(q.enqueueNDRangeKernel(kClosest.ready(), cl::NullRange, cl::NDRange(global), cl::NDRange(local)));
                 CL_CPP(q.finish());
                 double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
                 std::vector<dev::Hit> hits(rays.size());
@@ -181,10 +181,10 @@ int main(int argc, char** argv) {
                 sr[i].contribution = {1, 1, 1, 0};
             }
             cl::Buffer sb = upload(sr);
-            kShadow.setArg(5, sb); kShadow.setArg(6, n);
+            kShadow.set("shadows", sb).set("count", n);
             CL_CPP(q.finish());
             auto t0 = std::chrono::steady_clock::now();
-            CL_CPP(q.enqueueNDRangeKernel(kShadow, cl::NullRange, cl::NDRange(global), cl::NDRange(local)));
+            CL_CPP(q.enqueueNDRangeKernel(kShadow.ready(), cl::NullRange, cl::NDRange(global), cl::NDRange(local)));
             CL_CPP(q.finish());
             double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
             CL_CPP(q.enqueueReadBuffer(sb, CL_TRUE, 0, sizeof(dev::ShadowRay) * sr.size(), sr.data()));

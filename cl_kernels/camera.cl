@@ -2,6 +2,12 @@
  * pixels, pixel-major (the samples of one pixel are adjacent). One sample per pixel: the
  * pixel centre (as the course does); more: stratified jitter over a strataX × strataY grid (box
  * filter). ApertureSize > 0: thin lens focused at FocusDistance, square aperture as in the course. */
+#ifndef CLRT_CAMERA_CL
+#define CLRT_CAMERA_CL
+
+#include "../src/shared/device_types.h"
+#include "../src/shared/kernel_params.h"
+#include "common.cl"
 
 inline float3 Camera_Direction(CameraParams cam, float px, float py) {
     float su = (px / (float)cam.width);
@@ -11,8 +17,8 @@ inline float3 Camera_Direction(CameraParams cam, float px, float py) {
     return uc * cam.u.xyz + vc * cam.v.xyz - cam.nearDistance * cam.w.xyz;
 }
 
-__kernel void generate_camera_rays(CameraParams cam, SceneParams scene, int firstPixel, int firstSample, int count,
-                                   __global PathState* paths, __global Ray* rays, int samples) {
+/* Parameters: src/shared/kernel_params.h. */
+__kernel void generate_camera_rays(CLRT_KERNEL_PARAMS(generate_camera_rays)) {
     int i = get_global_id(0);
     if (i >= count) return;
     int pixel = firstPixel + i / samples;
@@ -50,3 +56,5 @@ __kernel void generate_camera_rays(CameraParams cam, SceneParams scene, int firs
     p.pathId = 1u;
     paths[i] = p;
 }
+
+#endif /* CLRT_CAMERA_CL */

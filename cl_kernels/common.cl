@@ -1,13 +1,15 @@
 /* common.cl — math helpers, the counter-based random number generator, sampling warps and the
  * robust ray-origin offset shared by every kernel. No kernels here. */
+#ifndef CLRT_COMMON_CL
+#define CLRT_COMMON_CL
+
+#include "../src/shared/device_types.h"
 
 #define CLRT_PI 3.14159265358979323846f
 #define CLRT_INV_PI 0.31830988618379067154f
 
-inline float3 f3(float4 v) { return v.xyz; }
 inline float4 f4(float3 v, float w) { return (float4)(v, w); }
 inline float maxComponent(float3 v) { return fmax(v.x, fmax(v.y, v.z)); }
-inline float luminance(float3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
 inline int allFinite3(float3 v) { return isfinite(v.x) && isfinite(v.y) && isfinite(v.z); }
 
 /* Orthonormal basis around unit n (Duff et al. 2017, branchless). */
@@ -90,3 +92,5 @@ inline float3 Ray_OffsetOrigin(float3 p, float3 n) {
 inline float3 finiteOrZero(float3 c) {
     return (float3)(isfinite(c.x) ? c.x : 0.0f, isfinite(c.y) ? c.y : 0.0f, isfinite(c.z) ? c.z : 0.0f);
 }
+
+#endif /* CLRT_COMMON_CL */

@@ -2,6 +2,11 @@
  * their (u,v) -> solid-angle Jacobians, the bilinear radiance lookup, and sampling / pdf of the
  * piecewise-constant importance distribution built by src/render/env_distribution.cpp (whose host
  * functions mirror these float-for-float; see the layout and within-cell rules there). No kernels. */
+#ifndef CLRT_ENVMAP_CL
+#define CLRT_ENVMAP_CL
+
+#include "../src/shared/device_types.h"
+#include "common.cl"
 
 #define CLRT_ENV_MAX_REJECTIONS 32
 #define CLRT_ONE_MINUS_EPS 0.99999994f
@@ -90,7 +95,7 @@ inline int EnvDist_FindInterval(const __global float* cdf, int n, float x) {
     return lo;
 }
 
-/* pdf over solid angle of unit direction d (lat-long: uniform in solid angle within a cell; probe:
+/* pdf over solid angle of the unit direction with map coordinates uv (lat-long: uniform in solid angle within a cell; probe:
  * uniform in (u, v) over the cell's part inside the disc). */
 inline float EnvDist_PdfUv(const __global float* dist, float2 uv) {
     int W = (int)dist[0], H = (int)dist[1], mapping = (int)dist[2];
@@ -105,9 +110,6 @@ inline float EnvDist_PdfUv(const __global float* dist, float2 uv) {
     }
     float f = dist[4 + H + 1 + H * (W + 1) + j * W + i];
     return f > 0.0f ? p * (float)W * (float)H / f * EnvMap_UvToSolidAngle(mapping, uv.x, uv.y) : 0.0f;
-}
-inline float EnvDist_Pdf(const __global float* dist, float3 d) {
-    return EnvDist_PdfUv(dist, EnvMap_DirToUv((int)dist[2], d));
 }
 
 /* Importance sample: returns 1 and the direction, its solid-angle pdf and its map coordinates (for
@@ -158,3 +160,5 @@ inline int EnvDist_Sample(const __global float* dist, float u1, float u2, float3
     float2 uv;
     return EnvDist_SampleUv(dist, u1, u2, dir, pdf, &uv);
 }
+
+#endif /* CLRT_ENVMAP_CL */

@@ -1,13 +1,20 @@
 /* intersect.cl — ray/primitive tests and BVH traversal: watertight triangles (Woop, Benthin & Wald
  * 2013), spheres under an affine transform with the stable quadratic of Ray Tracing Gems ch. 7, a
  * near-first stack traversal, and the two wavefront kernels: closest hit and any hit (shadow rays). */
+#ifndef CLRT_INTERSECT_CL
+#define CLRT_INTERSECT_CL
+
+#include "../src/shared/device_types.h"
+#include "../src/shared/kernel_params.h"
+#include "common.cl"
 
 #ifdef cl_khr_fp64
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #define CLRT_HAVE_FP64 1
 #endif
 
-/* No contraction of a*b - c*d into fma() here: the watertight test relies on a shared edge's function
+/* FP_CONTRACT OFF from here to the end of this file:
+ * no contraction of a*b - c*d into fma() here: the watertight test relies on a shared edge's function
  * coming out as the exact negation in both triangles (and, when non-zero, with the exact sign), which
  * fma breaks; with it, rays aimed at shared edges slipped through closed meshes. */
 #pragma OPENCL FP_CONTRACT OFF
@@ -246,12 +253,12 @@ inline int Planes_Intersect(const __global Plane* planes, int numPlanes, int fir
 }
 
 /* Closest hit for each ray of the queue. */
-__kernel void intersect_closest(const __global Bvh4Node* nodes, const __global int* primRefs,
-                                const __global Triangle* tris, const __global Sphere* spheres,
-                                int numTriangles, const __global Ray* rays, __global Hit* hits, int count,
-                                const __global Plane* planes, int numPlanes, int firstPlaneRef) {
+/* Parameters of both kernels: src/shared/kernel_params.h. */
+__kernel void intersect_closest(CLRT_KERNEL_PARAMS(intersect_closest)) {
     int i = get_global_id(0);
     if (i >= count) return;
+    const int numTriangles = scene.numTriangles, numPlanes = scene.numPlanes;
+    const int firstPlaneRef = scene.numTriangles + scene.numSpheres;
     Ray r = rays[i];
     Hit h;
     h.t = -1.0f; h.prim = CLRT_INVALID; h.u = 0.0f; h.v = 0.0f;
@@ -265,12 +272,11 @@ __kernel void intersect_closest(const __global Bvh4Node* nodes, const __global i
 }
 
 /* Any hit for each shadow ray: an occluded ray's contribution is set to zero. */
-__kernel void intersect_shadow(const __global Bvh4Node* nodes, const __global int* primRefs,
-                               const __global Triangle* tris, const __global Sphere* spheres,
-                               int numTriangles, __global ShadowRay* shadows, int count,
-                               const __global Plane* planes, int numPlanes, int firstPlaneRef) {
+__kernel void intersect_shadow(CLRT_KERNEL_PARAMS(intersect_shadow)) {
     int i = get_global_id(0);
     if (i >= count) return;
+    const int numTriangles = scene.numTriangles, numPlanes = scene.numPlanes;
+    const int firstPlaneRef = scene.numTriangles + scene.numSpheres;
     __global ShadowRay* s = &shadows[i];
     float4 c = s->contribution;
     if (c.x == 0.0f && c.y == 0.0f && c.z == 0.0f) return;
@@ -280,5 +286,8 @@ __kernel void intersect_shadow(const __global Bvh4Node* nodes, const __global in
         s->contribution = (float4)(0.0f);
 }
 
-/* Contraction back to the OpenCL default for the files that follow (shading gains from fma). */
+/* End of the FP_CONTRACT OFF scope: contraction back to ON, the OpenCL default, which every other
+ * file is compiled with (shading gains from fma; tests/test_cl.cpp checks each file leaves it ON). */
 #pragma OPENCL FP_CONTRACT ON
+
+#endif /* CLRT_INTERSECT_CL */

@@ -8,6 +8,10 @@
  *   struct row: sizeof(T), alignof(T);   member row: offsetof(T, m), sizeof(member).
  * When a struct in device_types.h changes, update its rows here (the tests check that every struct is
  * listed and that the listed members tile each struct exactly). */
+#ifndef CLRT_LAYOUT_CL
+#define CLRT_LAYOUT_CL
+#include "../src/shared/device_types.h"
+#include "../src/shared/kernel_params.h"
 #ifndef CLRT_LAYOUT_TABLE
 #define CLRT_LAYOUT_TABLE(S, M)                                                                   \
     S(Bvh4Node) M(Bvh4Node, minX) M(Bvh4Node, maxX) M(Bvh4Node, minY) M(Bvh4Node, maxY)          \
@@ -58,7 +62,7 @@
 #endif
 
 #ifdef __OPENCL_C_VERSION__
-__kernel void layout_report(__global int* out) {
+__kernel void layout_report(CLRT_KERNEL_PARAMS(layout_report)) { /* src/shared/kernel_params.h */
     if (get_global_id(0) != 0) return;
     int i = 1;
 #define CLRT_LAYOUT_S(T)                 \
@@ -73,3 +77,5 @@ __kernel void layout_report(__global int* out) {
     out[0] = (i - 1) / 2;
 }
 #endif
+
+#endif /* CLRT_LAYOUT_CL */

@@ -6,7 +6,13 @@
  * Environment samplers (SCENE_FORMAT.md): uniform (hemisphere around n by rejection, pdf 1/2π),
  * cosine (pdf cosθ/π), importance (the map's luminance distribution, envmap.cl), mis (one-sample
  * MIS: importance or cosine with probability 1/2 each, weighted by the balance heuristic, i.e.
- * divided by the mixture pdf ½·p_imp + ½·p_cos). Needs envmap.cl. */
+ * divided by the mixture pdf ½·p_imp + ½·p_cos). */
+#ifndef CLRT_LIGHTS_CL
+#define CLRT_LIGHTS_CL
+
+#include "../src/shared/device_types.h"
+#include "common.cl"
+#include "envmap.cl"
 
 /* Spot fall-off (SCENE_FORMAT.md): 1 inside falloff/2, 0 outside coverage/2, smooth quartic between.
  * Guards coverage == falloff (a hard edge) without dividing by zero. */
@@ -148,3 +154,5 @@ inline float3 Light_Sample(const __global Light* light, float3 p, float3 n, floa
     default: return (float3)(0.0f);
     }
 }
+
+#endif /* CLRT_LIGHTS_CL */

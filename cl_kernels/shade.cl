@@ -8,6 +8,15 @@
  *   accumulate:      adds each pixel's paths to the float image (paths of one pixel are adjacent);
  *   compact_paths:   order-preserving compaction of the children with host-computed indices.
  * Deterministic by construction: no float atomics, fixed summation order. */
+#ifndef CLRT_SHADE_CL
+#define CLRT_SHADE_CL
+
+#include "../src/shared/device_types.h"
+#include "../src/shared/kernel_params.h"
+#include "common.cl"
+#include "intersect.cl"
+#include "textures.cl"
+#include "lights.cl"
 
 typedef struct {
     float3 p, ng, ns, dir;
@@ -133,15 +142,8 @@ inline void Child_Write(__global PathState* nextPaths, __global Ray* nextRays, _
     childValid[slot] = maxComponent(c.throughput.xyz) > 0.0f && allFinite3(dir) ? 1 : 0;
 }
 
-__kernel void shade_hits(SceneParams scene, CameraParams cam, int count,
-                         const __global PathState* paths, const __global Ray* rays, const __global Hit* hits,
-                         const __global Triangle* tris, const __global TriangleShading* shading,
-                         const __global Sphere* spheres, const __global Material* materials,
-                         const __global TextureSet* textureSets, const __global TextureMap* textures,
-                         const __global ImageInfo* images, const __global float4* texels,
-                         __global ShadingPoint* points, __global float4* pathRadiance,
-                         __global PathState* nextPaths, __global Ray* nextRays, __global int* childValid,
-                         const __global Plane* planes) {
+/* Parameters of every kernel here: src/shared/kernel_params.h. */
+__kernel void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
     int i = get_global_id(0);
     if (i >= count) return;
     PathState path = paths[i];
@@ -157,7 +159,7 @@ __kernel void shade_hits(SceneParams scene, CameraParams cam, int count,
         pathRadiance[i] = (float4)(throughput * Miss_Radiance(scene, textures, images, texels, cam, path, ray.direction.xyz), 0.0f);
         return;
     }
-    SurfaceHit s = Surface_FromHit(h, ray, tris, shading, spheres, planes, scene.numTriangles, scene.numSpheres);
+    SurfaceHit s = Surface_FromHit(h, ray, tris, triShading, spheres, planes, scene.numTriangles, scene.numSpheres);
     Material m = materials[s.material];
     float3 wo = -s.dir;
     float3 ng = s.frontFacing ? s.ng : -s.ng;   /* facing the incoming ray */
@@ -258,11 +260,7 @@ __kernel void shade_hits(SceneParams scene, CameraParams cam, int count,
 }
 
 /* One shadow ray per (path, light in [lightBegin, lightEnd)), at slot i·chunk + (l − lightBegin). */
-__kernel void sample_lights(SceneParams scene, int count, int lightBegin, int lightEnd,
-                            const __global PathState* paths, const __global ShadingPoint* points,
-                            const __global Light* lights, __global ShadowRay* shadows,
-                            const __global ImageInfo* images, const __global float4* texels,
-                            const __global float* envDist) {
+__kernel void sample_lights(CLRT_KERNEL_PARAMS(sample_lights)) {
     int i = get_global_id(0);
     if (i >= count) return;
     int chunk = lightEnd - lightBegin;
@@ -297,7 +295,7 @@ __kernel void sample_lights(SceneParams scene, int count, int lightBegin, int li
     }
 }
 
-__kernel void gather_shadows(int count, int chunk, const __global ShadowRay* shadows, __global float4* pathRadiance) {
+__kernel void gather_shadows(CLRT_KERNEL_PARAMS(gather_shadows)) {
     int i = get_global_id(0);
     if (i >= count) return;
     float4 sum = pathRadiance[i];
@@ -306,8 +304,7 @@ __kernel void gather_shadows(int count, int chunk, const __global ShadowRay* sha
 }
 
 /* Paths of one pixel are adjacent; the first of each run adds the whole run (fixed order). */
-__kernel void accumulate(int count, const __global PathState* paths, const __global float4* pathRadiance,
-                         __global float4* image) {
+__kernel void accumulate(CLRT_KERNEL_PARAMS(accumulate)) {
     int i = get_global_id(0);
     if (i >= count) return;
     int pixel = paths[i].pixel;
@@ -317,12 +314,13 @@ __kernel void accumulate(int count, const __global PathState* paths, const __glo
     image[pixel] += (float4)(sum, 0.0f);
 }
 
-__kernel void compact_paths(int slots, const __global int* target, const __global PathState* nextPaths,
-                            const __global Ray* nextRays, __global PathState* paths, __global Ray* rays) {
+__kernel void compact_paths(CLRT_KERNEL_PARAMS(compact_paths)) {
     int i = get_global_id(0);
-    if (i >= slots) return;
-    int t = target[i];
+    if (i >= count) return; /* count: child slots, 2 per parent path */
+    int t = compactTarget[i];
     if (t < 0) return;
     paths[t] = nextPaths[i];
     rays[t] = nextRays[i];
 }
+
+#endif /* CLRT_SHADE_CL */

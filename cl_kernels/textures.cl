@@ -1,6 +1,11 @@
 /* textures.cl — texture lookups: image textures from the texel atlas (nearest or bilinear, repeat
  * wrap, the course's texel convention: (i, j) = (u·w, v·h), row 0 at the top), the checkerboard and
  * Perlin procedurals, and the decal modes that change kd / ks / the final colour. */
+#ifndef CLRT_TEXTURES_CL
+#define CLRT_TEXTURES_CL
+
+#include "../src/shared/device_types.h"
+#include "common.cl"
 
 inline float4 Image_Texel(const __global float4* texels, ImageInfo img, int x, int y) {
     x = x % img.width; if (x < 0) x += img.width;
@@ -61,3 +66,5 @@ inline float3 Texture_Eval(const __global TextureMap* tex, const __global ImageI
     }
     return (float3)(0.0f);
 }
+
+#endif /* CLRT_TEXTURES_CL */

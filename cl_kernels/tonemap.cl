@@ -14,6 +14,12 @@
  * one-pixel-per-work-item form (pow checked exhaustively for the exponents 1/2.2 and 1 on PoCL;
  * tests/test_tonemap.cpp compares the kernels with that form, kept there, byte for byte). Branches
  * become select() over both sides; every other operation is IEEE-exact, so lanes equal scalars. */
+#ifndef CLRT_TONEMAP_CL
+#define CLRT_TONEMAP_CL
+
+#include "../src/shared/device_types.h"
+#include "../src/shared/kernel_params.h"
+/* FP_CONTRACT OFF from here to the end of this file: the same float operations as the host. */
 #pragma OPENCL FP_CONTRACT OFF
 
 #define TONEMAP_BINS 256
@@ -65,9 +71,9 @@ inline float16 Tmo_Filmic(float16 L) {
 /* The one dispatcher over operators. */
 inline float16 Tmo_Apply(const TonemapParams* p, float16 L) {
     switch (p->op) {
-        case 0: return Tmo_Photographic(L, p->hasWhite, p->whiteL);
-        case 1: return Tmo_Aces(L);
-        case 2: return Tmo_Filmic(L);
+        case TMO_PHOTOGRAPHIC: return Tmo_Photographic(L, p->hasWhite, p->whiteL);
+        case TMO_ACES: return Tmo_Aces(L);
+        case TMO_FILMIC: return Tmo_Filmic(L);
         default: return (float16)(0.0f);
     }
 }
@@ -79,8 +85,8 @@ inline uchar16 Tonemap_Encode16(float16 v, const TonemapParams* p) {
     return convert_uchar16(select((float16)(0.0f), fmin(x, 255.0f), x > 0.0f));
 }
 
-__kernel void Tonemap_Luminance(__global const float* rgb, uint n, float delta,
-                                __global float* lum, __global float2* partials) {
+/* Parameters of every kernel here: src/shared/kernel_params.h. */
+__kernel void Tonemap_Luminance(CLRT_KERNEL_PARAMS(Tonemap_Luminance)) {
     const uint gid = get_global_id(0), stride = get_global_size(0);
     float sum = 0.0f, comp = 0.0f;  /* Neumaier: sum + comp is the exact running total */
     for (uint i = gid; i < n; i += stride) {
@@ -96,8 +102,7 @@ __kernel void Tonemap_Luminance(__global const float* rgb, uint n, float delta,
 
 /* Counts, among the Y whose bits under `mask` equal `prefix`, the 8-bit digit at `shift`.
  * hist (256 uints) must be zero before the launch; any local size works. */
-__kernel void Tonemap_Histogram(__global const float* lum, uint n, uint prefix, uint mask, uint shift,
-                                __global uint* hist) {
+__kernel void Tonemap_Histogram(CLRT_KERNEL_PARAMS(Tonemap_Histogram)) {
     __local uint local_hist[TONEMAP_BINS];
     const uint lid = get_local_id(0), lsize = get_local_size(0);
     for (uint b = lid; b < TONEMAP_BINS; b += lsize) local_hist[b] = 0;
@@ -146,7 +151,7 @@ inline void Tonemap_Display16(__global const float* rgb, uint first, uint count,
 }
 
 /* 8-bit output: TONEMAP_VEC pixels per work-item. */
-__kernel void Tonemap_Map(__global const float* rgb, TonemapParams p, __global uchar* out) {
+__kernel void Tonemap_Map(CLRT_KERNEL_PARAMS(Tonemap_Map)) {
     const uint first = get_global_id(0) * TONEMAP_VEC;
     if (first >= p.numPixels) return;
     const uint count = min(p.numPixels - first, (uint)TONEMAP_VEC);
@@ -161,7 +166,7 @@ __kernel void Tonemap_Map(__global const float* rgb, TonemapParams p, __global u
 
 /* Float output: the gamma-encoded display values in [0,1], not quantised; TONEMAP_VEC pixels per
  * work-item. */
-__kernel void Tonemap_MapFloat(__global const float* rgb, TonemapParams p, __global float* out) {
+__kernel void Tonemap_MapFloat(CLRT_KERNEL_PARAMS(Tonemap_MapFloat)) {
     const uint first = get_global_id(0) * TONEMAP_VEC;
     if (first >= p.numPixels) return;
     const uint count = min(p.numPixels - first, (uint)TONEMAP_VEC);
@@ -173,3 +178,8 @@ __kernel void Tonemap_MapFloat(__global const float* rgb, TonemapParams p, __glo
     for (uint j = 0; j < count; ++j)
         for (int k = 0; k < 3; ++k) o[3 * j + k] = q[k][j];
 }
+
+/* End of the FP_CONTRACT OFF scope (back to the OpenCL default). */
+#pragma OPENCL FP_CONTRACT ON
+
+#endif /* CLRT_TONEMAP_CL */

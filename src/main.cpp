@@ -132,7 +132,7 @@ Args parseRenderArgs(int argc, char** argv, int start) {
         else if (s == "--all-features") a.allFeatures = true;
         else if (s == "--env-sampling") {
             a.envSampling = value();
-            EnvSampler es;
+            dev::EnvSamplerKind es;
             if (!parseEnvSampler(a.envSampling, es))
                 throw Error("--env-sampling: expected uniform, cosine, importance or mis, got '" + a.envSampling + "'",
                             ExitCode::Usage);
@@ -237,36 +237,19 @@ bool renderAndWriteCamera(const Args& a, const Camera& cam, std::vector<std::uni
     return !oo.partial.empty();
 }
 
-int cmdRender(const Args& a) {
-    if (a.positional.size() != 1) throw Error("render: expected exactly one scene file (see clrt render --help)", ExitCode::Usage);
-    setVerbose(a.verbose);
-    checkOutputDirectory(a.outDir);  // exists and accepts a new file: exit 4 before any work
-
-    auto t = std::chrono::steady_clock::now();
-    Scene scene = loadScene(a.positional[0]);
-    if (!a.envSampling.empty()) {
-        EnvSampler es;
-        parseEnvSampler(a.envSampling, es);
-        overrideEnvSampling(scene, es);
-    }
-    double tParse = since(t);
-    if (a.width > 0)
-        for (Camera& c : scene.cameras) {
-            c.width = a.width;
-            c.height = a.height;
-        }
-
+// The cameras to render (--camera, else all); an error naming the scene if none.
+std::vector<const Camera*> selectCameras(const Scene& scene, const Args& a) {
     std::vector<const Camera*> cams;
     for (const Camera& c : scene.cameras)
         if (a.cameraId.empty() || std::to_string(c.id) == a.cameraId) cams.push_back(&c);
     if (cams.empty())
         throw Error(a.positional[0] + (a.cameraId.empty() ? ": the scene has no camera" : ": no camera with id " + a.cameraId));
-    // Plain .png/.exr names, no two alike, none of them a file the scene reads: exit 2 before any work.
-    checkOutputsAreNotInputs(planRenderOutputs(scene, cams, a.outDir), sceneInputs(scene), a.positional[0]);
+    return cams;
+}
 
-    std::vector<DeviceInfo> devs = selectDevices(a.device);
-    // An image no selected device can hold is refused here, before the BVH, the kernel build and any
-    // host allocation of its size (the renderer checks the same limit per device).
+// An image no selected device can hold is refused here, before the BVH, the kernel build and any
+// host allocation of its size (the renderer checks the same limit per device).
+void checkImagesFit(const Args& a, const std::vector<const Camera*>& cams, const std::vector<DeviceInfo>& devs) {
     for (const Camera* c : cams) {
         const uint64_t bytes = uint64_t(c->width) * uint64_t(c->height) * sizeof(dev::float4);
         uint64_t best = 0;
@@ -283,51 +266,151 @@ int cmdRender(const Args& a) {
                             " MiB per buffer",
                         ExitCode::BadInput);
     }
+}
 
-    t = std::chrono::steady_clock::now();
-    DeviceScene ds = flattenScene(scene);
-    double tFlatten = since(t);
-    if (a.allFeatures) {
-        const int stack = ds.features.bvhStack;  // not a feature: the tree's own need
-        ds.features = FeatureSet::all();        // (primRefsIdentity off: the generic program)
-        ds.features.bvhStack = stack;
-    }
-
-    // One context and program per device; a device whose setup fails is dropped while others remain.
-    t = std::chrono::steady_clock::now();
+// One context and renderer (program) per device; a device whose setup fails is dropped while others
+// remain.
+struct DeviceRenderers {
     std::vector<std::unique_ptr<DeviceContext>> contexts;
     std::vector<std::unique_ptr<Renderer>> renderers;
+};
+DeviceRenderers makeRenderers(const std::vector<DeviceInfo>& devs, const DeviceScene& ds) {
+    DeviceRenderers out;
     for (const DeviceInfo& d : devs) {
         try {
             auto dc = std::make_unique<DeviceContext>(d, /*profiling=*/!std::getenv("CLRT_NO_PROFILE"));  // per-kernel times for stats
             auto r = std::make_unique<Renderer>(*dc, ds);
-            contexts.push_back(std::move(dc));
-            renderers.push_back(std::move(r));
+            out.contexts.push_back(std::move(dc));
+            out.renderers.push_back(std::move(r));
         } catch (const Error& e) {
             if (devs.size() == 1) throw;
             warn("device [" + std::to_string(d.index) + "] " + d.name + " dropped: " + e.what());
         }
     }
-    if (renderers.empty()) throw Error("no selected device could build the renderer", ExitCode::Device);
-    double tBuild = since(t);
-    Renderer& renderer = *renderers.front();
-    if (verbose()) {
-        std::string flags;
-        for (const std::string& d : ds.features.defines()) flags += " " + d;
-        for (auto& r : renderers) info("device: [" + std::to_string(r->context().info().index) + "] " + r->context().info().name +
-                                       " (" + r->context().info().platformName + ")");
-        info("kernel flags:" + flags + (renderer.buildInfo().cacheHit ? " (cached binary)" : ""));
-        info("flatten: images read in " + std::to_string(ds.imageSeconds) + " s, environment distributions built in " +
-             std::to_string(ds.envDistSeconds) + " s");
-        info("primitives: " + std::to_string(ds.params.numTriangles) + " triangles, " + std::to_string(ds.params.numSpheres) +
-             " spheres; BVH SAH cost " + std::to_string(ds.bvh.sahCost) + ", depth " + std::to_string(ds.bvh.depth));
+    if (out.renderers.empty()) throw Error("no selected device could build the renderer", ExitCode::Device);
+    return out;
+}
+
+// -v: devices, kernel flags, flattening and BVH figures.
+void printSetup(const DeviceScene& ds, const std::vector<std::unique_ptr<Renderer>>& renderers) {
+    std::string flags;
+    for (const std::string& d : ds.features.defines()) flags += " " + d;
+    for (auto& r : renderers) info("device: [" + std::to_string(r->context().info().index) + "] " + r->context().info().name +
+                                   " (" + r->context().info().platformName + ")");
+    info("kernel flags:" + flags + (renderers.front()->buildInfo().cacheHit ? " (cached binary)" : ""));
+    info("flatten: images read in " + std::to_string(ds.imageSeconds) + " s, environment distributions built in " +
+         std::to_string(ds.envDistSeconds) + " s");
+    info("primitives: " + std::to_string(ds.params.numTriangles) + " triangles, " + std::to_string(ds.params.numSpheres) +
+         " spheres; BVH SAH cost " + std::to_string(ds.bvh.sahCost) + ", depth " + std::to_string(ds.bvh.depth));
+}
+
+struct StageTimes {
+    double parse = 0, flatten = 0, build = 0, output = 0;
+};
+
+// Adds the devices' ray counts (and, with one device, its render time) to `counters`; prints one line
+// per device when there are several, and with -v the device time of each kernel stage.
+void sumDeviceCounters(const std::vector<DeviceWork>& work, RenderCounters& counters) {
+    double deviceSeconds = 0;
+    for (const DeviceWork& w : work) {
+        counters.cameraRays += w.counters.cameraRays;
+        counters.secondaryRays += w.counters.secondaryRays;
+        counters.shadowRays += w.counters.shadowRays;
+        deviceSeconds = std::max(deviceSeconds, w.counters.seconds);
     }
+    if (work.size() == 1) counters.seconds = deviceSeconds;
+    if (work.size() > 1)
+        for (const DeviceWork& w : work) {
+            double r = double(w.counters.cameraRays + w.counters.secondaryRays + w.counters.shadowRays);
+            std::fprintf(stderr, "device %s: %llu tiles, %llu pixels, %.2f Mrays/s%s\n", w.name.c_str(),
+                         (unsigned long long)w.counters.tiles, (unsigned long long)w.counters.pixels,
+                         w.counters.seconds > 0 ? r / w.counters.seconds * 1e-6 : 0.0, w.failed ? " (failed)" : "");
+        }
+    if (!verbose()) return;
+    double stage[STAGE_COUNT] = {}, kernels = 0;
+    for (const DeviceWork& w : work)
+        for (int k = 0; k < STAGE_COUNT; ++k) stage[k] += w.counters.stageSeconds[k];
+    std::string line = "kernel time:";
+    for (int k = 0; k < STAGE_COUNT; ++k) {
+        char buf[64];
+        std::snprintf(buf, sizeof buf, " %s %.3fs", renderStageName(k), stage[k]);
+        line += buf;
+        kernels += stage[k];
+    }
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "; all kernels %.3fs of %.3fs render", kernels, counters.seconds);
+    info(line + buf);
+}
+
+// The `times:` line (stderr) and the `stats:` line (stdout, see README).
+void printTimes(const StageTimes& t, const DeviceScene& ds, const Renderer& renderer, const RenderCounters& counters,
+                const std::vector<DeviceWork>& work, int spp) {
+    double rays = double(counters.cameraRays + counters.secondaryRays + counters.shadowRays);
+    double secs = std::max(counters.seconds, 1e-9);
+    // Ray throughput of each kind: its rays over its trace kernel's device time, summed over devices
+    // (they run concurrently); without profiling, over the whole render time.
+    auto rate = [&](uint64_t RenderCounters::*rayCount, int stage) {
+        double r = 0;
+        for (const DeviceWork& w : work) {
+            double s = w.counters.profiled ? w.counters.stageSeconds[stage] : w.counters.seconds;
+            if (s > 0) r += double(w.counters.*rayCount) / s * 1e-6;
+        }
+        return r;
+    };
+    std::fprintf(stderr, "times: parse %.3fs, bvh %.3fs (flatten %.3fs), kernel build %.3fs%s, render %.3fs, output %.3fs; %.2f Mrays/s\n",
+                 t.parse, ds.bvhSeconds, t.flatten - ds.bvhSeconds, t.build, renderer.buildInfo().cacheHit ? " (cached)" : "",
+                 counters.seconds, t.output, rays / secs * 1e-6);
+    std::printf("stats: parse=%.3fs flatten=%.3fs bvh=%.3fs build=%.3fs render=%.3fs output=%.3fs camera_mrays=%.2f "
+                "shadow_mrays=%.2f secondary_mrays=%.2f spp=%d\n",
+                t.parse, t.flatten - ds.bvhSeconds, ds.bvhSeconds, t.build, counters.seconds, t.output,
+                rate(&RenderCounters::cameraRays, STAGE_TRACE_CAMERA), rate(&RenderCounters::shadowRays, STAGE_TRACE_SHADOW),
+                rate(&RenderCounters::secondaryRays, STAGE_TRACE_SECONDARY), spp);
+}
+
+int cmdRender(const Args& a) {
+    if (a.positional.size() != 1) throw Error("render: expected exactly one scene file (see clrt render --help)", ExitCode::Usage);
+    setVerbose(a.verbose);
+    checkOutputDirectory(a.outDir);  // exists and accepts a new file: exit 4 before any work
+
+    StageTimes times;
+    auto t = std::chrono::steady_clock::now();
+    Scene scene = loadScene(a.positional[0]);
+    if (!a.envSampling.empty()) {
+        dev::EnvSamplerKind es;
+        parseEnvSampler(a.envSampling, es);
+        overrideEnvSampling(scene, es);
+    }
+    times.parse = since(t);
+    if (a.width > 0)  // --resolution: every camera at WxH, same view
+        for (Camera& c : scene.cameras) {
+            c.width = a.width;
+            c.height = a.height;
+        }
+
+    std::vector<const Camera*> cams = selectCameras(scene, a);
+    // Plain .png/.exr names, no two alike, none of them a file the scene reads: exit 2 before any work.
+    checkOutputsAreNotInputs(planRenderOutputs(scene, cams, a.outDir), sceneInputs(scene), a.positional[0]);
+    std::vector<DeviceInfo> devs = selectDevices(a.device);
+    checkImagesFit(a, cams, devs);
+
+    t = std::chrono::steady_clock::now();
+    DeviceScene ds = flattenScene(scene);
+    times.flatten = since(t);
+    if (a.allFeatures) {
+        const int stack = ds.features.bvhStack;  // not a feature: the tree's own need
+        ds.features = FeatureSet::all();        // (primRefsIdentity off: the generic program)
+        ds.features.bvhStack = stack;
+    }
+    t = std::chrono::steady_clock::now();
+    DeviceRenderers dr = makeRenderers(devs, ds);
+    std::vector<std::unique_ptr<Renderer>>& renderers = dr.renderers;
+    times.build = since(t);
+    if (verbose()) printSetup(ds, renderers);
 
     RenderCounters counters;
     std::vector<DeviceWork> work(renderers.size());
     for (size_t i = 0; i < renderers.size(); ++i)
         work[i].name = "[" + std::to_string(renderers[i]->context().info().index) + "] " + renderers[i]->context().info().name;
-    double tOutput = 0;
     std::string notRendered;  // cameras skipped after an interrupt
     bool anyPartial = false;
     setGracefulInterrupt(true);  // Ctrl-C from here on: finish the pass, write the partial image
@@ -336,58 +419,10 @@ int cmdRender(const Args& a) {
             notRendered += (notRendered.empty() ? "" : ", ") + std::to_string(cam->id);
             continue;
         }
-        if (renderAndWriteCamera(a, *cam, renderers, work, counters, tOutput)) anyPartial = true;
+        if (renderAndWriteCamera(a, *cam, renderers, work, counters, times.output)) anyPartial = true;
     }
-    double deviceSeconds = 0;
-    for (const DeviceWork& w : work) {
-        counters.cameraRays += w.counters.cameraRays;
-        counters.secondaryRays += w.counters.secondaryRays;
-        counters.shadowRays += w.counters.shadowRays;
-        deviceSeconds = std::max(deviceSeconds, w.counters.seconds);
-    }
-    if (renderers.size() == 1) counters.seconds = deviceSeconds;
-    if (work.size() > 1)
-        for (const DeviceWork& w : work) {
-            double r = double(w.counters.cameraRays + w.counters.secondaryRays + w.counters.shadowRays);
-            std::fprintf(stderr, "device %s: %llu tiles, %llu pixels, %.2f Mrays/s%s\n", w.name.c_str(),
-                         (unsigned long long)w.counters.tiles, (unsigned long long)w.counters.pixels,
-                         w.counters.seconds > 0 ? r / w.counters.seconds * 1e-6 : 0.0, w.failed ? " (failed)" : "");
-        }
-    double rays = double(counters.cameraRays + counters.secondaryRays + counters.shadowRays);
-    double secs = std::max(counters.seconds, 1e-9);
-    // Ray throughput of each kind: its rays over its trace kernel's device time, summed over devices
-    // (they run concurrently); without profiling, over the whole render time.
-    auto rate = [&](uint64_t RenderCounters::*rayCount, int stage) {
-        double r = 0;
-        for (const DeviceWork& w : work) {
-            double t = w.counters.profiled ? w.counters.stageSeconds[stage] : w.counters.seconds;
-            if (t > 0) r += double(w.counters.*rayCount) / t * 1e-6;
-        }
-        return r;
-    };
-    if (verbose()) {
-        double stage[STAGE_COUNT] = {}, kernels = 0;
-        for (const DeviceWork& w : work)
-            for (int k = 0; k < STAGE_COUNT; ++k) stage[k] += w.counters.stageSeconds[k];
-        std::string line = "kernel time:";
-        for (int k = 0; k < STAGE_COUNT; ++k) {
-            char buf[64];
-            std::snprintf(buf, sizeof buf, " %s %.3fs", renderStageName(k), stage[k]);
-            line += buf;
-            kernels += stage[k];
-        }
-        char buf[96];
-        std::snprintf(buf, sizeof buf, "; all kernels %.3fs of %.3fs render", kernels, counters.seconds);
-        info(line + buf);
-    }
-    std::fprintf(stderr, "times: parse %.3fs, bvh %.3fs (flatten %.3fs), kernel build %.3fs%s, render %.3fs, output %.3fs; %.2f Mrays/s\n",
-                 tParse, ds.bvhSeconds, tFlatten - ds.bvhSeconds, tBuild, renderer.buildInfo().cacheHit ? " (cached)" : "",
-                 counters.seconds, tOutput, rays / secs * 1e-6);
-    std::printf("stats: parse=%.3fs flatten=%.3fs bvh=%.3fs build=%.3fs render=%.3fs output=%.3fs camera_mrays=%.2f "
-                "shadow_mrays=%.2f secondary_mrays=%.2f spp=%d\n",
-                tParse, tFlatten - ds.bvhSeconds, ds.bvhSeconds, tBuild, counters.seconds, tOutput, rate(&RenderCounters::cameraRays, STAGE_TRACE_CAMERA),
-                rate(&RenderCounters::shadowRays, STAGE_TRACE_SHADOW),
-                rate(&RenderCounters::secondaryRays, STAGE_TRACE_SECONDARY), a.spp > 0 ? a.spp : cams[0]->numSamples);
+    sumDeviceCounters(work, counters);
+    printTimes(times, ds, *renderers.front(), counters, work, a.spp > 0 ? a.spp : cams[0]->numSamples);
     if (stopRequested().load()) {
         std::fprintf(stderr, "clrt: interrupted (%s)%s%s%s\n", stopSignal() == SIGTERM ? "SIGTERM" : stopSignal() == SIGHUP ? "SIGHUP" : "SIGINT",
                      anyPartial ? ": partial images written (see above)" : "",

@@ -17,6 +17,7 @@
 #include "bvh/bvh4.h"
 #include "bvh/host_intersect.h"
 #include "cl/check.h"
+#include "cl/kernel_args.h"
 #include "test_helpers.h"
 
 using namespace clrt;
@@ -308,10 +309,10 @@ TEST_CASE("BVH4 traversal stack: the host bound holds, and the kernel with exact
     CHECK(maxSp >= b4.maxStack / 2);  // the scene does exercise the stack
 
     DeviceContext& dc = testContext();
-    auto sources = loadKernelSources({"common.cl", "intersect.cl"});
+    auto sources = loadKernelSources(KernelProgram::Intersect);
     cl::Program program = buildProgramFromSources(
         dc, sources, {"-DCLRT_BVH4_STACK_SIZE=" + std::to_string(b4.maxStack)});
-    cl::Kernel closest = CL_CPP(cl::Kernel(program, "intersect_closest"));
+    KernelArgs closest(program, "intersect_closest");
     std::vector<dev::Triangle> devTris;
     for (const Tri& t : tris) {
         devTris.push_back({{t[0].x, t[0].y, t[0].z, 0}, {t[1].x, t[1].y, t[1].z, 0}, {t[2].x, t[2].y, t[2].z, 0}});
@@ -327,10 +328,11 @@ TEST_CASE("BVH4 traversal stack: the host bound holds, and the kernel with exact
     cl::Buffer nodes = ro(b4.nodes), refs = ro(bin.primRefs), tb = ro(devTris), sb = ro(noSpheres),
                pb = ro(noPlanes), rb = ro(rays);
     cl::Buffer hb = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(dev::Hit) * numRays));
-    closest.setArg(0, nodes); closest.setArg(1, refs); closest.setArg(2, tb); closest.setArg(3, sb);
-    closest.setArg(4, int(tris.size())); closest.setArg(5, rb); closest.setArg(6, hb); closest.setArg(7, numRays);
-    closest.setArg(8, pb); closest.setArg(9, 0); closest.setArg(10, int(tris.size()));
-    CL_CPP(dc.queue().enqueueNDRangeKernel(closest, cl::NullRange, cl::NDRange(roundUp(size_t(numRays), 64)),
+    dev::SceneParams sp{};
+    sp.numTriangles = int(tris.size());  // no spheres, no planes
+    closest.set("count", numRays).set("scene", sp).set("nodes", nodes).set("primRefs", refs).set("tris", tb);
+    closest.set("spheres", sb).set("planes", pb).set("rays", rb).set("hits", hb);
+    CL_CPP(dc.queue().enqueueNDRangeKernel(closest.ready(), cl::NullRange, cl::NDRange(roundUp(size_t(numRays), 64)),
                                            cl::NDRange(64)));
     std::vector<dev::Hit> hits(numRays);
     CL_CPP(dc.queue().enqueueReadBuffer(hb, CL_TRUE, 0, sizeof(dev::Hit) * numRays, hits.data()));

@@ -5,7 +5,9 @@
 
 #include <CL/opencl.hpp>
 
+#include <algorithm>
 #include <chrono>
+#include <cstring>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -16,8 +18,11 @@
 
 #include "cl/check.h"
 #include "cl/devices.h"
+#include "cl/kernel_args.h"
 #include "cl/layout_check.h"
 #include "cl/program.h"
+#include "render/device_scene.h"
+#include "shared/type_tables.h"
 #include "util/error.h"
 
 namespace fs = std::filesystem;
@@ -218,12 +223,13 @@ TEST_CASE("kernel sources: embedded by name, or read from CLRT_KERNEL_DIR", "[cl
     {
         EnvGuard g("CLRT_KERNEL_DIR", nullptr);
         auto srcs = loadKernelSources({"layout.cl"});
-        REQUIRE(srcs.size() == 2);
+        REQUIRE(srcs.size() == 3);  // device_types.h, kernel_params.h, layout.cl
         CHECK(srcs[0].first == "src/shared/device_types.h");
         CHECK(srcs[0].second.rfind("#line 1 \"src/shared/device_types.h\"", 0) == 0);
-        CHECK(srcs[1].first == "cl_kernels/layout.cl");
-        CHECK(srcs[1].second.rfind("#line 1 \"cl_kernels/layout.cl\"", 0) == 0);
-        CHECK(srcs[1].second.find("layout_report") != std::string::npos);
+        CHECK(srcs[1].first == "src/shared/kernel_params.h");
+        CHECK(srcs[2].first == "cl_kernels/layout.cl");
+        CHECK(srcs[2].second.rfind("#line 1 \"cl_kernels/layout.cl\"", 0) == 0);
+        CHECK(srcs[2].second.find("layout_report") != std::string::npos);
         try {
             loadKernelSources({"no_such_kernel.cl"});
             FAIL("missing kernel accepted");
@@ -236,11 +242,92 @@ TEST_CASE("kernel sources: embedded by name, or read from CLRT_KERNEL_DIR", "[cl
         std::string dir = std::string(CLRT_SOURCE_DIR) + "/cl_kernels";
         EnvGuard g("CLRT_KERNEL_DIR", dir.c_str());
         auto srcs = loadKernelSources({"layout.cl"});
-        REQUIRE(srcs.size() == 2);
-        std::string typesPath = dir + "/../src/shared/device_types.h";
+        REQUIRE(srcs.size() == 3);
+        std::string typesPath = fs::path(dir + "/../src/shared/device_types.h").lexically_normal().string();
+        CHECK(srcs[0].first == typesPath);
         CHECK(srcs[0].second == "#line 1 \"" + typesPath + "\"\n" + readText(typesPath));
-        CHECK(srcs[1].second == "#line 1 \"" + dir + "/layout.cl\"\n" + readText(dir + "/layout.cl"));
+        CHECK(srcs[2].first == dir + "/layout.cl");
+        // The file's text, with its #include lines turned into comments (same line count).
+        std::string expected = "#line 1 \"" + dir + "/layout.cl\"\n" + readText(dir + "/layout.cl");
+        for (std::string header : {"device_types.h", "kernel_params.h"}) {
+            const std::string inc = "#include \"../src/shared/" + header + "\"";
+            REQUIRE(expected.find(inc) != std::string::npos);
+            expected.replace(expected.find(inc), inc.size(),
+                             "/* #include \"../src/shared/" + header + "\": placed before this file by the kernel loader */");
+        }
+        CHECK(srcs[2].second == expected);
         CHECK_THROWS_AS(loadKernelSources({"no_such_kernel.cl"}), Error);
+    }
+}
+
+namespace {
+std::vector<std::string> sourceNames(const std::vector<NamedSource>& srcs) {
+    std::vector<std::string> names;
+    for (const NamedSource& s : srcs) names.push_back(fs::path(s.first).filename().string());
+    return names;
+}
+}  // namespace
+
+TEST_CASE("kernel sources: each file brings in what it #includes, once, before itself", "[cl]") {
+    EnvGuard g("CLRT_KERNEL_DIR", nullptr);
+    // The render program: the order the files were concatenated in before they stated their includes
+    // (kernel_params.h, macros only, added).
+    auto render = loadKernelSources(KernelProgram::Render);
+    CHECK(sourceNames(render) == std::vector<std::string>{"device_types.h", "kernel_params.h", "common.cl",
+                                                          "intersect.cl", "camera.cl", "textures.cl", "envmap.cl",
+                                                          "lights.cl", "shade.cl"});
+    CHECK(sourceNames(loadKernelSources(KernelProgram::Tonemap)) ==
+          std::vector<std::string>{"device_types.h", "kernel_params.h", "tonemap.cl"});
+    CHECK(sourceNames(loadKernelSources(KernelProgram::Intersect)) ==
+          std::vector<std::string>{"device_types.h", "kernel_params.h", "common.cl", "intersect.cl"});
+    CHECK(sourceNames(loadKernelSources({"lights.cl"})) ==
+          std::vector<std::string>{"device_types.h", "common.cl", "envmap.cl", "lights.cl"});
+    std::regex include(R"((^|\n)[ \t]*#[ \t]*include[ \t]*")");
+    for (const NamedSource& s : render) {
+        INFO(s.first);
+        CHECK_FALSE(std::regex_search(s.second, include));  // the OpenCL compiler resolves no include
+    }
+    // Every program builds from its roots alone (each file states its dependencies).
+    DeviceContext& dc = cpuContext();
+    for (KernelProgram p : {KernelProgram::Render, KernelProgram::Tonemap, KernelProgram::Intersect, KernelProgram::Layout})
+        CHECK_NOTHROW(buildProgram(dc, p, {}));
+    // Each module of cl_kernels/ compiles on its own with what it includes.
+    for (auto& e : fs::directory_iterator(std::string(CLRT_SOURCE_DIR) + "/cl_kernels")) {
+        INFO(e.path());
+        CHECK_NOTHROW(buildProgram(dc, {e.path().filename().string()}, {}));
+    }
+}
+
+TEST_CASE("kernel sources: a missing #include names the including file and line", "[cl]") {
+    fs::path dir = makeTempDir("include");
+    fs::create_directories(dir / "cl_kernels");
+    {
+        std::ofstream(dir / "cl_kernels/a.cl") << "/* a */\n#include \"b.cl\"\n";
+        std::ofstream(dir / "cl_kernels/b.cl") << "/* b */\n\n#include \"missing.cl\"\n";
+    }
+    EnvGuard g("CLRT_KERNEL_DIR", (dir / "cl_kernels").c_str());
+    try {
+        loadKernelSources({"a.cl"});
+        FAIL("missing include accepted");
+    } catch (const Error& e) {
+        std::string msg = e.what();
+        INFO(msg);
+        CHECK(e.code() == ExitCode::Device);
+        CHECK(msg.find("b.cl:3: #include \"missing.cl\"") != std::string::npos);
+    }
+    fs::remove_all(dir);
+}
+
+TEST_CASE("kernel sources: FP_CONTRACT OFF is scoped to the file that sets it", "[cl]") {
+    // A file that turns contraction off turns it back on (the OpenCL default) before it ends, so the
+    // files after it in a program compile as they would alone.
+    std::regex pragma(R"(#pragma OPENCL FP_CONTRACT (ON|OFF|DEFAULT))");
+    for (auto& e : fs::directory_iterator(std::string(CLRT_SOURCE_DIR) + "/cl_kernels")) {
+        std::string text = readText(e.path().string());
+        std::string last;
+        for (std::sregex_iterator it(text.begin(), text.end(), pragma), end; it != end; ++it) last = (*it)[1].str();
+        INFO(e.path());
+        CHECK((last.empty() || last == "ON"));
     }
 }
 
@@ -336,4 +423,102 @@ TEST_CASE("device struct layout matches the host; second build hits the program 
 
     std::error_code ec;
     fs::remove_all(dir, ec);
+}
+
+TEST_CASE("every kernel has exactly its declared parameters: names, order, address space, const", "[cl]") {
+    // The kernels' signatures are generated from src/shared/kernel_params.h and the host binds by the
+    // same names; this checks the compiled result (-cl-kernel-arg-info), so a kernel written with a
+    // hand-made signature, or a declaration no kernel uses, fails here.
+    DeviceContext& dc = cpuContext();
+    std::set<std::string> seen;
+    for (KernelProgram p : {KernelProgram::Render, KernelProgram::Tonemap, KernelProgram::Layout}) {
+        cl::Program prog = buildProgram(dc, p, {"-cl-kernel-arg-info"});
+        size_t n = 0;
+        REQUIRE(clGetProgramInfo(prog(), CL_PROGRAM_KERNEL_NAMES, 0, nullptr, &n) == CL_SUCCESS);
+        std::string names(n, '\0');
+        REQUIRE(clGetProgramInfo(prog(), CL_PROGRAM_KERNEL_NAMES, n, &names[0], nullptr) == CL_SUCCESS);
+        names.resize(std::strlen(names.c_str()));
+        std::stringstream ss(names);
+        for (std::string name; std::getline(ss, name, ';');) {
+            INFO("kernel " << name);
+            seen.insert(name);
+            const KernelDecl& decl = kernelDecl(name);  // throws when undeclared
+            KernelArgs args(prog, name.c_str());
+            cl::Kernel& k = args.kernel();
+            cl_uint numArgs = 0;
+            REQUIRE(clGetKernelInfo(k(), CL_KERNEL_NUM_ARGS, sizeof numArgs, &numArgs, nullptr) == CL_SUCCESS);
+            REQUIRE(numArgs == decl.params.size());
+            for (cl_uint i = 0; i < numArgs; ++i) {
+                const ParamDecl& pd = decl.params[i];
+                char argName[256] = {};
+                REQUIRE(clGetKernelArgInfo(k(), i, CL_KERNEL_ARG_NAME, sizeof argName, argName, nullptr) == CL_SUCCESS);
+                CHECK(std::string(argName) == pd.name);
+                cl_kernel_arg_address_qualifier aq = 0;
+                REQUIRE(clGetKernelArgInfo(k(), i, CL_KERNEL_ARG_ADDRESS_QUALIFIER, sizeof aq, &aq, nullptr) == CL_SUCCESS);
+                CHECK(aq == (pd.kind == ParamKind::VAL ? CL_KERNEL_ARG_ADDRESS_PRIVATE : CL_KERNEL_ARG_ADDRESS_GLOBAL));
+                cl_kernel_arg_type_qualifier tq = 0;
+                REQUIRE(clGetKernelArgInfo(k(), i, CL_KERNEL_ARG_TYPE_QUALIFIER, sizeof tq, &tq, nullptr) == CL_SUCCESS);
+                if (pd.kind != ParamKind::VAL) CHECK(((tq & CL_KERNEL_ARG_TYPE_CONST) != 0) == (pd.kind == ParamKind::IN));
+            }
+        }
+    }
+    for (const KernelDecl& d : kernelDecls()) CHECK(seen.count(d.name) == 1);
+}
+
+TEST_CASE("KernelArgs refuses a wrong binding before any launch", "[cl]") {
+    DeviceContext& dc = cpuContext();
+    cl::Program prog = buildProgram(dc, KernelProgram::Render, {});
+    KernelArgs k(prog, "gather_shadows");
+    cl::Buffer b = CL_CPP(cl::Buffer(dc.context(), CL_MEM_READ_WRITE, 64));
+    auto throwsWith = [](auto f, const std::string& what) {
+        try {
+            f();
+        } catch (const Error& e) {
+            INFO(e.what());
+            CHECK(std::string(e.what()).find(what) != std::string::npos);
+            CHECK(e.code() == ExitCode::Device);
+            return;
+        }
+        FAIL("no error for: " << what);
+    };
+    throwsWith([&] { k.set("nope", b); }, "kernel gather_shadows has no parameter nope");
+    throwsWith([&] { k.set("count", b); }, "parameter count is a value; a buffer was bound");
+    throwsWith([&] { k.set("shadows", 3); }, "parameter shadows is a buffer; a value was bound");
+    throwsWith([&] { k.set("count", size_t(3)); }, "parameter count takes 4 bytes; 8 were bound");
+    k.set("count", 1).set("chunk", 1).set("shadows", b);
+    throwsWith([&] { k.ready(); }, "parameter pathRadiance is not bound");
+    k.set("pathRadiance", b);
+    CHECK_NOTHROW(k.ready());
+    CHECK_THROWS_AS(KernelArgs(prog, "no_such_kernel"), Error);
+}
+
+TEST_CASE("type tables: every light and material row has its device case under its feature flag", "[cl]") {
+    // README "Adding a light or a material": a table row in device_types.h, a `case` in the device
+    // dispatcher inside `#ifdef` the row's flag. Checked on the sources: a row without device code
+    // (or device code under another flag) fails here, not as a silently black light.
+    const std::string lights = readText(std::string(CLRT_SOURCE_DIR) + "/cl_kernels/lights.cl");
+    const std::string shade = readText(std::string(CLRT_SOURCE_DIR) + "/cl_kernels/shade.cl");
+    // The flag guarding `case K:` is the nearest #ifdef before it, closed by an #endif after it.
+    auto guardOf = [](const std::string& text, const std::string& constant) -> std::string {
+        size_t at = text.find("case " + constant + ":");
+        if (at == std::string::npos) return "(no case)";
+        size_t ifdef = text.rfind("#ifdef ", at), endif = text.rfind("#endif", at);
+        if (ifdef == std::string::npos || (endif != std::string::npos && endif > ifdef)) return "";
+        size_t end = text.find_first_of(" \n", ifdef + 7);
+        return text.substr(ifdef + 7, end - ifdef - 7);
+    };
+    for (const auto& row : lightTypes()) {
+        INFO("light " << row.constant);
+        CHECK(guardOf(lights, row.constant) == row.flag);
+    }
+    for (const auto& row : materialTypes()) {
+        INFO("material " << row.constant);
+        if (*row.flag) CHECK(guardOf(shade, row.constant) == row.flag);
+        // Materials that spawn children are those shade_hits writes children for.
+        if (row.bounces) CHECK(guardOf(shade, row.constant) != "(no case)");
+    }
+    // Every flag a scene can ask for is one FeatureSet::all() sets.
+    std::vector<std::string> all = FeatureSet::all().defines();
+    for (const auto& row : lightTypes())
+        CHECK(std::find(all.begin(), all.end(), std::string("-D") + row.flag + "=1") != all.end());
 }

@@ -343,14 +343,15 @@ TEST_CASE("cli: --device naming no device", "[cli]") {
 }
 
 TEST_CASE("cli: a kernel build failure prints the build log and keeps a good output file", "[cli]") {
-    // A copy of cl_kernels/ with a syntax error in shade.cl, used through CLRT_KERNEL_DIR (which also
-    // reads device_types.h from $CLRT_KERNEL_DIR/../src/shared/).
+    // A copy of cl_kernels/ with a syntax error in shade.cl, used through CLRT_KERNEL_DIR (the kernels'
+    // includes of ../src/shared/ are then read from $CLRT_KERNEL_DIR/../src/shared/).
     TempDir d;
     fs::path src = fs::path(CLRT_SOURCE_DIR);
     fs::create_directories(d.path / "k/cl_kernels");
     fs::create_directories(d.path / "k/src/shared");
     for (auto& e : fs::directory_iterator(src / "cl_kernels")) fs::copy_file(e.path(), d.path / "k/cl_kernels" / e.path().filename());
-    fs::copy_file(src / "src/shared/device_types.h", d.path / "k/src/shared/device_types.h");
+    for (auto& e : fs::directory_iterator(src / "src/shared"))  // what the kernels #include
+        fs::copy_file(e.path(), d.path / "k/src/shared" / e.path().filename());
     {
         std::ofstream out(d.path / "k/cl_kernels/shade.cl", std::ios::app);
         out << "\n__kernel void clrt_broken_on_purpose(void) { this is not C; }\n";

@@ -9,6 +9,7 @@
 #include "bvh/bvh4.h"
 #include "bvh/host_intersect.h"
 #include "cl/check.h"
+#include "cl/kernel_args.h"
 #include "test_helpers.h"
 
 using namespace clrt;
@@ -65,10 +66,10 @@ RandomScene makeScene(uint32_t seed, int numTris, int numSpheres) {
 
 TEST_CASE("intersection kernels match the host reference on random scenes", "[cl][intersect]") {
     DeviceContext& dc = testContext();
-    auto sources = loadKernelSources({"common.cl", "intersect.cl"});
+    auto sources = loadKernelSources(KernelProgram::Intersect);
     cl::Program program = buildProgramFromSources(dc, sources, {});
-    cl::Kernel closest = CL_CPP(cl::Kernel(program, "intersect_closest"));
-    cl::Kernel shadow = CL_CPP(cl::Kernel(program, "intersect_shadow"));
+    KernelArgs closest(program, "intersect_closest");
+    KernelArgs shadow(program, "intersect_shadow");
 
     RandomScene s = makeScene(1234, 3000, 200);
     const int numTris = int(s.tris.size());
@@ -96,11 +97,6 @@ TEST_CASE("intersection kernels match the host reference on random scenes", "[cl
     cl::Buffer hitBuf = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(dev::Hit) * numRays));
     cl::Buffer shadowBuf = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR,
                                              sizeof(dev::ShadowRay) * numRays, shadows.data()));
-    for (cl::Kernel* k : {&closest, &shadow}) {
-        k->setArg(0, nodes); k->setArg(1, refs); k->setArg(2, tris); k->setArg(3, sph); k->setArg(4, numTris);
-    }
-    closest.setArg(5, rayBuf); closest.setArg(6, hitBuf); closest.setArg(7, numRays);
-    shadow.setArg(5, shadowBuf); shadow.setArg(6, numRays);
     // Two infinite planes, outside the BVH, with references after the triangles and spheres.
     std::vector<dev::Plane> planes(2);
     planes[0].point = {0, -12, 0, 0}; planes[0].normal = {0, 1, 0, 0};
@@ -108,11 +104,18 @@ TEST_CASE("intersection kernels match the host reference on random scenes", "[cl
     planes[1].point = {14, 0, 0, 0}; planes[1].normal = {n1.x, n1.y, n1.z, 0};
     const int firstPlaneRef = numTris + int(s.spheres.size());
     cl::Buffer planeBuf = ro(planes);
-    closest.setArg(8, planeBuf); closest.setArg(9, 2); closest.setArg(10, firstPlaneRef);
-    shadow.setArg(8 - 1, planeBuf); shadow.setArg(8, 2); shadow.setArg(9, firstPlaneRef);
+    dev::SceneParams sp{};
+    sp.numTriangles = numTris;
+    sp.numSpheres = int(s.spheres.size());
+    sp.numPlanes = 2;
+    for (KernelArgs* k : {&closest, &shadow})
+        k->set("count", numRays).set("scene", sp).set("nodes", nodes).set("primRefs", refs).set("tris", tris)
+            .set("spheres", sph).set("planes", planeBuf);
+    closest.set("rays", rayBuf).set("hits", hitBuf);
+    shadow.set("shadows", shadowBuf);
     cl::CommandQueue& q = dc.queue();
-    CL_CPP(q.enqueueNDRangeKernel(closest, cl::NullRange, cl::NDRange(roundUp(numRays, 64)), cl::NDRange(64)));
-    CL_CPP(q.enqueueNDRangeKernel(shadow, cl::NullRange, cl::NDRange(roundUp(numRays, 64)), cl::NDRange(64)));
+    CL_CPP(q.enqueueNDRangeKernel(closest.ready(), cl::NullRange, cl::NDRange(roundUp(numRays, 64)), cl::NDRange(64)));
+    CL_CPP(q.enqueueNDRangeKernel(shadow.ready(), cl::NullRange, cl::NDRange(roundUp(numRays, 64)), cl::NDRange(64)));
     std::vector<dev::Hit> hits(numRays);
     CL_CPP(q.enqueueReadBuffer(hitBuf, CL_TRUE, 0, sizeof(dev::Hit) * numRays, hits.data()));
     CL_CPP(q.enqueueReadBuffer(shadowBuf, CL_TRUE, 0, sizeof(dev::ShadowRay) * numRays, shadows.data()));

@@ -139,7 +139,15 @@ std::string envSceneXml(const std::string& image, const std::string& type, const
     return s.str();
 }
 
-ImageRGB renderFile(const std::string& path, int spp, EnvSampler* override = nullptr, uint32_t seed = 1) {
+// The light feature flags of the program for the light kinds in `kinds` (bit per dev::LightKind), from
+// the light table: the kernels compile the Light_Sample cases of these kinds only.
+std::vector<std::string> lightFlags(uint32_t kinds) {
+    FeatureSet f;
+    f.lightKinds = kinds;
+    return f.defines();
+}
+
+ImageRGB renderFile(const std::string& path, int spp, dev::EnvSamplerKind* override = nullptr, uint32_t seed = 1) {
     Scene scene = loadScene(path);
     if (override) overrideEnvSampling(scene, *override);
     return renderCamera(scene, scene.cameras.at(0), spp, seed);
@@ -308,7 +316,8 @@ __kernel void env_test(const __global float* dist, const __global float4* texels
     int ok = EnvDist_Sample(dist, a.x, a.y, &d, &pdf);
     out[4 * i] = (float4)(d, ok ? pdf : -1.0f);
     float3 q = normalize((float3)(a.z, a.w, a.x - 0.5f));
-    out[4 * i + 1] = (float4)(EnvMap_Radiance(texels, img, mapping, (float3)(1.0f), q), EnvDist_Pdf(dist, q));
+    out[4 * i + 1] = (float4)(EnvMap_Radiance(texels, img, mapping, (float3)(1.0f), q),
+                            EnvDist_PdfUv(dist, EnvMap_DirToUv(mapping, q)));
     float2 uv = EnvMap_DirToUv(mapping, q);
     float3 back;
     int okb = EnvMap_UvToDir(mapping, uv.x, uv.y, &back);
@@ -317,7 +326,7 @@ __kernel void env_test(const __global float* dist, const __global float4* texels
 }
 )CLC";
     DeviceContext& dc = testContext();
-    auto sources = loadKernelSources({"common.cl", "envmap.cl"});
+    auto sources = loadKernelSources({"envmap.cl"});
     sources.push_back({"env_test.cl", src});
     cl::Program program = buildProgramFromSources(dc, sources, {});
     cl::Kernel k = CL_CPP(cl::Kernel(program, "env_test"));
@@ -443,11 +452,10 @@ __kernel void light_test(const __global Light* lights, int numLights, const __gl
 }
 )CLC";
     DeviceContext& dc = testContext();
-    auto sources = loadKernelSources({"common.cl", "envmap.cl", "lights.cl"});
+    auto sources = loadKernelSources({"lights.cl"});
     sources.push_back({"light_test.cl", src});
     cl::Program program = buildProgramFromSources(
-        dc, sources, {"-DCLRT_HAS_SPOT_LIGHT=1", "-DCLRT_HAS_DIRECTIONAL_LIGHT=1", "-DCLRT_HAS_AREA_LIGHT=1",
-                      "-DCLRT_HAS_ENV_LIGHT=1", "-DCLRT_HAS_POINT_LIGHT=1"});
+        dc, sources, lightFlags(~0u));  // every light type
     cl::Kernel k = CL_CPP(cl::Kernel(program, "light_test"));
     const int n = 4096, L = 4;
     std::mt19937 rng(21);
@@ -622,12 +630,12 @@ TEST_CASE("env samplers on sunset.exr: importance and MIS beat uniform >= 10x in
     std::string path = writeFile(tmp.file("sunset.xml"),
                                  envSceneXml(image, "latlong", "mis", size, spp, "0.5 0.4 0.3", ground, "0.3 0.3 0.3", 60,
                                              "4.4 1.0 -11.0", "0 0 -5"));
-    EnvSampler mis = EnvSampler::Mis;
+    dev::EnvSamplerKind mis = dev::ENV_SAMPLE_MIS;
     ImageRGB ref = renderFile(path, refSpp, &mis, 12345);
     std::vector<ImageRGB> imgs;
     std::vector<double> err;
     for (int s = 0; s < 4; ++s) {
-        EnvSampler es = EnvSampler(s);
+        dev::EnvSamplerKind es = dev::EnvSamplerKind(s);
         imgs.push_back(renderFile(path, spp, &es, 7));
         err.push_back(relMse(imgs.back(), ref));
         WARN("sunset.exr, " << size << "x" << size << ", " << spp << " spp, " << kSamplerNames[s] << ": relMSE " << err.back()
@@ -728,10 +736,10 @@ __kernel void edge_test(const __global Light* lights, int numLights, const __glo
     for (int i = 0; i < 2046; ++i) pts.push_back({pos(rng), i % 3 == 0 ? 0.0f : pos(rng), pos(rng), uni(rng)});
     const int n = int(pts.size());
     DeviceContext& dc = testContext();
-    auto sources = loadKernelSources({"common.cl", "envmap.cl", "lights.cl"});
+    auto sources = loadKernelSources({"lights.cl"});
     sources.push_back({"edge_test.cl", src});
     cl::Program program = buildProgramFromSources(
-        dc, sources, {"-DCLRT_HAS_SPOT_LIGHT=1", "-DCLRT_HAS_AREA_LIGHT=1", "-DCLRT_HAS_POINT_LIGHT=1"});
+        dc, sources, lightFlags((1u << dev::LIGHT_SPOT) | (1u << dev::LIGHT_AREA) | (1u << dev::LIGHT_POINT)));
     cl::Kernel k = CL_CPP(cl::Kernel(program, "edge_test"));
     cl::Context& ctx = dc.context();
     auto ro = [&](const auto& v) {

@@ -15,6 +15,7 @@
 #include "bvh/bvh4.h"
 #include "bvh/host_intersect.h"
 #include "cl/check.h"
+#include "cl/kernel_args.h"
 #include "render/device_scene.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
@@ -69,11 +70,11 @@ double fractionDiffering(const ImageRGB& a, const ImageRGB& b, float levels) {
 
 struct IntersectProgram {
     cl::Program program;
-    cl::Kernel closest;
+    KernelArgs closest;
     IntersectProgram() {
         DeviceContext& dc = testContext();
-        program = buildProgramFromSources(dc, loadKernelSources({"common.cl", "intersect.cl"}), {});
-        closest = CL_CPP(cl::Kernel(program, "intersect_closest"));
+        program = buildProgramFromSources(dc, loadKernelSources(KernelProgram::Intersect), {});
+        closest = KernelArgs(program, "intersect_closest");
     }
 };
 IntersectProgram& intersectProgram() {
@@ -115,13 +116,15 @@ std::vector<dev::Hit> deviceClosest(const std::vector<dev::Triangle>& trisIn, co
     cl::Buffer nodes = ro(nodes4), refs = ro(bvh.primRefs), tb = ro(tris), sb = ro(sph), rb = ro(rays);
     const int n = int(rays.size());
     cl::Buffer hb = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(dev::Hit) * rays.size()));
-    cl::Kernel& k = intersectProgram().closest;
-    k.setArg(0, nodes); k.setArg(1, refs); k.setArg(2, tb); k.setArg(3, sb); k.setArg(4, int(trisIn.size()));
-    k.setArg(5, rb); k.setArg(6, hb); k.setArg(7, n);
+    KernelArgs& k = intersectProgram().closest;
     std::vector<dev::Plane> noPlanes(1);
     cl::Buffer pb = ro(noPlanes);
-    k.setArg(8, pb); k.setArg(9, 0); k.setArg(10, 0);
-    CL_CPP(dc.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(roundUp(size_t(n), 64)), cl::NDRange(64)));
+    dev::SceneParams sp{};
+    sp.numTriangles = int(trisIn.size());
+    sp.numSpheres = int(sphIn.size());  // no planes
+    k.set("count", n).set("scene", sp).set("nodes", nodes).set("primRefs", refs).set("tris", tb).set("spheres", sb);
+    k.set("planes", pb).set("rays", rb).set("hits", hb);
+    CL_CPP(dc.queue().enqueueNDRangeKernel(k.ready(), cl::NullRange, cl::NDRange(roundUp(size_t(n), 64)), cl::NDRange(64)));
     std::vector<dev::Hit> hits(rays.size());
     CL_CPP(dc.queue().enqueueReadBuffer(hb, CL_TRUE, 0, sizeof(dev::Hit) * hits.size(), hits.data()));
     if (bvhOut) *bvhOut = std::move(bvh);

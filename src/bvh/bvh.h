@@ -1,3 +1,4 @@
+// src/bvh/: the bounding volume hierarchy (binned-SAH build, 4-wide collapse for the device, host reference traversal).
 // Bounding volume hierarchy over world-space primitives: binned SAH build on the host into binary
 // nodes (BvhNode, depth-first, left child next to its parent). The device reads it collapsed to
 // 4-wide nodes (bvh4.h); the binary tree is also what the plain C++ reference traversal in tests walks.

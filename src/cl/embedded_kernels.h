@@ -1,5 +1,6 @@
-// The OpenCL C sources of cl_kernels/ and src/shared/device_types.h, embedded at build time
-// (cmake/EmbedKernels.cmake). Each text starts with a #line marker naming its file.
+// The OpenCL C sources of cl_kernels/ and the two headers of src/shared/ they include (device_types.h,
+// kernel_params.h), embedded at build time (cmake/EmbedKernels.cmake). Each text starts with a #line
+// marker naming its file.
 #pragma once
 #include <string>
 #include <vector>

@@ -6,6 +6,7 @@
 #include <type_traits>
 
 #include "cl/check.h"
+#include "cl/kernel_args.h"
 #include "shared/device_types.h"
 #include "util/error.h"
 // The (struct, member) X-macro table, shared with the kernel; only CLRT_LAYOUT_TABLE is seen here.
@@ -34,12 +35,12 @@ const std::vector<LayoutEntry>& hostLayout() {
 
 std::vector<int> deviceLayout(DeviceContext& dc, BuildInfo* info) {
     const size_t n = 1 + 2 * hostLayout().size();
-    cl::Program prog = buildProgram(dc, {"layout.cl"}, {}, info);
-    cl::Kernel kernel = CL_CPP(cl::Kernel(prog, "layout_report"));
+    cl::Program prog = buildProgram(dc, KernelProgram::Layout, {}, info);
+    KernelArgs kernel(prog, "layout_report");
     std::vector<int> out(n, -1);
     cl::Buffer buf = CL_CPP(cl::Buffer(dc.context(), CL_MEM_WRITE_ONLY, n * sizeof(int)));
-    CL_CPP(kernel.setArg(0, buf));
-    CL_CPP(dc.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(1), cl::NullRange));
+    kernel.set("out", buf);
+    CL_CPP(dc.queue().enqueueNDRangeKernel(kernel.ready(), cl::NullRange, cl::NDRange(1), cl::NullRange));
     CL_CPP(dc.queue().enqueueReadBuffer(buf, CL_TRUE, 0, n * sizeof(int), out.data()));
     return out;
 }

@@ -54,19 +54,116 @@ std::string readFile(const std::string& path) {
     return ss.str();
 }
 
+// One kernel source file: its name for messages and #line markers (the path relative to the source
+// tree, or the real path when read from $CLRT_KERNEL_DIR) and its text, starting with a #line marker.
 NamedSource fromDisk(const std::string& path) {
     return {path, "#line 1 \"" + path + "\"\n" + readFile(path)};
 }
 
-NamedSource fromEmbedded(const std::string& name) {
-    const auto& all = embeddedKernelSources();
-    for (const EmbeddedSource& s : all)
-        if (name == s.name || name == s.path) return {s.path, s.text};
-    std::string known;
-    for (const EmbeddedSource& s : all) known += std::string(known.empty() ? "" : ", ") + s.name;
-    throw Error("kernel source \"" + name + "\" is not embedded in this build (known: " + known + ")",
-                ExitCode::Device);
+// An embedded source by file name ("shade.cl") or by path relative to the source tree.
+const EmbeddedSource* findEmbedded(const std::string& name) {
+    for (const EmbeddedSource& s : embeddedKernelSources())
+        if (name == s.name || name == s.path) return &s;
+    return nullptr;
 }
+
+std::string knownEmbedded() {
+    std::string known;
+    for (const EmbeddedSource& s : embeddedKernelSources()) known += std::string(known.empty() ? "" : ", ") + s.name;
+    return known;
+}
+
+// Resolves the #include "..." lines of kernel sources, the way a preprocessor with include guards
+// would: each file is emitted once, after the files it includes (recursively, in include order), and
+// its #include lines become comments (same line count, so #line markers stay true). Include paths
+// are relative to the including file, as for the C/C++ compiler (device_types.h is
+// "../src/shared/device_types.h" from cl_kernels/). An #include inside a comment or an #if is still
+// followed: kernel files write their includes plainly at the top.
+class SourceAssembler {
+public:
+    explicit SourceAssembler(std::string dir) : dir_(std::move(dir)) {}
+
+    // A root file by name ("shade.cl"), with everything it includes before it.
+    void addRoot(const std::string& name) {
+        if (dir_.empty()) {
+            const EmbeddedSource* s = findEmbedded(name);
+            if (!s)
+                throw Error("kernel source \"" + name + "\" is not embedded in this build (known: " + knownEmbedded() +
+                                ")",
+                            ExitCode::Device);
+            add(s->path, s->text);
+        } else {
+            const std::string path = fs::path(dir_ + "/" + name).lexically_normal().string();
+            if (!seen(path)) add(path, fromDisk(path).second);
+        }
+    }
+    std::vector<NamedSource> take() { return std::move(out_); }
+
+private:
+    bool seen(const std::string& path) const {
+        for (const std::string& d : done_)
+            if (d == path) return true;
+        return false;
+    }
+
+    void add(const std::string& path, std::string text) {
+        if (seen(path)) return;
+        done_.push_back(path);  // before its includes: an include cycle ends here, as with guards
+        size_t lineNo = 0;
+        for (size_t pos = 0; pos < text.size();) {
+            size_t eol = text.find('\n', pos);
+            if (eol == std::string::npos) eol = text.size();
+            std::string inc;
+            if (parseInclude(text, pos, eol, inc)) {
+                includeFile(path, lineNo, inc);
+                std::string comment = "/* #include \"" + inc + "\": placed before this file by the kernel loader */";
+                text.replace(pos, eol - pos, comment);
+                eol = pos + comment.size();
+            }
+            pos = eol + 1;
+            ++lineNo;
+        }
+        out_.push_back({path, std::move(text)});
+    }
+
+    // True if text[begin, end) is `#include "name"` (blanks allowed around '#' and 'include').
+    static bool parseInclude(const std::string& text, size_t begin, size_t end, std::string& name) {
+        size_t i = begin;
+        auto blanks = [&] { while (i < end && (text[i] == ' ' || text[i] == '\t')) ++i; };
+        blanks();
+        if (i >= end || text[i] != '#') return false;
+        ++i;
+        blanks();
+        if (text.compare(i, 7, "include") != 0) return false;
+        i += 7;
+        blanks();
+        if (i >= end || text[i] != '"') return false;
+        size_t close = text.find('"', i + 1);
+        if (close == std::string::npos || close >= end) return false;
+        name = text.substr(i + 1, close - i - 1);
+        return true;
+    }
+
+    void includeFile(const std::string& from, size_t lineNo, const std::string& inc) {
+        // lineNo counts the #line marker that starts every text: it is the file's own line number.
+        const std::string path = (fs::path(from).parent_path() / inc).lexically_normal().string();
+        const std::string where = from + ":" + std::to_string(lineNo) + ": #include \"" + inc + "\"";
+        if (dir_.empty()) {
+            for (const EmbeddedSource& s : embeddedKernelSources())
+                if (path == s.path) return add(s.path, s.text);
+            throw Error(where + ": " + path + " is not embedded in this build (known: " + knownEmbedded() + ")",
+                        ExitCode::Device);
+        }
+        if (seen(path)) return;
+        std::error_code ec;
+        if (!fs::is_regular_file(path, ec)) throw Error(where + ": cannot read kernel source " + path, ExitCode::Device);
+        add(path, fromDisk(path).second);
+    }
+
+    std::string dir_;
+    std::vector<std::string> done_;
+    std::vector<NamedSource> out_;
+};
 
 std::string hex64(uint64_t v) {
     char buf[17];
@@ -202,17 +299,32 @@ void dumpProgram(const std::string& source, const std::string& options) {
 }  // namespace
 
 std::vector<NamedSource> loadKernelSources(const std::vector<std::string>& kernelFiles) {
-    std::vector<NamedSource> out;
     std::string dir = envOr("CLRT_KERNEL_DIR");
-    if (!dir.empty()) {
-        while (dir.size() > 1 && dir.back() == '/') dir.pop_back();
-        out.push_back(fromDisk(dir + "/../src/shared/device_types.h"));
-        for (const std::string& f : kernelFiles) out.push_back(fromDisk(dir + "/" + f));
-    } else {
-        out.push_back(fromEmbedded("device_types.h"));
-        for (const std::string& f : kernelFiles) out.push_back(fromEmbedded(f));
+    while (dir.size() > 1 && dir.back() == '/') dir.pop_back();
+    SourceAssembler assembler(dir);
+    for (const std::string& f : kernelFiles) assembler.addRoot(f);
+    return assembler.take();
+}
+
+const std::vector<std::string>& kernelProgramRoots(KernelProgram program) {
+    // The one list of what each program is made of. Root files only: each brings in what it
+    // #includes, before itself (render: device_types.h, common, intersect, camera, textures, envmap,
+    // lights, shade; kernel_params.h after device_types.h).
+    static const std::vector<std::string> render = {"intersect.cl", "camera.cl", "shade.cl"};
+    static const std::vector<std::string> tonemap = {"tonemap.cl"};
+    static const std::vector<std::string> intersect = {"intersect.cl"};
+    static const std::vector<std::string> layout = {"layout.cl"};
+    switch (program) {
+    case KernelProgram::Render: return render;
+    case KernelProgram::Tonemap: return tonemap;
+    case KernelProgram::Intersect: return intersect;
+    case KernelProgram::Layout: break;
     }
-    return out;
+    return layout;
+}
+
+std::vector<NamedSource> loadKernelSources(KernelProgram program) {
+    return loadKernelSources(kernelProgramRoots(program));
 }
 
 std::string buildOptions(const std::vector<std::string>& defines) {
@@ -260,6 +372,11 @@ bool programCacheEntryValid(const std::string& path) {
 cl::Program buildProgram(DeviceContext& dc, const std::vector<std::string>& kernelFiles,
                          const std::vector<std::string>& defines, BuildInfo* info) {
     return buildProgramFromSources(dc, loadKernelSources(kernelFiles), defines, info);
+}
+
+cl::Program buildProgram(DeviceContext& dc, KernelProgram program, const std::vector<std::string>& defines,
+                         BuildInfo* info) {
+    return buildProgram(dc, kernelProgramRoots(program), defines, info);
 }
 
 cl::Program buildProgramFromSources(DeviceContext& dc, const std::vector<NamedSource>& namedSources,

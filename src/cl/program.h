@@ -1,6 +1,7 @@
+// src/cl/: the OpenCL layer (devices, checked calls, kernel source assembly, program build and cache, argument binding, layout check).
 // program.h — an OpenCL context + queue for one device (DeviceContext) and program building:
-// sources are assembled as device_types.h followed by the named cl_kernels/ files (embedded at build
-// time, or read from $CLRT_KERNEL_DIR so kernels can be edited without rebuilding), compiled with
+// sources are the named cl_kernels/ files with what they #include (embedded at build time, or read
+// from $CLRT_KERNEL_DIR so kernels can be edited without rebuilding), compiled with
 // "-cl-std=CL1.2" plus the caller's defines, and cached as device binaries on disk
 // ($CLRT_CACHE_DIR, else $XDG_CACHE_HOME/clrt, else ~/.cache/clrt; CLRT_NO_CACHE=1 disables); each
 // entry carries its length and an FNV-1a 64 checksum, and a damaged entry is rebuilt and rewritten.
@@ -47,14 +48,31 @@ struct BuildInfo {
 // A named source: (name used in #line / messages, text).
 using NamedSource = std::pair<std::string, std::string>;
 
-// device_types.h followed by the given kernel files (by file name, e.g. "intersect.cl"), each text
-// starting with a #line marker naming its file. From the embedded copies, or from $CLRT_KERNEL_DIR
-// (device_types.h then from $CLRT_KERNEL_DIR/../src/shared/). Throws clrt::Error (Device) if missing.
-std::vector<NamedSource> loadKernelSources(const std::vector<std::string>& kernelFiles);
+// The programs clrt builds. Their composition (which cl_kernels/ files) is kernelProgramRoots(), the
+// one place that lists it; the renderer, the tone mapper, bench/ray_bench and the tests use it.
+enum class KernelProgram {
+    Render,     // the wavefront renderer (src/render/renderer.cpp)
+    Tonemap,    // device tone mapping (src/render/tonemap_device.cpp)
+    Intersect,  // the two intersection kernels alone (bench/ray_bench, intersection tests)
+    Layout      // layout_report (src/cl/layout_check.cpp)
+};
+// The root files of a program; each brings in what it #includes.
+const std::vector<std::string>& kernelProgramRoots(KernelProgram program);
 
-// loadKernelSources(kernelFiles) + buildProgramFromSources().
+// The sources of a program made of the given root files (by file name, e.g. "shade.cl"): every file
+// preceded by the files it #includes (recursively, each once, the way include guards would have it),
+// its #include lines turned into comments; each text starts with a #line marker naming its file. From
+// the embedded copies, or from $CLRT_KERNEL_DIR (includes resolved relative to the including file, so
+// device_types.h comes from $CLRT_KERNEL_DIR/../src/shared/). Throws clrt::Error (Device) naming the
+// file if one is missing.
+std::vector<NamedSource> loadKernelSources(const std::vector<std::string>& kernelFiles);
+std::vector<NamedSource> loadKernelSources(KernelProgram program);
+
+// loadKernelSources() + buildProgramFromSources().
 cl::Program buildProgram(DeviceContext& dc, const std::vector<std::string>& kernelFiles,
                          const std::vector<std::string>& defines, BuildInfo* info = nullptr);
+cl::Program buildProgram(DeviceContext& dc, KernelProgram program, const std::vector<std::string>& defines,
+                         BuildInfo* info = nullptr);
 
 // Builds exactly the given sources (concatenated in order; nothing is prepended except a
 // `#line 1 "<name>"` marker for texts that do not start with "#line"). Defines are build options such

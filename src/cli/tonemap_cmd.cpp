@@ -137,8 +137,7 @@ std::vector<TonemapSettings> applyOptions(const TonemapArgs& a, std::vector<Tone
         s.truncate = a.truncate;
         validateTonemapSettings(s, "tonemap");
         settings.push_back(s);
-        if (a.haveTmo) b.op = s.op == TmoKind::Aces ? TonemapOperator::ACES
-                          : s.op == TmoKind::Filmic ? TonemapOperator::Filmic : TonemapOperator::Photographic;
+        if (a.haveTmo) b.op = s.op;
     }
     return settings;
 }

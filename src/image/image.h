@@ -1,3 +1,4 @@
+// src/image/: images on the host (PNG/JPG/EXR read and write, the tone-mapping reference).
 // Float RGB images on the host and their files: PNG/JPG read (stb_image), PNG write (own encoder on
 // zlib, image_write.cpp), EXR read/write (OpenEXR). Every writer writes to a temporary file in the target directory and
 // renames it over the target, so a failure never leaves a truncated image over a good one; the

@@ -7,27 +7,20 @@
 #include <cfloat>
 #include <cmath>
 
+#include "shared/type_tables.h"
 #include "util/error.h"
 
 namespace clrt {
 
-TmoKind parseTmoKind(const std::string& name, const std::string& what) {
+dev::TmoKind parseTmoKind(const std::string& name, const std::string& what) {
     std::string v = name;
     for (char& c : v) c = char(std::tolower(static_cast<unsigned char>(c)));
-    if (v == "photographic") return TmoKind::Photographic;
-    if (v == "aces") return TmoKind::Aces;
-    if (v == "filmic") return TmoKind::Filmic;
+    dev::TmoKind k;
+    if (lookupType(tonemapOperators(), v, k)) return k;
     throw Error(what + ": expected photographic, aces or filmic, got '" + name + "'", ExitCode::Usage);
 }
 
-const char* tmoKindName(TmoKind k) {
-    switch (k) {
-        case TmoKind::Photographic: return "photographic";
-        case TmoKind::Aces: return "aces";
-        case TmoKind::Filmic: return "filmic";
-    }
-    return "?";
-}
+const char* tmoKindName(dev::TmoKind k) { return typeRow(tonemapOperators(), k).name; }
 
 void validateTonemapSettings(const TonemapSettings& s, const std::string& what) {
     auto bad = [&](const std::string& m) { throw Error(what + ": " + m); };
@@ -90,7 +83,7 @@ TonemapStats tonemapStatsFrom(double logSum, size_t n, float kthLuminance, const
     TonemapStats st;
     st.logAverage = std::exp(logSum / double(std::max<size_t>(n, 1)));
     st.scale = float(double(s.key) / st.logAverage);
-    st.hasWhite = s.op == TmoKind::Photographic && s.burnPercent > 0.0f;
+    st.hasWhite = s.op == dev::TMO_PHOTOGRAPHIC && s.burnPercent > 0.0f;
     st.whiteIndex = percentileIndex(n, 100.0 - double(s.burnPercent));
     st.kthLuminance = kthLuminance;
     st.whiteL = std::fmin(kthLuminance * st.scale, FLT_MAX);
@@ -124,9 +117,9 @@ void tonemapPixel(const float rgb[3], const TonemapSettings& s, const TonemapSta
     const float L = std::fmin(Y * st.scale, FLT_MAX);
     float Yo = 0.0f;
     switch (s.op) {
-        case TmoKind::Photographic: Yo = tmoPhotographic(L, st.hasWhite, st.whiteL); break;
-        case TmoKind::Aces: Yo = tmoAces(L); break;
-        case TmoKind::Filmic: Yo = tmoFilmic(L); break;
+        case dev::TMO_PHOTOGRAPHIC: Yo = tmoPhotographic(L, st.hasWhite, st.whiteL); break;
+        case dev::TMO_ACES: Yo = tmoAces(L); break;
+        case dev::TMO_FILMIC: Yo = tmoFilmic(L); break;
     }
     Yo = Yo >= 0.0f ? std::fmin(Yo, FLT_MAX) : 0.0f;  // NaN -> 0
     for (int i = 0; i < 3; ++i) {

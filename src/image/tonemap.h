@@ -17,17 +17,16 @@
 #include <vector>
 
 #include "image/image.h"
+#include "shared/device_types.h"  // dev::TmoKind, the one operator enum (host, kernels, scene model)
 
 namespace clrt {
 
-enum class TmoKind : int { Photographic = 0, Aces = 1, Filmic = 2 };
-
 // "photographic", "aces", "filmic" (case-insensitive); throws clrt::Error (Usage) naming `what`.
-TmoKind parseTmoKind(const std::string& name, const std::string& what = "--tmo");
-const char* tmoKindName(TmoKind k);  // lower case
+dev::TmoKind parseTmoKind(const std::string& name, const std::string& what = "--tmo");
+const char* tmoKindName(dev::TmoKind k);  // lower case
 
 struct TonemapSettings {
-    TmoKind op = TmoKind::Photographic;
+    dev::TmoKind op = dev::TMO_PHOTOGRAPHIC;
     float key = 0.18f;          // TMOOptions[0]
     float burnPercent = 1.0f;   // TMOOptions[1] (Photographic only), in [0, 100]
     float saturation = 1.0f;

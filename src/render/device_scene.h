@@ -2,6 +2,7 @@
 // read, plus the feature set of this scene (which -D flags its program needs). Images referenced by
 // textures and environment lights are loaded here into one float4 texel atlas.
 #pragma once
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -12,19 +13,26 @@
 
 namespace clrt {
 
+// Which types and features a scene uses: its program is compiled with the matching -D flags only.
+// The flags of lights and materials come from their tables (src/shared/type_tables.h).
 struct FeatureSet {
-    bool pointLight = false, spotLight = false, directionalLight = false, areaLight = false, envLight = false;
-    bool mirror = false, dielectric = false, conductor = false;
+    uint32_t lightKinds = 0;     // bit k set: the scene has a light of dev::LightKind k
+    uint32_t materialKinds = 0;  // bit k set: the scene has a material of dev::MaterialKind k
     bool textures = false;
     bool spheres = false;
     bool primRefsIdentity = false;  // primRefs[i] == i (triangles only, stored in leaf order)
     int bvhStack = 0;  // traversal stack entries the scene's BVH needs (0: the header's default)
+    void add(dev::LightKind k) { lightKinds |= 1u << k; }
+    void add(dev::MaterialKind k) { materialKinds |= 1u << k; }
+    bool has(dev::LightKind k) const { return (lightKinds >> k) & 1u; }
+    bool has(dev::MaterialKind k) const { return (materialKinds >> k) & 1u; }
+    bool bounces() const;  // a material that spawns reflection/refraction children
     std::vector<std::string> defines() const;  // e.g. {"-DCLRT_HAS_POINT_LIGHT=1", ...}
     // Every feature on: the unspecialised program (clrt render --all-features).
     static FeatureSet all() {
         FeatureSet f;
-        f.pointLight = f.spotLight = f.directionalLight = f.areaLight = f.envLight = true;
-        f.mirror = f.dielectric = f.conductor = f.textures = f.spheres = true;
+        f.lightKinds = f.materialKinds = ~0u;
+        f.textures = f.spheres = true;
         return f;
     }
 };
@@ -51,11 +59,6 @@ struct DeviceScene {
 };
 
 DeviceScene flattenScene(const Scene& scene);
-
-// Environment-light sampling strategy by name (uniform | cosine | importance | mis); false if unknown.
-bool parseEnvSampler(const std::string& name, EnvSampler& out);
-// Sets the sampler of every environment light of `scene` (clrt render --env-sampling), before flattening.
-void overrideEnvSampling(Scene& scene, EnvSampler sampler);
 
 // Camera frame and image plane for the kernels; strata chosen for numSamples.
 dev::CameraParams makeCameraParams(const Camera& cam);

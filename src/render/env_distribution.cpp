@@ -114,6 +114,68 @@ Vec3 envLookup(const EnvMapView& map, float u, float v) {
            t(x0, y1) * ((1.0f - dx) * dy) + t(x1, y1) * (dx * dy);
 }
 
+// Probe mapping: the solid angle of cell (i, j) of a W x H map (the part inside the disc) and that
+// part's share of the cell's area, by n x n sub-samples (more for cells the rim cuts).
+static void probeCell(int i, int j, int W, int H, double& omega, double& frac) {
+    double x0 = 2.0 * i / W - 1.0, x1 = 2.0 * (i + 1) / W - 1.0;
+    double y0 = 1.0 - 2.0 * (j + 1) / H, y1 = 1.0 - 2.0 * j / H;
+    double nx = std::clamp(0.0, x0, x1), ny = std::clamp(0.0, y0, y1);
+    double nearR = std::sqrt(nx * nx + ny * ny);
+    double fx = std::max(std::fabs(x0), std::fabs(x1)), fy = std::max(std::fabs(y0), std::fabs(y1));
+    double farR = std::sqrt(fx * fx + fy * fy);
+    if (nearR >= 1.0) {
+        omega = frac = 0.0;
+        return;
+    }
+    const int n = farR <= 1.0 ? 4 : (W * H <= 16 ? 512 : 32);
+    double sum = 0;
+    int inside = 0;
+    for (int b = 0; b < n; ++b)
+        for (int a = 0; a < n; ++a) {
+            double x = x0 + (x1 - x0) * (a + 0.5) / n, y = y0 + (y1 - y0) * (b + 0.5) / n;
+            double r = std::sqrt(x * x + y * y);
+            if (r > 1.0) continue;
+            ++inside;
+            sum += r < 1e-9 ? 4.0 * M_PI * M_PI : 4.0 * M_PI * std::sin(M_PI * r) / r;
+        }
+    double cellArea = 1.0 / (double(W) * H);
+    if (inside == 0) {  // a sliver the sub-samples missed: small but positive
+        frac = 0.5 / (double(n) * n);
+        omega = 4.0 * M_PI * std::sin(M_PI * nearR) / std::max(nearR, 1e-9) * frac * cellArea;
+    } else {
+        frac = double(inside) / (double(n) * n);
+        omega = sum / (double(n) * n) * cellArea;
+    }
+}
+
+// The sampling tables (layout: env_distribution.h) from the cell weights, their row sums and total.
+static void writeTables(EnvDistribution& d, int W, int H, int mapping, const std::vector<double>& weight,
+                        const std::vector<double>& rowSum, double total, const std::vector<double>& frac) {
+    const size_t margOff = 4, condOff = margOff + H + 1, fracOff = condOff + size_t(H) * (W + 1);
+    const size_t zOff = fracOff + size_t(W) * H;
+    d.data.assign(zOff + H + 1, 0.0f);
+    for (int j = 0; j <= H; ++j) d.data[zOff + j] = float(std::cos(M_PI * j / H));
+    d.data[zOff] = 1.0f;
+    d.data[zOff + H] = -1.0f;
+    d.data[0] = float(W);
+    d.data[1] = float(H);
+    d.data[2] = float(mapping);
+    double cum = 0;
+    for (int j = 0; j < H; ++j) {
+        d.data[margOff + j] = float(cum / total);
+        cum += rowSum[j];
+        float* cond = &d.data[condOff + size_t(j) * (W + 1)];
+        double rc = 0;
+        for (int i = 0; i < W; ++i) {
+            cond[i] = rowSum[j] > 0 ? float(rc / rowSum[j]) : float(i) / float(W);
+            rc += weight[size_t(j) * W + i];
+        }
+        cond[W] = 1.0f;
+    }
+    d.data[margOff + H] = 1.0f;
+    for (size_t c = 0; c < size_t(W) * H; ++c) d.data[fracOff + c] = float(frac[c]);
+}
+
 EnvDistribution buildEnvDistribution(const EnvMapView& map) {
     EnvDistribution d;
     const int W = std::max(1, map.width), H = std::max(1, map.height);
@@ -144,35 +206,7 @@ EnvDistribution buildEnvDistribution(const EnvMapView& map) {
                 omega[c] = 2.0 * M_PI / W * (std::cos(M_PI * j / H) - std::cos(M_PI * (j + 1) / H));
                 frac[c] = 1.0;
             } else {
-                double x0 = 2.0 * i / W - 1.0, x1 = 2.0 * (i + 1) / W - 1.0;
-                double y0 = 1.0 - 2.0 * (j + 1) / H, y1 = 1.0 - 2.0 * j / H;
-                double nx = std::clamp(0.0, x0, x1), ny = std::clamp(0.0, y0, y1);
-                double nearR = std::sqrt(nx * nx + ny * ny);
-                double fx = std::max(std::fabs(x0), std::fabs(x1)), fy = std::max(std::fabs(y0), std::fabs(y1));
-                double farR = std::sqrt(fx * fx + fy * fy);
-                if (nearR >= 1.0) {
-                    omega[c] = frac[c] = 0.0;
-                } else {
-                    const int n = farR <= 1.0 ? 4 : (W * H <= 16 ? 512 : 32);
-                    double sum = 0;
-                    int inside = 0;
-                    for (int b = 0; b < n; ++b)
-                        for (int a = 0; a < n; ++a) {
-                            double x = x0 + (x1 - x0) * (a + 0.5) / n, y = y0 + (y1 - y0) * (b + 0.5) / n;
-                            double r = std::sqrt(x * x + y * y);
-                            if (r > 1.0) continue;
-                            ++inside;
-                            sum += r < 1e-9 ? 4.0 * M_PI * M_PI : 4.0 * M_PI * std::sin(M_PI * r) / r;
-                        }
-                    double cellArea = 1.0 / (double(W) * H);
-                    if (inside == 0) {  // a sliver the sub-samples missed: small but positive
-                        frac[c] = 0.5 / (double(n) * n);
-                        omega[c] = 4.0 * M_PI * std::sin(M_PI * nearR) / std::max(nearR, 1e-9) * frac[c] * cellArea;
-                    } else {
-                        frac[c] = double(inside) / (double(n) * n);
-                        omega[c] = sum / (double(n) * n) * cellArea;
-                    }
-                }
+                probeCell(i, j, W, H, omega[c], frac[c]);
             }
             if (omega[c] > 0) { lumSum += s; ++lumCount; }
         }
@@ -189,29 +223,7 @@ EnvDistribution buildEnvDistribution(const EnvMapView& map) {
         }
         total += rowSum[j];
     }
-    const size_t margOff = 4, condOff = margOff + H + 1, fracOff = condOff + size_t(H) * (W + 1);
-    const size_t zOff = fracOff + size_t(W) * H;
-    d.data.assign(zOff + H + 1, 0.0f);
-    for (int j = 0; j <= H; ++j) d.data[zOff + j] = float(std::cos(M_PI * j / H));
-    d.data[zOff] = 1.0f;
-    d.data[zOff + H] = -1.0f;
-    d.data[0] = float(W);
-    d.data[1] = float(H);
-    d.data[2] = float(map.mapping);
-    double cum = 0;
-    for (int j = 0; j < H; ++j) {
-        d.data[margOff + j] = float(cum / total);
-        cum += rowSum[j];
-        float* cond = &d.data[condOff + size_t(j) * (W + 1)];
-        double rc = 0;
-        for (int i = 0; i < W; ++i) {
-            cond[i] = rowSum[j] > 0 ? float(rc / rowSum[j]) : float(i) / float(W);
-            rc += weight[size_t(j) * W + i];
-        }
-        cond[W] = 1.0f;
-    }
-    d.data[margOff + H] = 1.0f;
-    for (size_t c = 0; c < size_t(W) * H; ++c) d.data[fracOff + c] = float(frac[c]);
+    writeTables(d, W, H, map.mapping, weight, rowSum, total, frac);
     return d;
 }
 

@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <exception>
 #include <filesystem>
+#include <functional>
 #include <set>
 #include <thread>
 #include <utility>
@@ -47,11 +48,7 @@ std::string lowerExtension(const std::string& name) {
 
 TonemapSettings tonemapSettingsFrom(const Tonemap& t) {
     TonemapSettings s;
-    switch (t.op) {
-        case TonemapOperator::Photographic: s.op = TmoKind::Photographic; break;
-        case TonemapOperator::ACES: s.op = TmoKind::Aces; break;
-        case TonemapOperator::Filmic: s.op = TmoKind::Filmic; break;
-    }
+    s.op = t.op;
     s.key = t.key;
     s.burnPercent = t.burnPercent;
     s.saturation = t.saturation;
@@ -78,6 +75,61 @@ std::vector<std::string> tonemapPngPaths(const std::string& hdrPath, const std::
     }
     return out;
 }
+
+namespace {
+
+// The 8-bit RGB of each Tonemap block of `cam`, tone-mapped on the device; `lap` times the stages (-v).
+std::vector<std::vector<unsigned char>> tonemapCamera(const Camera& cam, const ImageRGB& radiance,
+                                                      const OutputOptions& opts, DeviceContext& dc,
+                                                      const std::function<void(const std::string&)>& lap) {
+    std::vector<std::vector<unsigned char>> pngs;
+    if (cam.tonemaps.empty()) return pngs;
+    TonemapDevice tm(dc);
+    lap("tone-map program");
+    tm.upload(radiance);
+    for (const Tonemap& t : cam.tonemaps) {
+        TonemapSettings s = tonemapSettingsFrom(t);
+        s.truncate = opts.tonemapTruncate;
+        TonemapDeviceResult r = tm.map(s);
+        if (verbose())
+            info(cam.imageName + ": " + tmoKindName(s.op) + " log-average " + std::to_string(r.stats.logAverage) +
+                 (r.stats.hasWhite ? ", L_white " + std::to_string(r.stats.whiteL) : std::string()));
+        pngs.push_back(std::move(r.rgb8));
+    }
+    lap("tone mapping");
+    return pngs;
+}
+
+// Half or float channels and the header attributes of a render's EXR.
+ExrWriteOptions exrOptions(const OutputOptions& opts, DeviceContext& dc) {
+    ExrWriteOptions eo;
+    eo.half = opts.exrHalf;
+    eo.attributes["renderer"] = "clrt";
+    eo.attributes["spp"] = std::to_string(opts.spp);
+    eo.attributes["renderTime"] = formatSeconds(opts.renderSeconds) + " s";
+    eo.attributes["device"] = opts.deviceName.empty() ? dc.info().name : opts.deviceName;
+    if (!opts.partial.empty()) eo.attributes["partial"] = opts.partial;
+    return eo;
+}
+
+// Renames each (temporary, final path) into place in order, appending the final paths to `written`;
+// with `error` set, or on a failure, removes every temporary not yet renamed and throws.
+void commitOutputs(const std::vector<std::pair<std::string, std::string>>& commits, const std::exception_ptr& error,
+                   std::vector<std::string>& written) {
+    size_t done = 0;
+    try {
+        if (error) std::rethrow_exception(error);
+        for (; done < commits.size(); ++done) {
+            commitTemporary(commits[done].first, commits[done].second);
+            written.push_back(commits[done].second);
+        }
+    } catch (...) {
+        for (size_t i = done; i < commits.size(); ++i) std::remove(commits[i].first.c_str());
+        throw;
+    }
+}
+
+}  // namespace
 
 std::vector<std::string> writeCameraOutputs(const Camera& cam, const ImageRGB& radiance, const OutputOptions& opts,
                                             DeviceContext& dc) {
@@ -107,18 +159,12 @@ std::vector<std::string> writeCameraOutputs(const Camera& cam, const ImageRGB& r
     using Clock = std::chrono::steady_clock;
     auto seconds = [](Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); };
     auto t0 = Clock::now();
-    auto lap = [&](const std::string& what) {  // -v: where the output stage spends its time
+    const std::function<void(const std::string&)> lap = [&](const std::string& what) {  // -v: where the output stage spends its time
         auto t1 = Clock::now();
         info("output: " + what + " " + std::to_string(seconds(t0, t1)) + " s");
         t0 = t1;
     };
-    ExrWriteOptions eo;
-    eo.half = opts.exrHalf;
-    eo.attributes["renderer"] = "clrt";
-    eo.attributes["spp"] = std::to_string(opts.spp);
-    eo.attributes["renderTime"] = formatSeconds(opts.renderSeconds) + " s";
-    eo.attributes["device"] = opts.deviceName.empty() ? dc.info().name : opts.deviceName;
-    if (!opts.partial.empty()) eo.attributes["partial"] = opts.partial;
+    const ExrWriteOptions eo = exrOptions(opts, dc);
     const std::string exrPath = out.string();
     std::string exrTmp;
     std::exception_ptr exrError;
@@ -135,22 +181,7 @@ std::vector<std::string> writeCameraOutputs(const Camera& cam, const ImageRGB& r
     std::exception_ptr error;  // the first failure: tone mapping, else the EXR, else a PNG
     std::vector<std::string> pngTmps;
     try {
-        std::vector<std::vector<unsigned char>> pngs;
-        if (!cam.tonemaps.empty()) {
-            TonemapDevice tm(dc);
-            lap("tone-map program");
-            tm.upload(radiance);
-            for (const Tonemap& t : cam.tonemaps) {
-                TonemapSettings s = tonemapSettingsFrom(t);
-                s.truncate = opts.tonemapTruncate;
-                TonemapDeviceResult r = tm.map(s);
-                if (verbose())
-                    info(cam.imageName + ": " + tmoKindName(s.op) + " log-average " + std::to_string(r.stats.logAverage) +
-                         (r.stats.hasWhite ? ", L_white " + std::to_string(r.stats.whiteL) : std::string()));
-                pngs.push_back(std::move(r.rgb8));
-            }
-            lap("tone mapping");
-        }
+        std::vector<std::vector<unsigned char>> pngs = tonemapCamera(cam, radiance, opts, dc, lap);
         try {
             for (size_t i = 0; i < pngs.size(); ++i)
                 pngTmps.push_back(writePng8Uncommitted(pngPaths[i], radiance.width, radiance.height, pngs[i]));
@@ -176,21 +207,11 @@ std::vector<std::string> writeCameraOutputs(const Camera& cam, const ImageRGB& r
         std::fflush(stderr);
         for (;;) std::this_thread::sleep_for(std::chrono::seconds(1));
     }
-    // Commit: EXR first, then the PNGs; on any failure remove every temporary not yet renamed.
+    // Commit: EXR first, then the PNGs.
     std::vector<std::pair<std::string, std::string>> commits;  // (temporary, final path)
     if (!exrTmp.empty()) commits.emplace_back(exrTmp, exrPath);
     for (size_t i = 0; i < pngTmps.size(); ++i) commits.emplace_back(pngTmps[i], pngPaths[i]);
-    size_t done = 0;
-    try {
-        if (error) std::rethrow_exception(error);
-        for (; done < commits.size(); ++done) {
-            commitTemporary(commits[done].first, commits[done].second);
-            written.push_back(commits[done].second);
-        }
-    } catch (...) {
-        for (size_t i = done; i < commits.size(); ++i) std::remove(commits[i].first.c_str());
-        throw;
-    }
+    commitOutputs(commits, error, written);
     return written;
 }
 

@@ -8,14 +8,15 @@
 #include <cmath>
 
 #include "cl/check.h"
+#include "cl/kernel_args.h"
+#include "shared/kernel_params.h"
 #include "util/error.h"
 
 namespace clrt {
 
-namespace {
-const std::vector<std::string> kKernelFiles = {"common.cl", "intersect.cl", "camera.cl", "textures.cl",
-                                               "envmap.cl", "lights.cl", "shade.cl"};
+struct BatchPlan;
 
+namespace {
 // A read-only copy of v. OpenCL has no zero-size buffers and refuses a null host pointer, so an empty
 // array (an empty BVH's primRefs) becomes one zero-filled element that the kernels never read.
 template <class T> cl::Buffer uploadBuffer(cl::Context& ctx, const std::vector<T>& v) {
@@ -28,44 +29,49 @@ template <class T> cl::Buffer uploadBuffer(cl::Context& ctx, const std::vector<T
 
 struct Renderer::Impl {
     DeviceContext& dc;
-    const DeviceScene& scene;
+    const DeviceScene& ds;
     BuildInfo build;
     cl::Program program;
-    cl::Kernel kGenerate, kIntersect, kShadow, kShade, kLights, kGather, kAccumulate, kCompact;
+    KernelArgs kGenerate, kIntersect, kShadow, kShade, kLights, kGather, kAccumulate, kCompact;
+    // Every kernel argument, each named as the kernel parameter it is bound to (src/shared/kernel_params.h):
+    // bindAll() binds each kernel's whole parameter list from these members, by name.
     cl::Buffer nodes, primRefs, tris, triShading, spheres, planes, materials, textureSets, textures, images, texels, lights, envDist;
     // Queue buffers (sized per render).
     size_t queueCapacity = 0, shadowCapacity = 0;
     cl::Buffer paths, rays, hits, points, pathRadiance, nextPaths, nextRays, childValid, compactTarget, shadows;
+    // Per render: the image and the parameter blocks. Per launch (set again before each): the rest.
+    cl::Buffer image;
+    dev::SceneParams scene{};
+    dev::CameraParams cam{};
+    int count = 0, firstPixel = 0, firstSample = 0, samples = 1, lightBegin = 0, lightEnd = 0, chunk = 0;
 
-    Impl(DeviceContext& d, const DeviceScene& s) : dc(d), scene(s) {
+    Impl(DeviceContext& d, const DeviceScene& s) : dc(d), ds(s) {
         cl_command_queue_properties qp = 0;
         CL_CHECK(clGetCommandQueueInfo(dc.queue()(), CL_QUEUE_PROPERTIES, sizeof qp, &qp, nullptr));
         profiling = (qp & CL_QUEUE_PROFILING_ENABLE) != 0;
-        std::vector<std::string> defines = scene.features.defines();
-        program = buildProgram(dc, kKernelFiles, defines, &build);
-        auto mk = [&](const char* name) { return CL_CPP(cl::Kernel(program, name)); };
-        kGenerate = mk("generate_camera_rays");
-        kIntersect = mk("intersect_closest");
-        kShadow = mk("intersect_shadow");
-        kShade = mk("shade_hits");
-        kLights = mk("sample_lights");
-        kGather = mk("gather_shadows");
-        kAccumulate = mk("accumulate");
-        kCompact = mk("compact_paths");
+        program = buildProgram(dc, KernelProgram::Render, ds.features.defines(), &build);
+        kGenerate = KernelArgs(program, "generate_camera_rays");
+        kIntersect = KernelArgs(program, "intersect_closest");
+        kShadow = KernelArgs(program, "intersect_shadow");
+        kShade = KernelArgs(program, "shade_hits");
+        kLights = KernelArgs(program, "sample_lights");
+        kGather = KernelArgs(program, "gather_shadows");
+        kAccumulate = KernelArgs(program, "accumulate");
+        kCompact = KernelArgs(program, "compact_paths");
         cl::Context& ctx = dc.context();
-        nodes = uploadBuffer(ctx, scene.bvh4.nodes);
-        primRefs = uploadBuffer(ctx, scene.bvh.primRefs);
-        tris = uploadBuffer(ctx, scene.triangles);
-        triShading = uploadBuffer(ctx, scene.triangleShading);
-        spheres = uploadBuffer(ctx, scene.spheres);
-        planes = uploadBuffer(ctx, scene.planes);
-        materials = uploadBuffer(ctx, scene.materials);
-        textureSets = uploadBuffer(ctx, scene.textureSets);
-        textures = uploadBuffer(ctx, scene.textures);
-        images = uploadBuffer(ctx, scene.images);
-        texels = uploadBuffer(ctx, scene.texels);
-        lights = uploadBuffer(ctx, scene.lights);
-        envDist = uploadBuffer(ctx, scene.envDistribution);
+        nodes = uploadBuffer(ctx, ds.bvh4.nodes);
+        primRefs = uploadBuffer(ctx, ds.bvh.primRefs);
+        tris = uploadBuffer(ctx, ds.triangles);
+        triShading = uploadBuffer(ctx, ds.triangleShading);
+        spheres = uploadBuffer(ctx, ds.spheres);
+        planes = uploadBuffer(ctx, ds.planes);
+        materials = uploadBuffer(ctx, ds.materials);
+        textureSets = uploadBuffer(ctx, ds.textureSets);
+        textures = uploadBuffer(ctx, ds.textures);
+        images = uploadBuffer(ctx, ds.images);
+        texels = uploadBuffer(ctx, ds.texels);
+        lights = uploadBuffer(ctx, ds.lights);
+        envDist = uploadBuffer(ctx, ds.envDistribution);
     }
 
     void ensureQueues(size_t capacity, size_t shadowSlots) {
@@ -98,10 +104,10 @@ struct Renderer::Impl {
     static constexpr size_t kProfileEvents = 256;
     bool profiling = false;
     std::vector<std::pair<int, cl::Event>> events;
-    void run(cl::Kernel& k, size_t n, int stage) {
+    void run(KernelArgs& k, size_t n, int stage) {
         if (n == 0) return;
         cl::Event ev;
-        CL_CPP(dc.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(roundUp(n, localSize)),
+        CL_CPP(dc.queue().enqueueNDRangeKernel(k.ready(), cl::NullRange, cl::NDRange(roundUp(n, localSize)),
                                                cl::NDRange(localSize), nullptr, profiling ? &ev : nullptr));
         if (profiling) events.emplace_back(stage, ev);
     }
@@ -117,11 +123,16 @@ struct Renderer::Impl {
         events.clear();
     }
 
-    // Sets the kernel arguments that do not change within a render.
-    void setRenderArgs(const dev::CameraParams& cp, const dev::SceneParams& sp, cl::Buffer& image);
+    // Binds every parameter of every kernel from the member of the same name: the per-render values
+    // given here, the per-launch ones with their current values (the loop sets those again).
+    void setRenderArgs(const dev::CameraParams& cp, const dev::SceneParams& sp, const cl::Buffer& img);
     // Traces `n` camera paths (already generated) through every bounce and accumulates them into the
     // image; `bounces` says whether any material makes children.
     void traceBatch(int n, const dev::SceneParams& sp, bool bounces, size_t lightChunk, RenderCounters& counters);
+    // Every batch of pixels [tileFirst, tileEnd), all samples (after setRenderArgs), unless stopped()
+    // turns true between two sample groups. Returns the samples each pixel got.
+    int renderTile(size_t tileFirst, size_t tileEnd, const BatchPlan& plan, RenderCounters& counters,
+                   const std::function<void(size_t, size_t)>& progress, const std::function<bool()>& stopped);
     std::vector<int> valid, target;  // compaction scratch, at most 2 * queueCapacity each
 
     // Reads pixels [first, end) back into `out`, scaled by `inv` (each tile's pixels are written by
@@ -140,36 +151,18 @@ struct Renderer::Impl {
     std::vector<dev::float4> tilePixels;
 };
 
-void Renderer::Impl::setRenderArgs(const dev::CameraParams& cp, const dev::SceneParams& sp, cl::Buffer& image) {
-    kGenerate.setArg(0, sizeof(cp), &cp);
-    kGenerate.setArg(1, sizeof(sp), &sp);
-    kGenerate.setArg(5, paths);
-    kGenerate.setArg(6, rays);
-    auto setGeometry = [&](cl::Kernel& k) {
-        k.setArg(0, nodes); k.setArg(1, primRefs); k.setArg(2, tris); k.setArg(3, spheres);
-        k.setArg(4, sp.numTriangles);
-    };
-    setGeometry(kIntersect);
-    kIntersect.setArg(5, rays);
-    kIntersect.setArg(6, hits);
-    const int firstPlaneRef = sp.numTriangles + sp.numSpheres;
-    kIntersect.setArg(8, planes); kIntersect.setArg(9, sp.numPlanes); kIntersect.setArg(10, firstPlaneRef);
-    kShadow.setArg(7, planes); kShadow.setArg(8, sp.numPlanes); kShadow.setArg(9, firstPlaneRef);
-    setGeometry(kShadow);
-    kShadow.setArg(5, shadows);
-    kShade.setArg(0, sizeof(sp), &sp);
-    kShade.setArg(1, sizeof(cp), &cp);
-    int a = 3;
-    for (cl::Buffer* b : {&paths, &rays, &hits, &tris, &triShading, &spheres, &materials, &textureSets, &textures,
-                          &images, &texels, &points, &pathRadiance, &nextPaths, &nextRays, &childValid, &planes})
-        kShade.setArg(a++, *b);
-    kLights.setArg(0, sizeof(sp), &sp);
-    kLights.setArg(4, paths); kLights.setArg(5, points); kLights.setArg(6, lights); kLights.setArg(7, shadows);
-    kLights.setArg(8, images); kLights.setArg(9, texels); kLights.setArg(10, envDist);
-    kGather.setArg(2, shadows); kGather.setArg(3, pathRadiance);
-    kAccumulate.setArg(1, paths); kAccumulate.setArg(2, pathRadiance); kAccumulate.setArg(3, image);
-    kCompact.setArg(1, compactTarget); kCompact.setArg(2, nextPaths); kCompact.setArg(3, nextRays);
-    kCompact.setArg(4, paths); kCompact.setArg(5, rays);
+void Renderer::Impl::setRenderArgs(const dev::CameraParams& cp, const dev::SceneParams& sp, const cl::Buffer& img) {
+    cam = cp;
+    scene = sp;
+    image = img;
+    CLRT_BIND_GROUP(kGenerate, CLRT_KERNEL_generate_camera_rays, *this);
+    CLRT_BIND_GROUP(kIntersect, CLRT_KERNEL_intersect_closest, *this);
+    CLRT_BIND_GROUP(kShadow, CLRT_KERNEL_intersect_shadow, *this);
+    CLRT_BIND_GROUP(kShade, CLRT_KERNEL_shade_hits, *this);
+    CLRT_BIND_GROUP(kLights, CLRT_KERNEL_sample_lights, *this);
+    CLRT_BIND_GROUP(kGather, CLRT_KERNEL_gather_shadows, *this);
+    CLRT_BIND_GROUP(kAccumulate, CLRT_KERNEL_accumulate, *this);
+    CLRT_BIND_GROUP(kCompact, CLRT_KERNEL_compact_paths, *this);
 }
 
 void Renderer::Impl::traceBatch(int n, const dev::SceneParams& sp, bool bounces, size_t lightChunk,
@@ -177,22 +170,22 @@ void Renderer::Impl::traceBatch(int n, const dev::SceneParams& sp, bool bounces,
     cl::CommandQueue& q = dc.queue();
     const int numLights = sp.numLights;
     for (int depth = 0; n > 0; ++depth) {
-        kIntersect.setArg(7, n);
+        kIntersect.set("count", n);
         run(kIntersect, n, depth == 0 ? STAGE_TRACE_CAMERA : STAGE_TRACE_SECONDARY);
-        kShade.setArg(2, n);
+        kShade.set("count", n);
         run(kShade, n, STAGE_SHADE);
         for (int l0 = 0; l0 < numLights; l0 += int(lightChunk)) {
             int l1 = std::min(numLights, l0 + int(lightChunk));
             int slots = n * (l1 - l0);
-            kLights.setArg(1, n); kLights.setArg(2, l0); kLights.setArg(3, l1);
+            kLights.set("count", n).set("lightBegin", l0).set("lightEnd", l1);
             run(kLights, n, STAGE_SAMPLE_LIGHTS);
-            kShadow.setArg(6, slots);
+            kShadow.set("count", slots);
             run(kShadow, slots, STAGE_TRACE_SHADOW);
-            kGather.setArg(0, n); kGather.setArg(1, l1 - l0);
+            kGather.set("count", n).set("chunk", l1 - l0);
             run(kGather, n, STAGE_GATHER);
             counters.shadowRays += slots;
         }
-        kAccumulate.setArg(0, n);
+        kAccumulate.set("count", n);
         run(kAccumulate, n, STAGE_ACCUMULATE);
         if (!bounces || depth >= sp.maxDepth) break;
         // Order-preserving compaction of the children.
@@ -206,7 +199,7 @@ void Renderer::Impl::traceBatch(int n, const dev::SceneParams& sp, bool bounces,
         if (next == 0) break;
         // Blocking: `target` is resized on the next pass, so the copy must be done before then.
         CL_CPP(q.enqueueWriteBuffer(compactTarget, CL_TRUE, 0, slots * sizeof(int), target.data()));
-        kCompact.setArg(0, int(slots));
+        kCompact.set("count", int(slots));
         run(kCompact, slots, STAGE_COMPACT);
         n = next;
         counters.secondaryRays += n;
@@ -266,12 +259,79 @@ static int samplesPerBatch(size_t numPixels, int spp) {
     return int(std::min({std::max<size_t>(1, targetPaths / std::max<size_t>(numPixels, 1)), maxSamples, size_t(spp)}));
 }
 
+// How a render is cut into batches and how large the queues are. A batch is `group` samples of each
+// of `batch` pixels, pixel-major. Every figure depends only on the image, the settings and the scene,
+// never on the tile: every device and every tiling computes each pixel identically.
+struct BatchPlan {
+    int group = 1;          // samples of each pixel per batch
+    size_t batch = 1;       // pixels per batch
+    size_t capacity = 0;    // queue slots: batch * group paths, times 2^splitDepth when materials bounce
+    size_t lightChunk = 0;  // lights per sample_lights launch (0: the scene has none)
+    bool bounces = false;   // some material spawns children
+};
+
+// The plan for `numPixels` pixels at cp.spp samples; sets the split depth (and seed, depth cap) in `sp`.
+static BatchPlan planBatches(const DeviceScene& ds, size_t numPixels, const RenderSettings& settings,
+                             const dev::CameraParams& cp, dev::SceneParams& sp) {
+    BatchPlan plan;
+    plan.group = samplesPerBatch(numPixels, cp.spp);
+    plan.batch = std::max<size_t>(1, std::min(numPixels, settings.maxBatchPixels / size_t(plan.group)));
+    const size_t batchPaths = plan.batch * size_t(plan.group);
+    plan.bounces = ds.features.bounces();
+    sp.seed = settings.seed;
+    sp.maxDepth = std::min(sp.maxDepth, kMaxRecursionDepth);
+    // Dielectrics split into both children while the queue can hold them and few samples are taken;
+    // beyond that (or with many samples) one child is chosen by Fresnel weight (same expectation).
+    int split = 0;
+    if (ds.features.has(dev::MATERIAL_DIELECTRIC) && cp.spp <= 4) {
+        while (split < sp.maxDepth && (batchPaths << (split + 1)) <= (size_t(1) << 21)) ++split;
+    }
+    if (settings.splitDepthOverride >= 0) split = settings.splitDepthOverride;
+    sp.splitDepth = split;
+    plan.capacity = plan.bounces ? batchPaths << split : batchPaths;
+    if (sp.numLights > 0) {
+        size_t budget = (size_t(256) << 20) / sizeof(dev::ShadowRay);
+        plan.lightChunk = std::max<size_t>(1, std::min<size_t>(sp.numLights, budget / plan.capacity));
+    }
+    return plan;
+}
+
+int Renderer::Impl::renderTile(size_t tileFirst, size_t tileEnd, const BatchPlan& plan, RenderCounters& counters,
+                               const std::function<void(size_t, size_t)>& progress,
+                               const std::function<bool()>& stopped) {
+    const int spp = cam.spp;
+    const size_t totalBatches =
+        ((size_t(spp) + plan.group - 1) / plan.group) * ((tileEnd - tileFirst + plan.batch - 1) / plan.batch);
+    size_t doneBatches = 0;
+    for (int sample = 0; sample < spp; sample += plan.group) {
+        if (sample > 0 && stopped()) {
+            counters.stoppedAtSample = counters.stoppedAtSample < 0 ? sample : std::min(counters.stoppedAtSample, sample);
+            return sample;
+        }
+        const int samples = std::min(plan.group, spp - sample);
+        for (size_t first = tileFirst; first < tileEnd; first += plan.batch) {
+            const int n = int(std::min(plan.batch, tileEnd - first)) * samples;
+            kGenerate.set("firstPixel", int(first)).set("firstSample", sample).set("samples", samples);
+            kGenerate.set("count", n);
+            run(kGenerate, n, STAGE_GENERATE);
+            counters.cameraRays += n;
+            traceBatch(n, scene, plan.bounces, plan.lightChunk, counters);
+            ++doneBatches;
+            if (progress || events.size() >= kProfileEvents) {
+                CL_CPP(dc.queue().finish());
+                collectProfile(counters);
+                if (progress) progress(doneBatches, totalBatches);
+            }
+        }
+    }
+    return spp;
+}
+
 void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, RenderCounters& counters,
                            const std::function<bool(size_t&, size_t&)>& nextTile, ImageRGB& out,
                            const std::function<void(size_t, size_t)>& progress) {
     Impl& m = *impl_;
     auto t0 = std::chrono::steady_clock::now();
-    const DeviceScene& ds = m.scene;
     dev::CameraParams cp = makeCameraParams(cam);
     // The loader and the command line already cap both (with a warning); this is the backstop for
     // scenes built in code.
@@ -279,74 +339,27 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     const size_t numPixels = size_t(cam.width) * cam.height;
     const size_t imageBytes = numPixels * sizeof(dev::float4);
     checkImageFits(m.dc.info(), cam);
+    dev::SceneParams sp = m.ds.params;
+    const BatchPlan plan = planBatches(m.ds, numPixels, settings, cp, sp);
+    m.ensureQueues(plan.capacity, plan.capacity * std::max<size_t>(plan.lightChunk, 1));
 
-    // A batch is `group` samples of each of `batch` pixels, pixel-major. The split depth depends only
-    // on the image and the batch limit, never on the tile: every device and every tiling computes
-    // each pixel identically.
-    const int group = samplesPerBatch(numPixels, cp.spp);
-    const size_t batch = std::max<size_t>(1, std::min(numPixels, settings.maxBatchPixels / size_t(group)));
-    const size_t batchPaths = batch * size_t(group);
-    const bool bounces = ds.features.mirror || ds.features.dielectric || ds.features.conductor;
-    dev::SceneParams sp = ds.params;
-    sp.seed = settings.seed;
-    sp.maxDepth = std::min(sp.maxDepth, kMaxRecursionDepth);
-    // Dielectrics split into both children while the queue can hold them and few samples are taken;
-    // beyond that (or with many samples) one child is chosen by Fresnel weight (same expectation).
-    int split = 0;
-    if (ds.features.dielectric && cp.spp <= 4) {
-        while (split < sp.maxDepth && (batchPaths << (split + 1)) <= (size_t(1) << 21)) ++split;
-    }
-    if (settings.splitDepthOverride >= 0) split = settings.splitDepthOverride;
-    sp.splitDepth = split;
-    const size_t capacity = bounces ? batchPaths << split : batchPaths;
-    size_t lightChunk = 0;
-    if (sp.numLights > 0) {
-        size_t budget = (size_t(256) << 20) / sizeof(dev::ShadowRay);
-        lightChunk = std::max<size_t>(1, std::min<size_t>(sp.numLights, budget / capacity));
-    }
-    m.ensureQueues(capacity, capacity * std::max<size_t>(lightChunk, 1));
-
-    cl::CommandQueue& q = m.dc.queue();
     cl::Buffer image = CL_CPP(cl::Buffer(m.dc.context(), CL_MEM_READ_WRITE, imageBytes));
-    CL_CPP(q.enqueueFillBuffer(image, dev::float4{0, 0, 0, 0}, 0, imageBytes));
+    CL_CPP(m.dc.queue().enqueueFillBuffer(image, dev::float4{0, 0, 0, 0}, 0, imageBytes));
     m.setRenderArgs(cp, sp, image);
 
     // settings.stop: a tile in progress ends after its current group of samples (at least one), no
     // new tile is started after the first.
-    auto stopped = [&] { return settings.stop && settings.stop->load(); };
+    const std::function<bool()> stopped = [&] { return settings.stop && settings.stop->load(); };
     size_t tileFirst = 0, tileCount = 0, tilesHere = 0;
     while (!(tilesHere++ > 0 && stopped()) && nextTile(tileFirst, tileCount)) {
         const size_t tileEnd = std::min(numPixels, tileFirst + tileCount);
-        const size_t totalBatches = ((size_t(cp.spp) + group - 1) / group) * ((tileEnd - tileFirst + batch - 1) / batch);
-        size_t doneBatches = 0;
-        int reached = cp.spp;  // fewer when stopped
-        for (int sample = 0; sample < cp.spp; sample += group) {
-            if (sample > 0 && stopped()) {
-                reached = sample;
-                counters.stoppedAtSample = counters.stoppedAtSample < 0 ? sample : std::min(counters.stoppedAtSample, sample);
-                break;
-            }
-            const int samples = std::min(group, cp.spp - sample);
-            for (size_t first = tileFirst; first < tileEnd; first += batch) {
-                const int n = int(std::min(batch, tileEnd - first)) * samples;
-                m.kGenerate.setArg(2, int(first)); m.kGenerate.setArg(3, sample); m.kGenerate.setArg(4, n);
-                m.kGenerate.setArg(7, samples);
-                m.run(m.kGenerate, n, STAGE_GENERATE);
-                counters.cameraRays += n;
-                m.traceBatch(n, sp, bounces, lightChunk, counters);
-                ++doneBatches;
-                if (progress || m.events.size() >= Impl::kProfileEvents) {
-                    CL_CPP(q.finish());
-                    m.collectProfile(counters);
-                    if (progress) progress(doneBatches, totalBatches);
-                }
-            }
-        }
+        const int reached = m.renderTile(tileFirst, tileEnd, plan, counters, progress, stopped);
         m.readTile(image, tileFirst, tileEnd, 1.0f / float(reached), out);
         counters.tiles += 1;
         counters.pixels += tileEnd - tileFirst;
         m.collectProfile(counters);  // the blocking read above drained the queue
     }
+    m.image = cl::Buffer();  // released with the render (the kernels' binding is replaced on the next)
     counters.profiled = counters.profiled || m.profiling;
     counters.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }

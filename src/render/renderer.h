@@ -1,3 +1,4 @@
+// src/render/: scene model to pixels (flattening, the wavefront renderer, several devices, device tone mapping, output files).
 // The wavefront renderer on one OpenCL device: uploads a DeviceScene, builds the program specialised
 // to its feature set, and renders a camera as a sequence of batches (a few samples of a pixel range;
 // several samples per batch only for small images):

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "cl/check.h"
+#include "cl/kernel_args.h"
 #include "shared/device_types.h"
 #include "util/error.h"
 
@@ -28,7 +29,7 @@ struct TonemapDevice::Impl {
     DeviceContext& dc;
     BuildInfo build;
     cl::Program program;
-    cl::Kernel kLum, kHist, kMap, kMapFloat;
+    KernelArgs kLum, kHist, kMap, kMapFloat;  // bound by parameter name (src/shared/kernel_params.h)
     cl::Buffer rgb, lum, partials, hist, out, outFloat;
     size_t numPixels = 0, capacity = 0;
     size_t workItems = 0;
@@ -37,17 +38,17 @@ struct TonemapDevice::Impl {
     double lumDelta = -1, logSum = 0;
 
     explicit Impl(DeviceContext& d) : dc(d) {
-        program = buildProgram(dc, {"common.cl", "tonemap.cl"}, {}, &build);
-        kLum = CL_CPP(cl::Kernel(program, "Tonemap_Luminance"));
-        kHist = CL_CPP(cl::Kernel(program, "Tonemap_Histogram"));
-        kMap = CL_CPP(cl::Kernel(program, "Tonemap_Map"));
-        kMapFloat = CL_CPP(cl::Kernel(program, "Tonemap_MapFloat"));
+        program = buildProgram(dc, KernelProgram::Tonemap, {}, &build);
+        kLum = KernelArgs(program, "Tonemap_Luminance");
+        kHist = KernelArgs(program, "Tonemap_Histogram");
+        kMap = KernelArgs(program, "Tonemap_Map");
+        kMapFloat = KernelArgs(program, "Tonemap_MapFloat");
         hist = CL_CPP(cl::Buffer(dc.context(), CL_MEM_READ_WRITE, 256 * sizeof(cl_uint)));
         partials = CL_CPP(cl::Buffer(dc.context(), CL_MEM_READ_WRITE, kMaxWorkItems * 2 * sizeof(float)));
     }
 
-    void launch(cl::Kernel& k, size_t globalItems) {
-        CL_CPP(dc.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(roundUp(globalItems, kLocal)),
+    void launch(KernelArgs& k, size_t globalItems) {
+        CL_CPP(dc.queue().enqueueNDRangeKernel(k.ready(), cl::NullRange, cl::NDRange(roundUp(globalItems, kLocal)),
                                                cl::NDRange(kLocal)));
     }
 
@@ -82,11 +83,8 @@ struct TonemapDevice::Impl {
     void luminance(double delta) {
         if (lumValid && lumDelta == delta) return;
         if (numPixels == 0) throw Error("tone mapping: no image uploaded");
-        CL_CPP(kLum.setArg(0, rgb));
-        CL_CPP(kLum.setArg(1, cl_uint(numPixels)));
-        CL_CPP(kLum.setArg(2, float(delta)));
-        CL_CPP(kLum.setArg(3, lum));
-        CL_CPP(kLum.setArg(4, partials));
+        kLum.set("rgb", rgb).set("n", cl_uint(numPixels)).set("delta", float(delta)).set("lum", lum);
+        kLum.set("partials", partials);
         launch(kLum, workItems);
         std::vector<float> p(roundUp(workItems, kLocal) * 2);
         CL_CPP(dc.queue().enqueueReadBuffer(partials, CL_TRUE, 0, p.size() * sizeof(float), p.data()));
@@ -104,12 +102,8 @@ struct TonemapDevice::Impl {
         for (int shift = 24; shift >= 0; shift -= 8) {
             const cl_uint zero = 0;
             CL_CPP(dc.queue().enqueueFillBuffer(hist, zero, 0, 256 * sizeof(cl_uint)));
-            CL_CPP(kHist.setArg(0, lum));
-            CL_CPP(kHist.setArg(1, cl_uint(numPixels)));
-            CL_CPP(kHist.setArg(2, prefix));
-            CL_CPP(kHist.setArg(3, mask));
-            CL_CPP(kHist.setArg(4, cl_uint(shift)));
-            CL_CPP(kHist.setArg(5, hist));
+            kHist.set("lum", lum).set("n", cl_uint(numPixels)).set("prefix", prefix).set("mask", mask);
+            kHist.set("shift", cl_uint(shift)).set("hist", hist);
             launch(kHist, workItems);
             cl_uint h[256];
             CL_CPP(dc.queue().enqueueReadBuffer(hist, CL_TRUE, 0, sizeof(h), h));
@@ -139,7 +133,7 @@ struct TonemapDevice::Impl {
         luminance(s.delta);
         TonemapDeviceResult r;
         r.logSum = logSum;
-        const bool needWhite = s.op == TmoKind::Photographic && s.burnPercent > 0.0f;
+        const bool needWhite = s.op == dev::TMO_PHOTOGRAPHIC && s.burnPercent > 0.0f;
         const size_t k = percentileIndex(numPixels, 100.0 - double(s.burnPercent));
         r.kthLuminance = needWhite ? select(k) : 0.0f;
         r.stats = tonemapStatsFrom(logSum, numPixels, r.kthLuminance, s);
@@ -156,17 +150,13 @@ struct TonemapDevice::Impl {
         if (floatDisplay) {
             if (outFloat() == nullptr)
                 outFloat = CL_CPP(cl::Buffer(dc.context(), CL_MEM_WRITE_ONLY, capacity * 3 * sizeof(float)));
-            CL_CPP(kMapFloat.setArg(0, rgb));
-            CL_CPP(kMapFloat.setArg(1, sizeof(p), &p));
-            CL_CPP(kMapFloat.setArg(2, outFloat));
+            kMapFloat.set("rgb", rgb).set("p", p).set("out", outFloat);
             launch(kMapFloat, mapWorkItems(numPixels));
             r.display.resize(numPixels * 3);
             CL_CPP(dc.queue().enqueueReadBuffer(outFloat, CL_TRUE, 0, r.display.size() * sizeof(float), r.display.data()));
             return r;
         }
-        CL_CPP(kMap.setArg(0, rgb));
-        CL_CPP(kMap.setArg(1, sizeof(p), &p));
-        CL_CPP(kMap.setArg(2, out));
+        kMap.set("rgb", rgb).set("p", p).set("out", out);
         launch(kMap, mapWorkItems(numPixels));
         r.rgb8.resize(numPixels * 3);
         CL_CPP(dc.queue().enqueueReadBuffer(out, CL_TRUE, 0, r.rgb8.size(), r.rgb8.data()));

@@ -22,7 +22,7 @@ struct TonemapDeviceResult {
 
 class TonemapDevice {
 public:
-    explicit TonemapDevice(DeviceContext& dc);  // builds {"common.cl", "tonemap.cl"}
+    explicit TonemapDevice(DeviceContext& dc);  // builds KernelProgram::Tonemap
     ~TonemapDevice();
     const BuildInfo& buildInfo() const;
 

@@ -1,6 +1,8 @@
+// src/scene/: scene files to the scene model (XML and JSON nodes, one walker, PLY reader, transforms).
 // The scene model: what a CENG795 scene file says, resolved (ids -> indices, transformation strings
 // -> matrices, PLY files -> vertex arrays) but not yet flattened for the device. Produced by the scene
-// loader (scene_loader.h) from XML or JSON; consumed by render/flatten. Nothing here knows OpenCL.
+// loader (scene_loader.h) from XML or JSON; consumed by render/flatten. Nothing here knows OpenCL (the enums are those of
+// shared/device_types.h, plain C shared with the kernels).
 //
 // Conventions: all indices are 0-based indices into the vectors of Scene; colours are linear
 // (degamma already applied by the loader); angles are in degrees as in the file unless named *Rad.
@@ -8,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "shared/device_types.h"  // the enums (one per concept, shared with the kernels)
 #include "util/math.h"
 
 namespace clrt {
@@ -17,10 +20,8 @@ namespace clrt {
 constexpr int kMaxSamplesPerPixel = 1 << 20;  // 1,048,576 samples per pixel
 constexpr int kMaxRecursionDepth = 256;       // bounces after the camera ray
 
-enum class TonemapOperator { Photographic, ACES, Filmic };
-
 struct Tonemap {
-    TonemapOperator op = TonemapOperator::Photographic;
+    dev::TmoKind op = dev::TMO_PHOTOGRAPHIC;
     float key = 0.18f;          // TMOOptions[0]
     float burnPercent = 1.0f;   // TMOOptions[1]
     float saturation = 1.0f;
@@ -44,11 +45,9 @@ struct Camera {
     std::vector<Tonemap> tonemaps;
 };
 
-enum class MaterialType { BlinnPhong, Mirror, Dielectric, Conductor };
-
 struct Material {
     int id = 0;
-    MaterialType type = MaterialType::BlinnPhong;
+    dev::MaterialKind type = dev::MATERIAL_BLINN_PHONG;
     Vec3 ambient, diffuse, specular, mirror;
     float phongExponent = 1;
     float refractionIndex = 1;
@@ -57,16 +56,12 @@ struct Material {
     float roughness = 0;
 };
 
-enum class TextureType { Image, Perlin, Checkerboard };
-enum class DecalMode { ReplaceKd, BlendKd, ReplaceKs, ReplaceBackground, ReplaceNormal, BumpNormal, ReplaceAll };
-enum class Interpolation { Nearest, Bilinear, Trilinear };
-
 struct Texture {
     int id = 0;
-    TextureType type = TextureType::Image;
+    dev::TextureKind type = dev::TEXTURE_IMAGE;
     int imageIndex = -1;            // into Scene::imagePaths (Image textures)
-    DecalMode decalMode = DecalMode::ReplaceKd;
-    Interpolation interpolation = Interpolation::Bilinear;
+    dev::DecalKind decalMode = dev::DECAL_REPLACE_KD;
+    dev::InterpKind interpolation = dev::INTERP_BILINEAR;
     float normalizer = 255;         // Image: texel / normalizer (loader sets 1 for EXR when absent)
     bool normalizerGiven = false;
     float bumpFactor = 1;
@@ -78,22 +73,17 @@ struct Texture {
     float scale = 1, offset = 0;
 };
 
-enum class LightType { Point, Area, Directional, Spot, Environment };
-enum class EnvMapping { LatLong, Probe };
-enum class EnvSampler { Uniform, Cosine, Importance, Mis };
-
 struct Light {
     int id = 0;
-    LightType type = LightType::Point;
+    dev::LightKind type = dev::LIGHT_POINT;
     Vec3 position;
     Vec3 intensity;       // Point, Spot: intensity; Area, Directional: radiance
     Vec3 direction;       // Directional, Spot; Area: normal
     float size = 1;       // Area: side length
     float coverageAngle = 0, falloffAngle = 0;  // Spot, full angles in degrees
     int imageIndex = -1;  // Environment
-    EnvMapping mapping = EnvMapping::LatLong;
-    EnvSampler sampler = EnvSampler::Mis;
-    bool samplerGiven = false;
+    dev::EnvMappingKind mapping = dev::ENV_LATLONG;
+    dev::EnvSamplerKind sampler = dev::ENV_SAMPLE_MIS;
 };
 
 // A triangle mesh in its own object space (before its transformation).
@@ -124,8 +114,6 @@ struct Shape {
 struct Scene {
     std::string path;              // the scene file
     Vec3 backgroundColor{0, 0, 0};
-    float shadowRayEpsilon = 1e-3f;
-    float intersectionTestEpsilon = 1e-6f;
     int maxRecursionDepth = 6;
     Vec3 ambientLight{0, 0, 0};
     std::vector<Camera> cameras;
@@ -137,5 +125,10 @@ struct Scene {
     std::vector<MeshData> meshes;
     std::vector<Shape> shapes;
 };
+
+// Environment-light sampling strategy by name (uniform | cosine | importance | mis); false if unknown.
+bool parseEnvSampler(const std::string& name, dev::EnvSamplerKind& out);
+// Sets the sampler of every environment light (clrt render --env-sampling), before flattening.
+void overrideEnvSampling(Scene& scene, dev::EnvSamplerKind sampler);
 
 }  // namespace clrt

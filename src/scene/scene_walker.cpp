@@ -40,6 +40,7 @@
 #include "scene/scene_loader.h"
 #include "scene/scene_node.h"
 #include "scene/transforms.h"
+#include "shared/type_tables.h"
 #include "util/error.h"
 
 namespace clrt {
@@ -207,10 +208,13 @@ struct Walker {
 
     // Warns once per (parent, element) about children that are not in `known`.
     void checkChildren(const SceneNode& n, std::initializer_list<const char*> known) {
+        checkChildren(n, std::vector<std::string>(known.begin(), known.end()));
+    }
+    void checkChildren(const SceneNode& n, const std::vector<std::string>& known) {
         for (auto& c : n.children()) {
             std::string cn = c->name();
             bool ok = false;
-            for (const char* k : known)
+            for (const std::string& k : known)
                 if (cn == k) { ok = true; break; }
             if (ok) continue;
             std::string key = n.name() + "/" + cn;
@@ -224,8 +228,10 @@ struct Walker {
                              "ZeroBasedIndexing", "Cameras", "Lights", "Materials", "Transformations",
                              "VertexData", "TexCoordData", "Textures", "Objects"});
         if (auto c = root.child("BackgroundColor")) scene.backgroundColor = vec3(*c);
-        if (auto c = root.child("ShadowRayEpsilon")) scene.shadowRayEpsilon = number(*c);
-        if (auto c = root.child("IntersectionTestEpsilon")) scene.intersectionTestEpsilon = number(*c);
+        // Read (a malformed value is still an error) but not used: ray origins are offset robustly
+        // (cl_kernels/common.cl, Ray_OffsetOrigin) and the intersection tests need no epsilon.
+        for (const char* eps : {"ShadowRayEpsilon", "IntersectionTestEpsilon"})
+            if (auto c = root.child(eps)) (void)number(*c);
         if (auto c = root.child("MaxRecursionDepth")) {
             scene.maxRecursionDepth = cappedInteger(*c, kMaxRecursionDepth);
             if (scene.maxRecursionDepth < 0) fail(*c, "MaxRecursionDepth must not be negative");
@@ -327,11 +333,9 @@ struct Walker {
         Material m;
         m.id = requiredId(n);
         std::string type = lower(trim(n.attribute("type").value_or("")));
-        if (type.empty() || type == "blinnphong" || type == "phong") m.type = MaterialType::BlinnPhong;
-        else if (type == "mirror") m.type = MaterialType::Mirror;
-        else if (type == "dielectric") m.type = MaterialType::Dielectric;
-        else if (type == "conductor") m.type = MaterialType::Conductor;
-        else fail(n, describe(n) + ": unknown material type '" + *n.attribute("type") + "'");
+        if (type.empty() || type == "phong") type = typeRow(materialTypes(), dev::MATERIAL_BLINN_PHONG).name;
+        if (!lookupType(materialTypes(), type, m.type))
+            fail(n, describe(n) + ": unknown material type '" + *n.attribute("type") + "'");
         bool degamma = false;
         if (auto d = n.attribute("degamma")) degamma = boolean(n, *d, describe(n) + ": degamma");
         auto colour = [&](const char* name, Vec3& out) {
@@ -392,35 +396,23 @@ struct Walker {
         auto typeAttr = n.attribute("type");
         if (!typeAttr) fail(n, describe(n) + " has no type attribute (image, perlin or checkerboard)");
         std::string type = lower(trim(*typeAttr));
-        if (type == "image") t.type = TextureType::Image;
-        else if (type == "perlin") t.type = TextureType::Perlin;
-        else if (type == "checkerboard") t.type = TextureType::Checkerboard;
-        else fail(n, describe(n) + ": unknown texture type '" + *typeAttr + "'");
+        if (!lookupType(textureTypes(), type, t.type)) fail(n, describe(n) + ": unknown texture type '" + *typeAttr + "'");
         if (auto d = n.attribute("degamma")) t.degamma = boolean(n, *d, describe(n) + ": degamma");
-        if (t.type == TextureType::Image) t.imageIndex = imageRef(n, *need(n, "ImageId"));
+        if (t.type == dev::TEXTURE_IMAGE) t.imageIndex = imageRef(n, *need(n, "ImageId"));
         if (auto c = n.child("Interpolation")) {
             std::string v = lower(trim(c->text()));
-            if (v == "nearest") t.interpolation = Interpolation::Nearest;
-            else if (v == "bilinear") t.interpolation = Interpolation::Bilinear;
-            else if (v == "trilinear") t.interpolation = Interpolation::Trilinear;
-            else fail(*c, "<Interpolation>: unknown value '" + trim(c->text()) + "' (nearest, bilinear, trilinear)");
+            if (!lookupType(interpolations(), v, t.interpolation))
+                fail(*c, "<Interpolation>: unknown value '" + trim(c->text()) + "' (nearest, bilinear, trilinear)");
         }
         if (auto c = n.child("DecalMode")) {
             std::string v = lower(trim(c->text()));
-            static const std::map<std::string, DecalMode> modes = {
-                {"replace_kd", DecalMode::ReplaceKd},         {"blend_kd", DecalMode::BlendKd},
-                {"replace_ks", DecalMode::ReplaceKs},         {"replace_background", DecalMode::ReplaceBackground},
-                {"replace_normal", DecalMode::ReplaceNormal}, {"bump_normal", DecalMode::BumpNormal},
-                {"replace_all", DecalMode::ReplaceAll}};
-            auto it = modes.find(v);
-            if (it == modes.end()) fail(*c, "<DecalMode>: unknown value '" + trim(c->text()) + "'");
-            t.decalMode = it->second;
+            if (!lookupType(decalModes(), v, t.decalMode)) fail(*c, "<DecalMode>: unknown value '" + trim(c->text()) + "'");
         }
         if (auto c = n.child("Normalizer")) {
             t.normalizer = number(*c);
             t.normalizerGiven = true;
             if (t.normalizer <= 0) fail(*c, "<Normalizer> must be positive");
-        } else if (t.type == TextureType::Image) {
+        } else if (t.type == dev::TEXTURE_IMAGE) {
             std::string ext = lower(fs::path(scene.imagePaths[size_t(t.imageIndex)]).extension().string());
             if (ext == ".exr" || ext == ".hdr") t.normalizer = 1;
         }
@@ -526,10 +518,8 @@ struct Walker {
         Tonemap t;
         if (auto c = n.child("TMO")) {
             std::string v = lower(trim(c->text()));
-            if (v == "photographic") t.op = TonemapOperator::Photographic;
-            else if (v == "aces") t.op = TonemapOperator::ACES;
-            else if (v == "filmic") t.op = TonemapOperator::Filmic;
-            else fail(*c, "<TMO>: unknown operator '" + trim(c->text()) + "' (Photographic, ACES or Filmic)");
+            if (!lookupType(tonemapOperators(), v, t.op))
+                fail(*c, "<TMO>: unknown operator '" + trim(c->text()) + "' (Photographic, ACES or Filmic)");
         }
         if (auto c = n.child("TMOOptions")) {
             auto v = numbers(*c);
@@ -550,9 +540,12 @@ struct Walker {
     }
 
     // ---- Lights ------------------------------------------------------------------------------
+    // The light elements are the names of lightTypes() (src/shared/type_tables.h); readLight() reads
+    // the parameters of each type.
     void readLights(const SceneNode& n) {
-        checkChildren(n, {"AmbientLight", "PointLight", "AreaLight", "DirectionalLight", "SpotLight",
-                          "SphericalDirectionalLight"});
+        std::vector<std::string> known = {"AmbientLight"};
+        for (const auto& row : lightTypes()) known.push_back(row.name);
+        checkChildren(n, known);
         for (auto& c : n.children()) {
             std::string name = c->name();
             const SceneNode& l = *c;
@@ -561,74 +554,73 @@ struct Walker {
             if (name == "AmbientLight") {
                 scene.ambientLight = vec3(l);
                 continue;
-            } else if (name == "PointLight") {
-                checkChildren(l, {"Position", "Intensity"});
-                light.type = LightType::Point;
-                light.position = vec3(*need(l, "Position"));
-                light.intensity = vec3(*need(l, "Intensity"));
-            } else if (name == "AreaLight") {
-                checkChildren(l, {"Position", "Normal", "Size", "Radiance"});
-                light.type = LightType::Area;
-                light.position = vec3(*need(l, "Position"));
-                auto nn = need(l, "Normal");
-                light.direction = unit(vec3(*nn));
-                if (length(light.direction) == 0) fail(*nn, describe(l) + ": Normal is zero");
-                auto sn = need(l, "Size");
-                light.size = number(*sn);
-                if (!(light.size > 0)) fail(*sn, describe(l) + ": Size must be positive");
-                if (!std::isfinite(light.size * light.size)) fail(*sn, describe(l) + ": Size² overflows a 32-bit float");
-                light.intensity = vec3(*need(l, "Radiance"));
-            } else if (name == "DirectionalLight") {
-                checkChildren(l, {"Direction", "Radiance"});
-                light.type = LightType::Directional;
-                auto dn = need(l, "Direction");
-                light.direction = unit(vec3(*dn));
-                if (length(light.direction) == 0) fail(*dn, describe(l) + ": Direction is zero");
-                light.intensity = vec3(*need(l, "Radiance"));
-            } else if (name == "SpotLight") {
-                checkChildren(l, {"Position", "Direction", "Intensity", "CoverageAngle", "FalloffAngle", "FallOffAngle"});
-                light.type = LightType::Spot;
-                light.position = vec3(*need(l, "Position"));
-                auto dn = need(l, "Direction");
-                light.direction = unit(vec3(*dn));
-                if (length(light.direction) == 0) fail(*dn, describe(l) + ": Direction is zero");
-                light.intensity = vec3(*need(l, "Intensity"));
-                light.coverageAngle = number(*need(l, "CoverageAngle"));
-                auto fo = l.child("FalloffAngle");
-                if (!fo) fo = l.child("FallOffAngle");
-                if (!fo) fail(l, describe(l) + " has no <FalloffAngle>");
-                light.falloffAngle = number(*fo);
-                if (!(light.coverageAngle > 0) || light.falloffAngle < 0 || light.falloffAngle > light.coverageAngle)
-                    fail(l, describe(l) + ": need 0 <= FalloffAngle <= CoverageAngle and CoverageAngle > 0");
-            } else if (name == "SphericalDirectionalLight") {
-                checkChildren(l, {"ImageId", "Type", "Sampler"});
-                light.type = LightType::Environment;
-                light.imageIndex = imageRef(l, *need(l, "ImageId"));
-                std::optional<std::string> type = l.attribute("type");
-                if (!type)
-                    if (auto c = l.child("Type")) type = c->text();
-                if (type) {
-                    std::string v = lower(trim(*type));
-                    if (v == "latlong") light.mapping = EnvMapping::LatLong;
-                    else if (v == "probe") light.mapping = EnvMapping::Probe;
-                    else fail(l, describe(l) + ": unknown type '" + *type + "' (latlong or probe)");
-                }
-                std::optional<std::string> sampler = l.attribute("sampler");
-                if (!sampler)
-                    if (auto c = l.child("Sampler")) sampler = c->text();
-                if (sampler) {
-                    std::string v = lower(trim(*sampler));
-                    if (v == "uniform") light.sampler = EnvSampler::Uniform;
-                    else if (v == "cosine") light.sampler = EnvSampler::Cosine;
-                    else if (v == "importance") light.sampler = EnvSampler::Importance;
-                    else if (v == "mis") light.sampler = EnvSampler::Mis;
-                    else fail(l, describe(l) + ": unknown sampler '" + *sampler + "' (uniform, cosine, importance or mis)");
-                    light.samplerGiven = true;
-                }
-            } else {
-                continue;
             }
+            const TypeRow<dev::LightKind>* row = findType(lightTypes(), name);
+            if (!row) continue;
+            light.type = row->kind;
+            readLight(l, light);
             scene.lights.push_back(light);
+        }
+    }
+    void readLight(const SceneNode& l, Light& light) {
+        switch (light.type) {
+        case dev::LIGHT_POINT:
+            checkChildren(l, {"Position", "Intensity"});
+            light.position = vec3(*need(l, "Position"));
+            light.intensity = vec3(*need(l, "Intensity"));
+            break;
+        case dev::LIGHT_AREA: {
+            checkChildren(l, {"Position", "Normal", "Size", "Radiance"});
+            light.position = vec3(*need(l, "Position"));
+            auto nn = need(l, "Normal");
+            light.direction = unit(vec3(*nn));
+            if (length(light.direction) == 0) fail(*nn, describe(l) + ": Normal is zero");
+            auto sn = need(l, "Size");
+            light.size = number(*sn);
+            if (!(light.size > 0)) fail(*sn, describe(l) + ": Size must be positive");
+            if (!std::isfinite(light.size * light.size)) fail(*sn, describe(l) + ": Size² overflows a 32-bit float");
+            light.intensity = vec3(*need(l, "Radiance"));
+            break;
+        }
+        case dev::LIGHT_DIRECTIONAL: {
+            checkChildren(l, {"Direction", "Radiance"});
+            auto dn = need(l, "Direction");
+            light.direction = unit(vec3(*dn));
+            if (length(light.direction) == 0) fail(*dn, describe(l) + ": Direction is zero");
+            light.intensity = vec3(*need(l, "Radiance"));
+            break;
+        }
+        case dev::LIGHT_SPOT: {
+            checkChildren(l, {"Position", "Direction", "Intensity", "CoverageAngle", "FalloffAngle", "FallOffAngle"});
+            light.position = vec3(*need(l, "Position"));
+            auto dn = need(l, "Direction");
+            light.direction = unit(vec3(*dn));
+            if (length(light.direction) == 0) fail(*dn, describe(l) + ": Direction is zero");
+            light.intensity = vec3(*need(l, "Intensity"));
+            light.coverageAngle = number(*need(l, "CoverageAngle"));
+            auto fo = l.child("FalloffAngle");
+            if (!fo) fo = l.child("FallOffAngle");
+            if (!fo) fail(l, describe(l) + " has no <FalloffAngle>");
+            light.falloffAngle = number(*fo);
+            if (!(light.coverageAngle > 0) || light.falloffAngle < 0 || light.falloffAngle > light.coverageAngle)
+                fail(l, describe(l) + ": need 0 <= FalloffAngle <= CoverageAngle and CoverageAngle > 0");
+            break;
+        }
+        case dev::LIGHT_ENVIRONMENT: {
+            checkChildren(l, {"ImageId", "Type", "Sampler"});
+            light.imageIndex = imageRef(l, *need(l, "ImageId"));
+            std::optional<std::string> type = l.attribute("type");
+            if (!type)
+                if (auto c = l.child("Type")) type = c->text();
+            if (type && !lookupType(envMappings(), lower(trim(*type)), light.mapping))
+                fail(l, describe(l) + ": unknown type '" + *type + "' (latlong or probe)");
+            std::optional<std::string> sampler = l.attribute("sampler");
+            if (!sampler)
+                if (auto c = l.child("Sampler")) sampler = c->text();
+            if (sampler && !lookupType(envSamplers(), lower(trim(*sampler)), light.sampler))
+                fail(l, describe(l) + ": unknown sampler '" + *sampler + "' (" + typeNames(envSamplers()) + ")");
+            break;
+        }
         }
     }
 
@@ -667,7 +659,7 @@ struct Walker {
     }
     bool hasImageTexture(const std::vector<int>& tex) const {
         for (int t : tex)
-            if (scene.textures[size_t(t)].type == TextureType::Image) return true;
+            if (scene.textures[size_t(t)].type == dev::TEXTURE_IMAGE) return true;
         return false;
     }
 

@@ -1,3 +1,4 @@
+/* src/shared/: what the host and the kernels both compile (structs, enums and type tables, kernel parameter lists). */
 /* device_types.h — THE definition of every struct and enum that crosses the host/device boundary.
  *
  * Read by the C++ compiler (inside namespace clrt::dev, with float4/int4 defined below as 16-byte
@@ -13,20 +14,55 @@
 namespace clrt {
 namespace dev {
 typedef unsigned int uint;
+typedef unsigned char uchar;
 struct alignas(16) float4 { float x, y, z, w; };
 struct alignas(16) int4 { int x, y, z, w; };
 struct alignas(8) float2 { float x, y; };
 #endif
 
-/* ---- enums (plain ints on both sides) ---------------------------------------------------- */
-enum MaterialKind { MATERIAL_BLINN_PHONG = 0, MATERIAL_MIRROR = 1, MATERIAL_DIELECTRIC = 2, MATERIAL_CONDUCTOR = 3 };
-enum LightKind { LIGHT_POINT = 0, LIGHT_AREA = 1, LIGHT_DIRECTIONAL = 2, LIGHT_SPOT = 3, LIGHT_ENVIRONMENT = 4 };
-enum EnvMappingKind { ENV_LATLONG = 0, ENV_PROBE = 1 };
-enum EnvSamplerKind { ENV_SAMPLE_UNIFORM = 0, ENV_SAMPLE_COSINE = 1, ENV_SAMPLE_IMPORTANCE = 2, ENV_SAMPLE_MIS = 3 };
-enum TextureKind { TEXTURE_IMAGE = 0, TEXTURE_PERLIN = 1, TEXTURE_CHECKERBOARD = 2 };
-enum DecalKind { DECAL_REPLACE_KD = 0, DECAL_BLEND_KD = 1, DECAL_REPLACE_KS = 2, DECAL_REPLACE_BACKGROUND = 3,
-                 DECAL_REPLACE_NORMAL = 4, DECAL_BUMP_NORMAL = 5, DECAL_REPLACE_ALL = 6 };
-enum InterpKind { INTERP_NEAREST = 0, INTERP_BILINEAR = 1 };
+/* ---- enums: one per concept, the only copy (the scene model, the flattener and the kernels use these)
+ * Each is generated from a table of X-macro rows. The two type families have extra columns:
+ *   lights     L(KIND, element name in scene files, kernel feature flag)
+ *   materials  M(KIND, type= name in scene files, kernel feature flag or "" (always compiled),
+ *                spawns reflection/refraction children 1/0)
+ * A scene that uses a type gets -D<flag>=1 in its program (FeatureSet, src/render/device_scene.h);
+ * the parser looks names up here (src/shared/type_tables.h). Values are the row order. */
+#define CLRT_LIGHT_TABLE(L)                                                                        \
+    L(LIGHT_POINT, "PointLight", "CLRT_HAS_POINT_LIGHT")                                           \
+    L(LIGHT_AREA, "AreaLight", "CLRT_HAS_AREA_LIGHT")                                              \
+    L(LIGHT_DIRECTIONAL, "DirectionalLight", "CLRT_HAS_DIRECTIONAL_LIGHT")                         \
+    L(LIGHT_SPOT, "SpotLight", "CLRT_HAS_SPOT_LIGHT")                                              \
+    L(LIGHT_ENVIRONMENT, "SphericalDirectionalLight", "CLRT_HAS_ENV_LIGHT")
+#define CLRT_MATERIAL_TABLE(M)                                                                     \
+    M(MATERIAL_BLINN_PHONG, "blinnphong", "", 0)                                                   \
+    M(MATERIAL_MIRROR, "mirror", "CLRT_HAS_MIRROR", 1)                                             \
+    M(MATERIAL_DIELECTRIC, "dielectric", "CLRT_HAS_DIELECTRIC", 1)                                 \
+    M(MATERIAL_CONDUCTOR, "conductor", "CLRT_HAS_CONDUCTOR", 1)
+/* The other enums: N(KIND, name in scene files / on the command line). */
+#define CLRT_ENV_MAPPING_TABLE(N) N(ENV_LATLONG, "latlong") N(ENV_PROBE, "probe")
+#define CLRT_ENV_SAMPLER_TABLE(N)                                                                  \
+    N(ENV_SAMPLE_UNIFORM, "uniform") N(ENV_SAMPLE_COSINE, "cosine") N(ENV_SAMPLE_IMPORTANCE, "importance") \
+    N(ENV_SAMPLE_MIS, "mis")
+#define CLRT_TEXTURE_TABLE(N) N(TEXTURE_IMAGE, "image") N(TEXTURE_PERLIN, "perlin") N(TEXTURE_CHECKERBOARD, "checkerboard")
+#define CLRT_DECAL_TABLE(N)                                                                        \
+    N(DECAL_REPLACE_KD, "replace_kd") N(DECAL_BLEND_KD, "blend_kd") N(DECAL_REPLACE_KS, "replace_ks")    \
+    N(DECAL_REPLACE_BACKGROUND, "replace_background") N(DECAL_REPLACE_NORMAL, "replace_normal")          \
+    N(DECAL_BUMP_NORMAL, "bump_normal") N(DECAL_REPLACE_ALL, "replace_all")
+/* The device filters trilinear textures bilinearly (no mip-maps). */
+#define CLRT_INTERP_TABLE(N) N(INTERP_NEAREST, "nearest") N(INTERP_BILINEAR, "bilinear") N(INTERP_TRILINEAR, "trilinear")
+/* Tone-mapping operators (Tonemap blocks, clrt tonemap --tmo, TonemapParams.op). */
+#define CLRT_TMO_TABLE(N) N(TMO_PHOTOGRAPHIC, "photographic") N(TMO_ACES, "aces") N(TMO_FILMIC, "filmic")
+
+#define CLRT_ENUM_CONSTANT_(KIND, ...) KIND,
+enum LightKind { CLRT_LIGHT_TABLE(CLRT_ENUM_CONSTANT_) };
+enum MaterialKind { CLRT_MATERIAL_TABLE(CLRT_ENUM_CONSTANT_) };
+enum EnvMappingKind { CLRT_ENV_MAPPING_TABLE(CLRT_ENUM_CONSTANT_) };
+enum EnvSamplerKind { CLRT_ENV_SAMPLER_TABLE(CLRT_ENUM_CONSTANT_) };
+enum TextureKind { CLRT_TEXTURE_TABLE(CLRT_ENUM_CONSTANT_) };
+enum DecalKind { CLRT_DECAL_TABLE(CLRT_ENUM_CONSTANT_) };
+enum InterpKind { CLRT_INTERP_TABLE(CLRT_ENUM_CONSTANT_) };
+enum TmoKind { CLRT_TMO_TABLE(CLRT_ENUM_CONSTANT_) };
+#undef CLRT_ENUM_CONSTANT_
 
 /* Primitive references in BVH leaves: index < numTriangles is a triangle, else sphere (index - numTriangles). */
 #define CLRT_MAX_TEXTURES_PER_SHAPE 4
@@ -224,7 +260,7 @@ typedef struct ShadingPoint {
 /* Tone mapping (cl_kernels/tonemap.cl): what the per-pixel mapping needs, computed by the host from
  * the device's log-sum and luminance percentile (src/render/tonemap_device.cpp). */
 typedef struct TonemapParams {
-    int op;                /* TmoKind: 0 Photographic, 1 ACES, 2 Filmic */
+    int op;                /* TmoKind */
     float scale;           /* key / log-average luminance: L = Y * scale */
     float whiteL;          /* Photographic L_white (when hasWhite) */
     int hasWhite;          /* 1: burn-out white point; 0: L / (1 + L) */

@@ -1,3 +1,4 @@
+// src/tools/: command-line helpers built beside clrt (clrt-imgdiff).
 // clrt-imgdiff A B: how far image A is from reference B (EXR or PNG, read by src/image). Prints one
 // line of metrics and, with --max-relmse / --max-bad, exits 1 when A is further than allowed.
 // Used by scripts/device_check.sh to compare a GPU render with PoCL's, and by hand.

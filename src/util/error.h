@@ -1,3 +1,4 @@
+// src/util/: the error type and exit codes, vector math.
 // The one exception type for user-facing failures. Readers throw it with a message that names the
 // file (and line:col for XML, key path for JSON); main() catches it once, prints the message on one
 // line and exits with its code: 2 = bad input, 3 = device failure, 4 = output failure.

@@ -1,0 +1,49 @@
+// flatten.h — the parts of flattenScene() (device_scene.cpp), one per domain and file:
+//   flatten_materials.cpp    materials
+//   flatten_textures.cpp     the texel atlas (ImageAtlas), texture maps, per-shape texture sets
+//   flatten_geometry.cpp     planes, spheres, meshes (on all hardware threads), the BVH, leaf order
+//   flatten_lights.cpp       lights (one case per light type)
+//   flatten_environment.cpp  environment lights: map, sampler, importance distribution, miss radiance
+// Each appends to a DeviceScene and marks the features it finds. The driver calls them in the order
+// above: images enter the atlas in order of first use (textures, then environment maps).
+#pragma once
+#include <chrono>
+#include <map>
+#include <vector>
+
+#include "render/device_scene.h"
+
+namespace clrt {
+
+double secondsSince(std::chrono::steady_clock::time_point t0);
+
+// The texel atlas: each scene image that is used is read once, on first use, into ds.texels (float4
+// texels) with its ImageInfo in ds.images.
+class ImageAtlas {
+public:
+    ImageAtlas(const Scene& scene, DeviceScene& ds) : scene_(scene), ds_(ds) {}
+    int use(int sceneImage);  // the device image index of scene image `sceneImage`
+    bool isHdr(int deviceImage) const { return hdr_.at(size_t(deviceImage)); }
+
+private:
+    const Scene& scene_;
+    DeviceScene& ds_;
+    std::map<int, int> slot_;  // scene image index -> device image index
+    std::vector<bool> hdr_;    // per device image
+};
+
+void flattenMaterials(const Scene& scene, DeviceScene& ds);
+// Texture maps (and the background texture); images through `atlas`.
+void flattenTextures(const Scene& scene, DeviceScene& ds, ImageAtlas& atlas);
+// The texture set of shape `s` (appended to ds.textureSets), or CLRT_INVALID when it has none.
+int flattenTextureSet(const Scene& scene, const Shape& s, DeviceScene& ds);
+// Planes, spheres and mesh triangles, then the BVH over triangles and spheres with the triangles
+// stored in leaf order; sets the primitive counts of ds.params.
+void flattenGeometry(const Scene& scene, DeviceScene& ds);
+void flattenLights(const Scene& scene, DeviceScene& ds, ImageAtlas& atlas);
+// The device fields of environment light `l` (index `lightIndex`), its importance distribution, and
+// the scene's miss radiance (ds.params env fields) from the first environment light.
+void flattenEnvironmentLight(const Scene& scene, const Light& l, int lightIndex, dev::Light& d, DeviceScene& ds,
+                             ImageAtlas& atlas);
+
+}  // namespace clrt

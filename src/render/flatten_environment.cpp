@@ -1,0 +1,35 @@
+// flatten_environment.cpp — environment (SphericalDirectionalLight) lights: the map in the texel
+// atlas, mapping and sampler, the importance distribution (env_distribution.h), and the radiance of
+// rays that miss (the first environment light's map); see flatten.h.
+#include "render/env_distribution.h"
+#include "render/flatten.h"
+#include "util/error.h"
+
+namespace clrt {
+
+void flattenEnvironmentLight(const Scene& scene, const Light& l, int lightIndex, dev::Light& d, DeviceScene& ds,
+                             ImageAtlas& atlas) {
+    d.radiance = {1, 1, 1, 0};
+    d.direction = {0, 1, 0, 0};
+    d.image = atlas.use(l.imageIndex);
+    d.mapping = l.mapping;
+    d.sampler = l.sampler;
+    const dev::ImageInfo& info = ds.images[d.image];
+    EnvMapView view{&ds.texels[info.offset], info.width, info.height, d.mapping};
+    auto te = std::chrono::steady_clock::now();
+    EnvDistribution dist = buildEnvDistribution(view);
+    ds.envDistSeconds += secondsSince(te);
+    d.distribution = int(ds.envDistribution.size());
+    ds.envDistribution.insert(ds.envDistribution.end(), dist.data.begin(), dist.data.end());
+    if (ds.params.envLight == CLRT_INVALID) {
+        ds.params.envLight = lightIndex;
+        ds.params.envScale = d.radiance;
+        ds.params.envImage = d.image;
+        ds.params.envMapping = d.mapping;
+    } else {
+        warnOnce(scene.path + ": several SphericalDirectionalLights: each lights the scene, but rays that "
+                 "miss show the first one only");
+    }
+}
+
+}  // namespace clrt

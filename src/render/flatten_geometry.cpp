@@ -1,0 +1,230 @@
+// flatten_geometry.cpp — planes, spheres and mesh triangles in world space (meshes on all hardware
+// threads), then the BVH over triangles and spheres with the triangles stored in leaf order (see
+// flatten.h). Triangles keep flat or area-weighted smooth normals and uvs; spheres their affine maps.
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <exception>
+#include <system_error>
+#include <thread>
+
+#include "render/flatten.h"
+#include "util/error.h"
+
+namespace clrt {
+namespace {
+
+// The triangles of one mesh shape in world space, in index order (degenerate and non-finite ones
+// counted and left out). Independent per shape, so shapes are flattened on several threads.
+struct MeshTriangles {
+    std::vector<dev::Triangle> triangles;
+    std::vector<dev::TriangleShading> shading;
+    std::vector<Aabb> boxes;
+    size_t degenerate = 0, nonFinite = 0;
+};
+
+void flattenMesh(const Scene& scene, const Shape& s, int texSet, MeshTriangles& out) {
+    const MeshData& mesh = scene.meshes.at(s.meshIndex);
+    out.triangles.reserve(mesh.indices.size() / 3);
+    out.shading.reserve(mesh.indices.size() / 3);
+    out.boxes.reserve(mesh.indices.size() / 3);
+    std::vector<Vec3> pw(mesh.positions.size());
+    for (size_t v = 0; v < pw.size(); ++v) pw[v] = s.transform.transformPoint(mesh.positions[v]);
+    // Smooth shading: given normals (transformed by the inverse transpose) or area-weighted ones.
+    std::vector<Vec3> nw;
+    if (s.smooth) {
+        nw.assign(pw.size(), Vec3(0, 0, 0));
+        if (mesh.normals.size() == mesh.positions.size()) {
+            Mat4 inv;
+            Mat4 invT = s.transform.inverse(inv) ? inv.transposed() : Mat4::identity();
+            for (size_t v = 0; v < nw.size(); ++v) nw[v] = normalize(invT.transformVector(mesh.normals[v]));
+        } else {
+            for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+                int a = mesh.indices[t], b = mesh.indices[t + 1], c = mesh.indices[t + 2];
+                Vec3 n = cross(pw[b] - pw[a], pw[c] - pw[a]);  // length = 2·area: area weighting
+                if (!isFinite(n)) continue;
+                nw[a] += n; nw[b] += n; nw[c] += n;
+            }
+            for (Vec3& n : nw) n = normalize(n);
+        }
+    }
+    bool hasUv = mesh.uvs.size() == mesh.positions.size();
+    for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+        int a = mesh.indices[t], b = mesh.indices[t + 1], c = mesh.indices[t + 2];
+        const Vec3 &p0 = pw[a], &p1 = pw[b], &p2 = pw[c];
+        if (!isFinite(p0) || !isFinite(p1) || !isFinite(p2)) { ++out.nonFinite; continue; }
+        Vec3 n = cross(p1 - p0, p2 - p0);
+        float len = length(n);
+        if (p0 == p1 || p1 == p2 || p0 == p2 || !(len > 0) || !std::isfinite(len)) {
+            ++out.degenerate;
+            continue;
+        }
+        n = n / len;
+        dev::Triangle tri{toFloat4(p0), toFloat4(p1), toFloat4(p2)};
+        dev::TriangleShading sh{};
+        auto normalAt = [&](int v) { return (s.smooth && nw[v] != Vec3(0, 0, 0) && isFinite(nw[v])) ? nw[v] : n; };
+        sh.n0 = toFloat4(normalAt(a));
+        sh.n1 = toFloat4(normalAt(b));
+        sh.n2 = toFloat4(normalAt(c));
+        if (hasUv) {
+            sh.uv01 = {mesh.uvs[a].x, mesh.uvs[a].y, mesh.uvs[b].x, mesh.uvs[b].y};
+            sh.uv2 = {mesh.uvs[c].x, mesh.uvs[c].y, 0, 0};
+        }
+        sh.material = s.materialIndex;
+        sh.textureSet = texSet;
+        Aabb box;
+        box.grow(p0); box.grow(p1); box.grow(p2);
+        out.triangles.push_back(tri);
+        out.shading.push_back(sh);
+        out.boxes.push_back(box);
+    }
+}
+
+
+void storeRows(dev::float4 rows[3], const Mat4& m) {
+    for (int r = 0; r < 3; ++r)
+        rows[r] = {float(m.m[r][0]), float(m.m[r][1]), float(m.m[r][2]), float(m.m[r][3])};
+}
+
+// False (warned) when the plane is degenerate.
+bool flattenPlane(const Shape& s, int texSet, DeviceScene& ds) {
+    Mat4 inv;
+    Vec3 n = s.transform.inverse(inv) ? normalize(inv.transposed().transformVector(s.normal)) : Vec3(0, 0, 0);
+    Vec3 p = s.transform.transformPoint(s.center);
+    if (!(length(n) > 0) || !isFinite(n) || !isFinite(p)) {
+        warn(s.source + ": singular transform or bad normal; plane skipped");
+        return false;
+    }
+    dev::Plane pl{};
+    pl.point = toFloat4(p);
+    pl.normal = toFloat4(n);
+    pl.material = s.materialIndex;
+    pl.textureSet = texSet;
+    ds.planes.push_back(pl);
+    return true;
+}
+
+// Appends the sphere and its world-space box; false (warned) when it is degenerate.
+bool flattenSphere(const Shape& s, int texSet, DeviceScene& ds, std::vector<Aabb>& sphereBoxes) {
+    dev::Sphere sp{};
+    sp.centerRadius = toFloat4(s.center, s.radius);
+    Mat4 inv;
+    if (!s.transform.inverse(inv) || !(s.radius > 0) || !isFinite(s.center)) {
+        warn(s.source + ": singular transform or bad radius; sphere skipped");
+        return false;
+    }
+    storeRows(sp.objectToWorld, s.transform);
+    storeRows(sp.worldToObject, inv);
+    sp.material = s.materialIndex;
+    sp.textureSet = texSet;
+    Aabb box;
+    for (int c = 0; c < 8; ++c) {
+        Vec3 corner(s.center.x + ((c & 1) ? s.radius : -s.radius), s.center.y + ((c & 2) ? s.radius : -s.radius),
+                    s.center.z + ((c & 4) ? s.radius : -s.radius));
+        box.grow(s.transform.transformPoint(corner));
+    }
+    ds.spheres.push_back(sp);
+    sphereBoxes.push_back(box);
+    return true;
+}
+
+using MeshJob = std::pair<const Shape*, int>;  // (shape, texture set)
+
+// Meshes on all hardware threads (each job writes only its own result), then concatenated in shape
+// order: the same arrays as a sequential loop. Appends the triangles' boxes to `boxes`; warns about
+// and counts (ds.skippedTriangles) degenerate and non-finite triangles.
+void flattenMeshes(const Scene& scene, const std::vector<MeshJob>& meshJobs, DeviceScene& ds, std::vector<Aabb>& boxes) {
+    std::vector<MeshTriangles> results(meshJobs.size());
+    std::atomic<size_t> next{0};
+    const size_t threads = std::min<size_t>(meshJobs.size(), std::max(1u, std::thread::hardware_concurrency()));
+    std::vector<std::exception_ptr> errors(std::max<size_t>(threads, 1));
+    auto worker = [&](size_t t) {
+        try {
+            for (size_t j; (j = next++) < meshJobs.size();)
+                flattenMesh(scene, *meshJobs[j].first, meshJobs[j].second, results[j]);
+        } catch (...) {
+            errors[t] = std::current_exception();
+            next = meshJobs.size();  // the others stop too
+        }
+    };
+    std::vector<std::thread> pool;
+    try {
+        for (size_t t = 1; t < threads; ++t) pool.emplace_back(worker, t);
+    } catch (const std::system_error&) {  // no thread to be had: the others (and this one) do it
+    }
+    worker(0);
+    for (std::thread& t : pool) t.join();
+    for (const std::exception_ptr& e : errors)
+        if (e) std::rethrow_exception(e);
+    size_t nanSkipped = 0;
+    for (MeshTriangles& r : results) {
+        ds.triangles.insert(ds.triangles.end(), r.triangles.begin(), r.triangles.end());
+        ds.triangleShading.insert(ds.triangleShading.end(), r.shading.begin(), r.shading.end());
+        boxes.insert(boxes.end(), r.boxes.begin(), r.boxes.end());
+        ds.skippedTriangles += r.degenerate;
+        nanSkipped += r.nonFinite;
+    }
+    if (ds.skippedTriangles) warn(scene.path + ": skipped " + std::to_string(ds.skippedTriangles) + " degenerate triangles");
+    if (nanSkipped) warn(scene.path + ": skipped " + std::to_string(nanSkipped) + " triangles with NaN/Inf vertices");
+    ds.skippedTriangles += nanSkipped;
+}
+
+// The BVH over `boxes` (triangles, then spheres), collapsed to 4-wide nodes; the triangles are then
+// stored in leaf order so a leaf's triangles are contiguous in memory.
+void buildDeviceBvh(const std::vector<Aabb>& boxes, DeviceScene& ds) {
+    auto tb = std::chrono::steady_clock::now();
+    ds.bvh = buildBvh(boxes);
+    ds.bvh4 = collapseBvh4(ds.bvh);
+    ds.features.bvhStack = std::max(1, ds.bvh4.maxStack);
+    ds.bvhSeconds = secondsSince(tb);
+    const int numTris = int(ds.triangles.size());
+    std::vector<dev::Triangle> tris(ds.triangles.size());
+    std::vector<dev::TriangleShading> shading(ds.triangleShading.size());
+    int next = 0;
+    for (int& ref : ds.bvh.primRefs) {
+        if (ref >= numTris) continue;  // spheres keep their indices
+        tris[size_t(next)] = ds.triangles[size_t(ref)];
+        shading[size_t(next)] = ds.triangleShading[size_t(ref)];
+        ref = next++;
+    }
+    ds.triangles.swap(tris);
+    ds.triangleShading.swap(shading);
+    // Without spheres every reference is now its own position: the kernels can skip primRefs.
+    bool identity = true;
+    for (size_t i = 0; i < ds.bvh.primRefs.size() && identity; ++i) identity = ds.bvh.primRefs[i] == int(i);
+    ds.features.primRefsIdentity = identity;
+}
+
+}  // namespace
+
+void flattenGeometry(const Scene& scene, DeviceScene& ds) {
+    std::vector<Aabb> boxes, sphereBoxes;
+    size_t total = 0;
+    for (const Shape& s : scene.shapes)
+        if (s.type == ShapeType::Mesh) total += scene.meshes.at(s.meshIndex).indices.size() / 3;
+    ds.triangles.reserve(total);
+    ds.triangleShading.reserve(total);
+    boxes.reserve(total + scene.shapes.size());
+    std::vector<MeshJob> meshJobs;
+    for (const Shape& s : scene.shapes) {
+        int texSet = flattenTextureSet(scene, s, ds);  // for every shape, in shape order
+        if (s.type == ShapeType::Plane) flattenPlane(s, texSet, ds);
+        else if (s.type == ShapeType::Sphere) flattenSphere(s, texSet, ds, sphereBoxes);
+        else meshJobs.push_back({&s, texSet});
+    }
+    flattenMeshes(scene, meshJobs, ds, boxes);
+    ds.features.spheres = !ds.spheres.empty();
+    const int numTriangles = int(boxes.size());
+    boxes.insert(boxes.end(), sphereBoxes.begin(), sphereBoxes.end());
+    buildDeviceBvh(boxes, ds);
+    // Never an empty buffer (the counts below stay those of the scene, except planes: see Plane).
+    if (ds.triangles.empty()) { ds.triangles.push_back(dev::Triangle{}); ds.triangleShading.push_back(dev::TriangleShading{}); }
+    if (ds.spheres.empty()) ds.spheres.push_back(dev::Sphere{});
+    if (ds.planes.empty()) ds.planes.push_back(dev::Plane{});  // a zero normal: never hit, counted in numPlanes
+    if (ds.textureSets.empty()) ds.textureSets.push_back(dev::TextureSet{{-1, -1, -1, -1}});
+    ds.params.numTriangles = numTriangles;
+    ds.params.numSpheres = int(sphereBoxes.size());
+    ds.params.numPlanes = int(ds.planes.size());
+}
+
+}  // namespace clrt

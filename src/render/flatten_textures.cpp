@@ -1,0 +1,104 @@
+// flatten_textures.cpp — the texel atlas, texture maps and per-shape texture sets (see flatten.h).
+#include <cstdint>
+
+#include "image/image.h"
+#include "render/flatten.h"
+#include "util/error.h"
+
+namespace clrt {
+
+int ImageAtlas::use(int sceneImage) {
+    auto it = slot_.find(sceneImage);
+    if (it != slot_.end()) return it->second;
+    auto ti = std::chrono::steady_clock::now();
+    ImageRGB img = readImage(scene_.imagePaths.at(sceneImage));
+    ds_.imageSeconds += secondsSince(ti);
+    dev::ImageInfo info{};
+    info.offset = int(ds_.texels.size());
+    info.width = img.width;
+    info.height = img.height;
+    if (ds_.texels.size() + size_t(img.width) * img.height > size_t(INT32_MAX))
+        throw Error(scene_.path + ": textures exceed 2^31 texels");
+    const size_t n = size_t(img.width) * img.height;
+    ds_.texels.resize(size_t(info.offset) + n);
+    dev::float4* dst = ds_.texels.data() + info.offset;
+    const float* src = img.pixels.data();
+    for (size_t p = 0; p < n; ++p) dst[p] = {src[p * 3], src[p * 3 + 1], src[p * 3 + 2], 0};
+    int slot = int(ds_.images.size());
+    ds_.images.push_back(info);
+    hdr_.push_back(img.isHdr);
+    slot_[sceneImage] = slot;
+    return slot;
+}
+
+namespace {
+
+dev::TextureMap textureMap(const Texture& t) {
+    dev::TextureMap d{};
+    d.image = CLRT_INVALID;
+    d.kind = t.type;
+    d.decal = t.decalMode;
+    // No mip-maps on the device: trilinear is filtered bilinearly.
+    d.interpolation = t.interpolation == dev::INTERP_TRILINEAR ? dev::INTERP_BILINEAR : t.interpolation;
+    d.normalizer = t.normalizer;
+    d.bumpFactor = t.bumpFactor;
+    d.scale = t.scale;
+    d.offset = t.offset;
+    d.noiseScale = t.noiseScale;
+    d.noiseAbs = t.noiseConversion == "absval";
+    d.blackColor = toFloat4(t.blackColor);
+    d.whiteColor = toFloat4(t.whiteColor);
+    return d;
+}
+
+// An image texture's image is loaded only when a shape uses it or it is the background.
+bool imageUsed(const Scene& scene, const Texture& t, int index) {
+    bool used = t.decalMode == dev::DECAL_REPLACE_BACKGROUND;
+    for (const Shape& s : scene.shapes)
+        for (int x : s.textureIndices) used |= (x == index);
+    return used;
+}
+
+}  // namespace
+
+void flattenTextures(const Scene& scene, DeviceScene& ds, ImageAtlas& atlas) {
+    ds.params.backgroundTexture = CLRT_INVALID;
+    for (size_t ti = 0; ti < scene.textures.size(); ++ti) {
+        const Texture& t = scene.textures[ti];
+        dev::TextureMap d = textureMap(t);
+        if (t.type == dev::TEXTURE_IMAGE && t.imageIndex >= 0 && imageUsed(scene, t, int(ti))) {
+            d.image = atlas.use(t.imageIndex);
+            if (!t.normalizerGiven) d.normalizer = atlas.isHdr(d.image) ? 1.0f : 255.0f;
+        }
+        if (t.decalMode == dev::DECAL_REPLACE_BACKGROUND && d.image != CLRT_INVALID) ds.params.backgroundTexture = int(ti);
+        if (t.decalMode == dev::DECAL_REPLACE_NORMAL || t.decalMode == dev::DECAL_BUMP_NORMAL)
+            warnOnce(scene.path + ": texture id=" + std::to_string(t.id) +
+                     ": normal/bump decal modes are not supported yet; ignored");
+        ds.textures.push_back(d);
+    }
+    // Never an empty buffer. (The dummy image comes before any environment map's.)
+    if (ds.textures.empty()) ds.textures.push_back(dev::TextureMap{});
+    if (ds.images.empty()) ds.images.push_back(dev::ImageInfo{0, 1, 1, 0});
+    if (ds.texels.empty()) ds.texels.push_back({0, 0, 0, 0});
+}
+
+int flattenTextureSet(const Scene& scene, const Shape& s, DeviceScene& ds) {
+    if (s.textureIndices.empty()) return CLRT_INVALID;
+    dev::TextureSet set;
+    for (int k = 0; k < CLRT_MAX_TEXTURES_PER_SHAPE; ++k) set.texture[k] = CLRT_INVALID;
+    int k = 0;
+    for (int x : s.textureIndices) {
+        if (scene.textures[x].decalMode == dev::DECAL_REPLACE_BACKGROUND) continue;
+        if (k == CLRT_MAX_TEXTURES_PER_SHAPE) {
+            warnOnce(s.source + ": more than 4 textures; the rest are ignored");
+            break;
+        }
+        set.texture[k++] = x;
+    }
+    if (k == 0) return CLRT_INVALID;
+    ds.features.textures = true;
+    ds.textureSets.push_back(set);
+    return int(ds.textureSets.size()) - 1;
+}
+
+}  // namespace clrt

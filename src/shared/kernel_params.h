@@ -1,0 +1,101 @@
+/* kernel_params.h — THE parameter list of every kernel, declared once, as X-macro rows P(KIND, TYPE, NAME):
+ *   VAL  TYPE passed by value          IN  const __global TYPE*          BUF  __global TYPE*
+ * Groups that several kernels share are macros of their own (CLRT_PARAMS_GEOMETRY, ...).
+ *
+ * Device: a kernel's signature is generated from its list, `__kernel void k(CLRT_KERNEL_PARAMS(k))`.
+ * Host:   src/cl/kernel_args.h builds a table of (name, kind, value size) from the same lists, and
+ *         KernelArgs binds arguments by these names (no index is ever written by hand): a name that
+ *         is not a parameter, a buffer for a value, a value of the wrong size, or a parameter left
+ *         unbound throws before any launch. tests/test_cl.cpp checks, with -cl-kernel-arg-info, that
+ *         every kernel of every program has exactly the declared parameters, in order.
+ * Adding a parameter: add its row here (or to a group) and bind it where the kernel is set up;
+ * the kernel body sees it under its name. Included by the kernel files and by the host. */
+#ifndef CLRT_KERNEL_PARAMS_H
+#define CLRT_KERNEL_PARAMS_H
+
+/* ---- parameter groups ------------------------------------------------------------------------ */
+
+/* What the intersection kernels traverse. */
+#define CLRT_PARAMS_GEOMETRY(P)                                                                    \
+    P(IN, Bvh4Node, nodes) P(IN, int, primRefs) P(IN, Triangle, tris) P(IN, Sphere, spheres)       \
+    P(IN, Plane, planes)
+
+/* The surfaces as shading sees them (a hit's position, normals, uv, material). */
+#define CLRT_PARAMS_SURFACES(P)                                                                    \
+    P(IN, Triangle, tris) P(IN, TriangleShading, triShading) P(IN, Sphere, spheres) P(IN, Plane, planes)
+
+#define CLRT_PARAMS_MATERIALS(P) P(IN, Material, materials) P(IN, TextureSet, textureSets) P(IN, TextureMap, textures)
+
+/* The texel atlas: textures, background and environment maps. */
+#define CLRT_PARAMS_IMAGES(P) P(IN, ImageInfo, images) P(IN, float4, texels)
+
+/* ---- render program (camera.cl, intersect.cl, shade.cl) -------------------------------------- */
+
+/* count = pixels x samples: samples [firstSample, firstSample + samples) of pixels from firstPixel. */
+#define CLRT_KERNEL_generate_camera_rays(P)                                                        \
+    P(VAL, int, count) P(VAL, int, firstPixel) P(VAL, int, firstSample) P(VAL, int, samples)       \
+    P(VAL, CameraParams, cam) P(VAL, SceneParams, scene) P(BUF, PathState, paths) P(BUF, Ray, rays)
+
+#define CLRT_KERNEL_intersect_closest(P)                                                           \
+    P(VAL, int, count) P(VAL, SceneParams, scene) CLRT_PARAMS_GEOMETRY(P) P(IN, Ray, rays) P(BUF, Hit, hits)
+
+#define CLRT_KERNEL_intersect_shadow(P)                                                            \
+    P(VAL, int, count) P(VAL, SceneParams, scene) CLRT_PARAMS_GEOMETRY(P) P(BUF, ShadowRay, shadows)
+
+#define CLRT_KERNEL_shade_hits(P)                                                                  \
+    P(VAL, int, count) P(VAL, SceneParams, scene) P(VAL, CameraParams, cam) P(IN, PathState, paths) \
+    P(IN, Ray, rays) P(IN, Hit, hits) CLRT_PARAMS_SURFACES(P) CLRT_PARAMS_MATERIALS(P)              \
+    CLRT_PARAMS_IMAGES(P) P(BUF, ShadingPoint, points) P(BUF, float4, pathRadiance)                  \
+    P(BUF, PathState, nextPaths) P(BUF, Ray, nextRays) P(BUF, int, childValid)
+
+#define CLRT_KERNEL_sample_lights(P)                                                               \
+    P(VAL, int, count) P(VAL, int, lightBegin) P(VAL, int, lightEnd) P(VAL, SceneParams, scene)    \
+    P(IN, PathState, paths) P(IN, ShadingPoint, points) P(IN, Light, lights) CLRT_PARAMS_IMAGES(P) \
+    P(IN, float, envDist) P(BUF, ShadowRay, shadows)
+
+#define CLRT_KERNEL_gather_shadows(P)                                                              \
+    P(VAL, int, count) P(VAL, int, chunk) P(IN, ShadowRay, shadows) P(BUF, float4, pathRadiance)
+
+#define CLRT_KERNEL_accumulate(P)                                                                  \
+    P(VAL, int, count) P(IN, PathState, paths) P(IN, float4, pathRadiance) P(BUF, float4, image)
+
+#define CLRT_KERNEL_compact_paths(P)                                                               \
+    P(VAL, int, count) P(IN, int, compactTarget) P(IN, PathState, nextPaths) P(IN, Ray, nextRays)   \
+    P(BUF, PathState, paths) P(BUF, Ray, rays)
+
+/* ---- tone-mapping program (tonemap.cl) -------------------------------------------------------- */
+
+#define CLRT_KERNEL_Tonemap_Luminance(P)                                                           \
+    P(IN, float, rgb) P(VAL, uint, n) P(VAL, float, delta) P(BUF, float, lum) P(BUF, float2, partials)
+
+#define CLRT_KERNEL_Tonemap_Histogram(P)                                                           \
+    P(IN, float, lum) P(VAL, uint, n) P(VAL, uint, prefix) P(VAL, uint, mask) P(VAL, uint, shift)  \
+    P(BUF, uint, hist)
+
+#define CLRT_KERNEL_Tonemap_Map(P) P(IN, float, rgb) P(VAL, TonemapParams, p) P(BUF, uchar, out)
+#define CLRT_KERNEL_Tonemap_MapFloat(P) P(IN, float, rgb) P(VAL, TonemapParams, p) P(BUF, float, out)
+
+/* ---- layout program (layout.cl) --------------------------------------------------------------- */
+
+#define CLRT_KERNEL_layout_report(P) P(BUF, int, out)
+
+/* Every kernel, by program (the host's table and the tests iterate these). */
+#define CLRT_RENDER_KERNELS(K)                                                                     \
+    K(generate_camera_rays) K(intersect_closest) K(intersect_shadow) K(shade_hits) K(sample_lights) \
+    K(gather_shadows) K(accumulate) K(compact_paths)
+#define CLRT_TONEMAP_KERNELS(K) K(Tonemap_Luminance) K(Tonemap_Histogram) K(Tonemap_Map) K(Tonemap_MapFloat)
+#define CLRT_LAYOUT_KERNELS(K) K(layout_report)
+
+/* ---- the device side: a kernel's signature from its list ------------------------------------- */
+#ifdef __OPENCL_C_VERSION__
+#define CLRT_PARAM_TYPE_VAL(T) T
+#define CLRT_PARAM_TYPE_IN(T) const __global T*
+#define CLRT_PARAM_TYPE_BUF(T) __global T*
+#define CLRT_PARAM_DECL_(KIND, T, name) , CLRT_PARAM_TYPE_##KIND(T) name
+#define CLRT_DROP_FIRST_(first, ...) __VA_ARGS__
+#define CLRT_APPLY_(m, ...) m(__VA_ARGS__)
+/* Every row expands to ", TYPE NAME"; the first comma is dropped. */
+#define CLRT_KERNEL_PARAMS(K_) CLRT_APPLY_(CLRT_DROP_FIRST_, CLRT_KERNEL_##K_(CLRT_PARAM_DECL_))
+#endif
+
+#endif /* CLRT_KERNEL_PARAMS_H */
