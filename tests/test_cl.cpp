@@ -23,6 +23,7 @@
 #include "cl/program.h"
 #include "render/device_scene.h"
 #include "shared/type_tables.h"
+#include "test_helpers.h"
 #include "util/error.h"
 
 namespace fs = std::filesystem;
@@ -68,12 +69,6 @@ DeviceContext& cpuContext() {
     return *dc;
 }
 
-std::string readText(const std::string& path) {
-    std::ifstream in(path);
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
 
 }  // namespace
 
@@ -245,10 +240,10 @@ TEST_CASE("kernel sources: embedded by name, or read from CLRT_KERNEL_DIR", "[cl
         REQUIRE(srcs.size() == 3);
         std::string typesPath = fs::path(dir + "/../src/shared/device_types.h").lexically_normal().string();
         CHECK(srcs[0].first == typesPath);
-        CHECK(srcs[0].second == "#line 1 \"" + typesPath + "\"\n" + readText(typesPath));
+        CHECK(srcs[0].second == "#line 1 \"" + typesPath + "\"\n" + clrt::test::readFileBytes(typesPath));
         CHECK(srcs[2].first == dir + "/layout.cl");
         // The file's text, with its #include lines turned into comments (same line count).
-        std::string expected = "#line 1 \"" + dir + "/layout.cl\"\n" + readText(dir + "/layout.cl");
+        std::string expected = "#line 1 \"" + dir + "/layout.cl\"\n" + clrt::test::readFileBytes(dir + "/layout.cl");
         for (std::string header : {"device_types.h", "kernel_params.h"}) {
             const std::string inc = "#include \"../src/shared/" + header + "\"";
             REQUIRE(expected.find(inc) != std::string::npos);
@@ -323,7 +318,7 @@ TEST_CASE("kernel sources: FP_CONTRACT OFF is scoped to the file that sets it", 
     // files after it in a program compile as they would alone.
     std::regex pragma(R"(#pragma OPENCL FP_CONTRACT (ON|OFF|DEFAULT))");
     for (auto& e : fs::directory_iterator(std::string(CLRT_SOURCE_DIR) + "/cl_kernels")) {
-        std::string text = readText(e.path().string());
+        std::string text = clrt::test::readFileBytes(e.path().string());
         std::string last;
         for (std::sregex_iterator it(text.begin(), text.end(), pragma), end; it != end; ++it) last = (*it)[1].str();
         INFO(e.path());
@@ -349,7 +344,7 @@ TEST_CASE("host layout table covers every struct and tiles each one exactly", "[
     std::set<std::string> listed;
     for (const LayoutEntry& e : table)
         if (!e.member) listed.insert(e.structName);
-    std::string header = readText(std::string(CLRT_SOURCE_DIR) + "/src/shared/device_types.h");
+    std::string header = clrt::test::readFileBytes(std::string(CLRT_SOURCE_DIR) + "/src/shared/device_types.h");
     std::regex re("typedef\\s+struct\\s+(\\w+)");
     int found = 0;
     for (auto it = std::sregex_iterator(header.begin(), header.end(), re); it != std::sregex_iterator(); ++it) {
@@ -496,8 +491,8 @@ TEST_CASE("type tables: every light and material row has its device case under i
     // README "Adding a light or a material": a table row in device_types.h, a `case` in the device
     // dispatcher inside `#ifdef` the row's flag. Checked on the sources: a row without device code
     // (or device code under another flag) fails here, not as a silently black light.
-    const std::string lights = readText(std::string(CLRT_SOURCE_DIR) + "/cl_kernels/lights.cl");
-    const std::string shade = readText(std::string(CLRT_SOURCE_DIR) + "/cl_kernels/shade.cl");
+    const std::string lights = clrt::test::readFileBytes(std::string(CLRT_SOURCE_DIR) + "/cl_kernels/lights.cl");
+    const std::string shade = clrt::test::readFileBytes(std::string(CLRT_SOURCE_DIR) + "/cl_kernels/shade.cl");
     // The flag guarding `case K:` is the nearest #ifdef before it, closed by an #endif after it.
     auto guardOf = [](const std::string& text, const std::string& constant) -> std::string {
         size_t at = text.find("case " + constant + ":");

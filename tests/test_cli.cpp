@@ -20,14 +20,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string readText(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-void writeText(const std::string& path, const std::string& text) {
-    std::ofstream out(path, std::ios::binary);
-    out << text;
-}
 
 struct Run {
     int rc = -1;
@@ -47,7 +39,7 @@ Run runCli(const TempDir& dir, const std::string& args, const std::string& envPr
         int rc = std::system(cmd.c_str());
         r.rc = WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
     }
-    r.log = readText(logFile);
+    r.log = readFileBytes(logFile);
     std::istringstream ls(r.log);
     for (std::string line; std::getline(ls, line);)
         if (line.rfind("clrt: error:", 0) == 0) {
@@ -118,13 +110,13 @@ void makeExr(const std::string& path) {
     writeExr(path, img);
 }
 void truncateCopy(const std::string& from, const std::string& to, double keep) {
-    std::string bytes = readText(from);
-    writeText(to, bytes.substr(0, size_t(double(bytes.size()) * keep)));
+    std::string bytes = readFileBytes(from);
+    writeFileBytes(to, bytes.substr(0, size_t(double(bytes.size()) * keep)));
 }
 void corruptCopy(const std::string& from, const std::string& to, size_t skipHeader) {
-    std::string bytes = readText(from);
+    std::string bytes = readFileBytes(from);
     for (size_t i = skipHeader; i < bytes.size(); i += 3) bytes[i] = char(bytes[i] ^ 0x5A);
-    writeText(to, bytes);
+    writeFileBytes(to, bytes);
 }
 
 }  // namespace
@@ -145,28 +137,28 @@ TEST_CASE("cli: files that are not scenes", "[cli]") {
     SECTION("a directory") { expectError(runCli(d, "render " + d.path.string() + " -o " + d.path.string()), 2, {d.path.string()}); }
     SECTION("binary garbage") {
         std::string f = d.file("garbage.xml");
-        writeText(f, std::string("\x89PNG\r\n\x1a\n\0\0\0\rIHDR", 16));
+        writeFileBytes(f, std::string("\x89PNG\r\n\x1a\n\0\0\0\rIHDR", 16));
         expectError(runCli(d, "render " + f + " -o " + d.path.string()), 2, {"garbage.xml", "neither XML"});
     }
     SECTION("empty file") {
         std::string f = d.file("empty.xml");
-        writeText(f, "  \n ");
+        writeFileBytes(f, "  \n ");
         expectError(runCli(d, "render " + f + " -o " + d.path.string()), 2, {"empty.xml", "empty"});
     }
     SECTION("XML syntax error has file:line:col") {
         std::string f = d.file("broken.xml");
-        writeText(f, "<Scene>\n  <Cameras>\n    <Camera id=\"1\">\n  </Cameras>\n</Scene>\n");
+        writeFileBytes(f, "<Scene>\n  <Cameras>\n    <Camera id=\"1\">\n  </Cameras>\n</Scene>\n");
         Run r = runCli(d, "render " + f + " -o " + d.path.string());
         expectError(r, 2, {"broken.xml:4:"});
     }
     SECTION("JSON syntax error has file:line:col") {
         std::string f = d.file("broken.json");
-        writeText(f, "{\"Scene\": {\n  \"MaxRecursionDepth\": \"2\",\n  ]\n}\n");
+        writeFileBytes(f, "{\"Scene\": {\n  \"MaxRecursionDepth\": \"2\",\n  ]\n}\n");
         expectError(runCli(d, "render " + f + " -o " + d.path.string()), 2, {"broken.json:3:"});
     }
     SECTION("unknown root") {
         std::string f = d.file("root.xml");
-        writeText(f, "<!-- c -->\n<Scen></Scen>\n");
+        writeFileBytes(f, "<!-- c -->\n<Scen></Scen>\n");
         expectError(runCli(d, "render " + f + " -o " + d.path.string()), 2, {"root.xml:2:1", "<Scen>"});
     }
 }
@@ -175,7 +167,7 @@ TEST_CASE("cli: scene content errors name file:line:col", "[cli]") {
     TempDir d;
     std::string f = d.file("s.xml");
     auto run = [&](const std::string& text) {
-        writeText(f, text);
+        writeFileBytes(f, text);
         return runCli(d, "render " + f + " -o " + d.path.string());
     };
     SECTION("missing required element") {
@@ -218,7 +210,7 @@ TEST_CASE("cli: scene content errors name file:line:col", "[cli]") {
 TEST_CASE("cli: absurd resolution is refused up front with the device limit", "[cli]") {
     TempDir d;
     std::string f = d.file("huge.xml");
-    writeText(f, scene(kTriangle, "", "200000 200000"));
+    writeFileBytes(f, scene(kTriangle, "", "200000 200000"));
     Run r = runCli(d, "render " + f + " -o " + d.path.string() + " --device cpu");
     expectError(r, 2, {"200000x200000", "MiB"});
     // Refused before the kernel build and before any host allocation of that size.
@@ -229,11 +221,11 @@ TEST_CASE("cli: absurd resolution is refused up front with the device limit", "[
 TEST_CASE("cli: bad PLY files", "[cli]") {
     TempDir d;
     std::string f = d.file("s.xml");
-    writeText(f, scene("<Mesh id=\"1\"><Material>1</Material><Faces plyFile=\"m.ply\"/></Mesh>"));
+    writeFileBytes(f, scene("<Mesh id=\"1\"><Material>1</Material><Faces plyFile=\"m.ply\"/></Mesh>"));
     const std::string header = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
                                "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
     auto run = [&](const std::string& ply) {
-        if (!ply.empty()) writeText(d.file("m.ply"), ply);
+        if (!ply.empty()) writeFileBytes(d.file("m.ply"), ply);
         return runCli(d, "render " + f + " -o " + d.path.string());
     };
     SECTION("missing") { expectError(run(""), 2, {"s.xml:", "m.ply", "cannot open"}); }
@@ -266,16 +258,16 @@ TEST_CASE("cli: missing, truncated and corrupt texture images", "[cli]") {
     makeExr(d.file("good.exr"));
     std::string f = d.file("s.xml");
     auto run = [&](const std::string& image) {
-        writeText(f, texturedScene(image));
+        writeFileBytes(f, texturedScene(image));
         return runCli(d, "render " + f + " -o " + d.path.string());
     };
     SECTION("missing") { expectError(run("nope.png"), 2, {"nope.png", "cannot open"}); }
     SECTION("empty") {
-        writeText(d.file("empty.png"), "");
+        writeFileBytes(d.file("empty.png"), "");
         expectError(run("empty.png"), 2, {"empty.png"});
     }
     SECTION("unknown format") {
-        writeText(d.file("text.png"), "this is not an image\n");
+        writeFileBytes(d.file("text.png"), "this is not an image\n");
         expectError(run("text.png"), 2, {"text.png", "unknown image format"});
     }
     for (const char* ext : {"png", "jpg", "exr"}) {
@@ -305,7 +297,7 @@ TEST_CASE("cli: missing, truncated and corrupt texture images", "[cli]") {
         j += std::string(16, '\xFF');
         j += std::string(256, '\x01');
         j += "\xFF\xD9";
-        writeText(d.file("evil.jpg"), j);
+        writeFileBytes(d.file("evil.jpg"), j);
         expectError(run("evil.jpg"), 2, {"evil.jpg", "Huffman"});
     }
     expectNoOutput(d.path);
@@ -314,12 +306,12 @@ TEST_CASE("cli: missing, truncated and corrupt texture images", "[cli]") {
 TEST_CASE("cli: output errors exit 4 and leave no partial file", "[cli]") {
     TempDir d;
     std::string f = d.file("s.xml");
-    writeText(f, scene(kTriangle));
+    writeFileBytes(f, scene(kTriangle));
     SECTION("output directory does not exist") {
         expectError(runCli(d, "render " + f + " -o " + d.file("no/such/dir")), 4, {"no/such/dir", "does not exist"});
     }
     SECTION("output directory is a file") {
-        writeText(d.file("afile"), "x");
+        writeFileBytes(d.file("afile"), "x");
         expectError(runCli(d, "render " + f + " -o " + d.file("afile")), 4, {"afile"});
     }
     SECTION("output file cannot be written (a directory has its name)") {
@@ -335,7 +327,7 @@ TEST_CASE("cli: output errors exit 4 and leave no partial file", "[cli]") {
 TEST_CASE("cli: --device naming no device", "[cli]") {
     TempDir d;
     std::string f = d.file("s.xml");
-    writeText(f, scene(kTriangle));
+    writeFileBytes(f, scene(kTriangle));
     expectError(runCli(d, "render " + f + " -o " + d.path.string() + " --device no-such-device-xyz"), 3,
                 {"no-such-device-xyz", "names no OpenCL device"});
     expectError(runCli(d, "render " + f + " -o " + d.path.string() + " --device 99"), 3, {"99"});
@@ -358,9 +350,9 @@ TEST_CASE("cli: a kernel build failure prints the build log and keeps a good out
     }
     fs::create_directories(d.file("out"));
     const std::string good = "previous good render";
-    writeText(d.file("out/out.png"), good);
+    writeFileBytes(d.file("out/out.png"), good);
     std::string f = d.file("s.xml");
-    writeText(f, scene(kTriangle));
+    writeFileBytes(f, scene(kTriangle));
     Run r = runCli(d, "render " + f + " -o " + d.file("out") + " --device cpu",
                  "CLRT_NO_CACHE=1 CLRT_KERNEL_DIR='" + (d.path / "k/cl_kernels").string() + "'");
     INFO(r.log);
@@ -369,7 +361,7 @@ TEST_CASE("cli: a kernel build failure prints the build log and keeps a good out
     CHECK(r.errorLine.find("build failed") != std::string::npos);
     CHECK(r.log.find("build log") != std::string::npos);
     CHECK(r.log.find("shade.cl") != std::string::npos);
-    CHECK(readText(d.file("out/out.png")) == good);
+    CHECK(readFileBytes(d.file("out/out.png")) == good);
     for (auto& e : fs::directory_iterator(d.file("out")))
         CHECK(e.path().filename().string().find(".tmp-") == std::string::npos);
 }
@@ -378,20 +370,20 @@ TEST_CASE("cli: a render that fails after loading leaves the existing output unt
     TempDir d;
     fs::create_directories(d.file("out"));
     const std::string good = "previous good render";
-    writeText(d.file("out/out.png"), good);
+    writeFileBytes(d.file("out/out.png"), good);
     // The scene loads (the image path is only a name), then flattening fails to decode the image.
-    writeText(d.file("bad.png"), "\x89PNG\r\n\x1a\n truncated");
+    writeFileBytes(d.file("bad.png"), "\x89PNG\r\n\x1a\n truncated");
     std::string f = d.file("s.xml");
-    writeText(f, texturedScene("bad.png"));
+    writeFileBytes(f, texturedScene("bad.png"));
     Run r = runCli(d, "render " + f + " -o " + d.file("out"));
     expectError(r, 2, {"bad.png"});
-    CHECK(readText(d.file("out/out.png")) == good);
+    CHECK(readFileBytes(d.file("out/out.png")) == good);
     // And the same scene with a good image does replace it (the test can tell the two apart).
     makePng(d.file("bad.png"));
     Run ok = runCli(d, "render " + f + " -o " + d.file("out"));
     INFO(ok.log);
     CHECK(ok.rc == 0);
-    CHECK(readText(d.file("out/out.png")) != good);
+    CHECK(readFileBytes(d.file("out/out.png")) != good);
     ImageRGB img = readImage(d.file("out/out.png"));
     CHECK(img.width == 4);
 }

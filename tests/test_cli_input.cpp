@@ -22,14 +22,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string slurp(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-void spit(const std::string& path, const std::string& bytes) {
-    std::ofstream out(path, std::ios::binary);
-    out << bytes;
-}
 
 // s with the first `from` replaced by `to` (which must be there).
 std::string sub(std::string s, const std::string& from, const std::string& to) {
@@ -50,7 +42,7 @@ CliRun render(const TempDir& d, const std::string& sceneFile, const std::string&
     CliRun r;
     std::string log = d.file("clrt.log");
     r.rc = runClrt("render " + d.file(sceneFile) + " -o " + d.path.string() + " " + extra, log);
-    r.log = slurp(log);
+    r.log = readFileBytes(log);
     std::istringstream ls(r.log);
     for (std::string line; std::getline(ls, line);)
         if (line.rfind("clrt: error:", 0) == 0) {
@@ -134,7 +126,7 @@ const std::string kPlyMesh = "<Mesh id=\"1\"><Material>1</Material><Faces plyFil
 
 TEST_CASE("cli input: a JSON scene with only planes renders the background and the planes", "[cli][cli-input]") {
     TempDir d;
-    spit(d.file("s.json"), jsonPlanes());
+    writeFileBytes(d.file("s.json"), jsonPlanes());
     for (const char* extra : {"", "--all-features"}) {
         INFO(extra);
         CliRun r = render(d, "s.json", extra);
@@ -152,7 +144,7 @@ TEST_CASE("cli input: a scene with no objects renders the background", "[cli][cl
     TempDir d;
     for (const char* objects : {"-", ""}) {  // no <Objects> element; an empty one
         INFO("objects: '" << objects << "'");
-        spit(d.file("s.xml"), xmlScene("", objects));
+        writeFileBytes(d.file("s.xml"), xmlScene("", objects));
         for (const char* extra : {"", "--all-features"}) {
             INFO(extra);
             CliRun r = render(d, "s.xml", extra);
@@ -169,7 +161,7 @@ TEST_CASE("cli input: a scene with no objects renders the background", "[cli][cl
 TEST_CASE("cli input: a scene whose triangles are all degenerate renders the background", "[cli][cli-input]") {
     TempDir d;
     // Three collinear vertices and a repeated one: a Triangle and a two-triangle Mesh, all zero area.
-    spit(d.file("s.xml"), xmlScene("0 0 0 1 0 0 2 0 0",
+    writeFileBytes(d.file("s.xml"), xmlScene("0 0 0 1 0 0 2 0 0",
                                    "<Triangle id=\"1\"><Indices>1 2 3</Indices><Material>1</Material></Triangle>"
                                    "<Mesh id=\"2\"><Material>1</Material><Faces>1 1 2 2 3 3</Faces></Mesh>"));
     CliRun r = render(d, "s.xml");
@@ -184,7 +176,7 @@ TEST_CASE("cli input: a scene whose triangles are all degenerate renders the bac
 TEST_CASE("cli input: a mesh from an empty PLY renders the background", "[cli][cli-input]") {
     TempDir d;
     SECTION("no vertices, no faces") {
-        spit(d.file("m.ply"), "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
+        writeFileBytes(d.file("m.ply"), "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
                               "property float z\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n");
     }
     SECTION("vertices but no faces (binary)") {
@@ -192,10 +184,10 @@ TEST_CASE("cli input: a mesh from an empty PLY renders the background", "[cli][c
                           "property float z\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n";
         float v[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
         ply.append(reinterpret_cast<const char*>(v), sizeof v);
-        spit(d.file("m.ply"), ply);
+        writeFileBytes(d.file("m.ply"), ply);
     }
-    SECTION("only a degenerate face") { spit(d.file("m.ply"), std::string(kPlyHead3) + "0 0 0\n1 1 1\n2 2 2\n3 0 1 2\n"); }
-    spit(d.file("s.xml"), xmlScene("", kPlyMesh));
+    SECTION("only a degenerate face") { writeFileBytes(d.file("m.ply"), std::string(kPlyHead3) + "0 0 0\n1 1 1\n2 2 2\n3 0 1 2\n"); }
+    writeFileBytes(d.file("s.xml"), xmlScene("", kPlyMesh));
     CliRun r = render(d, "s.xml");
     INFO(r.log);
     CHECK(r.rc == 0);
@@ -209,7 +201,7 @@ TEST_CASE("cli input: a mesh from an empty PLY renders the background", "[cli][c
 TEST_CASE("cli input: a value beyond float range in an XML scene is exit 2 naming file:line:col", "[cli][cli-input]") {
     TempDir d;
     auto run = [&](const std::string& text) {
-        spit(d.file("s.xml"), text);
+        writeFileBytes(d.file("s.xml"), text);
         return render(d, "s.xml");
     };
     const std::string tri = "<Triangle id=\"1\"><Indices>1 2 3</Indices><Material>1</Material></Triangle>";
@@ -265,13 +257,13 @@ TEST_CASE("cli input: a value beyond float range in an XML scene is exit 2 namin
 
 TEST_CASE("cli input: PLY vertex data that is not a finite float is exit 2 naming the PLY", "[cli][cli-input]") {
     TempDir d;
-    spit(d.file("s.xml"), xmlScene("", kPlyMesh));
+    writeFileBytes(d.file("s.xml"), xmlScene("", kPlyMesh));
     SECTION("1e39 (ASCII)") {
-        spit(d.file("m.ply"), std::string(kPlyHead3) + "0 0 0\n1 1e39 0\n0 1 0\n3 0 1 2\n");
+        writeFileBytes(d.file("m.ply"), std::string(kPlyHead3) + "0 0 0\n1 1e39 0\n0 1 0\n3 0 1 2\n");
         expectBadInput(d, render(d, "s.xml"), {"s.xml:", "m.ply: line 11: vertex 1 has y = 1e+39, not a finite 32-bit float"});
     }
     SECTION("nan (ASCII)") {
-        spit(d.file("m.ply"), std::string(kPlyHead3) + "nan 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+        writeFileBytes(d.file("m.ply"), std::string(kPlyHead3) + "nan 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
         expectBadInput(d, render(d, "s.xml"), {"m.ply: line 10: vertex 0 has x = nan"});
     }
     SECTION("a double beyond float range (binary)") {
@@ -280,7 +272,7 @@ TEST_CASE("cli input: PLY vertex data that is not a finite float is exit 2 namin
         double v[9] = {0, 0, 0, 1, 0, 0, 0, 1, 1e300};
         ply.append(reinterpret_cast<const char*>(v), sizeof v);
         ply += std::string("\x03\0\0\0\0\x01\0\0\0\x02\0\0\0", 13);
-        spit(d.file("m.ply"), ply);
+        writeFileBytes(d.file("m.ply"), ply);
         expectBadInput(d, render(d, "s.xml"), {"m.ply: byte ", "vertex 2 has z = 1e+300"});
     }
     SECTION("an infinite normal (binary)") {
@@ -291,11 +283,11 @@ TEST_CASE("cli input: PLY vertex data that is not a finite float is exit 2 namin
         v[16] = INFINITY;  // vertex 2's ny
         ply.append(reinterpret_cast<const char*>(v), sizeof v);
         ply += std::string("\x03\0\0\0\0\x01\0\0\0\x02\0\0\0", 13);
-        spit(d.file("m.ply"), ply);
+        writeFileBytes(d.file("m.ply"), ply);
         expectBadInput(d, render(d, "s.xml"), {"m.ply: byte ", "vertex 2 has ny = inf"});
     }
     SECTION("a face index far beyond int range (the fuzz finding)") {
-        spit(d.file("m.ply"), std::string(kPlyHead3) + "0 0 0\n1 0 0\n0 1 0\n3 0 1 666666666666666666666666666666666\n");
+        writeFileBytes(d.file("m.ply"), std::string(kPlyHead3) + "0 0 0\n1 0 0\n0 1 0\n3 0 1 666666666666666666666666666666666\n");
         expectBadInput(d, render(d, "s.xml"), {"m.ply: line 13: face 0 has vertex index 6.66666667e+32, out of range"});
     }
 }
@@ -304,20 +296,20 @@ TEST_CASE("cli input: JSON numbers out of range are exit 2 naming the file", "[c
     TempDir d;
     SECTION("1e400 (beyond double): file:line:col") {
         std::string s = jsonPlanes("", "\"10 20 30\",\n  \"ShadowRayEpsilon\": 1e400");
-        spit(d.file("s.json"), s);
+        writeFileBytes(d.file("s.json"), s);
         // The number starts on line 3, after `  "ShadowRayEpsilon": `.
         expectBadInput(d, render(d, "s.json"), {"s.json:3:23: number overflow parsing '1e400'"});
     }
     SECTION("-1e400 inside an array") {
-        spit(d.file("s.json"), jsonPlanes("", "[10, 20, -1e400]"));
+        writeFileBytes(d.file("s.json"), jsonPlanes("", "[10, 20, -1e400]"));
         expectBadInput(d, render(d, "s.json"), {"s.json:2:31: number overflow parsing '-1e400'"});
     }
     SECTION("1e39 as a JSON number (beyond float): the key path") {
-        spit(d.file("s.json"), jsonPlanes("", "[10, 1e39, 30]"));
+        writeFileBytes(d.file("s.json"), jsonPlanes("", "[10, 1e39, 30]"));
         expectBadInput(d, render(d, "s.json"), {"s.json: Scene.BackgroundColor", "out of range"});
     }
     SECTION("1e39 in VertexData") {
-        spit(d.file("s.json"), jsonPlanes("", "\"10 20 30\"", "0 1e39 0"));
+        writeFileBytes(d.file("s.json"), jsonPlanes("", "\"10 20 30\"", "0 1e39 0"));
         expectBadInput(d, render(d, "s.json"), {"s.json: Scene.VertexData", "'1e39'"});
     }
 }

@@ -36,14 +36,6 @@ extern char** environ;
 
 namespace {
 
-std::string slurpFile(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-void putFile(const std::string& path, const std::string& text) {
-    std::ofstream out(path, std::ios::binary);
-    out << text;
-}
 
 struct Result {
     int rc = -1;
@@ -75,7 +67,7 @@ Result run(const TempDir& d, const std::string& args, const std::string& env = "
     const std::string log = d.file("clrt.log");
     const std::string cmd = env + " " + CLRT_BINARY + " " + args + " >'" + log + "' 2>&1";
     const int rc = std::system(cmd.c_str());
-    return parseLog(WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, slurpFile(log));
+    return parseLog(WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, readFileBytes(log));
 }
 
 void expectRefused(const Result& r, int rc, std::initializer_list<std::string> needles) {
@@ -92,7 +84,7 @@ std::map<std::string, std::string> snapshot(const fs::path& root) {
     for (auto it = fs::recursive_directory_iterator(root); it != fs::recursive_directory_iterator(); ++it) {
         const std::string rel = fs::relative(it->path(), root).string();
         if (it->is_symlink()) files[rel] = "-> " + fs::read_symlink(it->path()).string();
-        else if (it->is_regular_file()) files[rel] = slurpFile(it->path().string());
+        else if (it->is_regular_file()) files[rel] = readFileBytes(it->path().string());
     }
     return files;
 }
@@ -154,7 +146,7 @@ TEST_CASE("cli output: names that would leave OUTDIR are refused (exit 2)", "[cl
     fs::create_directories(d.path / "out" / "deep");
     const std::string f = d.file("s.xml");
     auto refused = [&](const std::string& cameras, std::initializer_list<std::string> needles) {
-        putFile(f, sceneXml(cameras));
+        writeFileBytes(f, sceneXml(cameras));
         const auto before = snapshot(d.path);
         expectRefused(run(d, "render " + f + " -o " + d.file("out/deep")), 2, needles);
         expectUnchanged(before, d.path);
@@ -191,7 +183,7 @@ TEST_CASE("cli output: wrong image types, inputs and duplicates are refused befo
     const std::string f = d.file("s.xml");
     auto refused = [&](const std::string& file, const std::string& text, const std::string& outDir,
                        std::initializer_list<std::string> needles) {
-        putFile(file, text);
+        writeFileBytes(file, text);
         const auto before = snapshot(d.path);
         expectRefused(run(d, "render " + file + " -o " + outDir), 2, needles);
         expectUnchanged(before, d.path);
@@ -220,7 +212,7 @@ TEST_CASE("cli output: wrong image types, inputs and duplicates are refused befo
         refused(f, sceneXml(camera(1, "hard.png"), textureBlock("tex.png")), d.file("out"), {"s.xml", "hard.png"});
     }
     SECTION("a PLY file named like an output") {
-        putFile(d.file("mesh.png"), "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+        writeFileBytes(d.file("mesh.png"), "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
                                     "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
                                     "end_header\n-1 -1 0\n1 -1 0\n0 1 0\n3 0 1 2\n");
         std::string text = sceneXml(camera(1, "mesh.png"));
@@ -244,14 +236,14 @@ TEST_CASE("cli output: accepted names, upper-case extensions, and a final symlin
     TempDir d;
     fs::create_directories(d.path / "out");
     fs::create_directories(d.path / "elsewhere");
-    putFile(d.file("elsewhere/victim.png"), "not to be touched");
+    writeFileBytes(d.file("elsewhere/victim.png"), "not to be touched");
     fs::create_symlink(d.path / "elsewhere" / "victim.png", d.path / "out" / "shot.png");
     const std::string f = d.file("s.xml");
-    putFile(f, sceneXml(camera(1, "shot.png") + camera(2, "UPPER.EXR", tonemap(""))));
+    writeFileBytes(f, sceneXml(camera(1, "shot.png") + camera(2, "UPPER.EXR", tonemap(""))));
     Result r = run(d, "render " + f + " -o " + d.file("out") + deviceArgs());
     INFO(r.log);
     REQUIRE(r.rc == 0);
-    CHECK(slurpFile(d.file("elsewhere/victim.png")) == "not to be touched");
+    CHECK(readFileBytes(d.file("elsewhere/victim.png")) == "not to be touched");
     CHECK(!fs::is_symlink(d.path / "out" / "shot.png"));
     CHECK(readImage(d.file("out/shot.png")).width == 4);
     CHECK(readImage(d.file("out/UPPER.EXR")).width == 4);
@@ -295,7 +287,7 @@ TEST_CASE("cli output: an output directory that cannot be written is reported be
           "[cli][output]") {
     TempDir d;
     const std::string f = d.file("s.xml");
-    putFile(f, sceneXml(camera(1, "out.exr", tonemap(""))));
+    writeFileBytes(f, sceneXml(camera(1, "out.exr", tonemap(""))));
     fs::create_directories(d.path / "out" / "out.png");  // the tone-mapped PNG's name is taken by a directory
     expectRefused(run(d, "render " + f + " -o " + d.file("out") + deviceArgs()), 4, {"out.png", "a directory has its name"});
     CHECK(!fs::exists(d.path / "out" / "out.exr"));
@@ -331,7 +323,7 @@ TEST_CASE("cli output: no OpenCL device, and an unusable HOME, are one error lin
         std::string pocl;
         if (fs::is_directory("/etc/OpenCL/vendors"))
             for (auto& e : fs::directory_iterator("/etc/OpenCL/vendors"))
-                if (slurpFile(e.path().string()).find("pocl") != std::string::npos) pocl = e.path().string();
+                if (readFileBytes(e.path().string()).find("pocl") != std::string::npos) pocl = e.path().string();
         if (pocl.empty()) {
             WARN("no PoCL ICD registered: skipped");
             return;
@@ -339,7 +331,7 @@ TEST_CASE("cli output: no OpenCL device, and an unusable HOME, are one error lin
         fs::copy_file(pocl, d.path / "vendors" / "pocl.icd");  // PoCL alone, whatever else is installed
         // HOME is a regular file: no one (root included, /proc mounted or not) can create a directory in it.
         const std::string home = d.file("home-is-a-file");
-        putFile(home, "x");
+        writeFileBytes(home, "x");
         const std::string env = "env -u POCL_CACHE_DIR -u XDG_CACHE_HOME HOME='" + home + "' " + noIcd;
         Result r = run(d, "devices", env);
         INFO(r.log);
@@ -348,7 +340,7 @@ TEST_CASE("cli output: no OpenCL device, and an unusable HOME, are one error lin
         CHECK(r.errorLine.find("kernel cache directory " + home + "/.cache/pocl/kcache") != std::string::npos);
         CHECK(r.errorLine.find("HOME=" + home) != std::string::npos);
         const std::string f = d.file("s.xml");
-        putFile(f, sceneXml(camera(1, "out.png")));
+        writeFileBytes(f, sceneXml(camera(1, "out.png")));
         fs::create_directories(d.path / "out");
         Result rr = run(d, "render " + f + " -o " + d.file("out"), env);
         INFO(rr.log);
@@ -401,9 +393,9 @@ Background spawn(const std::vector<std::string>& args, const std::string& log, c
 // Waits (bounded, generously: the outcome never depends on it) until the log holds `text`.
 bool waitForLog(const Background& b, const std::string& text, int seconds = 300) {
     for (int i = 0; i < seconds * 50; ++i) {
-        if (slurpFile(b.log).find(text) != std::string::npos) return true;
+        if (readFileBytes(b.log).find(text) != std::string::npos) return true;
         int status = 0;
-        if (waitpid(b.pid, &status, WNOHANG) == b.pid) return slurpFile(b.log).find(text) != std::string::npos;
+        if (waitpid(b.pid, &status, WNOHANG) == b.pid) return readFileBytes(b.log).find(text) != std::string::npos;
         std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
     return false;
@@ -442,14 +434,14 @@ TEST_CASE("cli output: the first SIGINT/SIGTERM/SIGHUP writes the partial image,
     TempDir d;
     fs::create_directories(d.path / "out");
     // Two cameras: the second is not rendered after the interrupt.
-    putFile(d.file("s.xml"), sceneXml(camera(1, "shot.exr", tonemap(""), "256 256") + camera(2, "second.png")));
+    writeFileBytes(d.file("s.xml"), sceneXml(camera(1, "shot.exr", tonemap(""), "256 256") + camera(2, "second.png")));
     for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
         DYNAMIC_SECTION("one signal: " << (sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "SIGHUP")) {
             Background b = spawn(renderArgs(d), d.file("clrt.log"));
             REQUIRE(waitForLog(b, "shot.exr, 256x256, 1048576 spp): rendering"));
             kill(b.pid, sig);
             const int rc = waitExit(b);
-            const std::string log = slurpFile(b.log);
+            const std::string log = readFileBytes(b.log);
             INFO(log);
             CHECK(rc == 128 + sig);
             CHECK(log.find("clrt: error") == std::string::npos);
@@ -478,7 +470,7 @@ TEST_CASE("cli output: the first SIGINT/SIGTERM/SIGHUP writes the partial image,
         CHECK(temporaries == 2);  // the EXR and its PNG
         kill(b.pid, SIGINT);
         const int rc = waitExit(b);
-        INFO(slurpFile(b.log));
+        INFO(readFileBytes(b.log));
         CHECK(rc == 130);
         CHECK(fs::is_empty(d.path / "out"));
         expectNoTemporaries(d.path);

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 
 #include "cl/devices.h"
@@ -31,6 +33,16 @@ inline DeviceContext& testContext() {
 
 inline std::string sharedDir() { return CLRT_SHARED_DIR; }
 inline bool haveShared() { return std::filesystem::is_directory(sharedDir() + "/scenes"); }
+
+// A whole file's bytes ("" if it cannot be read), and a file written with exactly `bytes`.
+inline std::string readFileBytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+inline void writeFileBytes(const std::string& path, const std::string& bytes) {
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out.write(bytes.data(), std::streamsize(bytes.size()));
+}
 
 struct TempDir {
     std::filesystem::path path;

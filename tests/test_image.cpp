@@ -33,6 +33,7 @@
 #include <zlib.h>
 
 #include "image/image.h"
+#include "test_helpers.h"
 #include "util/error.h"
 
 namespace fs = std::filesystem;
@@ -47,14 +48,6 @@ fs::path imgTempDir() {
 }
 std::string imgTemp(const std::string& name) { return (imgTempDir() / name).string(); }
 
-std::string slurp(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-void spit(const std::string& path, const std::string& bytes) {
-    std::ofstream out(path, std::ios::binary);
-    out.write(bytes.data(), std::streamsize(bytes.size()));
-}
 
 uint32_t bits(float f) {
     uint32_t u;
@@ -90,7 +83,7 @@ template <class F> std::string captureStderr(F f) {
     dup2(saved, 2);
     close(saved);
     std::fclose(tmp);
-    return slurp(path);
+    return clrt::test::readFileBytes(path);
 }
 
 void requireReadError(const std::string& path) {
@@ -343,41 +336,41 @@ TEST_CASE("corrupt and truncated images raise clrt::Error", "[image]") {
     std::string exr = imgTemp("good.exr"), png = imgTemp("good.png");
     clrt::writeExr(exr, img);
     clrt::writePngClamped(png, img);
-    std::string exrBytes = slurp(exr), pngBytes = slurp(png);
+    std::string exrBytes = clrt::test::readFileBytes(exr), pngBytes = clrt::test::readFileBytes(png);
 
     SECTION("missing file") { requireReadError(imgTemp("nope.png")); }
     SECTION("empty file") {
-        spit(imgTemp("empty.png"), "");
+        clrt::test::writeFileBytes(imgTemp("empty.png"), "");
         requireReadError(imgTemp("empty.png"));
     }
     SECTION("unknown format") {
-        spit(imgTemp("text.png"), "this is not an image at all");
+        clrt::test::writeFileBytes(imgTemp("text.png"), "this is not an image at all");
         requireReadError(imgTemp("text.png"));
     }
     SECTION("truncated EXR") {
         for (double frac : {0.1, 0.5, 0.9}) {
             std::string p = imgTemp("trunc" + std::to_string(int(frac * 10)) + ".exr");
-            spit(p, exrBytes.substr(0, size_t(exrBytes.size() * frac)));
+            clrt::test::writeFileBytes(p, exrBytes.substr(0, size_t(exrBytes.size() * frac)));
             requireReadError(p);
         }
     }
     SECTION("EXR magic then random bytes") {
         std::string b = "\x76\x2f\x31\x01";
         for (int i = 0; i < 500; ++i) b += char(rng() & 0xFF);
-        spit(imgTemp("random.exr"), b);
+        clrt::test::writeFileBytes(imgTemp("random.exr"), b);
         requireReadError(imgTemp("random.exr"));
     }
     SECTION("truncated PNG") {
         for (double frac : {0.05, 0.5, 0.95}) {
             std::string p = imgTemp("trunc" + std::to_string(int(frac * 100)) + ".png");
-            spit(p, pngBytes.substr(0, size_t(pngBytes.size() * frac)));
+            clrt::test::writeFileBytes(p, pngBytes.substr(0, size_t(pngBytes.size() * frac)));
             requireReadError(p);
         }
     }
     SECTION("PNG magic then random bytes") {
         std::string b = "\x89PNG\r\n\x1a\n";
         for (int i = 0; i < 500; ++i) b += char(rng() & 0xFF);
-        spit(imgTemp("random.png"), b);
+        clrt::test::writeFileBytes(imgTemp("random.png"), b);
         requireReadError(imgTemp("random.png"));
     }
     SECTION("truncated and random JPEG") {
@@ -387,12 +380,12 @@ TEST_CASE("corrupt and truncated images raise clrt::Error", "[image]") {
         REQUIRE(stbi_write_jpg(jpg.c_str(), 64, 64, 3, rgb.data(), 90));
         ImageRGB ok = clrt::readImage(jpg);
         CHECK(ok.width == 64);
-        std::string jb = slurp(jpg);
-        spit(imgTemp("trunc.jpg"), jb.substr(0, jb.size() / 2));
+        std::string jb = clrt::test::readFileBytes(jpg);
+        clrt::test::writeFileBytes(imgTemp("trunc.jpg"), jb.substr(0, jb.size() / 2));
         requireReadError(imgTemp("trunc.jpg"));
         std::string b = "\xFF\xD8\xFF";
         for (int i = 0; i < 500; ++i) b += char(rng() & 0xFF);
-        spit(imgTemp("random.jpg"), b);
+        clrt::test::writeFileBytes(imgTemp("random.jpg"), b);
         requireReadError(imgTemp("random.jpg"));
     }
 }
@@ -420,12 +413,12 @@ TEST_CASE("writers fail cleanly and never truncate the target", "[image]") {
             std::string p = imgTemp(name);
             if (name == "keep.png") clrt::writePng8(p, 8, 8, rgb);
             else clrt::writeExr(p, img);
-            std::string good = slurp(p);
+            std::string good = clrt::test::readFileBytes(p);
             REQUIRE(!good.empty());
             // A writer that produces half a file and then fails.
             CHECK_THROWS_AS(clrt::writeAtomically(p,
                                                   [&](const std::string& tmp) {
-                                                      spit(tmp, good.substr(0, good.size() / 2));
+                                                      clrt::test::writeFileBytes(tmp, good.substr(0, good.size() / 2));
                                                       throw clrt::Error("simulated failure", clrt::ExitCode::Output);
                                                   }),
                             clrt::Error);
@@ -434,7 +427,7 @@ TEST_CASE("writers fail cleanly and never truncate the target", "[image]") {
             bad.pixels.resize(10);
             requireWriteError([&] { clrt::writeExr(p, bad); }, p);
             requireWriteError([&] { clrt::writePng8(p, 8, 8, std::vector<unsigned char>(5)); }, p);
-            CHECK(slurp(p) == good);
+            CHECK(clrt::test::readFileBytes(p) == good);
             CHECK(!fs::exists(clrt::temporarySiblingPath(p)));
         }
     }
@@ -456,7 +449,7 @@ TEST_CASE("a PNG with a zero-length IDAT chunk (valid, found by the fuzzer) read
         "\x0c\x49\x44\x41\x54\x78\x9c\x63\xf8\xcf\xc0\x00\x00\x03\x01\x01\x00\xc9\xfe\x92\xef\x00\x00\x00"
         "\x00\x49\x45\x4e\x44\xae\x42\x60\x82";
     std::string path = imgTemp("zero_idat.png");
-    spit(path, std::string(kPng, sizeof(kPng) - 1));
+    clrt::test::writeFileBytes(path, std::string(kPng, sizeof(kPng) - 1));
     ImageRGB img = clrt::readImage(path);
     REQUIRE(img.width == 1);
     REQUIRE(img.height == 1);
@@ -621,7 +614,7 @@ TEST_CASE("PNG encoder: valid chunks and zlib stream, every filter type, exact r
         // Decoded by stb_image: the same pixels.
         const std::string path = imgTemp("enc.png");
         clrt::writePng8(path, w, h, rgb);
-        CHECK(slurp(path) == png);
+        CHECK(clrt::test::readFileBytes(path) == png);
         ImageRGB back = clrt::readImage(path);
         REQUIRE(back.width == w);
         REQUIRE(back.height == h);
@@ -636,14 +629,14 @@ TEST_CASE("uncommitted writes leave the target alone until committed", "[image]"
     for (size_t i = 0; i < img.pixels.size(); ++i) img.pixels[i] = float(i);
     std::vector<unsigned char> rgb(6 * 4 * 3, 9);
     const std::string exr = imgTemp("pending.exr"), png = imgTemp("pending.png");
-    spit(exr, "old exr");
-    spit(png, "old png");
+    clrt::test::writeFileBytes(exr, "old exr");
+    clrt::test::writeFileBytes(png, "old png");
     const std::string exrTmp = clrt::writeExrUncommitted(exr, img);
     const std::string pngTmp = clrt::writePng8Uncommitted(png, 6, 4, rgb);
     CHECK(exrTmp == clrt::temporarySiblingPath(exr));
     CHECK(pngTmp == clrt::temporarySiblingPath(png));
-    CHECK(slurp(exr) == "old exr");
-    CHECK(slurp(png) == "old png");
+    CHECK(clrt::test::readFileBytes(exr) == "old exr");
+    CHECK(clrt::test::readFileBytes(png) == "old png");
     clrt::commitTemporary(exrTmp, exr);
     clrt::commitTemporary(pngTmp, png);
     CHECK(clrt::readImage(exr).pixels == img.pixels);

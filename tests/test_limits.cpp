@@ -34,14 +34,6 @@ extern char** environ;
 
 namespace {
 
-std::string readText(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-void writeText(const std::string& path, const std::string& text) {
-    std::ofstream out(path, std::ios::binary | std::ios::trunc);
-    out << text;
-}
 
 struct Child {
     int rc = -1;          // exit code; -1 when killed by a signal
@@ -86,7 +78,7 @@ Child runChild(const TempDir& dir, const std::vector<std::string>& args, const s
     c.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     c.signal = WIFSIGNALED(status) ? WTERMSIG(status) : 0;
     c.maxRssKb = ru.ru_maxrss;
-    c.log = readText(logFile);
+    c.log = readFileBytes(logFile);
     std::istringstream ls(c.log);
     for (std::string line; std::getline(ls, line);) c.errorLines += line.rfind("clrt: error:", 0) == 0;
     return c;
@@ -144,7 +136,7 @@ TEST_CASE("limits: peak memory of a 1x1 render at 1048576 spp is within 4 MB of 
     // batch); with 4096 batches of 256 samples that alone is ~9 MB here, and the old one-sample
     // batches grew without bound. The kernel cache is warmed first: a build's peak is much higher.
     TempDir d;
-    writeText(d.file("s.xml"), oneByOne("", "", "one.exr", kDiffuse));
+    writeFileBytes(d.file("s.xml"), oneByOne("", "", "one.exr", kDiffuse));
     const std::vector<std::string> env = {"CLRT_CACHE_DIR=" + d.file("cache")};
     auto render = [&](const std::string& spp) {
         return runChild(d, {"render", d.file("s.xml"), "-o", d.path.string(), "--device", testDeviceSpec(), "--spp", spp}, env);
@@ -166,7 +158,7 @@ TEST_CASE("limits: peak memory of a 1x1 render at 1048576 spp is within 4 MB of 
 
 TEST_CASE("limits: progress moves within the one tile of a multi-device render", "[limits][cli][multidevice]") {
     TempDir d;
-    writeText(d.file("s.xml"), oneByOne("", "", "one.exr", kDiffuse));
+    writeFileBytes(d.file("s.xml"), oneByOne("", "", "one.exr", kDiffuse));
     Child c = runChild(d, {"render", d.file("s.xml"), "-o", d.path.string(), "--device", "all", "--spp", "65536"},
                        {"POCL_DEVICES=pthread pthread", "CLRT_CACHE_DIR=" + d.file("cache")});
     expectClean(c);
@@ -180,7 +172,7 @@ TEST_CASE("limits: NumSamples above 1048576 is capped with a warning naming the 
     TempDir d;
     const std::vector<std::string> env = {"CLRT_CACHE_DIR=" + d.file("cache")};
     SECTION("1e9 renders 1048576 samples") {
-        writeText(d.file("big.xml"), oneByOne("", "<NumSamples>1e9</NumSamples>", "big.exr", kDiffuse));
+        writeFileBytes(d.file("big.xml"), oneByOne("", "<NumSamples>1e9</NumSamples>", "big.exr", kDiffuse));
         Child c = runChild(d, {"render", d.file("big.xml"), "-o", d.path.string(), "--device", testDeviceSpec()}, env);
         expectClean(c);
         INFO(c.log);
@@ -190,7 +182,7 @@ TEST_CASE("limits: NumSamples above 1048576 is capped with a warning naming the 
         CHECK(exrAttribute(d.file("big.exr"), "spp") == "1048576");
     }
     SECTION("a value beyond int (1e12) is capped too, and --spp still overrides it") {
-        writeText(d.file("huge.xml"), oneByOne("", "<NumSamples>1e12</NumSamples>", "huge.exr", kDiffuse));
+        writeFileBytes(d.file("huge.xml"), oneByOne("", "<NumSamples>1e12</NumSamples>", "huge.exr", kDiffuse));
         Child c = runChild(d, {"render", d.file("huge.xml"), "-o", d.path.string(), "--device", testDeviceSpec(),
                                "--spp", "3"}, env);
         expectClean(c);
@@ -200,7 +192,7 @@ TEST_CASE("limits: NumSamples above 1048576 is capped with a warning naming the 
         CHECK(exrAttribute(d.file("huge.exr"), "spp") == "3");
     }
     SECTION("the same limit on the command line") {
-        writeText(d.file("s.xml"), oneByOne("", "", "s.exr", kDiffuse));
+        writeFileBytes(d.file("s.xml"), oneByOne("", "", "s.exr", kDiffuse));
         Child c = runChild(d, {"render", d.file("s.xml"), "-o", d.path.string(), "--spp", "1048577"}, env);
         INFO(c.log);
         CHECK(c.rc == 1);
@@ -214,7 +206,7 @@ TEST_CASE("limits: two facing mirrors at MaxRecursionDepth 1e9 finish at depth 2
     TempDir d;
     const std::vector<std::string> env = {"CLRT_CACHE_DIR=" + d.file("cache")};
     auto render = [&](const std::string& depth, const std::string& name, const std::string& spp = "4") {
-        writeText(d.file(name + ".xml"),
+        writeFileBytes(d.file(name + ".xml"),
                   oneByOne("<MaxRecursionDepth>" + depth + "</MaxRecursionDepth>", "", name + ".exr", kMirrors));
         return runChild(d, {"render", d.file(name + ".xml"), "-o", d.path.string(), "--device", testDeviceSpec(),
                             "--spp", spp}, env);
@@ -270,7 +262,7 @@ TEST_CASE("limits: samples batched together do not change a pixel whatever the t
 
 TEST_CASE("limits: a damaged kernel cache entry is rebuilt and rewritten, never loaded", "[limits][cli][cache]") {
     TempDir d;
-    writeText(d.file("s.xml"), oneByOne("", "<NumSamples>4</NumSamples>", "c.exr", kDiffuse));
+    writeFileBytes(d.file("s.xml"), oneByOne("", "<NumSamples>4</NumSamples>", "c.exr", kDiffuse));
     const std::vector<std::string> env = {"CLRT_CACHE_DIR=" + d.file("cache")};
     const std::vector<std::string> args = {"render", d.file("s.xml"), "-o", d.path.string(), "--device",
                                            testDeviceSpec(), "-v"};
@@ -300,9 +292,9 @@ TEST_CASE("limits: a damaged kernel cache entry is rebuilt and rewritten, never 
     for (const auto& [what, damage] : damages) {
         INFO(what);
         for (const std::string& e : entries) {
-            std::string bytes = readText(e);
+            std::string bytes = readFileBytes(e);
             damage(bytes);
-            writeText(e, bytes);
+            writeFileBytes(e, bytes);
             CHECK(!programCacheEntryValid(e));
         }
         Child c = runChild(d, args, env);
@@ -321,10 +313,10 @@ TEST_CASE("limits: a damaged kernel cache entry is rebuilt and rewritten, never 
     // A temporary entry left by a writer killed mid-write goes when an entry is next written, once it
     // is ten minutes old (a younger one may belong to a writer still running).
     const std::string stale = d.file("cache/0000000000000000.bin.tmp.1.0"), fresh = d.file("cache/1.bin.tmp.2.0");
-    writeText(stale, "half an entry");
-    writeText(fresh, "half an entry");
+    writeFileBytes(stale, "half an entry");
+    writeFileBytes(fresh, "half an entry");
     fs::last_write_time(stale, fs::file_time_type::clock::now() - std::chrono::hours(1));
-    for (const std::string& e : entries) writeText(e, "");
+    for (const std::string& e : entries) writeFileBytes(e, "");
     expectClean(runChild(d, args, env));
     CHECK(!fs::exists(stale));
     CHECK(fs::exists(fresh));
