@@ -152,8 +152,8 @@ __kernel void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
     float3 throughput = path.throughput.xyz;
     childValid[2 * i] = 0;
     childValid[2 * i + 1] = 0;
-    ShadingPoint sp;
-    sp.position = (float4)(0.0f);
+    ShadingPoint sp;  /* every field set: misses and dielectric interiors store it whole (oclgrind) */
+    sp.position = sp.normal = sp.geomNormal = sp.wo = sp.kd = sp.ks = (float4)(0.0f);
     if (h.prim == CLRT_INVALID) {
         points[i] = sp;
         pathRadiance[i] = (float4)(throughput * Miss_Radiance(scene, textures, images, texels, cam, path, ray.direction.xyz), 0.0f);

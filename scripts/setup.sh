@@ -4,7 +4,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-PKGS="cmake g++ make pkg-config ocl-icd-opencl-dev opencl-clhpp-headers pocl-opencl-icd libopenexr-dev libpugixml-dev catch2 libstb-dev clinfo nlohmann-json3-dev zlib1g-dev"
+PKGS="cmake g++ make pkg-config ocl-icd-opencl-dev opencl-clhpp-headers pocl-opencl-icd libopenexr-dev libpugixml-dev catch2 libstb-dev clinfo nlohmann-json3-dev zlib1g-dev oclgrind clang python3-venv"
 missing=""
 for p in $PKGS; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"
@@ -19,3 +19,5 @@ fi
 
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build -j"$(nproc)"
+# Intel's OpenCL CPU runtime (PyPI) in build/venv-intel, beside PoCL; CLRT_NO_INTEL_OCL=1 skips it.
+bash scripts/setup_intel_ocl.sh

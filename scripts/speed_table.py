@@ -40,8 +40,13 @@ def machine(clrt, device):
         if line.startswith("Model name:"):
             cpu = line.split(":", 1)[1].strip()
     lines = sh([clrt, "devices"]).stdout.strip().splitlines()
-    dev = lines[0].strip() if lines else "?"
-    m = re.match(r"\[\d+\]\s+\S+\s+(.*?)\s+\(platform: ([^)]*)\).*?driver:\s*(\S+)", dev)
+    # The line of the device the spec names (first match): an index, platform:NAME, cpu/gpu, else the first.
+    spec = device.lower()
+    pick = [l for l in lines if (spec.isdigit() and l.startswith("[%s]" % spec)) or
+            (spec.startswith("platform:") and spec[9:] in l.lower().split("(platform:", 1)[-1]) or
+            (spec in ("cpu", "gpu") and re.match(r"\[\d+\]\s+%s\b" % spec.upper(), l))]
+    dev = (pick or lines or ["?"])[0].strip()
+    m = re.match(r"\[\d+\]\s+\S+\s+(.*?)\s+\(platform: (.*?)\)\s+compute units.*?driver:\s*(\S+)", dev)
     if m:  # "[0] CPU  NAME  (platform: P) ... driver: D" -> "NAME (P D)"
         dev = "%s (%s %s)" % (m.group(1), m.group(2), m.group(3))
     return cpu, os.cpu_count(), dev

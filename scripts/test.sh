@@ -1,5 +1,7 @@
 #!/usr/bin/env bash
 # Sets up (scripts/setup.sh), runs the whole Catch2 test suite on the PoCL CPU device, then the
+# OpenCL-implementation checks (scripts/test_implementations.sh: the device tests on Intel's CPU
+# runtime, the oclgrind suite, GPU-target compiles of every kernel variant), then the
 # deterministic fuzz check of the scene/PLY/image readers (scripts/fuzz.sh --gate: the committed
 # regressions and seeds replayed under ASan/UBSan, then a fixed number of fixed-seed libFuzzer runs;
 # skip with CLRT_NO_FUZZ=1).
@@ -7,6 +9,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
+# Intel's OpenCL CPU runtime beside PoCL when scripts/setup_intel_ocl.sh installed it; "cpu" is PoCL.
+[ -f build/opencl-env.sh ] && . build/opencl-env.sh
 # Tests run on PoCL's CPU device; a private kernel-binary cache keeps reruns fast.
 export CLRT_TEST_DEVICE="${CLRT_TEST_DEVICE:-cpu}"
 export CLRT_CACHE_DIR="${CLRT_CACHE_DIR:-$PWD/build/kernel-cache}"
@@ -25,6 +29,7 @@ else
   echo "tests: ${p:-0} passed, ${f:-1} failed"
 fi
 [ "$rc" -eq 0 ] || exit "$rc"
+[ $# -eq 0 ] && { bash scripts/test_implementations.sh || exit 1; }
 if [ -z "${CLRT_NO_FUZZ:-}" ] && [ $# -eq 0 ]; then
   command -v clang++ >/dev/null || { [ "$(id -u)" -eq 0 ] && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq clang >/dev/null; }
   echo "fuzz gate (fuzz/regressions + fuzz/corpus replayed, then a fixed number of -seed=1 runs per target):"

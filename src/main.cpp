@@ -61,12 +61,17 @@ const char* kRenderHelp =
     "\n"
     "options:\n"
     "  -o, --output DIR      output directory (default: the current directory); must exist\n"
-    "  --device SPEC         OpenCL device: an index from `clrt devices`, cpu, gpu, a name\n"
-    "                        substring, `all`, or a comma list (0,2) to render on several devices\n"
-    "                        at once (default: the first GPU, else the CPU device)\n"
+    "  --device SPEC         OpenCL device: an index from `clrt devices`, cpu (PoCL's CPU\n"
+    "                        device(s) when several CPU implementations are installed), gpu, a name\n"
+    "                        substring, platform:NAME (every device of a platform whose name\n"
+    "                        contains NAME, e.g. platform:portable = PoCL, platform:intel), `all`,\n"
+    "                        or a comma list (0,2) to render on several devices at once\n"
+    "                        (default: the first GPU, else the CPU device)\n"
     "  --spp N               samples per pixel (1 to 1048576), overriding each camera's NumSamples\n"
     "  --seed N              random seed (default 0); the same seed gives the same image\n"
     "  --camera ID           render only the camera with this id\n"
+    "  --resolution WxH      render every camera at W x H pixels (same view) instead of its\n"
+    "                        ImageResolution: tiny renders for checking kernels (oclgrind)\n"
     "  --ldr-quantize MODE   round (default) or floor: how .png outputs turn clamped radiance into\n"
     "                        8 bits; the course's reference renders truncate (floor)\n"
     "  --env-sampling S      sampler of every SphericalDirectionalLight: uniform, cosine, importance or\n"
@@ -83,7 +88,7 @@ const char* kRenderHelp =
 struct Args {
     std::vector<std::string> positional;
     std::string outDir = ".", device, cameraId;
-    int spp = 0;
+    int spp = 0, width = 0, height = 0;  // width/height: --resolution (0: the camera's own)
     uint32_t seed = 0;
     bool verbose = false, help = false, truncatePng = false, exrHalf = false, allFeatures = false;
     std::string envSampling;  // --env-sampling: overrides every environment light's sampler
@@ -115,6 +120,13 @@ Args parseRenderArgs(int argc, char** argv, int start) {
         else if (s == "--spp") a.spp = parseInt(s, value(), 1, kMaxSamplesPerPixel);
         else if (s == "--seed") a.seed = uint32_t(parseInt(s, value(), 0, 2147483647));
         else if (s == "--camera") a.cameraId = value();
+        else if (s == "--resolution") {
+            std::string v = value();
+            size_t x = v.find('x');
+            if (x == std::string::npos) throw Error("--resolution: expected WxH, got '" + v + "'", ExitCode::Usage);
+            a.width = parseInt(s, v.substr(0, x), 1, 1 << 16);
+            a.height = parseInt(s, v.substr(x + 1), 1, 1 << 16);
+        }
         else if (s == "-v" || s == "--verbose") a.verbose = true;
         else if (s == "--exr-half") a.exrHalf = true;
         else if (s == "--all-features") a.allFeatures = true;
@@ -369,6 +381,11 @@ int cmdRender(const Args& a) {
         overrideEnvSampling(scene, es);
     }
     times.parse = since(t);
+    if (a.width > 0)  // --resolution: every camera at WxH, same view
+        for (Camera& c : scene.cameras) {
+            c.width = a.width;
+            c.height = a.height;
+        }
 
     std::vector<const Camera*> cams = selectCameras(scene, a);
     // Plain .png/.exr names, no two alike, none of them a file the scene reads: exit 2 before any work.

@@ -64,8 +64,9 @@ fs::path makeTempDir(const std::string& tag) {
 
 // The first CPU device (PoCL here), shared by the tests that need a context.
 DeviceContext& cpuContext() {
-    static DeviceContext dc(selectDevices("cpu").at(0));
-    return dc;
+    // Never destroyed: see testContext() in test_helpers.h.
+    static DeviceContext* dc = new DeviceContext(selectDevices("cpu").at(0));
+    return *dc;
 }
 
 

@@ -24,8 +24,11 @@ inline DeviceInfo testDevice() {
 
 // One shared context per test process (program builds are the slow part on PoCL).
 inline DeviceContext& testContext() {
-    static DeviceContext dc(testDevice());
-    return dc;
+    // Never destroyed: OpenCL objects released from static destructors at exit run after the
+    // runtime's thread-local state is gone (oclgrind 21.10's clReleaseCommandQueue then writes to its
+    // freed per-thread call stack: valgrind, and "corrupted double-linked list" aborts at exit).
+    static DeviceContext* dc = new DeviceContext(testDevice());
+    return *dc;
 }
 
 inline std::string sharedDir() { return CLRT_SHARED_DIR; }

@@ -35,7 +35,7 @@ using namespace clrt::test;
 namespace {
 
 TonemapDevice& tmDevice() {
-    static TonemapDevice tm(testContext());
+    static TonemapDevice& tm = *new TonemapDevice(testContext());  // never destroyed: see testContext()
     return tm;
 }
 

@@ -128,6 +128,19 @@ bool isIndex(const std::string& s) {
     return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) { return std::isdigit((unsigned char)c); });
 }
 
+// The CPU implementation that "cpu" and the default spec use when several are installed (PoCL and
+// Intel's runtime run on the same cores: using both at once only makes them compete). PoCL's, the
+// implementation clrt is validated on, when present; else the first platform with a CPU device.
+std::string preferredCpuPlatform(const std::vector<DeviceInfo>& all) {
+    std::string plat;
+    for (const DeviceInfo& d : all) {
+        if (!(d.type & CL_DEVICE_TYPE_CPU)) continue;
+        if (lower(d.platformName).find("portable computing language") != std::string::npos) return d.platformName;
+        if (plat.empty()) plat = d.platformName;
+    }
+    return plat;
+}
+
 }  // namespace
 
 const char* deviceTypeName(cl_device_type type) {
@@ -207,9 +220,10 @@ std::vector<DeviceInfo> selectDevices(const std::string& spec) {
     if (all.empty()) throw Error(noDevicesMessage(), ExitCode::Device);
 
     std::vector<bool> chosen(all.size(), false);
+    const std::string cpuPlatform = preferredCpuPlatform(all);
     auto firstOfType = [&](cl_device_type t) -> int {
         for (const DeviceInfo& d : all)
-            if (d.type & t) return d.index;
+            if ((d.type & t) && (t != CL_DEVICE_TYPE_CPU || d.platformName == cpuPlatform)) return d.index;
         return -1;
     };
 
@@ -236,12 +250,17 @@ std::vector<DeviceInfo> selectDevices(const std::string& spec) {
         } else if (key == "all") {
             std::fill(chosen.begin(), chosen.end(), true);
             any = true;
-        } else if (key == "cpu" || key == "gpu" || key == "accelerator") {
-            cl_device_type t = key == "cpu" ? CL_DEVICE_TYPE_CPU
-                               : key == "gpu" ? CL_DEVICE_TYPE_GPU
-                                              : CL_DEVICE_TYPE_ACCELERATOR;
+        } else if (key == "cpu") {  // the CPU devices of one implementation (preferredCpuPlatform)
+            for (const DeviceInfo& d : all)
+                if ((d.type & CL_DEVICE_TYPE_CPU) && d.platformName == cpuPlatform) chosen[d.index] = any = true;
+        } else if (key == "gpu" || key == "accelerator") {
+            cl_device_type t = key == "gpu" ? CL_DEVICE_TYPE_GPU : CL_DEVICE_TYPE_ACCELERATOR;
             for (const DeviceInfo& d : all)
                 if (d.type & t) chosen[d.index] = any = true;
+        } else if (key.compare(0, 9, "platform:") == 0 && key.size() > 9) {
+            // Every device of the platforms whose name contains the rest, e.g. platform:portable (PoCL).
+            for (const DeviceInfo& d : all)
+                if (lower(d.platformName).find(trim(key.substr(9))) != std::string::npos) chosen[d.index] = any = true;
         } else {
             for (const DeviceInfo& d : all)
                 if (lower(d.name).find(key) != std::string::npos) chosen[d.index] = any = true;

@@ -1,6 +1,7 @@
 // devices.h — OpenCL device discovery and selection for `clrt devices` and `clrt render --device`.
 // listDevices() enumerates every device of every platform with a global index; selectDevices() turns a
-// --device spec ("", "2", "cpu", "gpu", "accelerator", "all", "0,2", or a name substring) into devices.
+// --device spec ("", "2", "cpu", "gpu", "accelerator", "all", "0,2", "platform:NAME", or a name
+// substring) into devices.
 #pragma once
 #include <CL/opencl.hpp>
 
@@ -29,9 +30,12 @@ const char* deviceTypeName(cl_device_type type);
 // no platform (or no ICD) at all gives an empty list.
 std::vector<DeviceInfo> listDevices();
 
-// Devices named by spec (comma-separated items, each one of: an index, "cpu", "gpu", "accelerator",
-// "all", or a case-insensitive substring of the device name; "" = the first GPU, else the first CPU,
-// else the first device). Result is in index order without duplicates. Throws clrt::Error
+// Devices named by spec (comma-separated items, each one of: an index, "cpu" (the CPU devices of
+// one implementation: PoCL's when present, else the first platform's), "gpu", "accelerator", "all"
+// (every device of every platform), "platform:NAME" (every device of the platforms whose name
+// contains NAME, case-insensitive, e.g. platform:portable for PoCL, platform:intel for Intel's
+// runtime), or a case-insensitive substring of the device name; "" = the first GPU, else the first
+// device of "cpu", else the first device). Result is in index order without duplicates. Throws clrt::Error
 // (ExitCode::Device), listing the available devices, when an item names no device or none exist.
 std::vector<DeviceInfo> selectDevices(const std::string& spec);
 

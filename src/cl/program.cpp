@@ -284,6 +284,18 @@ cl::Program fromBinary(DeviceContext& dc, const std::vector<unsigned char>& bin,
     return prog;
 }
 
+// $CLRT_DUMP_PROGRAM=DIR: every program's exact source and options go to DIR/<hash>.cl and
+// DIR/<hash>.options (for compiling the same programs offline, e.g. with clang for GPU targets).
+void dumpProgram(const std::string& source, const std::string& options) {
+    std::string dir = envOr("CLRT_DUMP_PROGRAM");
+    if (dir.empty()) return;
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    std::string base = dir + "/" + hex64(fnv1a64(options, fnv1a64(source)));
+    std::ofstream(base + ".cl", std::ios::binary) << source;
+    std::ofstream(base + ".options", std::ios::binary) << options << "\n";
+}
+
 }  // namespace
 
 std::vector<NamedSource> loadKernelSources(const std::vector<std::string>& kernelFiles) {
@@ -383,6 +395,7 @@ cl::Program buildProgramFromSources(DeviceContext& dc, const std::vector<NamedSo
         names += (names.empty() ? "" : ", ") + ns.first;
     }
 
+    dumpProgram(source, bi.options);
     const DeviceInfo& di = dc.info();
     cl_device_id dev = dc.device()();
     auto seconds = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };

@@ -5,6 +5,8 @@
 // "-cl-std=CL1.2" plus the caller's defines, and cached as device binaries on disk
 // ($CLRT_CACHE_DIR, else $XDG_CACHE_HOME/clrt, else ~/.cache/clrt; CLRT_NO_CACHE=1 disables); each
 // entry carries its length and an FNV-1a 64 checksum, and a damaged entry is rebuilt and rewritten.
+// $CLRT_DUMP_PROGRAM=DIR also writes each program's exact source and options string into DIR
+// (scripts/gpu_compile_check.sh compiles them with clang for GPU targets).
 #pragma once
 #include <CL/opencl.hpp>
 

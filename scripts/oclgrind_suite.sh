@@ -1,0 +1,94 @@
+#!/usr/bin/env bash
+# oclgrind suite: tiny renders (8x8, 1 spp) of every kernel feature variant listed in
+# scripts/kernel_variants.txt, plus `clrt tonemap` with each operator (8-bit and float output) and
+# the device struct-layout kernel (clrt_tests "[layout]"), run on Oclgrind's simulator with its checks:
+#   pass 1  memory (always on), API misuse and data races  (OCLGRIND_CHECK_API, OCLGRIND_DATA_RACES)
+#           on the optimised program, as clrt builds it;
+#   pass 2  API misuse and uninitialised values (OCLGRIND_UNINITIALIZED), with -cl-opt-disable:
+#           oclgrind 21.10's uninitialised-value plugin aborts on LLVM's `freeze` instruction that
+#           the optimiser emits ("Unsupported instruction: freeze").
+# clEnqueueFillBuffer is turned into a host write (tests/oclgrind/fill_as_write.c, LD_PRELOAD):
+# oclgrind 21.10 does not count a fill as initialising memory, which reports every read of a
+# zero-filled buffer. Oclgrind's reports go to a log per run (OCLGRIND_LOG); the suite fails on any
+# report, on a clrt failure, on a render that did not run on the Oclgrind device, or when oclgrind is
+# missing. A negative control runs first: tests/oclgrind/oob_probe.c (an out-of-bounds read and an
+# uninitialised value) must be reported in each pass. Logs: build/oclgrind/.
+# Usage: bash scripts/oclgrind_suite.sh [--quick]   (--quick: pass 1 only)
+set -uo pipefail
+cd "$(dirname "$0")/.."
+ROOT=$PWD
+SCENES=$ROOT/../shared/scenes
+OUT=$ROOT/build/oclgrind
+RT=/usr/lib/oclgrind/liboclgrind-rt.so
+SHIM=$ROOT/build/oclgrind-fill-shim.so
+fail() { echo "oclgrind_suite: FAIL: $*"; exit 1; }
+[ -f "$RT" ] || RT=$(dpkg -L oclgrind 2>/dev/null | grep '/liboclgrind-rt\.so$' | head -1)
+[ -n "$RT" ] && [ -f "$RT" ] || fail "oclgrind is not installed (Debian package oclgrind; scripts/setup.sh installs it)"
+[ -x build/clrt ] && [ -x build/clrt_tests ] || fail "build/clrt or build/clrt_tests missing (run scripts/setup.sh)"
+[ -d "$SCENES" ] || fail "no shared scenes at $SCENES"
+PASSES="races uninit"
+[ "${1:-}" = "--quick" ] && PASSES="races"
+rm -rf "$OUT"; mkdir -p "$OUT/img"
+if [ ! -f "$SHIM" ] || [ tests/oclgrind/fill_as_write.c -nt "$SHIM" ]; then
+  cc -shared -fPIC -O2 -o "$SHIM" tests/oclgrind/fill_as_write.c -lOpenCL || fail "cannot build $SHIM"
+fi
+PROBE=$ROOT/build/oclgrind-oob-probe
+if [ ! -x "$PROBE" ] || [ tests/oclgrind/oob_probe.c -nt "$PROBE" ]; then
+  cc -O1 -o "$PROBE" tests/oclgrind/oob_probe.c -lOpenCL || fail "cannot build $PROBE"
+fi
+
+runs=0; bad=0
+# check NAME PASS COMMAND...: runs COMMAND on oclgrind; fails on a non-zero exit or any oclgrind report.
+check() {
+  local name=$1 pass=$2; shift 2
+  local log=$OUT/$name.$pass.oclgrind.log out=$OUT/$name.$pass.out
+  local -a env=(LD_PRELOAD="$SHIM:$RT" OCLGRIND_LOG="$log" OCLGRIND_CHECK_API=1 OCLGRIND_GLOBAL_MEM_SIZE=1073741824
+                CLRT_NO_CACHE=1 CLRT_NO_PROFILE=1)
+  if [ "$pass" = races ]; then env+=(OCLGRIND_DATA_RACES=1)
+  else env+=(OCLGRIND_UNINITIALIZED=1 OCLGRIND_BUILD_OPTIONS=-cl-opt-disable); fi
+  : > "$log"
+  env "${env[@]}" "$@" > "$out" 2>&1
+  local rc=$?
+  runs=$((runs + 1))
+  if [ $rc -ne 0 ] || [ -s "$log" ] || grep -q "OCLGRIND\|Oclgrind - " "$out"; then
+    bad=$((bad + 1))
+    echo "oclgrind_suite: $name ($pass): rc $rc, $(grep -c "Kernel:" "$log") reports; first lines:"
+    { head -12 "$log"; grep -v "^$" "$out" | grep -v "^wrote\|^times:\|^stats:\|done$" | head -6; } | sed 's/^/    /'
+  fi
+}
+
+# Negative control: the probe's faults must be reported in every pass.
+for pass in $PASSES; do
+  check probe "$pass" "$PROBE" > /dev/null
+  grep -q "Invalid read" "$OUT/probe.$pass.oclgrind.log" ||
+    fail "oclgrind did not report the probe's out-of-bounds read ($pass pass): it would not see real faults either"
+  if [ "$pass" = uninit ]; then grep -qi "uninitiali" "$OUT/probe.$pass.oclgrind.log" ||
+    fail "oclgrind did not report the probe's uninitialised value"; fi
+done
+runs=0; bad=0
+
+n=0
+while read -r scene args; do
+  case "$scene" in ''|\#*) continue ;; esac
+  n=$((n + 1)); name=$(printf "%02d-%s" $n "$(basename "${scene%.*}")")
+  for pass in $PASSES; do
+    check "$name" "$pass" build/clrt render "$SCENES/$scene" --resolution 8x8 --spp 1 -o "$OUT/img" -v $args
+    grep -q "(Oclgrind)" "$OUT/$name.$pass.out" || { bad=$((bad + 1)); echo "oclgrind_suite: $name did not run on Oclgrind"; }
+  done
+done < scripts/kernel_variants.txt
+
+# Tone mapping: every operator, 8-bit and float output, on the tiny HDR render of cube_point_hdr.
+exr=$OUT/img/cube_point_hdr.exr
+[ -f "$exr" ] || fail "$exr was not rendered"
+for tmo in photographic aces filmic; do
+  for pass in $PASSES; do
+    check "tonemap-$tmo" "$pass" build/clrt tonemap "$exr" --tmo "$tmo" -o "$OUT/img/tm-$tmo.png"
+    check "tonemap-$tmo-float" "$pass" build/clrt tonemap "$exr" --tmo "$tmo" -o "$OUT/img/tm-$tmo.exr"
+  done
+done
+# The struct-layout kernel (cl_kernels/layout.cl) through its test.
+for pass in $PASSES; do check "layout" "$pass" build/clrt_tests "[layout]" --use-colour no; done
+
+echo "oclgrind_suite: $runs runs on oclgrind ($PASSES), $bad with reports or failures; logs in build/oclgrind"
+[ $bad -eq 0 ] || fail "$bad runs reported problems"
+echo "oclgrind_suite: ok"
