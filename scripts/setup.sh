@@ -1,10 +1,13 @@
 #!/usr/bin/env bash
-# Installs clrt's Debian build/test dependencies (when missing) and builds it into build/ (Release).
-# Usage: bash scripts/setup.sh        (run as root, or with sudo available, on Debian/Ubuntu)
+# Installs clrt's Debian build dependencies (when missing) and builds it into build/ (Release).
+# With --test also what the test command needs beyond that: oclgrind, clang (fuzz gate, GPU-target
+# compiles), python3-venv, and Intel's OpenCL CPU runtime from PyPI in build/venv-intel.
+# Usage: bash scripts/setup.sh [--test]   (run as root, or with sudo available, on Debian/Ubuntu)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-PKGS="cmake g++ make pkg-config ocl-icd-opencl-dev opencl-clhpp-headers pocl-opencl-icd libopenexr-dev libpugixml-dev catch2 libstb-dev clinfo nlohmann-json3-dev zlib1g-dev oclgrind clang python3-venv"
+PKGS="cmake g++ make pkg-config ocl-icd-opencl-dev opencl-clhpp-headers pocl-opencl-icd libopenexr-dev libpugixml-dev catch2 libstb-dev clinfo nlohmann-json3-dev zlib1g-dev"
+[ "${1:-}" = "--test" ] && PKGS="$PKGS oclgrind clang python3-venv"
 missing=""
 for p in $PKGS; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"
@@ -20,4 +23,5 @@ fi
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build -j"$(nproc)"
 # Intel's OpenCL CPU runtime (PyPI) in build/venv-intel, beside PoCL; CLRT_NO_INTEL_OCL=1 skips it.
-bash scripts/setup_intel_ocl.sh
+[ "${1:-}" = "--test" ] && bash scripts/setup_intel_ocl.sh
+exit 0

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Sets up (scripts/setup.sh), runs the whole Catch2 test suite on the PoCL CPU device, then the
+# Sets up (scripts/setup.sh --test), runs the whole Catch2 test suite on the PoCL CPU device, then the
 # OpenCL-implementation checks (scripts/test_implementations.sh: the device tests on Intel's CPU
 # runtime, the oclgrind suite, GPU-target compiles of every kernel variant), then the
 # deterministic fuzz check of the scene/PLY/image readers (scripts/fuzz.sh --gate: the committed
@@ -8,7 +8,7 @@
 # Usage: bash scripts/test.sh [catch2 args...]
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup.sh
+bash scripts/setup.sh --test
 # Intel's OpenCL CPU runtime beside PoCL when scripts/setup_intel_ocl.sh installed it; "cpu" is PoCL.
 [ -f build/opencl-env.sh ] && . build/opencl-env.sh
 # Tests run on PoCL's CPU device; a private kernel-binary cache keeps reruns fast.
