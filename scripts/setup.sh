@@ -7,7 +7,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 PKGS="cmake g++ make pkg-config ocl-icd-opencl-dev opencl-clhpp-headers pocl-opencl-icd libopenexr-dev libpugixml-dev catch2 libstb-dev clinfo nlohmann-json3-dev zlib1g-dev"
-[ "${1:-}" = "--test" ] && PKGS="$PKGS oclgrind clang python3-venv"
+[ "${1:-}" = "--test" ] && PKGS="$PKGS oclgrind clang libclang-rt-dev python3-venv"
 missing=""
 for p in $PKGS; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"
