@@ -192,10 +192,11 @@ int cmdDevices() {
     return 0;
 }
 
-// Renders one camera on every renderer and writes its outputs. Returns true if the render was
-// interrupted (stopRequested) before all its samples: the images written are partial.
-bool renderAndWriteCamera(const Args& a, const Camera& cam, std::vector<std::unique_ptr<Renderer>>& renderers,
-                          std::vector<DeviceWork>& work, RenderCounters& counters, double& tOutput) {
+// Renders one camera on every renderer and writes its outputs. Returns the samples per pixel every
+// pixel reached: fewer than asked if the render was interrupted (stopRequested), and the images
+// written are then partial.
+int renderAndWriteCamera(const Args& a, const Camera& cam, std::vector<std::unique_ptr<Renderer>>& renderers,
+                         std::vector<DeviceWork>& work, RenderCounters& counters, double& tOutput) {
     RenderSettings rs;
     rs.spp = a.spp > 0 ? a.spp : cam.numSamples;
     rs.seed = a.seed;
@@ -234,7 +235,7 @@ bool renderAndWriteCamera(const Args& a, const Camera& cam, std::vector<std::uni
     tOutput += since(to);
     for (const std::string& w : written)
         std::fprintf(stderr, "wrote %s%s\n", w.c_str(), oo.partial.empty() ? "" : " (partial image)");
-    return !oo.partial.empty();
+    return oo.spp;
 }
 
 // The cameras to render (--camera, else all); an error naming the scene if none.
@@ -413,16 +414,20 @@ int cmdRender(const Args& a) {
         work[i].name = "[" + std::to_string(renderers[i]->context().info().index) + "] " + renderers[i]->context().info().name;
     std::string notRendered;  // cameras skipped after an interrupt
     bool anyPartial = false;
+    int statsSpp = -1;
     setGracefulInterrupt(true);  // Ctrl-C from here on: finish the pass, write the partial image
     for (const Camera* cam : cams) {
         if (stopRequested().load()) {
             notRendered += (notRendered.empty() ? "" : ", ") + std::to_string(cam->id);
             continue;
         }
-        if (renderAndWriteCamera(a, *cam, renderers, work, counters, times.output)) anyPartial = true;
+        const int asked = a.spp > 0 ? a.spp : cam->numSamples;
+        const int reached = renderAndWriteCamera(a, *cam, renderers, work, counters, times.output);
+        if (reached < asked) anyPartial = true;
+        if (statsSpp < 0) statsSpp = reached;  // the stats line reports the first camera's
     }
     sumDeviceCounters(work, counters);
-    printTimes(times, ds, *renderers.front(), counters, work, a.spp > 0 ? a.spp : cams[0]->numSamples);
+    printTimes(times, ds, *renderers.front(), counters, work, std::max(statsSpp, 0));
     if (stopRequested().load()) {
         std::fprintf(stderr, "clrt: interrupted (%s)%s%s%s\n", stopSignal() == SIGTERM ? "SIGTERM" : stopSignal() == SIGHUP ? "SIGHUP" : "SIGINT",
                      anyPartial ? ": partial images written (see above)" : "",

@@ -450,6 +450,7 @@ TEST_CASE("cli output: the first SIGINT/SIGTERM/SIGHUP writes the partial image,
             CHECK(spp >= 1);
             CHECK(spp < 1048576);
             CHECK(exrAttribute(d.file("out/shot.exr"), "partial").find("interrupted after " + std::to_string(spp)) == 0);
+            CHECK(log.find(" spp=" + std::to_string(spp) + "\n") != std::string::npos);  // the stats line too
             CHECK(readImage(d.file("out/shot.png")).width == 256);  // the tone-mapped PNG is made too
             CHECK(!fs::exists(d.path / "out" / "second.png"));
             CHECK(log.find("partial images written") != std::string::npos);
