@@ -21,32 +21,20 @@ namespace fs = std::filesystem;
 namespace {
 
 
-struct Run {
-    int rc = -1;
-    std::string log;       // stdout + stderr
-    std::string errorLine; // the one "clrt: error:" line, or "" (several or none: see errorLines)
-    int errorLines = 0;
-};
+using Run = CliResult;
 
 // Runs `clrt <args>` (arguments already quoted where needed) with an optional environment prefix.
 Run runCli(const TempDir& dir, const std::string& args, const std::string& envPrefix = "") {
-    Run r;
     std::string logFile = dir.file("clrt.log");
+    int rc = -1;
     if (envPrefix.empty()) {
-        r.rc = runClrt(args, logFile);
+        rc = runClrt(args, logFile);
     } else {
         std::string cmd = envPrefix + " " + std::string(CLRT_BINARY) + " " + args + " >" + logFile + " 2>&1";
-        int rc = std::system(cmd.c_str());
-        r.rc = WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+        int st = std::system(cmd.c_str());
+        rc = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
     }
-    r.log = readFileBytes(logFile);
-    std::istringstream ls(r.log);
-    for (std::string line; std::getline(ls, line);)
-        if (line.rfind("clrt: error:", 0) == 0) {
-            ++r.errorLines;
-            r.errorLine = line;
-        }
-    return r;
+    return cliResult(rc, readFileBytes(logFile));
 }
 
 // A scene with one camera (4x4 unless `resolution` says otherwise), one point light, one material,

@@ -30,26 +30,13 @@ std::string sub(std::string s, const std::string& from, const std::string& to) {
     return s.replace(at, from.size(), to);
 }
 
-struct CliRun {
-    int rc = -1;
-    std::string log;        // stdout + stderr
-    std::string errorLine;  // the last "clrt: error:" line
-    int errorLines = 0;
-};
+using CliRun = CliResult;
 
 // `clrt render SCENE -o DIR [extra]`, output to DIR/clrt.log.
 CliRun render(const TempDir& d, const std::string& sceneFile, const std::string& extra = "") {
-    CliRun r;
     std::string log = d.file("clrt.log");
-    r.rc = runClrt("render " + d.file(sceneFile) + " -o " + d.path.string() + " " + extra, log);
-    r.log = readFileBytes(log);
-    std::istringstream ls(r.log);
-    for (std::string line; std::getline(ls, line);)
-        if (line.rfind("clrt: error:", 0) == 0) {
-            ++r.errorLines;
-            r.errorLine = line;
-        }
-    return r;
+    int rc = runClrt("render " + d.file(sceneFile) + " -o " + d.path.string() + " " + extra, log);
+    return cliResult(rc, readFileBytes(log));
 }
 
 // No sanitizer report, no temporary file; `image` exists exactly when expected.

@@ -37,24 +37,7 @@ extern char** environ;
 namespace {
 
 
-struct Result {
-    int rc = -1;
-    std::string log, errorLine;
-    int errorLines = 0;
-};
-
-Result parseLog(int rc, const std::string& log) {
-    Result r;
-    r.rc = rc;
-    r.log = log;
-    std::istringstream ls(log);
-    for (std::string line; std::getline(ls, line);)
-        if (line.rfind("clrt: error:", 0) == 0) {
-            ++r.errorLines;
-            r.errorLine = line;
-        }
-    return r;
-}
+using Result = CliResult;
 
 // The --device of the test device (CLRT_TEST_DEVICE; default: the CPU device).
 std::string deviceArgs() {
@@ -67,7 +50,7 @@ Result run(const TempDir& d, const std::string& args, const std::string& env = "
     const std::string log = d.file("clrt.log");
     const std::string cmd = env + " " + CLRT_BINARY + " " + args + " >'" + log + "' 2>&1";
     const int rc = std::system(cmd.c_str());
-    return parseLog(WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, readFileBytes(log));
+    return cliResult(WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, readFileBytes(log));
 }
 
 void expectRefused(const Result& r, int rc, std::initializer_list<std::string> needles) {

@@ -44,6 +44,29 @@ inline void writeFileBytes(const std::string& path, const std::string& bytes) {
     out.write(bytes.data(), std::streamsize(bytes.size()));
 }
 
+// What one run of the clrt binary printed: its exit code, stdout and stderr together, and its
+// "clrt: error:" lines (errorLine: the last one; a good error is exactly one).
+struct CliResult {
+    int rc = -1;
+    std::string log, errorLine;
+    int errorLines = 0;
+};
+inline CliResult cliResult(int rc, const std::string& log) {
+    CliResult r;
+    r.rc = rc;
+    r.log = log;
+    for (size_t at = 0; at < log.size();) {
+        size_t end = log.find('\n', at);
+        if (end == std::string::npos) end = log.size();
+        if (log.compare(at, 12, "clrt: error:") == 0) {
+            ++r.errorLines;
+            r.errorLine = log.substr(at, end - at);
+        }
+        at = end + 1;
+    }
+    return r;
+}
+
 struct TempDir {
     std::filesystem::path path;
     TempDir() {
