@@ -16,16 +16,10 @@ using namespace clrt;
 using namespace clrt::test;
 
 namespace {
-std::string readFile(const std::string& p) {
-    std::ifstream f(p, std::ios::binary);
-    std::stringstream ss;
-    ss << f.rdbuf();
-    return ss.str();
-}
 
 // A copy of the demo scene that writes EXR (exact floats) at a small size.
 std::string writeScene(const TempDir& dir) {
-    std::string xml = readFile(std::string(CLRT_SOURCE_DIR) + "/scenes/demo.xml");
+    std::string xml = readFileBytes(std::string(CLRT_SOURCE_DIR) + "/scenes/demo.xml");
     xml = std::regex_replace(xml, std::regex("demo\\.png"), "multi.exr");
     xml = std::regex_replace(xml, std::regex("640 480"), "320 240");
     std::string path = dir.file("multi.xml");
@@ -39,7 +33,7 @@ std::vector<int> poclIndices(const TempDir& dir, const std::string& env) {
     std::string log = dir.file("devices.txt");
     std::system((env + CLRT_BINARY + " devices >" + log + " 2>&1").c_str());
     std::vector<int> out;
-    std::istringstream in(readFile(log));
+    std::istringstream in(readFileBytes(log));
     std::smatch m;
     for (std::string line; std::getline(in, line);)
         if (std::regex_search(line, m, std::regex("^\\[(\\d+)\\].*\\(platform: Portable Computing Language\\)")))
@@ -65,7 +59,7 @@ TEST_CASE("two PoCL devices render the same image as one, balanced dynamically",
     auto run = [&](const std::string& prefix, const std::string& args) {
         std::string log = dir.file("log.txt");
         int rc = std::system((prefix + env + CLRT_BINARY + " render " + scene + " " + args + " >" + log + " 2>&1").c_str());
-        return std::make_pair(WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, readFile(log));
+        return std::make_pair(WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, readFileBytes(log));
     };
     std::vector<int> pocl = poclIndices(dir, env);
     REQUIRE(pocl.size() == 2);
@@ -77,7 +71,7 @@ TEST_CASE("two PoCL devices render the same image as one, balanced dynamically",
     auto both = run("CLRT_THROTTLE_DEVICE=1:150 ", "-o " + two + both01 + " --spp 2");
     INFO(both.second);
     REQUIRE(both.first == 0);
-    CHECK(readFile(one + "/multi.exr").size() > 1000);
+    CHECK(readFileBytes(one + "/multi.exr").size() > 1000);
     // EXR headers differ only by attributes we do not write per device; compare the decoded floats.
     ImageRGB a = readImage(one + "/multi.exr"), b = readImage(two + "/multi.exr");
     REQUIRE(a.pixels.size() == b.pixels.size());
