@@ -162,6 +162,23 @@ TEST_CASE("scene: lookAt camera plane from FovY and aspect", "[scene]") {
     CHECK(c.tonemaps[1].extension == "_aces");
 }
 
+TEST_CASE("scene: lookAt camera with <Gaze> (a direction), as the course's hw6 scenes give it", "[scene]") {
+    auto camera = [](const std::string& gaze) {
+        return R"(<Scene><Cameras><Camera id="1" type="lookAt" handedness="right"><Position>1 2 3</Position>)" + gaze +
+               R"(<Up>0 1 0</Up><FovY>90</FovY><NearDistance>1</NearDistance><ImageResolution>4 4</ImageResolution>)"
+               R"(<ImageName>x.png</ImageName></Camera></Cameras></Scene>)";
+    };
+    Scene s = load("gaze_dir.xml", camera("<Gaze>0 0 -2</Gaze>"));
+    Scene p = load("gaze_point.xml", camera("<GazePoint>1 2 1</GazePoint>"));
+    CHECK(near(s.cameras[0].w, {0, 0, 1}));
+    CHECK(near(s.cameras[0].w, p.cameras[0].w));
+    CHECK(near(s.cameras[0].u, p.cameras[0].u));
+    CHECK(s.cameras[0].top == Approx(1.0f));
+    CHECK_THROWS_WITH(load("both.xml", camera("<Gaze>0 0 -1</Gaze><GazePoint>1 2 1</GazePoint>")),
+                      Catch::Contains("both.xml") && Catch::Contains("not both"));
+    CHECK_THROWS_WITH(load("neither.xml", camera("")), Catch::Contains("GazePoint"));
+}
+
 TEST_CASE("scene: globals and defaults", "[scene]") {
     Scene d = load("defaults.xml", sceneWith(""));
     CHECK(d.maxRecursionDepth == 6);

@@ -469,7 +469,12 @@ struct Walker {
 
         Vec3 gaze;
         if (lookAt) {
-            gaze = vec3(*need(n, "GazePoint")) - cam.position;
+            // The course's hw6 lookAt cameras give <Gaze> (a direction) instead of <GazePoint>; their
+            // references line up with GazePoint = Position + Gaze.
+            auto pointNode = n.child("GazePoint"), dirNode = n.child("Gaze");
+            if (pointNode && dirNode) fail(*dirNode, who + ": give <GazePoint> or <Gaze>, not both");
+            if (dirNode) gaze = vec3(*dirNode);
+            else gaze = vec3(*need(n, "GazePoint")) - cam.position;
             auto fovNode = need(n, "FovY");
             float fovY = number(*fovNode);
             if (!(fovY > 0 && fovY < 180)) fail(*fovNode, who + ": FovY must be in (0, 180) degrees");
