@@ -1,6 +1,7 @@
 /* shade.cl — the shading stages of the wavefront:
  *   shade_hits:      per path, turns a hit into a ShadingPoint (textures applied), adds the terms
- *                    that need no shadow ray (ambient, background on a miss), and writes the
+ *                    that need no shadow ray (ambient, background on a miss, the emission of an
+ *                    object light that is hit), and writes the
  *                    reflection/refraction children to slots 2i and 2i+1 of the next queue;
  *   sample_lights:   per path and light of a chunk, one shadow ray carrying its Blinn-Phong term
  *                    (environment lights: one sampled direction, the shadow ray going to infinity);
@@ -189,6 +190,9 @@ __kernel void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
     int canBounce = path.depth < scene.maxDepth;
     int insideDielectric = (m.kind == MATERIAL_DIELECTRIC) && !s.frontFacing;
 
+#ifdef CLRT_HAS_OBJECT_LIGHTS
+    radiance += ObjectLight_Emission(h.prim, s.frontFacing, scene.numTriangles, scene.numSpheres, triShading, spheres, lights);
+#endif
     if (replaceAll) {
         pathRadiance[i] = (float4)(throughput * radiance, 0.0f);
         points[i] = sp;
@@ -278,7 +282,7 @@ __kernel void sample_lights(CLRT_KERNEL_PARAMS(sample_lights)) {
             float3 wi;
             float dist;
             float3 p = sp.position.xyz, n = sp.normal.xyz, ng = sp.geomNormal.xyz;
-            float3 e = Light_Sample(&lights[l], p, n, u, images, texels, envDist, &wi, &dist);
+            float3 e = Light_Sample(&lights[l], p, n, u, images, texels, envDist, lightData, &wi, &dist);
             float cosTheta = dot(n, wi);
             if (cosTheta > 0.0f && dot(ng, wi) > 0.0f && maxComponent(e) > 0.0f) {
                 float3 hv = normalize(wi + sp.wo.xyz);

@@ -72,6 +72,7 @@ void flattenMesh(const Scene& scene, const Shape& s, int texSet, MeshTriangles& 
         }
         sh.material = s.materialIndex;
         sh.textureSet = texSet;
+        sh.light = s.lightIndex;  // LightMesh: its light, else CLRT_INVALID (-1)
         Aabb box;
         box.grow(p0); box.grow(p1); box.grow(p2);
         out.triangles.push_back(tri);
@@ -117,6 +118,7 @@ bool flattenSphere(const Shape& s, int texSet, DeviceScene& ds, std::vector<Aabb
     storeRows(sp.worldToObject, inv);
     sp.material = s.materialIndex;
     sp.textureSet = texSet;
+    sp.light = s.lightIndex;  // LightSphere: its light, else CLRT_INVALID (-1)
     Aabb box;
     for (int c = 0; c < 8; ++c) {
         Vec3 corner(s.center.x + ((c & 1) ? s.radius : -s.radius), s.center.y + ((c & 2) ? s.radius : -s.radius),
