@@ -102,6 +102,26 @@ inline float3 SphereLight_Sample(const __global Light* light, const __global flo
 }
 
 #ifdef CLRT_HAS_OBJECT_LIGHTS
+inline int ObjectLight_IsShape(const __global Light* light) {
+    return light->kind == LIGHT_MESH || light->kind == LIGHT_SPHERE;
+}
+
+/* The shadow ray from the offset origin org to the sampled point q on an object light (returns its
+ * direction, sets *tMax). The light is geometry too, so the ray must end just before its surface: it
+ * is aimed at q itself rather than sent along the sampled direction from the shading point, whose
+ * parallel offset by the origin shift moves the light's hit by shift/cos at grazing incidence (on the
+ * hw6 sphere box 9% of such rays hit the light itself short of tMax). */
+inline float3 ObjectLight_ShadowRay(float3 q, float3 org, float* tMax) {
+    float3 d = q - org;
+    float len = length(d);
+    if (!(len > 0.0f)) {
+        *tMax = 0.0f;
+        return (float3)(0.0f, 0.0f, 1.0f);
+    }
+    *tMax = len * (1.0f - 1e-5f);
+    return d / len;
+}
+
 /* The radiance a ray sees where it hits primitive `prim` (frontFacing: it hit the side the geometric
  * normal points to): the Radiance of its object light from the emitting side (LightMesh: the front
  * face; LightSphere: outside), else 0. */

@@ -290,8 +290,12 @@ __kernel void sample_lights(CLRT_KERNEL_PARAMS(sample_lights)) {
                 float3 c = path.throughput.xyz * (sp.kd.xyz * cosTheta + sp.ks.xyz * spec) * e;
                 float3 org = Ray_OffsetOrigin(p, ng);
                 float tMax = isinf(dist) ? INFINITY : length(p + dist * wi - org) * (1.0f - 1e-5f);
+                float3 dirShadow = wi;
+#ifdef CLRT_HAS_OBJECT_LIGHTS
+                if (ObjectLight_IsShape(&lights[l])) dirShadow = ObjectLight_ShadowRay(p + dist * wi, org, &tMax);
+#endif
                 sr.origin = (float4)(org, tMax);
-                sr.direction = (float4)(wi, 0.0f);
+                sr.direction = (float4)(dirShadow, 0.0f);
                 sr.contribution = (float4)(finiteOrZero(c), 0.0f);
             }
         }
