@@ -351,6 +351,12 @@ TEST_CASE("object lights: parse errors name the element and its line", "[objligh
                                        "<Radiance>1 1 1</Radiance></LightSphere></Objects></Scene>", "Radius");
     expectError("badface.xml", head + "<Objects><LightMesh id=\"1\"><Material>1</Material><Radiance>1 1 1</Radiance>"
                                       "<Faces>1 2 9</Faces></LightMesh></Objects></Scene>", "LightMesh");
+    {  // other lights are not objects: a PointLight inside <Objects> is an unknown element (warned, skipped)
+        Scene sc = loadScene(writeText(d, "pointobj.xml", head + "<Objects><PointLight id=\"1\"><Position>0 0 0</Position>"
+                                                               "<Intensity>1 1 1</Intensity></PointLight></Objects></Scene>"));
+        CHECK(sc.lights.empty());
+        CHECK(sc.shapes.empty());
+    }
     expectError("inlights.xml", head + "<Lights><LightSphere id=\"1\"><Radiance>1 1 1</Radiance></LightSphere></Lights>"
                                        "</Scene>", "belongs in <Objects>");
 }

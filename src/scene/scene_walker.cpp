@@ -895,7 +895,9 @@ struct Walker {
             else if (name == "Triangle") scene.shapes.push_back(readTriangle(*c));
             else if (name == "Sphere") scene.shapes.push_back(readSphere(*c));
             else if (name == "Plane") scene.shapes.push_back(readPlane(*c));
-            else if (findType(lightTypes(), name)) readObjectLight(*c, findType(lightTypes(), name)->kind);
+            else if (const TypeRow<dev::LightKind>* row = findType(lightTypes(), name);
+                     row && (row->kind == dev::LIGHT_MESH || row->kind == dev::LIGHT_SPHERE))
+                readObjectLight(*c, row->kind);
         }
     }
 
