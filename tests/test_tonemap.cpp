@@ -341,6 +341,10 @@ TEST_CASE("<Gamma>sRGB</Gamma>: the sRGB transfer curve on host and device; nume
     CHECK(tonemapEncode(0.0f, s) == 0);
     s.srgb = false;
     CHECK(tonemapEncode(0.5f, s) == 186);  // floor(255 · 0.5^(1/2.2)) = floor(186.08)
+    Tonemap block;  // a scene's <Gamma>sRGB</Gamma> reaches the settings that camera outputs use
+    block.srgb = true;
+    CHECK(tonemapSettingsFrom(block).srgb);
+    CHECK_FALSE(tonemapSettingsFrom(Tonemap()).srgb);
     // Device (8-bit and float display) against the host reference, every operator.
     ImageRGB img = randomHdr(83, 45, 29);
     for (dev::TmoKind op : {dev::TMO_PHOTOGRAPHIC, dev::TMO_ACES, dev::TMO_FILMIC}) {
@@ -520,6 +524,13 @@ TEST_CASE("clrt tonemap subcommand: options, scene camera settings, errors", "[t
     ImageRGB back = readImage(tmp.file("in.exr"));
     ImageRGB png = readImage(tmp.file("out.png"));
     CHECK(maxDiff(std::vector<unsigned char>(png.pixels.begin(), png.pixels.end()), tonemapHost(back, s)) <= 1);
+
+    CHECK(run({tmp.file("in.exr"), "-o", tmp.file("srgb.png"), "--gamma", "sRGB", "--device", dev}) == 0);
+    TonemapSettings srgb;
+    srgb.srgb = true;
+    ImageRGB pngSrgb = readImage(tmp.file("srgb.png"));
+    CHECK(maxDiff(std::vector<unsigned char>(pngSrgb.pixels.begin(), pngSrgb.pixels.end()), tonemapHost(back, srgb)) <= 1);
+    CHECK_THROWS_AS(run({tmp.file("in.exr"), "--gamma", "sRGB2"}), Error);
 
     CHECK(run({tmp.file("in.exr"), "--burn", "0", "--device", dev}) == 0);  // default output: in.png
     CHECK(std::filesystem::exists(tmp.file("in.png")));
