@@ -179,9 +179,6 @@ __kernel void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
     ray.origin.xyz -= motionShift;  /* the ray in the rest frame of the primitive it hit */
 #endif
     SurfaceHit s = Surface_FromHit(h, ray, tris, triShading, spheres, planes, scene.numTriangles, scene.numSpheres);
-#ifdef CLRT_HAS_MOTION_BLUR
-    s.p += motionShift;
-#endif
     Material m = materials[s.material];
     float3 wo = -s.dir;
     float3 ng = s.frontFacing ? s.ng : -s.ng;   /* facing the incoming ray */
@@ -205,6 +202,9 @@ __kernel void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
             }
         }
     }
+#endif
+#ifdef CLRT_HAS_MOTION_BLUR
+    s.p += motionShift; /* the textures above saw the rest-frame point: they move with the object */
 #endif
     RngKey key = Rng_Key(scene.seed, path.pixel, path.sample, path.pathId);
     uint dim = 4u + 32u * (uint)path.depth;

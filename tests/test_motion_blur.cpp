@@ -3,8 +3,8 @@
 // its shadow and secondary rays share. Parsing and its errors; the feature flag (scenes without
 // motion build kernels without it, and a zero motion renders bit-identically to none); the flattened
 // motion and swept boxes; and a render of a sphere moving across a wall lit from the camera, compared
-// with a host integration of the same picture against the noise floor of two independent renders.
-// (The device-vs-host intersection test of moving primitives is in test_intersect.cpp.)
+// with a host integration of the same picture against the noise floor of two independent renders;
+// a procedural texture moves with its object. (The device-vs-host intersection test of moving primitives is in test_intersect.cpp.)
 #include <catch.hpp>
 
 #include <cmath>
@@ -189,6 +189,38 @@ TEST_CASE("a zero MotionBlur renders bit-identically to none", "[motion][render]
     ImageRGB a = renderCamera(still, still.cameras[0], 4, 3), b = renderCamera(zero, zero.cameras[0], 4, 3);
     REQUIRE(a.pixels.size() == b.pixels.size());
     CHECK(std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(float)) == 0);
+}
+
+// Textures move with their object: a procedural texture is evaluated at the hit point in the rest
+// frame. The sphere lies inside one checkerboard cell at rest (cells 10 units wide, faces at
+// x = −3, 7, …; y = −3, 7, …; z = −3, −13, …) and moves by −3 in x across the face at x = −3: it must
+// come out in one checker colour, exactly as the same sphere without a texture and that colour as its
+// diffuse reflectance. (Which of the two colours depends on the checkerboard's parity convention; both
+// are accepted.)
+TEST_CASE("a moving object's procedural texture moves with it", "[motion][render]") {
+    TempDir dir;
+    auto scene = [&](const std::string& name, const std::string& sphereKd, bool textured) {
+        std::string xml = movingSphereScene("<MotionBlur>-3 0 0</MotionBlur>", 16, 12);
+        const std::string kd = "<DiffuseReflectance>0.5 0.25 1</DiffuseReflectance>";
+        xml.replace(xml.find(kd), kd.size(), "<DiffuseReflectance>" + sphereKd + "</DiffuseReflectance>");
+        if (textured) {
+            xml.replace(xml.find("<Objects>"), 9,
+                        "<Textures><TextureMap id=\"1\" type=\"checkerboard\"><DecalMode>replace_kd</DecalMode>"
+                        "<BlackColor>0.5 0.25 1</BlackColor><WhiteColor>0 1 0</WhiteColor><Scale>0.1</Scale>"
+                        "<Offset>3</Offset></TextureMap></Textures><Objects>");
+            xml.replace(xml.find("<Center>5</Center>"), 18, "<Textures>1</Textures><Center>5</Center>");
+        }
+        return loadText(dir, name, xml);
+    };
+    Scene textured = scene("textured.xml", "0 0 0", true);
+    Scene black = scene("black.xml", "0.5 0.25 1", false), white = scene("white.xml", "0 1 0", false);
+    ImageRGB a = renderCamera(textured, textured.cameras[0], 16, 5);
+    ImageRGB b = renderCamera(black, black.cameras[0], 16, 5), w = renderCamera(white, white.cameras[0], 16, 5);
+    const double dBlack = mse(a, b), dWhite = mse(a, w), dColours = mse(b, w);
+    INFO("MSE to the black-colour sphere " << dBlack << ", to the white-colour sphere " << dWhite
+                                            << ", between the two " << dColours);
+    CHECK(dColours > 1.0);
+    CHECK(std::min(dBlack, dWhite) < 1e-8 * dColours);
 }
 
 // A sphere moving across a wall, the light at the eye: a camera ray that passes the sphere at its
