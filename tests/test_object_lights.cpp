@@ -313,6 +313,28 @@ TEST_CASE("object lights: LightMesh and LightSphere parse into a shape and a lig
     CHECK(ds.lights[0].area == Approx(4.0f));
     CHECK(ds.lights[2].objRadius == Approx(1.0f).epsilon(1e-5));
     CHECK(ds.lights[3].objRadius == Approx(1.5f).epsilon(1e-5));
+    // A mirrored LightMesh (Scaling -1 1 1) keeps emitting downwards: its sampling triangles take the
+    // winding flattenGeometry gives its geometry (reversed under a mirror).
+    {
+        TempDir dm;
+        std::string xml = std::regex_replace(std::string(kLightsXml), std::regex("<Transformations>t1</Transformations>"),
+                                             "<Transformations>s3 t1</Transformations>");
+        xml = std::regex_replace(xml, std::regex("<Rotation id=\"1\">"), "<Scaling id=\"3\">-1 1 1</Scaling><Rotation id=\"1\">");
+        DeviceScene dsm = flattenScene(loadScene(writeText(dm, "mirror.xml", xml)));
+        REQUIRE(dsm.lights[0].objCount == 2);
+        for (int k = 0; k < 2; ++k) {
+            D3 a = d3(dsm.lightData[size_t(dsm.lights[0].objFirst + 3 * k)]), b = d3(dsm.lightData[size_t(dsm.lights[0].objFirst + 3 * k + 1)]),
+               c = d3(dsm.lightData[size_t(dsm.lights[0].objFirst + 3 * k + 2)]);
+            CHECK(unit(cross(b - a, c - a)).y == Approx(-1.0));
+        }
+        int geomDown = 0;
+        for (size_t t = 0; t < dsm.triangles.size(); ++t)
+            if (dsm.triangleShading[t].light == 0) {
+                const dev::Triangle& tr = dsm.triangles[t];
+                geomDown += unit(cross(d3(tr.v1) - d3(tr.v0), d3(tr.v2) - d3(tr.v0))).y < -0.999;
+            }
+        CHECK(geomDown == 2);
+    }
     // A scene without object lights gets neither flag.
     TempDir d;
     FeatureSet none = flattenScene(loadScene(writeText(d, "plain.xml",

@@ -11,15 +11,17 @@
 namespace clrt {
 namespace {
 
-// LightMesh: its triangles in world space (as flattenGeometry places them; degenerate and non-finite
-// ones left out) with the area CDF in v0.w and the area in v1.w; total area in d.area.
+// LightMesh: its triangles in world space (as flattenGeometry places them, mirrored meshes with their
+// winding reversed; degenerate and non-finite ones left out) with the area CDF in v0.w and the area in v1.w; total area in d.area.
 void flattenMeshLight(const Scene& scene, const Shape& s, dev::Light& d, DeviceScene& ds) {
     const MeshData& mesh = scene.meshes.at(size_t(s.meshIndex));
     d.objFirst = int(ds.lightData.size());
     std::vector<double> areas;
+    const bool mirrored = mirrorsOrientation(s.transform);  // winding as flattenGeometry's (front = emitting)
     for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
         Vec3 p[3];
         for (int k = 0; k < 3; ++k) p[k] = s.transform.transformPoint(mesh.positions.at(size_t(mesh.indices[t + k])));
+        if (mirrored) std::swap(p[1], p[2]);
         if (!isFinite(p[0]) || !isFinite(p[1]) || !isFinite(p[2])) continue;
         Vec3 c = cross(p[1] - p[0], p[2] - p[0]);
         double area = 0.5 * std::sqrt(double(c.x) * c.x + double(c.y) * c.y + double(c.z) * c.z);
