@@ -233,9 +233,6 @@ bool renderCameraDist(const Args& a, const Camera& cam, int camIndex, const Rend
     DistResult dr = renderDistributed(rp, cam, camIndex, rs, work, a.dist, MpiJob::get(),
                                       [&](size_t d, size_t n) { prog->update(d, n); });
     if (!dr.writesOutputs) return false;
-    if (!dr.checkpointFolder.empty())
-        std::fprintf(stderr, "checkpoint %s: %zu of %zu tiles were there already\n", dr.checkpointFolder.c_str(),
-                     dr.fromCheckpoint, dr.tiles.size());
     if (a.dist.parts == 0) {
         img = std::move(dr.image);
         return true;
@@ -503,8 +500,9 @@ void gatherRankStats(std::vector<DeviceWork>& work) {
         ownTiles += w.counters.tiles;
     }
     const RankTransfer& own = job.transfer();
-    std::fprintf(stderr, "rank 0 (%s): %llu tiles; served the other ranks for %.3f s in all (received %.1f KB)\n",
-                 job.host().c_str(), (unsigned long long)ownTiles, own.serveSeconds, double(own.bytesReceived) / 1024);
+    std::fprintf(stderr, "rank 0 (%s): %llu tiles; served the other ranks for %.4f s in all (%llu messages, %.1f KB)\n",
+                 job.host().c_str(), (unsigned long long)ownTiles, own.serveSeconds, (unsigned long long)own.messages,
+                 double(own.bytesReceived) / 1024);
     for (size_t r = 1; r < all.size(); ++r) {
         std::istringstream in(all[r]);
         RankTransfer t;
@@ -524,6 +522,21 @@ void gatherRankStats(std::vector<DeviceWork>& work) {
                              "%.3f ms sending it\n", r, (unsigned long long)t.tiles, double(t.bytesSent) / 1024,
                      double(t.bytesSent) / 1024 / n, t.waitSeconds * 1e3 / n, t.sendSeconds * 1e3 / n);
     }
+}
+
+// From here on Ctrl-C finishes the pass and writes the partial image; not in an MPI job: a signal
+// there (mpirun ending every rank because one failed, or the job cancelled) exits at once, writing
+// no image of a camera not yet finished, with a line naming the rank.
+void setRenderInterrupts(const Args& a) {
+    MpiJob& job = MpiJob::get();
+    setGracefulInterrupt(!job.distributed());
+    if (!job.distributed()) return;
+    static std::string note;
+    note = "clrt: error: rank " + std::to_string(job.rank()) + " of " + std::to_string(job.size()) + " (" + job.host() +
+           "): the MPI job was ended (a rank failed, see mpirun's message naming it, or the job was cancelled); "
+           "no image of an unfinished camera written" +
+           (a.dist.checkpointDir.empty() ? "" : ", finished tiles kept in " + a.dist.checkpointDir);
+    setImmediateExitNote(note.c_str());
 }
 
 int cmdRender(Args a) {
@@ -576,16 +589,7 @@ int cmdRender(Args a) {
     std::string notRendered;  // cameras skipped after an interrupt
     bool anyPartial = false;
     int statsSpp = -1;
-    // Ctrl-C from here on: finish the pass, write the partial image. Not in an MPI job: a signal there
-    // (mpirun ending every rank because one failed, or the job cancelled) exits at once, writing nothing.
-    setGracefulInterrupt(!job.distributed());
-    static std::string exitNote;
-    if (job.distributed()) {
-        exitNote = "clrt: error: rank " + std::to_string(job.rank()) + " of " + std::to_string(job.size()) + " (" + job.host() +
-                   "): the MPI job was ended (a rank failed, see mpirun's message naming it, or the job was cancelled); "
-                   "no output written" + (a.dist.checkpointDir.empty() ? "" : ", finished tiles kept in " + a.dist.checkpointDir);
-        setImmediateExitNote(exitNote.c_str());
-    }
+    setRenderInterrupts(a);
     int camIndex = 0;
     for (const Camera* cam : cams) {
         if (stopRequested().load()) {

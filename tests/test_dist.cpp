@@ -50,11 +50,18 @@ CliResult run(const TempDir& dir, const std::string& prefix, const std::string& 
 
 const std::string kSmall = " --resolution 128x96 --tile-pixels 1024 --device ";
 
-// mpirun with 3 ranks on this machine ("" when clrt has no MPI or mpirun is missing). plm=isolated:
+// mpirun with 3 ranks on this machine ("" when clrt has no MPI or mpirun is missing: the caller skips
+// the test). A build that wanted MPI (CLRT_MPI=ON) but found none while mpirun is installed fails
+// instead of skipping (a stale CMake cache from before the install; reconfigure). plm=isolated:
 // local launch without ssh; no single-copy: containers without ptrace.
 std::string mpirun3() {
     const std::string exe = CLRT_MPIEXEC;
-    if (exe.empty() || access(exe.c_str(), X_OK) != 0) return "";
+    if (exe.empty()) {
+        if (std::string(CLRT_MPI_OPTION) == "1" && std::system("command -v mpirun >/dev/null 2>&1") == 0)
+            FAIL("mpirun is installed but clrt was built without MPI: reconfigure (rm build/CMakeCache.txt)");
+        return "";
+    }
+    if (access(exe.c_str(), X_OK) != 0) return "";
     return "OMPI_MCA_plm=isolated OMPI_MCA_btl_vader_single_copy_mechanism=none " + exe +
            " --oversubscribe --allow-run-as-root -np 3";
 }

@@ -2,6 +2,7 @@
 #include "dist/dist_render.h"
 
 #include <atomic>
+#include <cstdio>
 #include <deque>
 #include <exception>
 #include <memory>
@@ -153,6 +154,9 @@ DistResult renderDistributed(const std::vector<Renderer*>& renderers, const Came
         if (have[t]) ++r.fromCheckpoint;
         else todo.push_back(t);
     }
+    if (cp)
+        std::fprintf(stderr, "checkpoint %s: %zu of %zu tiles were there already\n", r.checkpointFolder.c_str(),
+                     r.fromCheckpoint, r.tiles.size());
     TileScheduler sched(std::move(todo), r.tiles.size(), cp.get(), r.image, progress, job.killRankHook());
     if (job.distributed()) {
         renderAsRoot(renderers, cam, camIndex, settings, work, job, sched, r);

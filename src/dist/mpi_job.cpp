@@ -129,6 +129,7 @@ void MpiJob::serve(int cam, const TileGrid& grid, ImageRGB& img, const std::func
         buf.resize(std::max<size_t>(size_t(bytes), sizeof(Msg)));
         MPI_Recv(buf.data(), bytes, MPI_BYTE, st.MPI_SOURCE, st.MPI_TAG, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
         transfer_.bytesReceived += uint64_t(bytes);
+        ++transfer_.messages;
         Msg m;
         std::memcpy(&m, buf.data(), sizeof m);
         if (m.kind == kResult) {

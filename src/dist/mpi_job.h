@@ -27,7 +27,7 @@ namespace clrt {
 
 // What one rank's transfers cost (printed by rank 0 per rank; README "Scaling").
 struct RankTransfer {
-    uint64_t tiles = 0, bytesSent = 0, bytesReceived = 0;
+    uint64_t tiles = 0, bytesSent = 0, bytesReceived = 0, messages = 0;  // messages: rank 0, received
     double waitSeconds = 0;  // worker: from asking for a tile to having its id
     double sendSeconds = 0;  // worker: sending finished tiles
     double serveSeconds = 0; // rank 0: handling the others' messages (receive, copy, checkpoint)
