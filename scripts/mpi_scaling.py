@@ -66,7 +66,8 @@ def main():
     ap.add_argument("--clrt", default=os.path.join(ROOT, "build", "clrt"))
     ap.add_argument("--mpirun", default="mpirun")
     a = ap.parse_args()
-    env = dict(os.environ, OMPI_MCA_plm="isolated", OMPI_MCA_btl_vader_single_copy_mechanism="none")
+    env = dict(os.environ, OMPI_MCA_plm="isolated", OMPI_MCA_btl_vader_single_copy_mechanism="none",
+               HWLOC_COMPONENTS="-opencl")
     if a.threads > 0:
         env["POCL_MAX_PTHREAD_COUNT"] = str(a.threads)
     w, h = map(int, a.resolution.split("x"))

@@ -53,7 +53,8 @@ const std::string kSmall = " --resolution 128x96 --tile-pixels 1024 --device ";
 // mpirun with 3 ranks on this machine ("" when clrt has no MPI or mpirun is missing: the caller skips
 // the test). A build that wanted MPI (CLRT_MPI=ON) but found none while mpirun is installed fails
 // instead of skipping (a stale CMake cache from before the install; reconfigure). plm=isolated:
-// local launch without ssh; no single-copy: containers without ptrace.
+// local launch without ssh; no single-copy: containers without ptrace; hwloc without its OpenCL
+// plugin: mpirun itself need not load PoCL.
 std::string mpirun3() {
     const std::string exe = CLRT_MPIEXEC;
     if (exe.empty()) {
@@ -62,7 +63,7 @@ std::string mpirun3() {
         return "";
     }
     if (access(exe.c_str(), X_OK) != 0) return "";
-    return "OMPI_MCA_plm=isolated OMPI_MCA_btl_vader_single_copy_mechanism=none " + exe +
+    return "env OMPI_MCA_plm=isolated OMPI_MCA_btl_vader_single_copy_mechanism=none HWLOC_COMPONENTS=-opencl " + exe +
            " --oversubscribe --allow-run-as-root -np 3";
 }
 
@@ -88,6 +89,15 @@ size_t filesIn(const std::string& dir) {
     std::error_code ec;
     for (auto it = fs::recursive_directory_iterator(dir, ec); it != fs::recursive_directory_iterator(); ++it)
         n += it->is_regular_file();
+    return n;
+}
+
+// The tile files of a checkpoint folder (a writer killed mid-write may leave a temporary beside them).
+size_t checkpointTiles(const std::string& dir) {
+    size_t n = 0;
+    std::error_code ec;
+    for (auto it = fs::recursive_directory_iterator(dir, ec); it != fs::recursive_directory_iterator(); ++it)
+        n += std::regex_match(it->path().filename().string(), std::regex("tile-\\d+\\.bin"));
     return n;
 }
 
@@ -171,13 +181,13 @@ TEST_CASE("--checkpoint: a render that failed goes on where it stopped and gives
     INFO(failed.log);
     CHECK(failed.rc == 3);
     CHECK(readFileBytes(dir.file("out/hdr.exr")) == "a good image");
-    CHECK(filesIn(dir.file("ck")) == 3);
+    CHECK(checkpointTiles(dir.file("ck")) == 3);
     CliResult again = run(dir, "", "render " + scene + " -o out --checkpoint ck" + dev);
     INFO(again.log);
     REQUIRE(again.rc == 0);
     CHECK(tilesFromCheckpoint(again.log) == 3);
     checkSameOutputs(dir.file("one"), dir.file("out"));
-    CHECK(filesIn(dir.file("ck")) == 12);
+    CHECK(checkpointTiles(dir.file("ck")) == 12);
     // Another spp is another checkpoint: nothing reused.
     CliResult other = run(dir, "", "render " + scene + " -o out --spp 1 --checkpoint ck" + dev);
     CHECK(tilesFromCheckpoint(other.log) == 0);
@@ -220,14 +230,17 @@ TEST_CASE("mpirun -np 3: a rank killed mid-render fails the job cleanly; --check
     REQUIRE(run(dir, "", "render " + scene + " -o one" + dev).rc == 0);
     for (const char* f : {"out/hdr.exr", "out/hdr_photographic.png", "out/hdr_aces.png"}) writeFileBytes(dir.file(f), "good");
     // Rank 1 dies (SIGKILL) when handed its third tile; its first two are in the checkpoint by then.
-    CliResult killed = run(dir, "CLRT_KILL_RANK=1:2 " + mpi, "render " + scene + " -o out --checkpoint ck" + dev);
+    // After such a failure Debian 12's mpirun (OpenMPI 4.1.4 with PMIx) now and then hangs or crashes in
+    // its own PMIx_server_finalize, after every rank is gone and its messages are printed (about 1 run
+    // in 20 here): `timeout` ends such an mpirun. It changes no outcome: the job has failed by then.
+    CliResult killed = run(dir, "CLRT_KILL_RANK=1:2 timeout -k 5 60 " + mpi, "render " + scene + " -o out --checkpoint ck" + dev);
     INFO(killed.log);
     CHECK(killed.rc != 0);
     CHECK(std::regex_search(killed.log, std::regex("rank 1 .*(signal 9|Killed)")));  // mpirun names the rank
     for (const char* f : {"out/hdr.exr", "out/hdr_photographic.png", "out/hdr_aces.png"})
         CHECK(readFileBytes(dir.file(f)) == "good");
     CHECK(filesIn(dir.file("out")) == 3);  // no temporary left
-    const size_t kept = filesIn(dir.file("ck"));
+    const size_t kept = checkpointTiles(dir.file("ck"));
     CHECK(kept >= 2);
     CHECK(kept < 12);
     fs::copy(dir.file("ck"), dir.file("ck2"), fs::copy_options::recursive);

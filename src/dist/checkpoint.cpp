@@ -1,6 +1,7 @@
 // Tile files of a checkpoint (see checkpoint.h).
 #include "dist/checkpoint.h"
 
+#include <chrono>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -31,6 +32,14 @@ Checkpoint::Checkpoint(const std::string& dir, const std::string& imageName, con
 std::string Checkpoint::tilePath(size_t t) const { return (fs::path(folder_) / ("tile-" + std::to_string(t) + ".bin")).string(); }
 
 std::vector<bool> Checkpoint::load(ImageRGB& img) const {
+    // A writer killed mid-write leaves its temporary (.tile-N.bin.tmp-PID): removed once ten minutes old.
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(folder_, ec)) {
+        const std::string name = e.path().filename().string();
+        if (name.rfind(".tile-", 0) == 0 && name.find(".tmp-") != std::string::npos &&
+            fs::last_write_time(e.path(), ec) < fs::file_time_type::clock::now() - std::chrono::minutes(10))
+            fs::remove(e.path(), ec);
+    }
     std::vector<bool> have(grid_.count(), false);
     for (size_t t = 0; t < grid_.count(); ++t) {
         const std::string path = tilePath(t);

@@ -3,7 +3,8 @@
 // bit for bit. One folder per camera and render identity (scene inputs, options, spp, seed, tile size):
 // DIR/<ImageName>-<key>/tile-<id>.bin, each file written to a temporary and renamed, holding a header
 // (magic, key, tile, pixel range), float RGB, and an FNV-1a 64 checksum of everything before it.
-// A damaged or foreign tile file is ignored with a warning and its tile rendered again. The files are
+// A damaged or foreign tile file is ignored with a warning and its tile rendered again; a temporary
+// left by a killed writer is removed once it is ten minutes old. The files are
 // kept after the render finishes (a rerun then renders nothing); delete DIR to start over.
 #pragma once
 #include <cstdint>
