@@ -134,8 +134,46 @@ def main():
             c = med([x[1] for x in res[tp]])
             extra = "" if n == 1 else " (%+.3f ms a tile over one tile)" % (1e3 * (c - cpu1) / (n - 1))
             print("| %d | %d | %.3f | %.2f%s |" % (tp, n, r, c, extra))
-        print("\nrender time per pixel (all %d samples), one rank: %.2f us" % (a.spp, 1e6 * one / (w * h)))
+        print("\nrender time per pixel (all %d samples), one rank: %.2f us wall, %.2f us CPU" % (
+            a.spp, 1e6 * one / (w * h), 1e6 * cpu1 / (w * h)))
 
+        # Fixed cost of a job: mpirun start-up + every rank's parse/BVH/kernel build + output, measured
+        # on a 16x12 image with 2 ranks.
+        starts = []
+        for _ in range(a.runs):
+            out = os.path.join(tmp, "tiny")
+            os.makedirs(out, exist_ok=True)
+            starts.append(run(mpi + ["2", a.clrt, "render", a.scene, "--resolution", "16x12", "--spp", "1",
+                                     "--device", a.device, "-o", out], env)[0])
+        s0 = med(starts)
+        print("fixed cost of a 2-rank job (16x12 image, 1 spp): %.2f s" % s0)
+        remote = [r for r in rows if r["remote"]]
+        c = 1e-3 * sum(r["served"] for r in remote) / max(1, sum(r["messages"] for r in remote))
+        over = max(0.0, (med([x[1] for x in res[sizes[0]]]) - cpu1) / ((w * h + sizes[0] - 1) // sizes[0] - 1))
+        model(cpu1 / (w * h), s0, over, c, (w, h), a.spp)
+
+
+def model(wpix, s0, over, c, size0, spp0):
+    """Predicted speed-up S(N) = T(1) / T(N) of N ranks, each as fast as one rank here:
+    T(N) = S0 + max(ceil(n / N) (W / n + o), 12 Pix / B, 2 n c): n tiles of equal cost handed out
+    dynamically (a rank takes the next tile when it finishes one), rank 0's link carrying 12 bytes a
+    pixel, rank 0 handling 2 messages a tile. W = per-pixel CPU time here x pixels x (spp / spp here)."""
+    print("\nmodel: W = %.3g us a pixel-sample x pixels x spp, S0 = %.2f s, per-tile overhead o = %.3g ms, "
+          "rank 0 per message c = %.3g ms, 12 bytes a pixel to rank 0" % (1e6 * wpix / spp0, s0, 1e3 * over, 1e3 * c))
+    ns = [1, 2, 4, 8, 16, 32, 64, 128, 256, 512]
+    print("\n| image | spp | tiles | W (one rank) | " + " | ".join("N=%d" % n for n in ns) +
+          " | ranks that fill rank 0's link, 1 / 10 Gb/s |")
+    print("|---|---|---|---|" + "---|" * len(ns) + "---|")
+    for (wd, ht, spp) in [(size0[0], size0[1], spp0), (1920, 1080, 64), (3840, 2160, 1024), (7680, 4320, 256)]:
+        pix = wd * ht
+        tile = min(65536, max(4096, (pix + 63) // 64))
+        n = (pix + tile - 1) // tile
+        W = wpix / spp0 * spp * pix
+        def T(N, B):
+            return s0 + max(-(-n // N) * (W / n + over), 12 * pix / B, 2 * n * c)
+        cells = ["%.1f" % (T(1, 125e6) / T(N, 125e6)) for N in ns]
+        nbw = [W / (12 * pix / B) for B in (125e6, 1250e6)]
+        print("| %dx%d | %d | %d | %.3g s | %s | %.0f / %.0f |" % (wd, ht, spp, n, W, " | ".join(cells), nbw[0], nbw[1]))
 
 if __name__ == "__main__":
     sys.exit(main())
