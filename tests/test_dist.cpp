@@ -23,7 +23,7 @@ namespace {
 
 const char* kTonemaps =
     "<Tonemap><TMO>Photographic</TMO><TMOOptions>0.18 1</TMOOptions><Saturation>1</Saturation><Gamma>2.2</Gamma></Tonemap>"
-    "<Tonemap><TMO>ACES</TMO><TMOOptions>0.5 0</TMOOptions><Extension>_aces</Extension></Tonemap>";
+    "<Tonemap><TMO>ACES</TMO><TMOOptions>0.5 0</TMOOptions><Gamma>sRGB</Gamma><Extension>_aces</Extension></Tonemap>";
 
 // The demo scene as an LDR (ldr.png) or HDR (hdr.exr + two tone-mapped PNGs) render.
 std::string writeScene(const TempDir& dir, bool hdr) {

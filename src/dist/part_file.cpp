@@ -27,16 +27,20 @@ std::string fmtFloat(float v) {
     std::snprintf(buf, sizeof buf, "%.9g", double(v));
     return buf;
 }
-// One Tonemap block as "tmo key burn saturation gamma extension" (the extension last, may be empty).
+// One Tonemap block as "tmo key burn saturation gamma srgb extension" (srgb 0/1; the extension last,
+// may be empty).
 std::string formatTonemap(const Tonemap& t) {
     return std::string(tmoKindName(t.op)) + " " + fmtFloat(t.key) + " " + fmtFloat(t.burnPercent) + " " +
-           fmtFloat(t.saturation) + " " + fmtFloat(t.gamma) + " " + t.extension;
+           fmtFloat(t.saturation) + " " + fmtFloat(t.gamma) + " " + (t.srgb ? "1" : "0") + " " + t.extension;
 }
 Tonemap parseTonemap(const std::string& s, const std::string& what) {
     std::istringstream in(s);
     std::string op;
+    int srgb = 0;
     Tonemap t;
-    if (!(in >> op >> t.key >> t.burnPercent >> t.saturation >> t.gamma)) throw Error(what + ": bad Tonemap attribute '" + s + "'");
+    if (!(in >> op >> t.key >> t.burnPercent >> t.saturation >> t.gamma >> srgb) || (srgb != 0 && srgb != 1))
+        throw Error(what + ": bad Tonemap attribute '" + s + "'");
+    t.srgb = srgb == 1;
     t.op = parseTmoKind(op, what);
     std::string rest;
     std::getline(in, rest);
