@@ -148,7 +148,7 @@ def main():
         s0 = med(starts)
         print("fixed cost of a 2-rank job (16x12 image, 1 spp): %.2f s" % s0)
         remote = [r for r in rows if r["remote"]]
-        c = 1e-3 * sum(r["served"] for r in remote) / max(1, sum(r["messages"] for r in remote))
+        c = sum(r["served"] for r in remote) / max(1, sum(r["messages"] for r in remote))  # seconds a message
         over = max(0.0, (med([x[1] for x in res[sizes[0]]]) - cpu1) / ((w * h + sizes[0] - 1) // sizes[0] - 1))
         model(cpu1 / (w * h), s0, over, c, (w, h), a.spp)
 
