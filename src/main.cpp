@@ -285,7 +285,7 @@ int renderAndWriteCamera(const Args& a, const Camera& cam, int camIndex, std::ve
         auto w0 = std::chrono::steady_clock::now();
         const bool write = renderCameraDist(a, cam, camIndex, rs, renderers, work, prog, img);
         counters.seconds += since(w0);
-        if (!write) return rs.spp;
+        if (!write) return rs.spp;  // another rank, or a part (an interrupted one is not written: nothing partial)
     } else if (renderers.size() == 1) {
         img = renderers.front()->render(cam, rs, work[0].counters, [&](size_t d, size_t n) { prog->update(d, n); });
     } else {
