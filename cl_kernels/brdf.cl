@@ -22,9 +22,9 @@
  * Sampling: a mixture of a cosine lobe about n (probability 1 − s) and a glossy lobe (s), s = mean(ks)
  * / (mean(kd) + mean(ks)). Glossy lobes: Phong BRDFs draw wi about wo mirrored in n with density
  * (p+1)/(2π) cos^p; Blinn-Phong BRDFs draw h about n with (p+1)/(2π) cos^p αh, Torrance-Sparrow with
- * D(h) cosαh = (p+2)/(2π) cos^(p+1) αh, and reflect wo about h (density / (4 |wo·h|)). The density is
- * over the whole sphere and integrates to one: glossy samples below the surface are returned (f = 0
- * there), not redrawn. The host reference is tests/brdf_reference.h. */
+ * D(h) cosαh = (p+2)/(2π) cos^(p+1) αh, and reflect wo about h (density / (4 |wo·h|)). Glossy samples
+ * that land below the surface are rejected (f = 0 there), so over the upper hemisphere the density
+ * integrates to 1 − P(rejected). The host reference is tests/brdf_reference.h. */
 #ifndef CLRT_BRDF_CL
 #define CLRT_BRDF_CL
 
@@ -187,15 +187,17 @@ inline float Brdf_GlossyPdf(const BrdfParams* b, float3 n, float3 wo, float3 wi)
     return woH > 0.0f ? Brdf_PowerCosinePdf(q, dot(n, h)) / (4.0f * woH) : 0.0f;
 }
 
-/* The density Brdf_Sample draws wi with (solid angle, over the whole sphere). */
+/* The density Brdf_Sample draws wi with (solid angle; 0 below the surface). */
 inline float Brdf_Pdf(const BrdfParams* b, float3 n, float3 wo, float3 wi) {
+    if (!(dot(n, wi) > 0.0f)) return 0.0f;
     float s = Brdf_GlossyWeight(b);
-    float pd = fmax(0.0f, dot(n, wi)) * CLRT_INV_PI;
+    float pd = dot(n, wi) * CLRT_INV_PI;
     return (1.0f - s) * pd + (s > 0.0f ? s * Brdf_GlossyPdf(b, n, wo, wi) : 0.0f);
 }
 
-/* Draws wi for wo; *pdf its density (computed from the warp, not by Brdf_Pdf). Returns 0 when no
- * direction could be made (a degenerate half vector); wi may lie below the surface (f = 0 there). */
+/* Draws wi for wo; *pdf its density (computed from the warp, not by Brdf_Pdf). Returns 0 when the
+ * glossy lobe's direction lies below the surface (f = 0 there: the sample carries nothing), so the
+ * pdf integrates to 1 − P(rejected) over the upper hemisphere. */
 inline int Brdf_Sample(const BrdfParams* b, float3 n, float3 wo, float2 u, float3* wi, float* pdf) {
     float s = Brdf_GlossyWeight(b);
     float c;
@@ -208,9 +210,11 @@ inline int Brdf_Sample(const BrdfParams* b, float3 n, float3 wo, float2 u, float
             float woH = dot(wo, h);
             if (!(fabs(woH) > 0.0f)) return 0;
             *wi = normalize(2.0f * woH * h - wo);
+            if (!(dot(n, *wi) > 0.0f)) return 0;
             *pdf = s * Brdf_PowerCosinePdf(q, c) / (4.0f * fabs(woH)) + (1.0f - s) * fmax(0.0f, dot(n, *wi)) * CLRT_INV_PI;
         } else {
             *wi = Brdf_WarpPowerCosine(Brdf_Reflect(wo, n), q, u1, u.y, &c);
+            if (!(dot(n, *wi) > 0.0f)) return 0;
             *pdf = s * Brdf_PowerCosinePdf(q, c) + (1.0f - s) * fmax(0.0f, dot(n, *wi)) * CLRT_INV_PI;
         }
         return *pdf > 0.0f && allFinite3(*wi);

@@ -51,13 +51,16 @@ inline Vec3 hostBrdfEval(const HostBrdf& b, const Vec3& n, const Vec3& wo, const
     float cosH = hl > 0 ? std::max(0.0f, dot(n, hs) / hl) : 0.0f;
     float p = b.exponent;
     bool normalized = b.flags & CLRT_BRDF_NORMALIZED;
+    // Diffuse: kd/π in the normalized BRDFs and Torrance-Sparrow, kd in the others.
     switch (b.kind) {
-    case dev::BRDF_ORIGINAL_PHONG: return diffuse + b.ks * (brdfPow(cosR, p) / cosI);
-    case dev::BRDF_ORIGINAL_BLINN_PHONG: return diffuse + b.ks * (brdfPow(cosH, p) / cosI);
+    case dev::BRDF_ORIGINAL_PHONG: return b.kd + b.ks * (brdfPow(cosR, p) / cosI);
+    case dev::BRDF_ORIGINAL_BLINN_PHONG: return b.kd + b.ks * (brdfPow(cosH, p) / cosI);
     case dev::BRDF_MODIFIED_PHONG:
-        return diffuse + b.ks * (brdfPow(cosR, p) * (normalized ? (p + 2) * (0.5f * kBrdfInvPi) : 1.0f));
+        if (!normalized) return b.kd + b.ks * brdfPow(cosR, p);
+        return diffuse + b.ks * (brdfPow(cosR, p) * ((p + 2) * (0.5f * kBrdfInvPi)));
     case dev::BRDF_MODIFIED_BLINN_PHONG:
-        return diffuse + b.ks * (brdfPow(cosH, p) * (normalized ? (p + 8) * (0.125f * kBrdfInvPi) : 1.0f));
+        if (!normalized) return b.kd + b.ks * brdfPow(cosH, p);
+        return diffuse + b.ks * (brdfPow(cosH, p) * ((p + 8) * (0.125f * kBrdfInvPi)));
     case dev::BRDF_TORRANCE_SPARROW: {
         Vec3 h = normalize(wi + wo);
         float ch = std::max(0.0f, dot(n, h)), woH = dot(wo, h);
@@ -96,8 +99,9 @@ inline float hostGlossyPdf(const HostBrdf& b, const Vec3& n, const Vec3& wo, con
 }
 
 inline float hostBrdfPdf(const HostBrdf& b, const Vec3& n, const Vec3& wo, const Vec3& wi) {
+    if (!(dot(n, wi) > 0)) return 0;
     float s = hostGlossyWeight(b);
-    float pd = std::max(0.0f, dot(n, wi)) * kBrdfInvPi;
+    float pd = dot(n, wi) * kBrdfInvPi;
     return (1 - s) * pd + (s > 0 ? s * hostGlossyPdf(b, n, wo, wi) : 0.0f);
 }
 
@@ -109,7 +113,7 @@ inline Vec3 hostWarpPowerCosine(const Vec3& axis, float q, float u1, float u2, f
     return normalize(t * (s * std::cos(phi)) + bt * (s * std::sin(phi)) + axis * c);
 }
 
-// Draws wi; pdf from the warp. False when no direction could be made.
+// Draws wi; pdf from the warp. False when the glossy lobe's direction is below the surface.
 inline bool hostBrdfSample(const HostBrdf& b, const Vec3& n, const Vec3& wo, float ux, float uy, Vec3& wi, float& pdf) {
     float s = hostGlossyWeight(b), c;
     if (ux < s) {
@@ -119,9 +123,11 @@ inline bool hostBrdfSample(const HostBrdf& b, const Vec3& n, const Vec3& wo, flo
             float woH = dot(wo, h);
             if (!(std::fabs(woH) > 0)) return false;
             wi = normalize(h * (2 * woH) - wo);
+            if (!(dot(n, wi) > 0)) return false;
             pdf = s * hostPowerCosinePdf(q, c) / (4 * std::fabs(woH)) + (1 - s) * std::max(0.0f, dot(n, wi)) * kBrdfInvPi;
         } else {
             wi = hostWarpPowerCosine(brdfReflect(wo, n), q, u1, uy, c);
+            if (!(dot(n, wi) > 0)) return false;
             pdf = s * hostPowerCosinePdf(q, c) + (1 - s) * std::max(0.0f, dot(n, wi)) * kBrdfInvPi;
         }
         return pdf > 0 && isFinite(wi);
@@ -135,4 +141,22 @@ inline bool hostBrdfSample(const HostBrdf& b, const Vec3& n, const Vec3& wo, flo
     return pdf > 0 && isFinite(wi);
 }
 
+}  // namespace clrt::test
+
+namespace clrt::test {
+// The probability that hostBrdfSample rejects (a glossy direction below the surface), integrated in
+// the lobe's own domain (h about n, or directions about wo mirrored in n): independent of the
+// solid-angle pdf, so ∫ pdf dω over the hemisphere + this = 1 checks the Jacobian.
+template <class Integrate> double hostRejectedMass(const HostBrdf& b, const Vec3& n, const Vec3& wo, Integrate integrate) {
+    float s = hostGlossyWeight(b), q = hostLobeExponent(b);
+    if (s == 0) return 0;
+    if (hostLobeHalfVector(b)) {
+        return s * integrate(n, [&](const Vec3& h) {
+                   Vec3 wi = h * (2 * dot(wo, h)) - wo;
+                   return dot(n, wi) > 0 ? 0.0 : double(hostPowerCosinePdf(q, dot(n, h)));
+               });
+    }
+    Vec3 r = brdfReflect(wo, n);
+    return s * integrate(r, [&](const Vec3& w) { return dot(n, w) > 0 ? 0.0 : double(hostPowerCosinePdf(q, dot(r, w))); });
+}
 }  // namespace clrt::test
