@@ -40,16 +40,14 @@ typedef struct {
     float3 kd, ks;
 } BrdfParams;
 
-inline BrdfParams Brdf_FromMaterial(const __global Material* m, float3 kd, float3 ks) {
-    BrdfParams b;
-    b.kind = m->brdf;
-    b.exponent = m->brdfExponent;
-    b.flags = m->brdfFlags;
-    b.eta = m->refractionIndex;
-    b.k = m->absorptionIndex;
-    b.kd = kd;
-    b.ks = ks;
-    return b;
+inline void Brdf_FromMaterial(BrdfParams* b, const __global Material* m, float3 kd, float3 ks) {
+    b->kind = m->brdf;
+    b->exponent = m->brdfExponent;
+    b->flags = m->brdfFlags;
+    b->eta = m->refractionIndex;
+    b->k = m->absorptionIndex;
+    b->kd = kd;
+    b->ks = ks;
 }
 
 /* ---- shared pieces ---------------------------------------------------------------------------- */

@@ -271,7 +271,8 @@ inline float3 Material_EvalDirect(ShadingPoint sp, const __global Material* mate
 #ifdef CLRT_HAS_BRDFS
     const __global Material* m = &materials[sp.material];
     if (m->brdf != CLRT_INVALID) {
-        BrdfParams b = Brdf_FromMaterial(m, sp.kd.xyz, sp.ks.xyz);
+        BrdfParams b;
+        Brdf_FromMaterial(&b, m, sp.kd.xyz, sp.ks.xyz);
         return Brdf_Eval(&b, sp.normal.xyz, sp.wo.xyz, wi) * cosTheta;
     }
 #endif
