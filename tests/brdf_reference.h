@@ -66,7 +66,7 @@ inline Vec3 hostBrdfEval(const HostBrdf& b, const Vec3& n, const Vec3& wo, const
         float ch = std::max(0.0f, dot(n, h)), woH = dot(wo, h);
         float d = (p + 2) * (0.5f * kBrdfInvPi) * brdfPow(ch, p);
         float g = std::min(1.0f, std::min(2 * ch * cosO / woH, 2 * ch * cosI / woH));
-        float f = hostFresnelConductor(std::clamp(woH, 0.0f, 1.0f), b.eta, b.k);
+        float f = hostFresnelConductor(cosI, b.eta, b.k);  // at θi, as brdf.cl
         Vec3 kd = (b.flags & CLRT_BRDF_KD_FRESNEL) ? b.kd * (1 - f) : b.kd;
         return kd * kBrdfInvPi + b.ks * (d * f * g / (4 * cosI * cosO));
     }
