@@ -45,6 +45,10 @@ SCENES = [
          res=(256, 128), spp=[1, 4, 16, 64, 256], ref_spp=4096, env=True),
     dict(name="tt_pisa_courtyard", path=os.path.join(SHARED, "hw5", "tt", "scene_pisa_courtyard.xml"),
          res=(300, 167), spp=[1, 4, 16, 64], ref_spp=1024, env=True),
+    # Issue 18's comparison scene: the Audi TT with specular and mirror reflectance zeroed and the
+    # textures dropped (a diffuse-only copy that Mitsuba renders the same; see bench/to_mitsuba.py).
+    dict(name="tt_diffuse", path=os.path.join(SHARED, "hw5", "tt", "scene_pisa_courtyard.xml"),
+         res=(300, 167), spp=[1, 4, 16, 64], ref_spp=1024, env=True, diffuse=True),
 ]
 FEATURE_SPP = 16
 FEATURE_SCENES = ["cube_point", "veachAjar", "tt_pisa_courtyard"]
@@ -75,6 +79,8 @@ def prepare_scene(sc, tmpdir):
     for img in root.iter("Image"):
         if img.text and img.text.strip():
             img.text = absp(img.text.strip())
+    if sc.get("diffuse"):
+        make_diffuse(root)
     cams = root.find("Cameras")
     hdr = False
     for i, cam in enumerate(list(cams)):
@@ -91,6 +97,20 @@ def prepare_scene(sc, tmpdir):
     out = os.path.join(tmpdir, sc["name"] + ".xml")
     tree.write(out)
     return out, hdr
+
+
+def make_diffuse(root):
+    """Diffuse-only copy: specular and mirror reflectance zeroed, material types (mirror, ...) and
+    per-object textures removed."""
+    for m in root.iter("Material"):
+        m.attrib.pop("type", None)
+        for tag in ("SpecularReflectance", "MirrorReflectance"):
+            for e in m.findall(tag):
+                e.text = "0 0 0"
+    for obj in root.iter():
+        for t in obj.findall("Textures"):
+            if obj.tag != "Scene":
+                obj.remove(t)
 
 
 def scene_hash(path):
