@@ -4,9 +4,12 @@
  * L(wi)/pdf(wi) for a direction drawn by the light's sampler) divided by the pdf of the chosen
  * direction, and the direction and distance (INFINITY: directional, environment) for the shadow ray.
  * Environment samplers (SCENE_FORMAT.md): uniform (hemisphere around n by rejection, pdf 1/2π),
- * cosine (pdf cosθ/π), importance (the map's luminance distribution, envmap.cl), mis (one-sample
- * MIS: importance or cosine with probability 1/2 each, weighted by the balance heuristic, i.e.
- * divided by the mixture pdf ½·p_imp + ½·p_cos). */
+ * cosine (pdf cosθ/π), importance (the map's luminance distribution, envmap.cl), mis. MIS is
+ * multi-sample (EnvLight_SampleMis): one importance and one cosine direction per shading point, two
+ * shadow rays, each weighted by the power heuristic; the renderer gives such a light two shadow-ray
+ * slots (sample_lights' lightSlots). EnvironmentLight_Sample's `mis` case is the one-sample form
+ * (importance or cosine with probability 1/2 each, divided by the mixture pdf ½·p_imp + ½·p_cos),
+ * kept for callers with one slot. */
 #ifndef CLRT_LIGHTS_CL
 #define CLRT_LIGHTS_CL
 
@@ -126,6 +129,49 @@ inline float3 EnvironmentLight_Sample(const __global Light* light, float3 n, flo
     if (uv.x < 0.0f) uv = EnvMap_DirToUv(mapping, w);
     float3 l = EnvMap_Lookup(texels, images[light->image], mapping, uv.x, uv.y) * light->radiance.xyz;
     return finiteOrZero(l / pdf);
+}
+
+/* Whether an environment light is sampled by multi-sample MIS (two shadow-ray slots). */
+inline int EnvLight_UsesMis(const __global Light* light) {
+    return light->kind == LIGHT_ENVIRONMENT && light->sampler == ENV_SAMPLE_MIS && light->distribution != CLRT_INVALID;
+}
+
+/* Power heuristic weight of a sample of density p against the other strategy's q (one sample each). */
+inline float Mis_Power(float p, float q) {
+    if (!(p > 0.0f)) return 0.0f;
+    float r = q / p;  /* r·r overflowing to +inf gives weight 0, the limit */
+    return 1.0f / (1.0f + r * r);
+}
+
+/* Multi-sample MIS for an environment light: sample k = 0 from the map's importance distribution (uniforms
+ * uLight), k = 1 from the cosine lobe around n (uBsdf). Each returned value is L(wi_k)·w_k/p_k, w_k the
+ * power-heuristic weight; their sum is an unbiased estimate of the irradiance-like term E of
+ * Light_Sample (the sample's Blinn-Phong term multiplies each). dist: INFINITY (to the map). */
+inline void EnvLight_SampleMis(const __global Light* light, float3 n, float2 uLight, float2 uBsdf,
+                               const __global ImageInfo* images, const __global float4* texels,
+                               const __global float* envDist, float3 wi[2], float3 e[2]) {
+    const __global float* d = envDist + light->distribution;
+    const int mapping = light->mapping;
+    const ImageInfo img = images[light->image];
+    for (int k = 0; k < 2; ++k) {
+        float3 w = n;
+        float2 uv;
+        float pImp = 0.0f;
+        e[k] = (float3)(0.0f);
+        if (k == 0) {
+            if (!EnvDist_SampleUv(d, uLight.x, uLight.y, &w, &pImp, &uv)) { wi[k] = n; continue; }
+        } else {
+            w = EnvSample_Cosine(n, (float2)(fmin(uBsdf.x, CLRT_ONE_MINUS_EPS), uBsdf.y));
+            uv = EnvMap_DirToUv(mapping, w);
+            pImp = EnvDist_PdfUv(d, uv);
+        }
+        wi[k] = w;
+        float pCos = fmax(dot(w, n), 0.0f) * CLRT_INV_PI;
+        float p = k == 0 ? pImp : pCos, q = k == 0 ? pCos : pImp;
+        if (!(p > 0.0f) || !isfinite(p)) continue;
+        float3 l = EnvMap_Lookup(texels, img, mapping, uv.x, uv.y) * light->radiance.xyz;
+        e[k] = finiteOrZero(l * (Mis_Power(p, q) / p));
+    }
 }
 
 /* The dispatcher. p: the shading point, n: its shading normal (environment samplers), u: two uniform

@@ -3,7 +3,8 @@
  *                    that need no shadow ray (ambient, background on a miss), and writes the
  *                    reflection/refraction children to slots 2i and 2i+1 of the next queue;
  *   sample_lights:   per path and light of a chunk, one shadow ray carrying its Blinn-Phong term
- *                    (environment lights: one sampled direction, the shadow ray going to infinity);
+ *                    (environment lights: one sampled direction, the shadow ray going to infinity;
+ *                    two, a light and a cosine sample, under multi-sample MIS: see lightSlots);
  *   gather_shadows:  adds the unoccluded shadow contributions of each path in light order;
  *   accumulate:      adds each pixel's paths to the float image (paths of one pixel are adjacent);
  *   compact_paths:   order-preserving compaction of the children with host-computed indices.
@@ -259,7 +260,32 @@ __kernel void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
     }
 }
 
-/* One shadow ray per (path, light in [lightBegin, lightEnd)), at slot i·chunk + (l − lightBegin). */
+/* The shadow ray of one light sample at shading point sp: the sample's Blinn-Phong term times e
+ * (Light_Sample's estimate) and the path throughput, or a ray of zero contribution (not traced). */
+inline ShadowRay Shadow_Make(ShadingPoint sp, float3 throughput, float3 wi, float dist, float3 e) {
+    ShadowRay sr;
+    sr.contribution = (float4)(0.0f);
+    sr.origin = (float4)(0.0f);
+    sr.direction = (float4)(0.0f, 0.0f, 1.0f, 0.0f);
+    float3 p = sp.position.xyz, n = sp.normal.xyz, ng = sp.geomNormal.xyz;
+    float cosTheta = dot(n, wi);
+    if (cosTheta > 0.0f && dot(ng, wi) > 0.0f && maxComponent(e) > 0.0f) {
+        float3 hv = normalize(wi + sp.wo.xyz);
+        float spec = Math_PowNonNegative(fmax(0.0f, dot(n, hv)), sp.ks.w);
+        float3 c = throughput * (sp.kd.xyz * cosTheta + sp.ks.xyz * spec) * e;
+        float3 org = Ray_OffsetOrigin(p, ng);
+        float tMax = isinf(dist) ? INFINITY : length(p + dist * wi - org) * (1.0f - 1e-5f);
+        sr.origin = (float4)(org, tMax);
+        sr.direction = (float4)(wi, 0.0f);
+        sr.contribution = (float4)(finiteOrZero(c), 0.0f);
+    }
+    return sr;
+}
+
+/* Shadow-ray slots: each (path i, light l in [lightBegin, lightEnd)) owns lightSlots consecutive
+ * slots from (i·(lightEnd − lightBegin) + l − lightBegin)·lightSlots. lightSlots is 1 unless the scene
+ * has an environment light sampled by multi-sample MIS (EnvLight_SampleMis), which fills two (light
+ * sample, cosine sample); other lights then leave their second slot at zero contribution (not traced). */
 __kernel void sample_lights(CLRT_KERNEL_PARAMS(sample_lights)) {
     int i = get_global_id(0);
     if (i >= count) return;
@@ -267,31 +293,32 @@ __kernel void sample_lights(CLRT_KERNEL_PARAMS(sample_lights)) {
     ShadingPoint sp = points[i];
     PathState path = paths[i];
     RngKey key = Rng_Key(scene.seed, path.pixel, path.sample, path.pathId);
+    const ShadowRay none = Shadow_Make(sp, (float3)(0.0f), (float3)(0.0f, 0.0f, 1.0f), 0.0f, (float3)(0.0f));
     for (int l = lightBegin; l < lightEnd; ++l) {
-        ShadowRay sr;
-        sr.contribution = (float4)(0.0f);
-        sr.origin = (float4)(0.0f);
-        sr.direction = (float4)(0.0f, 0.0f, 1.0f, 0.0f);
+        size_t slot = ((size_t)i * chunk + (l - lightBegin)) * lightSlots;
+        ShadowRay sr = none, sr2 = none;
         if (sp.position.w > 0.0f) {
             uint dim = 4u + 32u * (uint)path.depth + 8u + 2u * (uint)l;
             float2 u = (float2)(Rng_Uniform(key, dim), Rng_Uniform(key, dim + 1));
             float3 wi;
             float dist;
-            float3 p = sp.position.xyz, n = sp.normal.xyz, ng = sp.geomNormal.xyz;
-            float3 e = Light_Sample(&lights[l], p, n, u, images, texels, envDist, &wi, &dist);
-            float cosTheta = dot(n, wi);
-            if (cosTheta > 0.0f && dot(ng, wi) > 0.0f && maxComponent(e) > 0.0f) {
-                float3 hv = normalize(wi + sp.wo.xyz);
-                float spec = Math_PowNonNegative(fmax(0.0f, dot(n, hv)), sp.ks.w);
-                float3 c = path.throughput.xyz * (sp.kd.xyz * cosTheta + sp.ks.xyz * spec) * e;
-                float3 org = Ray_OffsetOrigin(p, ng);
-                float tMax = isinf(dist) ? INFINITY : length(p + dist * wi - org) * (1.0f - 1e-5f);
-                sr.origin = (float4)(org, tMax);
-                sr.direction = (float4)(wi, 0.0f);
-                sr.contribution = (float4)(finiteOrZero(c), 0.0f);
+#ifdef CLRT_HAS_ENV_LIGHT
+            if (lightSlots == 2 && EnvLight_UsesMis(&lights[l])) {
+                /* the cosine sample's uniforms: the same dimensions, offset by 2^15 */
+                float2 u2 = (float2)(Rng_Uniform(key, dim + 0x8000u), Rng_Uniform(key, dim + 0x8001u));
+                float3 w2[2], e2[2];
+                EnvLight_SampleMis(&lights[l], sp.normal.xyz, u, u2, images, texels, envDist, w2, e2);
+                sr = Shadow_Make(sp, path.throughput.xyz, w2[0], INFINITY, e2[0]);
+                sr2 = Shadow_Make(sp, path.throughput.xyz, w2[1], INFINITY, e2[1]);
+            } else
+#endif
+            {
+                float3 e = Light_Sample(&lights[l], sp.position.xyz, sp.normal.xyz, u, images, texels, envDist, &wi, &dist);
+                sr = Shadow_Make(sp, path.throughput.xyz, wi, dist, e);
             }
         }
-        shadows[(size_t)i * chunk + (l - lightBegin)] = sr;
+        shadows[slot] = sr;
+        if (lightSlots == 2) shadows[slot + 1] = sr2;
     }
 }
 
