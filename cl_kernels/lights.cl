@@ -143,35 +143,41 @@ inline float Mis_Power(float p, float q) {
     return 1.0f / (1.0f + r * r);
 }
 
-/* Multi-sample MIS for an environment light: sample k = 0 from the map's importance distribution (uniforms
- * uLight), k = 1 from the cosine lobe around n (uBsdf). Each returned value is L(wi_k)·w_k/p_k, w_k the
- * power-heuristic weight; their sum is an unbiased estimate of the irradiance-like term E of
- * Light_Sample (the sample's Blinn-Phong term multiplies each). dist: INFINITY (to the map). */
+/* One sample of multi-sample MIS for an environment light: from the map's importance distribution
+ * (fromMap = 1) or the cosine lobe around n (0), uniforms u. Returns L(wi)·w/p, w the power-heuristic
+ * weight against the other strategy, and the direction in *wi (n when no direction was drawn). */
+inline float3 EnvLight_MisSample(const __global Light* light, const __global float* d, ImageInfo img, float3 n,
+                                 int fromMap, float2 u, const __global float4* texels, float3* wi) {
+    float3 w = n;
+    float2 uv;
+    float pImp = 0.0f;
+    *wi = n;
+    if (fromMap) {
+        if (!EnvDist_SampleUv(d, u.x, u.y, &w, &pImp, &uv)) return (float3)(0.0f);
+    } else {
+        w = EnvSample_Cosine(n, (float2)(fmin(u.x, CLRT_ONE_MINUS_EPS), u.y));
+        uv = EnvMap_DirToUv(light->mapping, w);
+        pImp = EnvDist_PdfUv(d, uv);
+    }
+    *wi = w;
+    float pCos = fmax(dot(w, n), 0.0f) * CLRT_INV_PI;
+    float p = fromMap ? pImp : pCos, q = fromMap ? pCos : pImp;
+    if (!(p > 0.0f) || !isfinite(p)) return (float3)(0.0f);
+    float3 l = EnvMap_Lookup(texels, img, light->mapping, uv.x, uv.y) * light->radiance.xyz;
+    return finiteOrZero(l * (Mis_Power(p, q) / p));
+}
+
+/* Multi-sample MIS for an environment light: one sample from the map's importance distribution (uniforms
+ * uLight; direction *wiL, value *eL) and one from the cosine lobe around n (uBsdf; *wiB, *eB). Their sum
+ * (each times its sample's Blinn-Phong term) is an unbiased estimate of what Light_Sample's E estimates.
+ * Shadow rays go to infinity. */
 inline void EnvLight_SampleMis(const __global Light* light, float3 n, float2 uLight, float2 uBsdf,
                                const __global ImageInfo* images, const __global float4* texels,
-                               const __global float* envDist, float3 wi[2], float3 e[2]) {
+                               const __global float* envDist, float3* wiL, float3* eL, float3* wiB, float3* eB) {
     const __global float* d = envDist + light->distribution;
-    const int mapping = light->mapping;
     const ImageInfo img = images[light->image];
-    for (int k = 0; k < 2; ++k) {
-        float3 w = n;
-        float2 uv;
-        float pImp = 0.0f;
-        e[k] = (float3)(0.0f);
-        if (k == 0) {
-            if (!EnvDist_SampleUv(d, uLight.x, uLight.y, &w, &pImp, &uv)) { wi[k] = n; continue; }
-        } else {
-            w = EnvSample_Cosine(n, (float2)(fmin(uBsdf.x, CLRT_ONE_MINUS_EPS), uBsdf.y));
-            uv = EnvMap_DirToUv(mapping, w);
-            pImp = EnvDist_PdfUv(d, uv);
-        }
-        wi[k] = w;
-        float pCos = fmax(dot(w, n), 0.0f) * CLRT_INV_PI;
-        float p = k == 0 ? pImp : pCos, q = k == 0 ? pCos : pImp;
-        if (!(p > 0.0f) || !isfinite(p)) continue;
-        float3 l = EnvMap_Lookup(texels, img, mapping, uv.x, uv.y) * light->radiance.xyz;
-        e[k] = finiteOrZero(l * (Mis_Power(p, q) / p));
-    }
+    *eL = EnvLight_MisSample(light, d, img, n, 1, uLight, texels, wiL);
+    *eB = EnvLight_MisSample(light, d, img, n, 0, uBsdf, texels, wiB);
 }
 
 /* The dispatcher. p: the shading point, n: its shading normal (environment samplers), u: two uniform

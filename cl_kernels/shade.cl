@@ -270,9 +270,12 @@ inline ShadowRay Shadow_Make(ShadingPoint sp, float3 throughput, float3 wi, floa
     float3 p = sp.position.xyz, n = sp.normal.xyz, ng = sp.geomNormal.xyz;
     float cosTheta = dot(n, wi);
     if (cosTheta > 0.0f && dot(ng, wi) > 0.0f && maxComponent(e) > 0.0f) {
-        float3 hv = normalize(wi + sp.wo.xyz);
-        float spec = Math_PowNonNegative(fmax(0.0f, dot(n, hv)), sp.ks.w);
-        float3 c = throughput * (sp.kd.xyz * cosTheta + sp.ks.xyz * spec) * e;
+        float3 brdf = sp.kd.xyz * cosTheta;
+        if (maxComponent(sp.ks.xyz) > 0.0f) { /* ks = 0 adds exactly 0: the lobe is skipped */
+            float3 hv = normalize(wi + sp.wo.xyz);
+            brdf = sp.kd.xyz * cosTheta + sp.ks.xyz * Math_PowNonNegative(fmax(0.0f, dot(n, hv)), sp.ks.w);
+        }
+        float3 c = throughput * brdf * e;
         float3 org = Ray_OffsetOrigin(p, ng);
         float tMax = isinf(dist) ? INFINITY : length(p + dist * wi - org) * (1.0f - 1e-5f);
         sr.origin = (float4)(org, tMax);
@@ -306,10 +309,10 @@ __kernel void sample_lights(CLRT_KERNEL_PARAMS(sample_lights)) {
             if (lightSlots == 2 && EnvLight_UsesMis(&lights[l])) {
                 /* the cosine sample's uniforms: the same dimensions, offset by 2^15 */
                 float2 u2 = (float2)(Rng_Uniform(key, dim + 0x8000u), Rng_Uniform(key, dim + 0x8001u));
-                float3 w2[2], e2[2];
-                EnvLight_SampleMis(&lights[l], sp.normal.xyz, u, u2, images, texels, envDist, w2, e2);
-                sr = Shadow_Make(sp, path.throughput.xyz, w2[0], INFINITY, e2[0]);
-                sr2 = Shadow_Make(sp, path.throughput.xyz, w2[1], INFINITY, e2[1]);
+                float3 wiB, eL, eB;
+                EnvLight_SampleMis(&lights[l], sp.normal.xyz, u, u2, images, texels, envDist, &wi, &eL, &wiB, &eB);
+                sr = Shadow_Make(sp, path.throughput.xyz, wi, INFINITY, eL);
+                sr2 = Shadow_Make(sp, path.throughput.xyz, wiB, INFINITY, eB);
             } else
 #endif
             {

@@ -22,6 +22,7 @@ import numpy as np
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 ENVMAPS = os.path.abspath(os.path.join(ROOT, "..", "shared", "envmaps"))
 STRATS = ["uniform", "cosine", "importance", "mis"]
+BASELINE = ""
 
 SCENE = """<Scene>
   <Cameras><Camera id="1" type="lookAt"><Position>0 0 0</Position><GazePoint>0 0 -1</GazePoint><Up>0 1 0</Up>
@@ -57,6 +58,7 @@ def hot_texel_map(path):
 
 
 def render(exe, scene, spp, seed, out):
+    exe = BASELINE if scene.endswith("_mis-baseline.xml") else exe
     p = subprocess.run([exe, "render", scene, "-o", out, "--spp", str(spp), "--seed", str(seed)], capture_output=True, text=True)
     if p.returncode:
         sys.exit(p.stderr)
@@ -76,14 +78,18 @@ def main():
     ap.add_argument("--res", default="96x72")
     ap.add_argument("--maps", default="courtyard,night,studio,sunset,hot_texel")
     ap.add_argument("--out", default="")
+    ap.add_argument("--baseline", default="", help="another clrt whose mis is listed too (e.g. before a change)")
     a = ap.parse_args()
     w, h = (int(x) for x in a.res.split("x"))
+    global BASELINE, STRATS
+    if a.baseline:
+        BASELINE = os.path.abspath(a.baseline)
+        STRATS = STRATS + ["mis-baseline"]
     exe = os.path.join(ROOT, "build", "clrt")
     tmp = tempfile.mkdtemp(prefix="clrt-envmis-")
     out = os.path.join(tmp, "o")
     os.makedirs(out)
-    lines = ["| map | uniform | cosine | importance | MIS | best single | MIS/best relMSE (equal spp) | MIS/best relMSE·s (equal time) |",
-             "|---|---|---|---|---|---|---|---|"]
+    lines = None
     for m in a.maps.split(","):
         path = os.path.join(tmp, "hot.exr") if m == "hot_texel" else os.path.join(ENVMAPS, m + ".exr")
         if m == "hot_texel":
@@ -91,7 +97,7 @@ def main():
         scenes = {}
         for s in STRATS:
             scenes[s] = os.path.join(tmp, "%s_%s.xml" % (m, s))
-            open(scenes[s], "w").write(SCENE.format(w=w, h=h, map=path, sampler=s))
+            open(scenes[s], "w").write(SCENE.format(w=w, h=h, map=path, sampler=s.replace("-baseline", "")))
         _, ra = render(exe, scenes["importance"], a.ref_spp // 2, 1000001, out)
         _, rb = render(exe, scenes["importance"], a.ref_spp // 2, 1000002, out)
         ref = 0.5 * (ra + rb)
@@ -106,7 +112,10 @@ def main():
                 es.append(rel_mse(img, ref))
             res[s] = (statistics.median(es), statistics.median(ts), float(np.mean(img) / np.mean(ref)))
             print("%-10s %-10s relMSE %.4g  render %.3fs  mean/ref %.4f" % (m, s, *res[s]), file=sys.stderr, flush=True)
-        singles = [s for s in STRATS if s != "mis"]
+        if lines is None:
+            lines = ["| map | " + " | ".join(STRATS) + " | best single | MIS/best relMSE (equal spp) | MIS/best relMSE·s (equal time) |",
+                     "|---|" + "---|" * (len(STRATS) + 3)]
+        singles = [s for s in STRATS if not s.startswith("mis")]
         best = min(singles, key=lambda s: res[s][0])
         best_t = min(singles, key=lambda s: res[s][0] * res[s][1])
         lines.append("| %s | %s | %s (%s at equal time) | %.2f | %.2f |" % (

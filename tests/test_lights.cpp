@@ -678,10 +678,10 @@ __kernel void mis_test(const __global Light* lights, const __global float4* nrm,
                        __global float4* out, int n) {
     int i = get_global_id(0);
     if (i >= n) return;
-    float3 wi[2], e[2];
+    float3 wiL, eL, wiB, eB;
     float3 nn = nrm[i].xyz;
-    EnvLight_SampleMis(&lights[0], nn, us[i].xy, us[i].zw, images, texels, envDist, wi, e);
-    out[i] = (float4)(fmax(dot(nn, wi[0]), 0.0f) * e[0] + fmax(dot(nn, wi[1]), 0.0f) * e[1], 0.0f);
+    EnvLight_SampleMis(&lights[0], nn, us[i].xy, us[i].zw, images, texels, envDist, &wiL, &eL, &wiB, &eB);
+    out[i] = (float4)(fmax(dot(nn, wiL), 0.0f) * eL + fmax(dot(nn, wiB), 0.0f) * eB, 0.0f);
 }
 )CLC";
     DeviceContext& dc = testContext();
