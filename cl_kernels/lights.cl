@@ -136,18 +136,20 @@ inline int EnvLight_UsesMis(const __global Light* light) {
     return light->kind == LIGHT_ENVIRONMENT && light->sampler == ENV_SAMPLE_MIS && light->distribution != CLRT_INVALID;
 }
 
-/* Power heuristic weight of a sample of density p against the other strategy's q (one sample each). */
-inline float Mis_Power(float p, float q) {
+/* Power heuristic weight of a sample of density p drawn with expected count nP per shading point,
+ * against the other strategy's density q and count nQ. */
+inline float Mis_Power(float nP, float p, float nQ, float q) {
     if (!(p > 0.0f)) return 0.0f;
-    float r = q / p;  /* r·r overflowing to +inf gives weight 0, the limit */
+    float r = (nQ * q) / (nP * p);  /* r·r overflowing to +inf gives weight 0, the limit */
     return 1.0f / (1.0f + r * r);
 }
 
 /* One sample of multi-sample MIS for an environment light: from the map's importance distribution
- * (fromMap = 1) or the cosine lobe around n (0), uniforms u. Returns L(wi)·w/p, w the power-heuristic
- * weight against the other strategy, and the direction in *wi (n when no direction was drawn). */
+ * (fromMap = 1, expected count 1 per shading point) or the cosine lobe around n (0, expected count
+ * cosShare: drawn at a fraction cosShare of the shading points), uniforms u. Returns L(wi)·w/(count·p), w the
+ * power-heuristic weight against the other strategy, and the direction in *wi (n when none was drawn). */
 inline float3 EnvLight_MisSample(const __global Light* light, const __global float* d, ImageInfo img, float3 n,
-                                 int fromMap, float2 u, const __global float4* texels, float3* wi) {
+                                 int fromMap, float cosShare, float2 u, const __global float4* texels, float3* wi) {
     float3 w = n;
     float2 uv;
     float pImp = 0.0f;
@@ -162,22 +164,26 @@ inline float3 EnvLight_MisSample(const __global Light* light, const __global flo
     *wi = w;
     float pCos = fmax(dot(w, n), 0.0f) * CLRT_INV_PI;
     float p = fromMap ? pImp : pCos, q = fromMap ? pCos : pImp;
+    float nP = fromMap ? 1.0f : cosShare, nQ = fromMap ? cosShare : 1.0f;
     if (!(p > 0.0f) || !isfinite(p)) return (float3)(0.0f);
     float3 l = EnvMap_Lookup(texels, img, light->mapping, uv.x, uv.y) * light->radiance.xyz;
-    return finiteOrZero(l * (Mis_Power(p, q) / p));
+    return finiteOrZero(l * (Mis_Power(nP, p, nQ, q) / (nP * p)));
 }
 
 /* Multi-sample MIS for an environment light: one sample from the map's importance distribution (uniforms
- * uLight; direction *wiL, value *eL) and one from the cosine lobe around n (uBsdf; *wiB, *eB). Their sum
- * (each times its sample's Blinn-Phong term) is an unbiased estimate of what Light_Sample's E estimates.
- * Shadow rays go to infinity. */
-inline void EnvLight_SampleMis(const __global Light* light, float3 n, float2 uLight, float2 uBsdf,
-                               const __global ImageInfo* images, const __global float4* texels,
+ * uLight; direction *wiL, value *eL) at every shading point, and one from the cosine lobe around n (uBsdf;
+ * *wiB, *eB) where withCosine is set, which the caller sets at a fraction cosShare of the shading points
+ * (1: all; ½: every other sample of a pixel). Then eL + eB (each times its sample's Blinn-Phong term) is
+ * an unbiased estimate of what Light_Sample's E estimates. Shadow rays go to infinity. */
+inline void EnvLight_SampleMis(const __global Light* light, float3 n, float2 uLight, float2 uBsdf, float cosShare,
+                               int withCosine, const __global ImageInfo* images, const __global float4* texels,
                                const __global float* envDist, float3* wiL, float3* eL, float3* wiB, float3* eB) {
     const __global float* d = envDist + light->distribution;
     const ImageInfo img = images[light->image];
-    *eL = EnvLight_MisSample(light, d, img, n, 1, uLight, texels, wiL);
-    *eB = EnvLight_MisSample(light, d, img, n, 0, uBsdf, texels, wiB);
+    *eL = EnvLight_MisSample(light, d, img, n, 1, cosShare, uLight, texels, wiL);
+    *eB = (float3)(0.0f);
+    *wiB = n;
+    if (withCosine) *eB = EnvLight_MisSample(light, d, img, n, 0, cosShare, uBsdf, texels, wiB);
 }
 
 /* The dispatcher. p: the shading point, n: its shading normal (environment samplers), u: two uniform

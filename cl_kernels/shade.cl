@@ -285,6 +285,14 @@ inline ShadowRay Shadow_Make(ShadingPoint sp, float3 throughput, float3 wi, floa
     return sr;
 }
 
+/* Share of shading points that take multi-sample MIS's cosine sample (1 or ½; see EnvLight_SampleMis).
+ * Measured (scripts/env_mis_compare.py, README "Environment MIS never loses"): ½, every other sample of
+ * a pixel, cuts sample_lights by ~25% but doubles the relMSE on sunset.exr and gains nothing on
+ * studio.exr; so 1, every shading point takes both samples. */
+#ifndef CLRT_ENV_MIS_COSINE_SHARE
+#define CLRT_ENV_MIS_COSINE_SHARE 1.0f
+#endif
+
 /* Shadow-ray slots: each (path i, light l in [lightBegin, lightEnd)) owns lightSlots consecutive
  * slots from (i·(lightEnd − lightBegin) + l − lightBegin)·lightSlots. lightSlots is 1 unless the scene
  * has an environment light sampled by multi-sample MIS (EnvLight_SampleMis), which fills two (light
@@ -309,8 +317,13 @@ __kernel void sample_lights(CLRT_KERNEL_PARAMS(sample_lights)) {
             if (lightSlots == 2 && EnvLight_UsesMis(&lights[l])) {
                 /* the cosine sample's uniforms: the same dimensions, offset by 2^15 */
                 float2 u2 = (float2)(Rng_Uniform(key, dim + 0x8000u), Rng_Uniform(key, dim + 0x8001u));
+                /* With a share of ½: the cosine sample at every other sample of a pixel (parity offset per
+                 * pixel and light), stratified; with 1 (the default): always. */
+                int withCos = CLRT_ENV_MIS_COSINE_SHARE >= 1.0f ||
+                              ((path.sample + (int)(Rng_Uniform(key, 0x7ff0u + (uint)l) < 0.5f)) & 1) == 0;
                 float3 wiB, eL, eB;
-                EnvLight_SampleMis(&lights[l], sp.normal.xyz, u, u2, images, texels, envDist, &wi, &eL, &wiB, &eB);
+                EnvLight_SampleMis(&lights[l], sp.normal.xyz, u, u2, CLRT_ENV_MIS_COSINE_SHARE, withCos, images, texels,
+                                   envDist, &wi, &eL, &wiB, &eB);
                 sr = Shadow_Make(sp, path.throughput.xyz, wi, INFINITY, eL);
                 sr2 = Shadow_Make(sp, path.throughput.xyz, wiB, INFINITY, eB);
             } else

@@ -105,22 +105,29 @@ def main():
         res = {}
         for s in STRATS:
             render(exe, scenes[s], 1, 0, out)  # warm-up
-            ts, es = [], []
-            for run in range(a.runs):
+        # Interleaved (run k of every strategy, then run k+1): drift of a shared machine hits all alike.
+        ts, es, ms = {s: [] for s in STRATS}, {s: [] for s in STRATS}, {s: [] for s in STRATS}
+        for run in range(a.runs):
+            for s in STRATS:
                 t, img = render(exe, scenes[s], a.spp, run + 1, out)
-                ts.append(t)
-                es.append(rel_mse(img, ref))
-            res[s] = (statistics.median(es), statistics.median(ts), float(np.mean(img) / np.mean(ref)))
-            print("%-10s %-10s relMSE %.4g  render %.3fs  mean/ref %.4f" % (m, s, *res[s]), file=sys.stderr, flush=True)
+                ts[s].append(t)
+                es[s].append(rel_mse(img, ref))
+                ms[s].append(float(np.mean(img) / np.mean(ref)))
+        for s in STRATS:
+            res[s] = (statistics.median(es[s]), statistics.median(ts[s]), statistics.mean(ms[s]))
+            print("%-10s %-12s relMSE %.4g  render %.3fs [%.3f-%.3f]  mean/ref %.4f" % (
+                m, s, res[s][0], res[s][1], min(ts[s]), max(ts[s]), res[s][2]), file=sys.stderr, flush=True)
         if lines is None:
-            lines = ["| map | " + " | ".join(STRATS) + " | best single | MIS/best relMSE (equal spp) | MIS/best relMSE·s (equal time) |",
-                     "|---|" + "---|" * (len(STRATS) + 3)]
+            lines = ["| map | " + " | ".join(STRATS) + " | best single (at equal time) | MIS/best relMSE (equal spp) | "
+                     "MIS/best relMSE·s (equal time) | render s: " + " / ".join(STRATS) + " |",
+                     "|---|" + "---|" * (len(STRATS) + 4)]
         singles = [s for s in STRATS if not s.startswith("mis")]
         best = min(singles, key=lambda s: res[s][0])
         best_t = min(singles, key=lambda s: res[s][0] * res[s][1])
-        lines.append("| %s | %s | %s (%s at equal time) | %.2f | %.2f |" % (
+        lines.append("| %s | %s | %s (%s) | %.2f | %.2f | %s |" % (
             m, " | ".join("%.3g" % res[s][0] for s in STRATS), best, best_t, res["mis"][0] / res[best][0],
-            (res["mis"][0] * res["mis"][1]) / (res[best_t][0] * res[best_t][1])))
+            (res["mis"][0] * res["mis"][1]) / (res[best_t][0] * res[best_t][1]),
+            " / ".join("%.3f" % res[s][1] for s in STRATS)))
         print("  reference floor %.3g; best at equal time: %s" % (floor, best_t), file=sys.stderr)
     text = "\n".join(lines)
     print(text)

@@ -675,12 +675,14 @@ TEST_CASE("env multi-sample MIS (EnvLight_SampleMis) is unbiased: cos-weighted s
     const char* src = R"CLC(
 __kernel void mis_test(const __global Light* lights, const __global float4* nrm, const __global float4* us,
                        const __global ImageInfo* images, const __global float4* texels, const __global float* envDist,
-                       __global float4* out, int n) {
+                       __global float4* out, int n, float cosShare) {
     int i = get_global_id(0);
     if (i >= n) return;
     float3 wiL, eL, wiB, eB;
     float3 nn = nrm[i].xyz;
-    EnvLight_SampleMis(&lights[0], nn, us[i].xy, us[i].zw, images, texels, envDist, &wiL, &eL, &wiB, &eB);
+    int withCos = cosShare >= 1.0f || (i & 1) == 0;  /* share ½: every other point, as sample parity */
+    EnvLight_SampleMis(&lights[0], nn, us[i].xy, us[i].zw, cosShare, withCos, images, texels, envDist, &wiL, &eL,
+                       &wiB, &eB);
     out[i] = (float4)(fmax(dot(nn, wiL), 0.0f) * eL + fmax(dot(nn, wiB), 0.0f) * eB, 0.0f);
 }
 )CLC";
@@ -692,8 +694,9 @@ __kernel void mis_test(const __global Light* lights, const __global float4* nrm,
     const Vec3 normals[6] = {Vec3(0, 1, 0), Vec3(0, -1, 0), Vec3(1, 0, 0), Vec3(0.3f, 0.5f, -0.8f), Vec3(-0.6f, 0.2f, 0.7f),
                              Vec3(0.1f, -0.4f, 0.9f)};
     const int per = 40000, n = 6 * per;
+    for (float cosShare : {1.0f, 0.5f})
     for (const char* name : {"grad.exr", "hot.exr"}) {
-        INFO(name);
+        INFO(name << ", cosine share " << cosShare);
         Scene scene = loadScene(writeFile(tmp.file("mis.xml"), envSceneXml(name, "latlong", "mis", 4, 1)));
         DeviceScene ds = flattenScene(scene);
         REQUIRE(ds.lights.size() == 1);
@@ -714,7 +717,7 @@ __kernel void mis_test(const __global Light* lights, const __global float4* nrm,
         cl::Buffer lb = ro(ds.lights), nb = ro(nrm), ub = ro(us), ib = ro(ds.images), tb = ro(ds.texels), eb = ro(ds.envDistribution);
         cl::Buffer ob = CL_CPP(cl::Buffer(ctx, CL_MEM_WRITE_ONLY, out.size() * sizeof(dev::float4)));
         k.setArg(0, lb); k.setArg(1, nb); k.setArg(2, ub); k.setArg(3, ib); k.setArg(4, tb); k.setArg(5, eb);
-        k.setArg(6, ob); k.setArg(7, n);
+        k.setArg(6, ob); k.setArg(7, n); k.setArg(8, cosShare);
         CL_CPP(dc.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(roundUp(n, 64)), cl::NDRange(64)));
         CL_CPP(dc.queue().enqueueReadBuffer(ob, CL_TRUE, 0, out.size() * sizeof(dev::float4), out.data()));
         const dev::ImageInfo& img = ds.images[ds.lights[0].image];
@@ -737,6 +740,7 @@ __kernel void mis_test(const __global Light* lights, const __global float4* nrm,
                     sum += x;
                     sum2 += x * x;
                 }
+                // (share ½: pairs of neighbours, one with and one without the cosine sample, are the unit)
                 double mean = sum / per, se = std::sqrt(std::max(0.0, sum2 / per - mean * mean) / per);
                 INFO("normal " << j << " channel " << c << ": MIS mean " << mean << " +- " << se << ", quadrature " << exact);
                 CHECK(std::fabs(mean - exact) <= 4 * se + 5e-3 * exact);
