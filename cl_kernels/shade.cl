@@ -83,6 +83,21 @@ inline SurfaceHit Surface_FromHit(Hit h, Ray r, const __global Triangle* tris, c
     return s;
 }
 
+/* Motion blur: how far the hit primitive has moved at the ray's shutter time (t·motion; planes do not
+ * move). Shading takes the ray back by it into the primitive's rest frame and the hit point forward. */
+inline float3 MotionBlur_HitShift(Hit h, Ray r, const __global Triangle* tris, const __global Sphere* spheres,
+                                  int numTriangles, int numSpheres) {
+    if (h.prim < numTriangles) return Ray_Time(r) * Triangle_Motion(&tris[h.prim]);
+    if (h.prim < numTriangles + numSpheres) return Ray_Time(r) * spheres[h.prim - numTriangles].motion.xyz;
+    return (float3)(0.0f);
+}
+
+/* Motion blur: the children of path i (slots 2i, 2i+1) see the scene at its shutter time. */
+inline void MotionBlur_StampChildren(__global Ray* nextRays, const __global int* childValid, int i, float time) {
+    for (int k = 2 * i; k <= 2 * i + 1; ++k)
+        if (childValid[k]) nextRays[k].origin.w = time;
+}
+
 /* Dielectric Fresnel reflectance for unit cosines (course formulas: mean of r∥² and r⊥²). */
 inline float Fresnel_Dielectric(float cosI, float cosT, float n1, float n2) {
     float rPar = (n2 * cosI - n1 * cosT) / (n2 * cosI + n1 * cosT);
@@ -160,6 +175,10 @@ __kernel void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
         pathRadiance[i] = (float4)(throughput * Miss_Radiance(scene, textures, images, texels, cam, path, ray.direction.xyz), 0.0f);
         return;
     }
+#ifdef CLRT_HAS_MOTION_BLUR
+    const float3 motionShift = MotionBlur_HitShift(h, ray, tris, spheres, scene.numTriangles, scene.numSpheres);
+    ray.origin.xyz -= motionShift;  /* the ray in the rest frame of the primitive it hit */
+#endif
     SurfaceHit s = Surface_FromHit(h, ray, tris, triShading, spheres, planes, scene.numTriangles, scene.numSpheres);
     Material m = materials[s.material];
     float3 wo = -s.dir;
@@ -184,6 +203,9 @@ __kernel void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
             }
         }
     }
+#endif
+#ifdef CLRT_HAS_MOTION_BLUR
+    s.p += motionShift; /* the textures above saw the rest-frame point: they move with the object */
 #endif
     RngKey key = Rng_Key(scene.seed, path.pixel, path.sample, path.pathId);
     uint dim = 4u + 32u * (uint)path.depth;
@@ -258,6 +280,9 @@ __kernel void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
     default:
         break;
     }
+#ifdef CLRT_HAS_MOTION_BLUR
+    MotionBlur_StampChildren(nextRays, childValid, i, Ray_Time(ray));
+#endif
 }
 
 /* The shadow ray of one light sample at shading point sp: the sample's Blinn-Phong term times e
@@ -332,6 +357,10 @@ __kernel void sample_lights(CLRT_KERNEL_PARAMS(sample_lights)) {
                 float3 e = Light_Sample(&lights[l], sp.position.xyz, sp.normal.xyz, u, images, texels, envDist, &wi, &dist);
                 sr = Shadow_Make(sp, path.throughput.xyz, wi, dist, e);
             }
+#ifdef CLRT_HAS_MOTION_BLUR
+            /* the shadow rays of a sample see the scene at the sample's time (camera.cl) */
+            sr.direction.w = sr2.direction.w = MotionBlur_Time(scene.seed, path.pixel, path.sample);
+#endif
         }
         shadows[slot] = sr;
         if (lightSlots == 2) shadows[slot + 1] = sr2;

@@ -21,6 +21,7 @@ struct FeatureSet {
     bool textures = false;
     bool spheres = false;
     bool primRefsIdentity = false;  // primRefs[i] == i (triangles only, stored in leaf order)
+    bool motionBlur = false;        // a mesh, triangle or sphere has a MotionBlur translation
     int bvhStack = 0;  // traversal stack entries the scene's BVH needs (0: the header's default)
     void add(dev::LightKind k) { lightKinds |= 1u << k; }
     void add(dev::MaterialKind k) { materialKinds |= 1u << k; }
@@ -32,7 +33,7 @@ struct FeatureSet {
     static FeatureSet all() {
         FeatureSet f;
         f.lightKinds = f.materialKinds = ~0u;
-        f.textures = f.spheres = true;
+        f.textures = f.spheres = f.motionBlur = true;
         return f;
     }
 };
