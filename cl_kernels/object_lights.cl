@@ -106,20 +106,21 @@ inline int ObjectLight_IsShape(const __global Light* light) {
     return light->kind == LIGHT_MESH || light->kind == LIGHT_SPHERE;
 }
 
-/* The shadow ray from the offset origin org to the sampled point q on an object light (returns its
- * direction, sets *tMax). The light is geometry too, so the ray must end just before its surface: it
- * is aimed at q itself rather than sent along the sampled direction from the shading point, whose
- * parallel offset by the origin shift moves the light's hit by shift/cos at grazing incidence (on the
- * hw6 sphere box 9% of such rays hit the light itself short of tMax). */
-inline float3 ObjectLight_ShadowRay(float3 q, float3 org, float* tMax) {
-    float3 d = q - org;
+/* Re-aims the shadow ray *sr (from its offset origin) at the sampled point q on an object light. The
+ * light is geometry too, so the ray must end just before its surface: it is aimed at q itself rather
+ * than sent along the sampled direction from the shading point, whose parallel offset by the origin
+ * shift moves the light's hit by shift/cos at grazing incidence (on the hw6 sphere box 9% of such rays
+ * hit the light itself short of tMax). Rays of zero contribution (not traced) are left alone. */
+inline void ObjectLight_AimShadow(ShadowRay* sr, float3 q) {
+    if (!(maxComponent(sr->contribution.xyz) > 0.0f)) return;
+    float3 d = q - sr->origin.xyz;
     float len = length(d);
-    if (!(len > 0.0f)) {
-        *tMax = 0.0f;
-        return (float3)(0.0f, 0.0f, 1.0f);
+    if (!(len > 0.0f) || !isfinite(len)) {
+        sr->contribution = (float4)(0.0f);
+        return;
     }
-    *tMax = len * (1.0f - 1e-5f);
-    return d / len;
+    sr->origin.w = len * (1.0f - 1e-5f);
+    sr->direction.xyz = d / len;
 }
 
 /* The radiance a ray sees where it hits primitive `prim` (frontFacing: it hit the side the geometric
