@@ -28,6 +28,8 @@ std::vector<std::string> FeatureSet::defines() const {
     for (const auto& row : lightTypes()) add(has(row.kind), row.flag);
     for (const auto& row : materialTypes()) add(has(row.kind), row.flag);
     add(textures, "CLRT_HAS_TEXTURES");
+    add(normalMaps, "CLRT_HAS_NORMAL_MAP");
+    add(bumpMaps, "CLRT_HAS_BUMP_MAP");
     add(spheres, "CLRT_HAS_SPHERES");
     add(primRefsIdentity, "CLRT_PRIMREFS_IDENTITY");
     // Rounded up to a multiple of 8 so that scenes of similar depth share a cached program.

@@ -19,6 +19,8 @@ struct FeatureSet {
     uint32_t lightKinds = 0;     // bit k set: the scene has a light of dev::LightKind k
     uint32_t materialKinds = 0;  // bit k set: the scene has a material of dev::MaterialKind k
     bool textures = false;
+    bool normalMaps = false;  // a shape uses a replace_normal texture
+    bool bumpMaps = false;    // a shape uses a bump_normal texture
     bool spheres = false;
     bool primRefsIdentity = false;  // primRefs[i] == i (triangles only, stored in leaf order)
     int bvhStack = 0;  // traversal stack entries the scene's BVH needs (0: the header's default)
@@ -32,7 +34,7 @@ struct FeatureSet {
     static FeatureSet all() {
         FeatureSet f;
         f.lightKinds = f.materialKinds = ~0u;
-        f.textures = f.spheres = true;
+        f.textures = f.normalMaps = f.bumpMaps = f.spheres = true;
         return f;
     }
 };

@@ -127,9 +127,21 @@ typedef struct Plane {
     int pad0, pad1;
 } Plane;
 
+/* The textures of one shape, and its world->object map: procedural textures that the course
+ * evaluates in object space (the checkerboard) read the hit point through it, also on meshes whose
+ * triangles are stored in world space. One per textured shape. */
 typedef struct TextureSet {
     int texture[CLRT_MAX_TEXTURES_PER_SHAPE]; /* indices into textures, CLRT_INVALID when unused */
+    float4 worldToObject[3];                  /* rows of the shape's inverse transform (3x4 affine) */
 } TextureSet;
+
+/* Perlin noise (textures.cl, its host reference in tests/): the course's 16 gradients, a fixed
+ * permutation of 0..15 (the course's own is not published), and the step of the bump gradient. */
+#define CLRT_PERLIN_PERM_VALUES 6, 12, 3, 9, 0, 14, 5, 11, 2, 15, 8, 1, 13, 4, 10, 7
+#define CLRT_PERLIN_GRAD_VALUES                                                                    \
+    {1, 1, 0}, {-1, 1, 0}, {1, -1, 0}, {-1, -1, 0}, {1, 0, 1}, {-1, 0, 1}, {1, 0, -1}, {-1, 0, -1},    \
+    {0, 1, 1}, {0, -1, 1}, {0, 1, -1}, {0, -1, -1}, {1, 1, 0}, {-1, 1, 0}, {0, -1, 1}, {0, -1, -1}
+#define CLRT_PERLIN_GRAD_STEP 1e-3f
 
 typedef struct Material {
     float4 ambient;     /* rgb */
