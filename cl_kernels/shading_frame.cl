@@ -7,7 +7,7 @@
  *     shape's object space, f = BumpFactor;
  *   Bump_PerlinPerturb: bump_normal from Perlin noise, n' = n − (∇h − (∇h·n)n), ∇h of the noise in 3D.
  * Scene elements read: TextureMap DecalMode replace_normal / bump_normal, BumpFactor, Normalizer.
- * Host reference: tests/shading_frame_ref.h (tests/test_shading_frame.cpp compares them). */
+ * Host reference: tests/test_hw4.cpp (the device functions against plain C++ on PoCL). */
 #ifndef CLRT_SHADING_FRAME_CL
 #define CLRT_SHADING_FRAME_CL
 
