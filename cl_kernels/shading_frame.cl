@@ -3,10 +3,10 @@
  *     uvs, or from a sphere's (θ, φ) parametrisation (u = (π − φ)/2π, v = θ/π) mapped by its transform;
  *   Normal_FromMap:  replace_normal, a tangent-space normal (texel/255·2 − 1) in the frame (T, B, N);
  *   Bump_ImageGradient, Bump_Perturb: bump_normal from an image, a forward difference of the texel
- *     height (mean of r, g, b, /Normalizer), and n' = (B + f·dh/dv·n) × (T + f·dh/du·n) in the
+ *     height (mean of r, g, b in texel units), and n' = (B + f·dh/dv·n) × (T + f·dh/du·n) in the
  *     shape's object space, f = BumpFactor;
  *   Bump_PerlinPerturb: bump_normal from Perlin noise, n' = n − (∇h − (∇h·n)n), ∇h of the noise in 3D.
- * Scene elements read: TextureMap DecalMode replace_normal / bump_normal, BumpFactor, Normalizer.
+ * Scene elements read: TextureMap DecalMode replace_normal / bump_normal, BumpFactor (default 1).
  * Host reference: tests/test_hw4.cpp (the device functions against plain C++ on PoCL). */
 #ifndef CLRT_SHADING_FRAME_CL
 #define CLRT_SHADING_FRAME_CL
@@ -65,22 +65,21 @@ inline float3 Normal_FromMap(float3 c, TangentFrame f, float3 n) {
     return Frame_SafeNormalize(m.x * t + m.y * b + m.z * n, n);
 }
 
-/* The height of texel (x, y) of a bump image: the mean of its channels over the normalizer. */
-inline float Bump_TexelHeight(const __global float4* texels, ImageInfo img, int x, int y, float normalizer) {
+/* The height of texel (x, y) of a bump image: the mean of its channels, in texel units (0..255 for
+ * 8-bit images; the Normalizer does not apply). */
+inline float Bump_TexelHeight(const __global float4* texels, ImageInfo img, int x, int y) {
     float3 c = Image_Texel(texels, img, x, y).xyz;
-    return (c.x + c.y + c.z) / (3.0f * normalizer);
+    return (c.x + c.y + c.z) * (1.0f / 3.0f);
 }
 
-/* (dh/du, dh/dv) at uv per unit of u and v: forward differences at the texel that contains uv,
- * times CLRT_BUMP_GRADIENT_SCALE·(width, height). The scale 0.4 is fitted to the course's references
- * (sphere_nobump_justbump: 39.8 dB at 0.4 against 30.7 dB at 1 and 36.7 dB at 0.25); the course's
- * own step is not published. */
-#define CLRT_BUMP_GRADIENT_SCALE 0.4f
-inline float2 Bump_ImageGradient(const __global float4* texels, ImageInfo img, float2 uv, float normalizer) {
+/* (dh/du, dh/dv) at uv as the course takes them: the forward differences of the texel heights at the
+ * texel that contains uv, h(x+1, y) − h(x, y) and h(x, y+1) − h(x, y), used as derivatives per unit
+ * of u and v. (Fitted to the references: sphere_nobump_justbump 47.4 dB; the same differences divided
+ * by 255 and scaled by 0.4·(width, height) reach 39.8 dB, central differences less.) */
+inline float2 Bump_ImageGradient(const __global float4* texels, ImageInfo img, float2 uv) {
     int x = (int)floor(uv.x * (float)img.width), y = (int)floor(uv.y * (float)img.height);
-    float h = Bump_TexelHeight(texels, img, x, y, normalizer);
-    return (float2)((Bump_TexelHeight(texels, img, x + 1, y, normalizer) - h) * CLRT_BUMP_GRADIENT_SCALE * (float)img.width,
-                    (Bump_TexelHeight(texels, img, x, y + 1, normalizer) - h) * CLRT_BUMP_GRADIENT_SCALE * (float)img.height);
+    float h = Bump_TexelHeight(texels, img, x, y);
+    return (float2)(Bump_TexelHeight(texels, img, x + 1, y) - h, Bump_TexelHeight(texels, img, x, y + 1) - h);
 }
 
 /* bump_normal (image), in the shape's object space (the course displaces the object's surface, so the
@@ -125,7 +124,7 @@ inline float3 Texture_PerturbNormal(const __global TextureMap* tex, const __glob
     if (tex->decal == DECAL_BUMP_NORMAL) {
         if (tex->kind == TEXTURE_PERLIN) return Bump_PerlinPerturb(n, Perlin_Gradient(tex, p), tex->bumpFactor);
         if (tex->kind == TEXTURE_IMAGE) {
-            return Bump_Perturb(n, f, Bump_ImageGradient(texels, images[tex->image], uv, tex->normalizer), tex->bumpFactor,
+            return Bump_Perturb(n, f, Bump_ImageGradient(texels, images[tex->image], uv), tex->bumpFactor,
                                 worldToObject);
         }
     }
