@@ -2,8 +2,8 @@
 // cl_kernels/shading_frame.cl and textures.cl against the plain C++ references below (PoCL), and the
 // course's hw4 scenes (../shared/scenes/hw4) against their reference renders with the course's 8-bit
 // truncation: ≥ 40 dB for image textures, luminance mean and std within 2% for Perlin scenes (the
-// course's permutation table is not published). Scenes that do not reach the bar yet are in the
-// hidden test "[hw4-gaps]" with the bar unchanged (see the report in the commit log).
+// course's permutation table is not published). The scene that does not reach the bar yet is in the
+// hidden test "[hw4-gaps]" with the bar unchanged.
 #include <catch.hpp>
 
 #include <array>
@@ -256,7 +256,8 @@ TEST_CASE("Perlin noise: zero at lattice points, within [-1, 1], gradient by cen
 TEST_CASE("course hw4 image-texture scenes match their references at >= 40 dB", "[render][shared][hw4]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
     for (const char* name : {"brickwall_with_normalmap", "cube_cushion", "cube_wall", "cube_wall_normal", "cube_waves",
-                             "sphere_nearest_bilinear", "wood_box", "wood_box_no_specular"})
+                             "sphere_nearest_bilinear", "sphere_nobump_bump", "sphere_nobump_justbump", "wood_box",
+                             "wood_box_no_specular"})
         CHECK(floorPsnr(name) >= 40.0);
     // 100 spp in the scene; rendered at 16 spp here (the error is then mostly the 16-spp noise: 45.9 dB
     // at 16 spp, 52.3 dB at 100 spp measured with clrt render).
@@ -265,7 +266,7 @@ TEST_CASE("course hw4 image-texture scenes match their references at >= 40 dB", 
 
 TEST_CASE("course hw4 Perlin scenes: luminance mean and std within 2% of the references", "[render][shared][hw4]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
-    for (const char* name : {"cube_perlin", "sphere_perlin", "sphere_perlin_bump"}) {
+    for (const char* name : {"cube_perlin", "sphere_perlin", "sphere_perlin_scale", "sphere_perlin_bump"}) {
         LumStats a = luminance(quantize(renderHw4(name), true)), b = luminance(hw4Reference(name));
         INFO(name << ": mean " << a.mean << " / " << b.mean << ", std " << a.stddev << " / " << b.stddev);
         CHECK(std::fabs(a.mean - b.mean) <= 0.02 * b.mean);
@@ -273,14 +274,11 @@ TEST_CASE("course hw4 Perlin scenes: luminance mean and std within 2% of the ref
     }
 }
 
-// Not reached yet (the same bars, kept visible): image bump maps (the course's gradient step is not
-// published; 0.4 fitted), bump_mapping_transformed (also needs the negative-determinant triangle fix),
-// sphere_perlin_scale (mean 2.8% off with this permutation table).
+// Not reached yet, the bar kept: bump_mapping_transformed's floor is scaled by −0.05 in x and faces
+// away from its lights until triangles under a negative-determinant transform get their normal
+// flipped (another change); with its winding reversed by hand it reaches 34 dB (the floor matches,
+// the mirrored bump-mapped sphere does not yet).
 TEST_CASE("course hw4 scenes not matched yet", "[.][hw4-gaps][shared]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
-    for (const char* name : {"sphere_nobump_bump", "sphere_nobump_justbump", "bump_mapping_transformed"})
-        CHECK(floorPsnr(name) >= 40.0);
-    LumStats a = luminance(quantize(renderHw4("sphere_perlin_scale"), true)), b = luminance(hw4Reference("sphere_perlin_scale"));
-    CHECK(std::fabs(a.mean - b.mean) <= 0.02 * b.mean);
-    CHECK(std::fabs(a.stddev - b.stddev) <= 0.02 * b.stddev);
+    CHECK(floorPsnr("bump_mapping_transformed") >= 40.0);
 }
