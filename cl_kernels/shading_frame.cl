@@ -5,7 +5,8 @@
  *   Bump_ImageGradient, Bump_Perturb: bump_normal from an image, a forward difference of the texel
  *     height (mean of r, g, b in texel units), and n' = (B + f·dh/dv·n) × (T + f·dh/du·n) in the
  *     shape's object space, f = BumpFactor;
- *   Bump_PerlinPerturb: bump_normal from Perlin noise, n' = n − (∇h − (∇h·n)n), ∇h of the noise in 3D.
+ *   Bump_PerlinPerturb: bump_normal from Perlin noise, n' = n − f·(∇h − (∇h·n)n), ∇h the gradient
+ *     of the converted noise in 3D (object space, mapped to world space).
  * Scene elements read: TextureMap DecalMode replace_normal / bump_normal, BumpFactor (default 1).
  * Host reference: tests/test_hw4.cpp (the device functions against plain C++ on PoCL). */
 #ifndef CLRT_SHADING_FRAME_CL
@@ -113,7 +114,7 @@ inline float3 Bump_PerlinPerturb(float3 n, float3 g, float factor) {
 }
 
 /* The normal n after a replace_normal or bump_normal texture `tex` (value c at the point, world
- * position p, tangent frame f); other decal modes keep it. */
+ * position p, tangent frame f, the shape's world->object rows); other decal modes keep it. */
 inline float3 Texture_PerturbNormal(const __global TextureMap* tex, const __global ImageInfo* images,
                                     const __global float4* texels, float3 c, float2 uv, float3 p, TangentFrame f,
                                     float3 n, const __global float4* worldToObject) {
@@ -122,7 +123,13 @@ inline float3 Texture_PerturbNormal(const __global TextureMap* tex, const __glob
 #endif
 #ifdef CLRT_HAS_BUMP_MAP
     if (tex->decal == DECAL_BUMP_NORMAL) {
-        if (tex->kind == TEXTURE_PERLIN) return Bump_PerlinPerturb(n, Perlin_Gradient(tex, p), tex->bumpFactor);
+        if (tex->kind == TEXTURE_PERLIN) {
+            /* the noise lives in object space: ∇ in world space = Lᵀ·∇ in object space (L = world->object) */
+            const __global float4* w = worldToObject;
+            float3 pObj = (float3)(dot(w[0].xyz, p) + w[0].w, dot(w[1].xyz, p) + w[1].w, dot(w[2].xyz, p) + w[2].w);
+            float3 g = Perlin_Gradient(tex, pObj);
+            return Bump_PerlinPerturb(n, g.x * w[0].xyz + g.y * w[1].xyz + g.z * w[2].xyz, tex->bumpFactor);
+        }
         if (tex->kind == TEXTURE_IMAGE) {
             return Bump_Perturb(n, f, Bump_ImageGradient(texels, images[tex->image], uv), tex->bumpFactor,
                                 worldToObject);

@@ -70,8 +70,8 @@ inline float3 Perlin_Gradient(const __global TextureMap* tex, float3 p) {
 }
 
 /* The value of texture `tex` at (uv, world position p, object-space position pObj), in reflectance
- * units (0..1 for images after the normalizer). The checkerboard is evaluated in object space (its
- * tiles follow the object's scale, as in the course), Perlin noise in world space. */
+ * units (0..1 for images after the normalizer). The procedural textures are evaluated in object space
+ * (the checkerboard's tiles and the noise follow the object's scale, as in the course). */
 inline float3 Texture_Eval(const __global TextureMap* tex, const __global ImageInfo* images,
                            const __global float4* texels, float2 uv, float3 p, float3 pObj) {
     switch (tex->kind) {
@@ -83,7 +83,7 @@ inline float3 Texture_Eval(const __global TextureMap* tex, const __global ImageI
         return (s & 1) ? tex->blackColor.xyz : tex->whiteColor.xyz;
     }
     case TEXTURE_PERLIN:
-        return (float3)(clamp(Perlin_Value(tex, p), 0.0f, 1.0f));
+        return (float3)(clamp(Perlin_Value(tex, pObj), 0.0f, 1.0f));
     }
     return (float3)(0.0f);
 }
