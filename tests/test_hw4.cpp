@@ -329,3 +329,47 @@ TEST_CASE("course hw4 scenes not matched yet", "[.][hw4-gaps][shared]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
     CHECK(floorPsnr("bump_mapping_transformed") >= 40.0);
 }
+
+namespace {
+// A quad at world z = 0.5 spanning [-4, 4]², seen from z = 10, lit by a point light at the camera;
+// `verts` is its object-space half size and `transform` its transformation.
+std::string checkerScene(float half, float z, const char* scaling, float checkerScale) {
+    std::string h = std::to_string(half), zz = std::to_string(z);
+    std::string tr = scaling ? std::string("<Transformations><Scaling id=\"1\">") + scaling + "</Scaling></Transformations>" : "";
+    return std::string(R"(<Scene><BackgroundColor>0 0 0</BackgroundColor>
+<Cameras><Camera id="1"><Position>0 0 10</Position><Gaze>0 0 -1</Gaze><Up>0 1 0</Up>
+<NearPlane>-1 1 -1 1</NearPlane><NearDistance>2</NearDistance><ImageResolution>64 64</ImageResolution>
+<ImageName>c.png</ImageName></Camera></Cameras>
+<Lights><PointLight id="1"><Position>0 0 10</Position><Intensity>10000 10000 10000</Intensity></PointLight></Lights>
+<Materials><Material id="1"><AmbientReflectance>0 0 0</AmbientReflectance><DiffuseReflectance>1 1 1</DiffuseReflectance>
+<SpecularReflectance>0 0 0</SpecularReflectance></Material></Materials>
+<Textures><TextureMap id="1" type="checkerboard"><DecalMode>replace_kd</DecalMode><BlackColor>0 0 0</BlackColor>
+<WhiteColor>1 1 1</WhiteColor><Scale>)") + std::to_string(checkerScale) + R"(</Scale><Offset>0</Offset></TextureMap></Textures>)" + tr +
+           "<VertexData>-" + h + " -" + h + " " + zz + " " + h + " -" + h + " " + zz + " " + h + " " + h + " " + zz + " -" + h +
+           " " + h + " " + zz + "</VertexData><Objects><Mesh id=\"1\"><Material>1</Material><Textures>1</Textures>" +
+           (scaling ? "<Transformations>s1</Transformations>" : "") + "<Faces>1 2 3 1 3 4</Faces></Mesh></Objects></Scene>";
+}
+double fractionDiffering(const ImageRGB& a, const ImageRGB& b) {
+    size_t n = 0;
+    for (size_t i = 0; i < a.pixels.size(); i += 3)
+        n += std::fabs(a.pixels[i] - b.pixels[i]) > 1.0f;
+    return double(n) / double(a.pixels.size() / 3);
+}
+}  // namespace
+
+TEST_CASE("the checkerboard is evaluated in object space: its tiles follow the object's scale", "[hw4][render]") {
+    TempDir dir;
+    auto render = [&](const std::string& name, const std::string& xml) {
+        writeFileBytes(dir.file(name), xml);
+        Scene s = loadScene(dir.file(name));
+        return renderCamera(s, s.cameras.at(0), 1, 0);
+    };
+    // the same world geometry three ways: scaled by 2 from [-2, 2]² (checker scale 1), and unscaled
+    // [-4, 4]² with checker scale 0.5 and 1
+    ImageRGB scaled = render("a.xml", checkerScene(2, 0.25f, "2 2 2", 1));
+    ImageRGB sameTiles = render("b.xml", checkerScene(4, 0.5f, nullptr, 0.5f));
+    ImageRGB worldTiles = render("c.xml", checkerScene(4, 0.5f, nullptr, 1));
+    REQUIRE(scaled.pixels.size() == sameTiles.pixels.size());
+    CHECK(fractionDiffering(scaled, sameTiles) < 0.01);   // object-space tiles of size 1 = world size 2
+    CHECK(fractionDiffering(scaled, worldTiles) > 0.2);   // world-space tiles would be half as big
+}
