@@ -373,3 +373,54 @@ TEST_CASE("the checkerboard is evaluated in object space: its tiles follow the o
     CHECK(fractionDiffering(scaled, sameTiles) < 0.01);   // object-space tiles of size 1 = world size 2
     CHECK(fractionDiffering(scaled, worldTiles) > 0.2);   // world-space tiles would be half as big
 }
+
+namespace {
+// A camera whose 8×8 image sees only background (no objects), or a quad filling the view.
+std::string paletteScene(const std::string& textureXml, bool quad) {
+    return std::string(R"(<Scene><BackgroundColor>0 0 0</BackgroundColor>
+<Cameras><Camera id="1"><Position>0 0 10</Position><Gaze>0 0 -1</Gaze><Up>0 1 0</Up>
+<NearPlane>-1 1 -1 1</NearPlane><NearDistance>1</NearDistance><ImageResolution>8 8</ImageResolution>
+<ImageName>p.png</ImageName></Camera></Cameras>
+<Materials><Material id="1"><DiffuseReflectance>1 1 1</DiffuseReflectance></Material></Materials>
+<Textures><Images><Image id="1">palette.png</Image></Images>)") + textureXml + "</Textures>" +
+           (quad ? "<VertexData>-100 -100 0 100 -100 0 100 100 0 -100 100 0</VertexData><TexCoordData>0 0 1 0 1 1 0 1</TexCoordData>"
+                   "<Objects><Mesh id=\"1\"><Material>1</Material><Textures>1</Textures><Faces>1 2 3 1 3 4</Faces></Mesh></Objects>"
+                 : "") +
+           "</Scene>";
+}
+}  // namespace
+
+TEST_CASE("replace_background maps pixel i to texel i; replace_all pastes texel / Normalizer", "[hw4][render]") {
+    TempDir dir;
+    std::vector<unsigned char> rgb(8 * 8 * 3);
+    for (size_t i = 0; i < rgb.size(); ++i) rgb[i] = (unsigned char)((i * 37 + 11) % 256);
+    writePng8(dir.file("palette.png"), 8, 8, rgb);
+    auto render = [&](const std::string& name, const std::string& xml) {
+        writeFileBytes(dir.file(name), xml);
+        Scene s = loadScene(dir.file(name));
+        return renderCamera(s, s.cameras.at(0), 1, 0);
+    };
+    const char* bg = R"(<TextureMap id="1" type="image"><ImageId>1</ImageId><Interpolation>bilinear</Interpolation>
+<DecalMode>replace_background</DecalMode></TextureMap>)";
+    ImageRGB b = render("bg.xml", paletteScene(bg, false));
+    REQUIRE(b.pixels.size() == rgb.size());
+    int exact = 0;
+    for (size_t i = 0; i < rgb.size(); ++i) exact += std::fabs(b.pixels[i] - float(rgb[i])) < 1e-3f;
+    CHECK(exact == int(rgb.size()));  // the same texel, not a 2×2 blend
+    // replace_all on a quad with uv spanning 200 units: every pixel shows one texel's value / Normalizer
+    auto allWith = [&](const char* normalizer) {
+        std::string t = std::string(R"(<TextureMap id="1" type="image"><ImageId>1</ImageId><Interpolation>nearest</Interpolation>
+<DecalMode>replace_all</DecalMode>)") + normalizer + "</TextureMap>";
+        return render("all.xml", paletteScene(t, true));
+    };
+    ImageRGB none = allWith(""), two = allWith("<Normalizer>2</Normalizer>");
+    float maxNone = 0;
+    bool halves = true;
+    for (size_t i = 0; i < none.pixels.size(); ++i) {
+        maxNone = std::fmax(maxNone, none.pixels[i]);
+        halves &= std::fabs(two.pixels[i] - 0.5f * none.pixels[i]) < 1e-3f;
+    }
+    CHECK(maxNone > 100.0f);  // texel values themselves (0..255), not ×255
+    CHECK(maxNone <= 255.0f);
+    CHECK(halves);
+}
