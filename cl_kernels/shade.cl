@@ -193,11 +193,11 @@ __kernel void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
     int replaceAll = 0;
 #ifdef CLRT_HAS_TEXTURES
     if (s.textureSet != CLRT_INVALID) {
+        float3 pObj = affinePoint(textureSets[s.textureSet].worldToObject, s.p);  /* procedural textures */
         for (int k = 0; k < CLRT_MAX_TEXTURES_PER_SHAPE; ++k) {
             int ti = textureSets[s.textureSet].texture[k];
             if (ti == CLRT_INVALID) continue;
             const __global TextureMap* tex = &textures[ti];
-            float3 pObj = affinePoint(textureSets[s.textureSet].worldToObject, s.p);
             float3 c = Texture_Eval(tex, images, texels, s.uv, s.p, pObj);
             switch (tex->decal) {
             case DECAL_REPLACE_KD: kd = c; break;
