@@ -46,6 +46,9 @@ __kernel void generate_camera_rays(CLRT_KERNEL_PARAMS(generate_camera_rays)) {
     dir = normalize(dir);
     Ray r;
     r.origin = (float4)(org, 0.0f);
+#ifdef CLRT_HAS_MOTION_BLUR
+    r.origin.w = MotionBlur_Time(scene.seed, pixel, sample);
+#endif
     r.direction = (float4)(dir, INFINITY);
     rays[i] = r;
     PathState p;

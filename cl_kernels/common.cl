@@ -48,6 +48,15 @@ inline float Rng_Uniform(RngKey k, uint dim) {
     return (float)(h >> 8) * (1.0f / 16777216.0f);
 }
 
+/* ---- Motion blur ------------------------------------------------------------------------------
+ * The shutter time of a camera sample, uniform in [0, 1) (the course draws one per primary ray):
+ * a function of (seed, pixel, sample) alone, in a stream of its own (path id 0, which no path has),
+ * so every ray of the sample (reflections, refractions, shadow rays) sees the scene at that time.
+ * Rays carry it in Ray.origin.w and ShadowRay.direction.w. */
+inline float MotionBlur_Time(uint seed, int pixel, int sample) {
+    return Rng_Uniform(Rng_Key(seed, pixel, sample, 0u), 0u);
+}
+
 /* x^e for x >= 0 (Phong lobes). exp2(e·log2 x) instead of pow(): PoCL's one-value pow() costs about
  * as much as the rest of sample_lights (TT at 1 spp: 0.36 -> 0.30 s for the kernel); the relative
  * error, ~3 ulp of log2 times e·|log2 x|, stays below 1e-5 wherever the lobe is not negligible. */
@@ -86,6 +95,15 @@ inline float3 Ray_OffsetOrigin(float3 p, float3 n) {
     float m = fmax(fmax(fabs(p.x), fabs(p.y)), fabs(p.z));
     float d = fmax(CLRT_OFFSET_ULPS * FLT_EPSILON * m, floorOffset);
     return p + d * n;
+}
+
+/* A ray's shutter time (0 without motion blur: the origin's w is then never read). */
+inline float Ray_Time(Ray r) {
+#ifdef CLRT_HAS_MOTION_BLUR
+    return r.origin.w;
+#else
+    return 0.0f;
+#endif
 }
 
 /* Replaces NaN/Inf components by 0 (radiance guard before accumulation). */

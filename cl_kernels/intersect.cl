@@ -66,7 +66,9 @@ inline int Triangle_Intersect(float3 org, RayShear s, float3 v0, float3 v1, floa
     if (det == 0.0f) return 0;
     Az *= s.sz; Bz *= s.sz; Cz *= s.sz;
     float T = U * Az + V * Bz + W * Cz;
-    if (det < 0.0f) { T = -T; det = -det; }
+    /* A back-facing hit (det < 0): all of U, V, W, T share det's sign, so the weights V/det, W/det
+     * need V and W negated along with T and det. */
+    if (det < 0.0f) { T = -T; det = -det; V = -V; W = -W; }
     if (T <= 0.0f || T >= tMax * det) return 0;
     float inv = 1.0f / det;
     *tOut = T * inv;
@@ -106,6 +108,21 @@ inline int Sphere_Intersect(const __global Sphere* sp, float3 orgW, float3 dirW,
     return 0;
 }
 
+/* ---- Motion blur (CLRT_HAS_MOTION_BLUR) ---------------------------------------------------------
+ * A moving primitive is stored at its time-0 position with its translation over the shutter
+ * (Triangle: v0.w, v1.w, v2.w; Sphere: motion); a ray of time t meets it where the ray moved by
+ * −t·motion meets the primitive at rest. The BVH boxes are swept over [0, 1] on the host. */
+inline float3 Triangle_Motion(const __global Triangle* tri) { return (float3)(tri->v0.w, tri->v1.w, tri->v2.w); }
+
+/* The ray origin in the rest frame of a primitive moving by `motion`, at shutter time `time`. */
+inline float3 MotionBlur_RestOrigin(float3 org, float time, float3 motion) {
+#ifdef CLRT_HAS_MOTION_BLUR
+    return org - time * motion;
+#else
+    return org;
+#endif
+}
+
 /* Slab test; returns the entry distance or INFINITY when the box is missed within [0, tMax). */
 inline float Aabb_Intersect(float4 bmin, float4 bmax, float3 org, float3 invDir, float tMax) {
     float3 t0 = (bmin.xyz - org) * invDir;
@@ -141,7 +158,7 @@ inline float3 safeInverse(float3 d) {
     }
 
 /* Traverses the 4-wide BVH (Bvh4Node) near-first. anyHit = 1: stop at the first hit (shadow rays).
- * Returns 1 on a hit.
+ * Returns 1 on a hit. time: the ray's shutter time (used only under CLRT_HAS_MOTION_BLUR).
  * A node's four slab tests are float4 operations on its struct-of-arrays bounds, with the near and far
  * planes picked once per ray by the sign of the direction: an empty lane (min +inf, max -inf) is then
  * never hit, and 0·inf = NaN (a ray lying in a box face's plane) is dropped by fmin/fmax, which return
@@ -151,7 +168,7 @@ inline float3 safeInverse(float3 d) {
  * Stack entries: node index (>= 0) or a leaf, ~(first << 4 | count). */
 inline int Bvh_Traverse(const __global Bvh4Node* nodes, const __global int* primRefs,
                         const __global Triangle* tris, const __global Sphere* spheres, int numTriangles,
-                        float3 org, float3 dir, float tMax, int anyHit, Hit* hit) {
+                        float3 org, float3 dir, float tMax, float time, int anyHit, Hit* hit) {
     const float3 invDir = safeInverse(dir);
     const RayShear shear = RayShear_Make(dir);
     const int negX = signbit(invDir.x), negY = signbit(invDir.y), negZ = signbit(invDir.z);
@@ -212,9 +229,11 @@ inline int Bvh_Traverse(const __global Bvh4Node* nodes, const __global int* prim
                 int h;
                 if (ref < numTriangles) {
                     const __global Triangle* tri = &tris[ref];
-                    h = Triangle_Intersect(org, shear, tri->v0.xyz, tri->v1.xyz, tri->v2.xyz, tMax, &t, &b1, &b2);
+                    const float3 o = MotionBlur_RestOrigin(org, time, Triangle_Motion(tri));
+                    h = Triangle_Intersect(o, shear, tri->v0.xyz, tri->v1.xyz, tri->v2.xyz, tMax, &t, &b1, &b2);
                 } else {
-                    h = Sphere_Intersect(&spheres[ref - numTriangles], org, dir, tMax, &t);
+                    const __global Sphere* sph = &spheres[ref - numTriangles];
+                    h = Sphere_Intersect(sph, MotionBlur_RestOrigin(org, time, sph->motion.xyz), dir, tMax, &t);
                 }
                 if (h) {
                     tMax = t;
@@ -266,7 +285,7 @@ __kernel void intersect_closest(CLRT_KERNEL_PARAMS(intersect_closest)) {
     if (allFinite3(r.origin.xyz) && allFinite3(dir) && r.direction.w > 0.0f) {
         float tMax = r.direction.w;
         if (numPlanes > 0 && Planes_Intersect(planes, numPlanes, firstPlaneRef, r.origin.xyz, dir, tMax, 0, &h)) tMax = h.t;
-        Bvh_Traverse(nodes, primRefs, tris, spheres, numTriangles, r.origin.xyz, dir, tMax, 0, &h);
+        Bvh_Traverse(nodes, primRefs, tris, spheres, numTriangles, r.origin.xyz, dir, tMax, Ray_Time(r), 0, &h);
     }
     hits[i] = h;
 }
@@ -282,7 +301,8 @@ __kernel void intersect_shadow(CLRT_KERNEL_PARAMS(intersect_shadow)) {
     if (c.x == 0.0f && c.y == 0.0f && c.z == 0.0f) return;
     Hit h;
     if ((numPlanes > 0 && Planes_Intersect(planes, numPlanes, firstPlaneRef, s->origin.xyz, s->direction.xyz, s->origin.w, 1, &h)) ||
-        Bvh_Traverse(nodes, primRefs, tris, spheres, numTriangles, s->origin.xyz, s->direction.xyz, s->origin.w, 1, &h))
+        Bvh_Traverse(nodes, primRefs, tris, spheres, numTriangles, s->origin.xyz, s->direction.xyz, s->origin.w,
+                     s->direction.w, 1, &h))
         s->contribution = (float4)(0.0f);
 }
 

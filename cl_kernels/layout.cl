@@ -21,7 +21,8 @@
         M(TriangleShading, uv01) M(TriangleShading, uv2) M(TriangleShading, material)             \
         M(TriangleShading, textureSet) M(TriangleShading, pad0) M(TriangleShading, pad1)          \
     S(Sphere) M(Sphere, centerRadius) M(Sphere, worldToObject) M(Sphere, objectToWorld)           \
-        M(Sphere, material) M(Sphere, textureSet) M(Sphere, pad0) M(Sphere, pad1)                 \
+        M(Sphere, motion) M(Sphere, material) M(Sphere, textureSet) M(Sphere, pad0)               \
+        M(Sphere, pad1)                                                                           \
     S(Plane) M(Plane, point) M(Plane, normal) M(Plane, material) M(Plane, textureSet)              \
         M(Plane, pad0) M(Plane, pad1)                                                             \
     S(TextureSet) M(TextureSet, texture) M(TextureSet, worldToObject)                           \
@@ -58,7 +59,8 @@
         M(ShadingPoint, geomNormal) M(ShadingPoint, wo) M(ShadingPoint, kd) M(ShadingPoint, ks)    \
     S(TonemapParams) M(TonemapParams, op) M(TonemapParams, scale) M(TonemapParams, whiteL)        \
         M(TonemapParams, hasWhite) M(TonemapParams, saturation) M(TonemapParams, invGamma)        \
-        M(TonemapParams, truncate) M(TonemapParams, numPixels)
+        M(TonemapParams, truncate) M(TonemapParams, numPixels)                                  \
+        M(TonemapParams, srgb) M(TonemapParams, pad0) M(TonemapParams, pad1) M(TonemapParams, pad2)
 #endif
 
 #ifdef __OPENCL_C_VERSION__

@@ -105,6 +105,21 @@ inline TangentFrame Surface_TangentFrame(Hit h, SurfaceHit s, const __global Tri
 }
 #endif
 
+/* Motion blur: how far the hit primitive has moved at the ray's shutter time (t·motion; planes do not
+ * move). Shading takes the ray back by it into the primitive's rest frame and the hit point forward. */
+inline float3 MotionBlur_HitShift(Hit h, Ray r, const __global Triangle* tris, const __global Sphere* spheres,
+                                  int numTriangles, int numSpheres) {
+    if (h.prim < numTriangles) return Ray_Time(r) * Triangle_Motion(&tris[h.prim]);
+    if (h.prim < numTriangles + numSpheres) return Ray_Time(r) * spheres[h.prim - numTriangles].motion.xyz;
+    return (float3)(0.0f);
+}
+
+/* Motion blur: the children of path i (slots 2i, 2i+1) see the scene at its shutter time. */
+inline void MotionBlur_StampChildren(__global Ray* nextRays, const __global int* childValid, int i, float time) {
+    for (int k = 2 * i; k <= 2 * i + 1; ++k)
+        if (childValid[k]) nextRays[k].origin.w = time;
+}
+
 /* Dielectric Fresnel reflectance for unit cosines (course formulas: mean of r∥² and r⊥²). */
 inline float Fresnel_Dielectric(float cosI, float cosT, float n1, float n2) {
     float rPar = (n2 * cosI - n1 * cosT) / (n2 * cosI + n1 * cosT);
@@ -184,6 +199,10 @@ __kernel void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
         pathRadiance[i] = (float4)(throughput * Miss_Radiance(scene, textures, images, texels, cam, path, ray.direction.xyz), 0.0f);
         return;
     }
+#ifdef CLRT_HAS_MOTION_BLUR
+    const float3 motionShift = MotionBlur_HitShift(h, ray, tris, spheres, scene.numTriangles, scene.numSpheres);
+    ray.origin.xyz -= motionShift;  /* the ray in the rest frame of the primitive it hit */
+#endif
     SurfaceHit s = Surface_FromHit(h, ray, tris, triShading, spheres, planes, scene.numTriangles, scene.numSpheres);
     Material m = materials[s.material];
     float3 wo = -s.dir;
@@ -218,6 +237,9 @@ __kernel void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
             }
         }
     }
+#endif
+#ifdef CLRT_HAS_MOTION_BLUR
+    s.p += motionShift; /* the textures above saw the rest-frame point: they move with the object */
 #endif
     float3 ns = s.frontFacing ? s.ns : -s.ns;
     RngKey key = Rng_Key(scene.seed, path.pixel, path.sample, path.pathId);
@@ -293,6 +315,9 @@ __kernel void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
     default:
         break;
     }
+#ifdef CLRT_HAS_MOTION_BLUR
+    MotionBlur_StampChildren(nextRays, childValid, i, Ray_Time(ray));
+#endif
 }
 
 /* One shadow ray per (path, light in [lightBegin, lightEnd)), at slot i·chunk + (l − lightBegin). */
@@ -324,6 +349,9 @@ __kernel void sample_lights(CLRT_KERNEL_PARAMS(sample_lights)) {
                 float tMax = isinf(dist) ? INFINITY : length(p + dist * wi - org) * (1.0f - 1e-5f);
                 sr.origin = (float4)(org, tMax);
                 sr.direction = (float4)(wi, 0.0f);
+#ifdef CLRT_HAS_MOTION_BLUR
+                sr.direction.w = MotionBlur_Time(scene.seed, path.pixel, path.sample);
+#endif
                 sr.contribution = (float4)(finiteOrZero(c), 0.0f);
             }
         }

@@ -78,9 +78,21 @@ inline float16 Tmo_Apply(const TonemapParams* p, float16 L) {
     }
 }
 
-/* 8-bit value of 16 display values: 255·v^(1/gamma), floored or rounded, clamped to [0,255]. */
+/* The sRGB transfer curve (<Gamma>sRGB</Gamma>) of 16 display values in [0,1]. */
+inline float16 Tonemap_Srgb16(float16 v) {
+    const float16 curve = select(1.055f * pow(v, (float16)(1.0f / 2.4f)) - 0.055f, 12.92f * v, v <= 0.0031308f);
+    return select(curve, (float16)(1.0f), v >= 1.0f); /* 1.055 − 0.055 is one ulp short of 1 in float */
+}
+
+/* Gamma-encoded display values: the sRGB curve, or v^(1/gamma). */
+inline float16 Tonemap_GammaEncode16(float16 v, const TonemapParams* p) {
+    if (p->srgb) return Tonemap_Srgb16(v);
+    return pow(v, (float16)(p->invGamma));
+}
+
+/* 8-bit value of 16 display values: 255·v^(1/gamma) (or 255·sRGB(v)), floored or rounded, clamped to [0,255]. */
 inline uchar16 Tonemap_Encode16(float16 v, const TonemapParams* p) {
-    float16 x = 255.0f * pow(v, (float16)(p->invGamma));
+    float16 x = 255.0f * Tonemap_GammaEncode16(v, p);
     x = p->truncate ? floor(x) : floor(x + 0.5f);
     return convert_uchar16(select((float16)(0.0f), fmin(x, 255.0f), x > 0.0f));
 }
@@ -173,7 +185,7 @@ __kernel void Tonemap_MapFloat(CLRT_KERNEL_PARAMS(Tonemap_MapFloat)) {
     float16 v[3];
     Tonemap_Display16(rgb, first, count, &p, v);
     float q[3][TONEMAP_VEC];
-    for (int k = 0; k < 3; ++k) vstore16(pow(v[k], (float16)(p.invGamma)), 0, q[k]);
+    for (int k = 0; k < 3; ++k) vstore16(Tonemap_GammaEncode16(v[k], &p), 0, q[k]);
     __global float* o = out + 3 * (size_t)first;
     for (uint j = 0; j < count; ++j)
         for (int k = 0; k < 3; ++k) o[3 * j + k] = q[k][j];

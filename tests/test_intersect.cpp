@@ -1,6 +1,8 @@
 // The intersection kernels (cl_kernels/intersect.cl) against the plain C++ reference
-// (src/bvh/host_intersect.h) on PoCL: closest hits and shadow-ray any-hits over random scenes of
-// triangles and spheres, BVH-traversed on both sides, plus two infinite planes.
+// (src/bvh/host_intersect.h) on PoCL: closest hits (distance, primitive and barycentrics) and
+// shadow-ray any-hits over random scenes of triangles and spheres, BVH-traversed on both sides, plus
+// two infinite planes; and the same with moving primitives (MotionBlur) at given shutter times, the
+// kernels built with CLRT_HAS_MOTION_BLUR and the host moving each primitive by time·motion.
 #include <catch.hpp>
 
 #include <random>
@@ -22,24 +24,42 @@ struct RandomScene {
     std::vector<dev::Sphere> spheres;
     std::vector<Vec3> sphereCenter;
     std::vector<float> sphereRadius;
+    std::vector<Vec3> motion;  // per primitive reference (triangles, then spheres)
     Bvh bvh;
 };
 
-RandomScene makeScene(uint32_t seed, int numTris, int numSpheres) {
+// Boxes swept over the shutter (as flatten_geometry.cpp builds them): both ends of the motion.
+Aabb swept(Aabb b, const Vec3& m) {
+    Aabb end = b;
+    end.min = end.min + m;
+    end.max = end.max + m;
+    b.grow(end);
+    return b;
+}
+
+// moving: every primitive but every fourth gets a random translation over the shutter, stored as
+// the device reads it (Triangle v0.w v1.w v2.w, Sphere.motion), its BVH box swept over it.
+RandomScene makeScene(uint32_t seed, int numTris, int numSpheres, bool moving = false) {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> pos(-10, 10), size(0.05f, 3.0f), unit(-1, 1);
     RandomScene s;
     std::vector<Aabb> boxes;
+    auto nextMotion = [&](int i) {
+        Vec3 m = Vec3(unit(rng), unit(rng), unit(rng)) * 4.0f;
+        return moving && i % 4 != 0 ? m : Vec3(0, 0, 0);
+    };
     for (int i = 0; i < numTris; ++i) {
         Vec3 c(pos(rng), pos(rng), pos(rng));
         float sz = size(rng);
         Vec3 p[3];
         for (Vec3& v : p) v = c + Vec3(unit(rng), unit(rng), unit(rng)) * sz;
         if (i % 17 == 0) p[2] = p[1];  // some degenerate ones
-        s.tris.push_back({{p[0].x, p[0].y, p[0].z, 0}, {p[1].x, p[1].y, p[1].z, 0}, {p[2].x, p[2].y, p[2].z, 0}});
+        Vec3 m = nextMotion(i);
+        s.motion.push_back(m);
+        s.tris.push_back({{p[0].x, p[0].y, p[0].z, m.x}, {p[1].x, p[1].y, p[1].z, m.y}, {p[2].x, p[2].y, p[2].z, m.z}});
         Aabb b;
         for (Vec3& v : p) b.grow(v);
-        boxes.push_back(b);
+        boxes.push_back(swept(b, m));
     }
     for (int i = 0; i < numSpheres; ++i) {
         Vec3 c(pos(rng), pos(rng), pos(rng));
@@ -50,28 +70,31 @@ RandomScene makeScene(uint32_t seed, int numTris, int numSpheres) {
             sp.worldToObject[k] = {k == 0 ? 1.f : 0.f, k == 1 ? 1.f : 0.f, k == 2 ? 1.f : 0.f, 0};
             sp.objectToWorld[k] = sp.worldToObject[k];
         }
+        Vec3 m = nextMotion(i);
+        sp.motion = {m.x, m.y, m.z, 0};
+        s.motion.push_back(m);
         s.spheres.push_back(sp);
         s.sphereCenter.push_back(c);
         s.sphereRadius.push_back(r);
         Aabb b;
         b.grow(c - Vec3(r));
         b.grow(c + Vec3(r));
-        boxes.push_back(b);
+        boxes.push_back(swept(b, m));
     }
     s.bvh = buildBvh(boxes);
     return s;
 }
 
-}  // namespace
+// Shutter time of ray i: 0 and 1 (the ends of the motion), else spread over [0, 1).
+float rayTime(int i) { return i % 7 == 0 ? 0.0f : i % 7 == 1 ? 1.0f : float((i * 2654435761u) % 1000u) / 1000.0f; }
 
-TEST_CASE("intersection kernels match the host reference on random scenes", "[cl][intersect]") {
+// Runs both kernels of `program` over random rays in scene s (each ray at rayTime(i) when timed)
+// and compares them with the host: the primitive, t and barycentrics of the closest hit, and
+// whether the shadow ray is occluded. The host moves each primitive by time·motion.
+void compareWithHost(const cl::Program& program, const RandomScene& s, bool timed) {
     DeviceContext& dc = testContext();
-    auto sources = loadKernelSources(KernelProgram::Intersect);
-    cl::Program program = buildProgramFromSources(dc, sources, {});
     KernelArgs closest(program, "intersect_closest");
     KernelArgs shadow(program, "intersect_shadow");
-
-    RandomScene s = makeScene(1234, 3000, 200);
     const int numTris = int(s.tris.size());
     std::mt19937 rng(99);
     std::uniform_real_distribution<float> pos(-15, 15), unit(-1, 1);
@@ -83,13 +106,14 @@ TEST_CASE("intersection kernels match the host reference on random scenes", "[cl
         Vec3 d = normalize(Vec3(unit(rng), unit(rng), unit(rng)));
         if (i % 10 == 0) d = Vec3(0, 0, i % 20 == 0 ? 1.f : -1.f);  // axis-aligned: zero components
         float tMax = (i % 3 == 0) ? 5.0f : INFINITY;
-        rays[i] = {{o.x, o.y, o.z, 0}, {d.x, d.y, d.z, tMax}};
-        shadows[i] = {{o.x, o.y, o.z, tMax}, {d.x, d.y, d.z, 0}, {1, 1, 1, 0}};
+        float time = timed ? rayTime(i) : 0.0f;
+        rays[i] = {{o.x, o.y, o.z, time}, {d.x, d.y, d.z, tMax}};
+        shadows[i] = {{o.x, o.y, o.z, tMax}, {d.x, d.y, d.z, time}, {1, 1, 1, 0}};
     }
     cl::Context& ctx = dc.context();
     auto ro = [&](auto& v) {
         using T = typename std::decay_t<decltype(v)>::value_type;
-        return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), v.data()));
+        return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), const_cast<T*>(v.data())));
     };
     std::vector<dev::Bvh4Node> nodes4 = collapseBvh4(s.bvh).nodes;
     cl::Buffer nodes = ro(nodes4), refs = ro(s.bvh.primRefs), tris = ro(s.tris), sph = ro(s.spheres);
@@ -120,21 +144,23 @@ TEST_CASE("intersection kernels match the host reference on random scenes", "[cl
     CL_CPP(q.enqueueReadBuffer(hitBuf, CL_TRUE, 0, sizeof(dev::Hit) * numRays, hits.data()));
     CL_CPP(q.enqueueReadBuffer(shadowBuf, CL_TRUE, 0, sizeof(dev::ShadowRay) * numRays, shadows.data()));
 
-    int hitCount = 0, primMismatch = 0, tMismatch = 0, occlusionMismatch = 0;
+    int hitCount = 0, movingHits = 0, primMismatch = 0, tMismatch = 0, baryMismatch = 0, occlusionMismatch = 0;
     for (int i = 0; i < numRays; ++i) {
         Vec3 o(rays[i].origin.x, rays[i].origin.y, rays[i].origin.z);
         Vec3 d(rays[i].direction.x, rays[i].direction.y, rays[i].direction.z);
         float tMax = rays[i].direction.w;
+        const float time = rays[i].origin.w;
         int prim = -1;
-        float tBest = tMax;
+        float tBest = tMax, bary1 = 0, bary2 = 0;
         traverseBvh(s.bvh, o, d, tBest, [&](int ref, float& tm) {
-            float t, b1, b2;
-            bool h = ref < numTris
-                         ? intersectTriangleWatertight(o, d, Vec3(s.tris[ref].v0.x, s.tris[ref].v0.y, s.tris[ref].v0.z),
-                                                       Vec3(s.tris[ref].v1.x, s.tris[ref].v1.y, s.tris[ref].v1.z),
-                                                       Vec3(s.tris[ref].v2.x, s.tris[ref].v2.y, s.tris[ref].v2.z), tm, t, b1, b2)
-                         : intersectSphere(o, d, s.sphereCenter[ref - numTris], s.sphereRadius[ref - numTris], tm, t);
-            if (h) { tm = t; prim = ref; }
+            float t, b1 = 0, b2 = 0;
+            const Vec3 m = s.motion[size_t(ref)] * time;  // the primitive at this ray's time
+            const dev::Triangle* tri = ref < numTris ? &s.tris[size_t(ref)] : nullptr;
+            bool h = tri ? intersectTriangleWatertight(o, d, Vec3(tri->v0.x, tri->v0.y, tri->v0.z) + m,
+                                                       Vec3(tri->v1.x, tri->v1.y, tri->v1.z) + m,
+                                                       Vec3(tri->v2.x, tri->v2.y, tri->v2.z) + m, tm, t, b1, b2)
+                         : intersectSphere(o, d, s.sphereCenter[ref - numTris] + m, s.sphereRadius[ref - numTris], tm, t);
+            if (h) { tm = t; prim = ref; bary1 = b1; bary2 = b2; }
         });
         for (int k = 0; k < 2; ++k) {  // host reference for the planes
             Vec3 pp(planes[k].point.x, planes[k].point.y, planes[k].point.z);
@@ -154,16 +180,35 @@ TEST_CASE("intersection kernels match the host reference on random scenes", "[cl
             if (std::fabs(h.t - tBest) > 1e-4f * std::max(1.0f, tBest)) ++primMismatch;
             continue;
         }
-        if (std::fabs(h.t - tBest) > 1e-5f * std::max(1.0f, tBest)) ++tMismatch;
+        // Moving primitives: the device moves the ray instead of the primitive (a few ulps apart).
+        const bool moved = prim < numTris + int(s.spheres.size()) && s.motion[size_t(prim)] != Vec3(0, 0, 0);
+        movingHits += moved;
+        if (std::fabs(h.t - tBest) > (moved ? 1e-4f : 1e-5f) * std::max(1.0f, tBest)) ++tMismatch;
+        if (prim < numTris && (std::fabs(h.u - bary1) > 1e-3f || std::fabs(h.v - bary2) > 1e-3f)) ++baryMismatch;
         bool occluded = shadows[i].contribution.x == 0;
         if (!occluded) ++occlusionMismatch;  // the ray hit something before tMax: must be occluded
     }
     // Rays the host says miss must not be occluded on the device.
     for (int i = 0; i < numRays; ++i)
         if (hits[i].prim < 0 && shadows[i].contribution.x == 0) ++occlusionMismatch;
-    INFO("rays with hits: " << hitCount << " of " << numRays);
+    INFO("rays with hits: " << hitCount << " of " << numRays << ", on moving primitives: " << movingHits);
     CHECK(hitCount > numRays / 10);
+    if (timed) CHECK(movingHits > numRays / 20);
     CHECK(primMismatch == 0);
     CHECK(tMismatch == 0);
+    CHECK(baryMismatch == 0);
     CHECK(occlusionMismatch == 0);
+}
+
+}  // namespace
+
+TEST_CASE("intersection kernels match the host reference on random scenes", "[cl][intersect]") {
+    cl::Program program = buildProgramFromSources(testContext(), loadKernelSources(KernelProgram::Intersect), {});
+    compareWithHost(program, makeScene(1234, 3000, 200), false);
+}
+
+TEST_CASE("moving primitives (MotionBlur): kernels match the host at given shutter times", "[cl][intersect][motion]") {
+    cl::Program program = buildProgramFromSources(testContext(), loadKernelSources(KernelProgram::Intersect),
+                                                  {"-DCLRT_HAS_MOTION_BLUR=1"});
+    compareWithHost(program, makeScene(4321, 3000, 200, true), true);
 }

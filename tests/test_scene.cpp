@@ -162,6 +162,22 @@ TEST_CASE("scene: lookAt camera plane from FovY and aspect", "[scene]") {
     CHECK(c.tonemaps[1].extension == "_aces");
 }
 
+TEST_CASE("scene: <Gamma>sRGB</Gamma> in a Tonemap block selects the sRGB curve", "[scene]") {
+    auto tonemap = [](const std::string& gamma) {
+        return sceneWith("", "<Tonemap><TMO>Photographic</TMO>" + gamma + "</Tonemap>\n");
+    };
+    Scene s = load("srgb.xml", tonemap("<Gamma>sRGB</Gamma>"));
+    REQUIRE(s.cameras.at(0).tonemaps.size() == 1);
+    CHECK(s.cameras[0].tonemaps[0].srgb);
+    CHECK(load("srgb_lower.xml", tonemap("<Gamma> srgb </Gamma>")).cameras[0].tonemaps[0].srgb);
+    const Tonemap t = load("g24.xml", tonemap("<Gamma>2.4</Gamma>")).cameras[0].tonemaps[0];
+    CHECK_FALSE(t.srgb);
+    CHECK(t.gamma == 2.4f);
+    CHECK_FALSE(load("nog.xml", tonemap("")).cameras[0].tonemaps[0].srgb);
+    expectErrorAt("badgamma.xml", tonemap("<Gamma>sRGB2</Gamma>"), "<Gamma>", "'sRGB2' is not a number");
+    expectErrorAt("neggamma.xml", tonemap("<Gamma>-1</Gamma>"), "<Gamma>", "positive (or sRGB)");
+}
+
 TEST_CASE("scene: lookAt camera with <Gaze> (a direction), as the course's hw6 scenes give it", "[scene]") {
     auto camera = [](const std::string& gaze) {
         return R"(<Scene><Cameras><Camera id="1" type="lookAt" handedness="right"><Position>1 2 3</Position>)" + gaze +

@@ -326,6 +326,51 @@ TEST_CASE("device tone mapping equals the host reference on edge cases", "[tonem
     }
 }
 
+TEST_CASE("<Gamma>sRGB</Gamma>: the sRGB transfer curve on host and device; numeric gammas unchanged", "[tonemap]") {
+    // The curve: 12.92·v up to 0.0031308, then 1.055·v^(1/2.4) − 0.055 (continuous there, 1 at 1).
+    CHECK(srgbEncode(0.0f) == 0.0f);
+    CHECK(srgbEncode(0.002f) == Approx(0.02584f).epsilon(1e-6));
+    CHECK(srgbEncode(0.0031308f) == Approx(0.04045f).epsilon(1e-3));
+    CHECK(srgbEncode(0.0031309f) == Approx(0.04045f).epsilon(1e-3));
+    CHECK(srgbEncode(0.5f) == Approx(0.735357f).epsilon(1e-5));
+    CHECK(srgbEncode(1.0f) == Approx(1.0f).epsilon(1e-6));
+    TonemapSettings s;
+    s.srgb = true;
+    CHECK(tonemapEncode(0.5f, s) == 187);  // floor(255 · 0.735357)
+    CHECK(tonemapEncode(1.0f, s) == 255);
+    CHECK(tonemapEncode(0.0f, s) == 0);
+    s.srgb = false;
+    CHECK(tonemapEncode(0.5f, s) == 186);  // floor(255 · 0.5^(1/2.2)) = floor(186.08)
+    Tonemap block;  // a scene's <Gamma>sRGB</Gamma> reaches the settings that camera outputs use
+    block.srgb = true;
+    CHECK(tonemapSettingsFrom(block).srgb);
+    CHECK_FALSE(tonemapSettingsFrom(Tonemap()).srgb);
+    // Device (8-bit and float display) against the host reference, every operator.
+    ImageRGB img = randomHdr(83, 45, 29);
+    for (dev::TmoKind op : {dev::TMO_PHOTOGRAPHIC, dev::TMO_ACES, dev::TMO_FILMIC}) {
+        TonemapSettings t;
+        t.op = op;
+        t.srgb = true;
+        TonemapDeviceResult r = checkDeviceMatchesHost(img, t);
+        t.srgb = false;
+        TonemapDeviceResult g = checkDeviceMatchesHost(img, t);
+        CHECK(maxDiff(r.rgb8, g.rgb8) > 5);  // a different curve
+        t.srgb = true;
+        TonemapDevice& tm = tmDevice();
+        tm.upload(img);
+        TonemapDeviceResult f = tm.map(t, true);
+        TonemapStats st = tonemapStatsHost(img, t);
+        float worst = 0;
+        for (size_t i = 0; i < img.pixels.size(); i += 3) {
+            float v[3];
+            tonemapPixel(&img.pixels[i], t, st, v);
+            for (int c = 0; c < 3; ++c) worst = std::max(worst, std::fabs(srgbEncode(v[c]) - f.display[i + c]));
+        }
+        INFO(tmoKindName(op) << ": sRGB float display, max |device - host| = " << worst);
+        CHECK(worst <= 2e-5f);
+    }
+}
+
 TEST_CASE("device percentile equals the sorted-array value; device log-sum keeps its precision", "[tonemap]") {
     ImageRGB img = randomHdr(301, 211, 5);
     const size_t n = size_t(img.width) * img.height;
@@ -479,6 +524,13 @@ TEST_CASE("clrt tonemap subcommand: options, scene camera settings, errors", "[t
     ImageRGB back = readImage(tmp.file("in.exr"));
     ImageRGB png = readImage(tmp.file("out.png"));
     CHECK(maxDiff(std::vector<unsigned char>(png.pixels.begin(), png.pixels.end()), tonemapHost(back, s)) <= 1);
+
+    CHECK(run({tmp.file("in.exr"), "-o", tmp.file("srgb.png"), "--gamma", "sRGB", "--device", dev}) == 0);
+    TonemapSettings srgb;
+    srgb.srgb = true;
+    ImageRGB pngSrgb = readImage(tmp.file("srgb.png"));
+    CHECK(maxDiff(std::vector<unsigned char>(pngSrgb.pixels.begin(), pngSrgb.pixels.end()), tonemapHost(back, srgb)) <= 1);
+    CHECK_THROWS_AS(run({tmp.file("in.exr"), "--gamma", "sRGB2"}), Error);
 
     CHECK(run({tmp.file("in.exr"), "--burn", "0", "--device", dev}) == 0);  // default output: in.png
     CHECK(std::filesystem::exists(tmp.file("in.png")));

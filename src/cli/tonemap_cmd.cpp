@@ -2,6 +2,7 @@
 // camera, the output checks, then tone mapping on the device and atomic writes.
 #include "cli/tonemap_cmd.h"
 
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -40,7 +41,7 @@ const char* const kTonemapHelp =
     "  --burn P              photographic: percentage of pixels burnt out to white (default 1;\n"
     "                        0: no white point)\n"
     "  --saturation S        RGBo = Yo·(RGB/Y)^S (default 1)\n"
-    "  --gamma G             8-bit value of c is 255·c^(1/G) (default 2.2)\n"
+    "  --gamma G             8-bit value of c is 255·c^(1/G) (default 2.2); sRGB: the sRGB curve\n"
     "  --quantize MODE       floor (default; the course's reference PNGs) or round\n"
     "  --delta D             the δ of the log-average exp(mean(log(δ + Y))) (default 1e-6)\n"
     "  --scene S.xml         take the Tonemap settings of a camera of this scene\n"
@@ -53,6 +54,11 @@ const char* const kTonemapHelp =
     "exp(mean(log(1e-6 + Y))); L_white = the sorted-array (100 - burn)th percentile of L, nearest rank.\n";
 
 namespace {
+
+std::string lowerAscii(std::string v) {
+    for (char& c : v) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return v;
+}
 
 float parseFloatArg(const std::string& opt, const std::string& v) {
     char* end = nullptr;
@@ -86,7 +92,12 @@ TonemapArgs parseTonemapArgs(int argc, char** argv) {
         else if (s == "--key") { a.over.key = parseFloatArg(s, value()); a.haveKey = true; }
         else if (s == "--burn") { a.over.burnPercent = parseFloatArg(s, value()); a.haveBurn = true; }
         else if (s == "--saturation") { a.over.saturation = parseFloatArg(s, value()); a.haveSat = true; }
-        else if (s == "--gamma") { a.over.gamma = parseFloatArg(s, value()); a.haveGamma = true; }
+        else if (s == "--gamma") {
+            std::string v = value();
+            a.over.srgb = lowerAscii(v) == "srgb";
+            if (!a.over.srgb) a.over.gamma = parseFloatArg(s, v);
+            a.haveGamma = true;
+        }
         else if (s == "--quantize") {
             std::string v = value();
             if (v != "round" && v != "floor") throw Error("--quantize: expected round or floor, got '" + v + "'", ExitCode::Usage);
@@ -132,7 +143,7 @@ std::vector<TonemapSettings> applyOptions(const TonemapArgs& a, std::vector<Tone
         if (a.haveKey) s.key = a.over.key;
         if (a.haveBurn) s.burnPercent = a.over.burnPercent;
         if (a.haveSat) s.saturation = a.over.saturation;
-        if (a.haveGamma) s.gamma = a.over.gamma;
+        if (a.haveGamma) { s.gamma = a.over.gamma; s.srgb = a.over.srgb; }
         if (a.haveDelta) s.delta = a.over.delta;
         s.truncate = a.truncate;
         validateTonemapSettings(s, "tonemap");

@@ -128,9 +128,19 @@ void tonemapPixel(const float rgb[3], const TonemapSettings& s, const TonemapSta
     }
 }
 
-unsigned char tonemapEncode(float v, const TonemapSettings& s) {
+float srgbEncode(float v) {
+    if (v >= 1.0f) return 1.0f;  // in float, 1.055 − 0.055 falls one ulp short of 1: white would be 254
+    return v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
+}
+
+float tonemapGammaEncode(float v, const TonemapSettings& s) {
+    if (s.srgb) return srgbEncode(v);
     const float invGamma = 1.0f / s.gamma;
-    float x = 255.0f * std::pow(v, invGamma);
+    return std::pow(v, invGamma);
+}
+
+unsigned char tonemapEncode(float v, const TonemapSettings& s) {
+    float x = 255.0f * tonemapGammaEncode(v, s);
     x = s.truncate ? std::floor(x) : std::floor(x + 0.5f);
     return static_cast<unsigned char>(x > 0.0f ? std::fmin(x, 255.0f) : 0.0f);
 }

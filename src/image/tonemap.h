@@ -9,7 +9,8 @@
 //   * L = Y·(key/Ȳ) (the float factor key/Ȳ is computed once, in double, then rounded to float);
 //   * L_white = k-th smallest L (0-based) with k = percentileIndex(N, 100 − burn), see below;
 //     burn = 0: no white point (Yo = L/(1+L)); L_white = 0: every L > 0 maps to white;
-//   * RGBo = Yo·(RGB/Y)^s, clamped to [0,1]; 8-bit value = floor or round of 255·RGBo^(1/g).
+//   * RGBo = Yo·(RGB/Y)^s, clamped to [0,1]; 8-bit value = floor or round of 255·RGBo^(1/g), or of
+//     255·sRGB(RGBo) with <Gamma>sRGB</Gamma>.
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -31,6 +32,7 @@ struct TonemapSettings {
     float burnPercent = 1.0f;   // TMOOptions[1] (Photographic only), in [0, 100]
     float saturation = 1.0f;
     float gamma = 2.2f;
+    bool srgb = false;          // <Gamma>sRGB</Gamma>: the sRGB transfer curve instead of v^(1/gamma)
     double delta = 1e-6;        // the δ of the log-average (1e-6 reproduces the course)
     bool truncate = true;       // 8-bit quantisation: floor (the course's) or round
 };
@@ -62,6 +64,12 @@ size_t percentileIndex(size_t n, double percentile);
 TonemapStats tonemapStatsHost(const ImageRGB& img, const TonemapSettings& s);
 // Same from the log-sum and the k-th smallest luminance (the device path computes these two).
 TonemapStats tonemapStatsFrom(double logSum, size_t n, float kthLuminance, const TonemapSettings& s);
+
+// The sRGB transfer curve (IEC 61966-2-1) of a display value v in [0,1]: 12.92·v up to 0.0031308,
+// else 1.055·v^(1/2.4) − 0.055; exactly 1 from 1 up.
+float srgbEncode(float v);
+// The gamma-encoded display value: srgbEncode(v) with s.srgb, else v^(1/gamma).
+float tonemapGammaEncode(float v, const TonemapSettings& s);
 
 // The tone-mapped display value in [0,1] of one pixel (before gamma), and its 8-bit encoding.
 void tonemapPixel(const float rgb[3], const TonemapSettings& s, const TonemapStats& st, float out[3]);

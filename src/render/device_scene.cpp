@@ -32,6 +32,7 @@ std::vector<std::string> FeatureSet::defines() const {
     add(bumpMaps, "CLRT_HAS_BUMP_MAP");
     add(spheres, "CLRT_HAS_SPHERES");
     add(primRefsIdentity, "CLRT_PRIMREFS_IDENTITY");
+    add(motionBlur, "CLRT_HAS_MOTION_BLUR");
     // Rounded up to a multiple of 8 so that scenes of similar depth share a cached program.
     if (bvhStack > 0) d.push_back("-DCLRT_BVH4_STACK_SIZE=" + std::to_string((bvhStack + 7) / 8 * 8));
     return d;

@@ -23,6 +23,7 @@ struct FeatureSet {
     bool bumpMaps = false;    // a shape uses a bump_normal texture
     bool spheres = false;
     bool primRefsIdentity = false;  // primRefs[i] == i (triangles only, stored in leaf order)
+    bool motionBlur = false;        // a mesh, triangle or sphere has a MotionBlur translation
     int bvhStack = 0;  // traversal stack entries the scene's BVH needs (0: the header's default)
     void add(dev::LightKind k) { lightKinds |= 1u << k; }
     void add(dev::MaterialKind k) { materialKinds |= 1u << k; }
@@ -34,7 +35,7 @@ struct FeatureSet {
     static FeatureSet all() {
         FeatureSet f;
         f.lightKinds = f.materialKinds = ~0u;
-        f.textures = f.normalMaps = f.bumpMaps = f.spheres = true;
+        f.textures = f.normalMaps = f.bumpMaps = f.spheres = f.motionBlur = true;
         return f;
     }
 };

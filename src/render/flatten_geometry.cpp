@@ -1,6 +1,10 @@
 // flatten_geometry.cpp — planes, spheres and mesh triangles in world space (meshes on all hardware
 // threads), then the BVH over triangles and spheres with the triangles stored in leaf order (see
 // flatten.h). Triangles keep flat or area-weighted smooth normals and uvs; spheres their affine maps.
+// A mesh whose transformation mirrors (det < 0) has its winding reversed, as the course does, so its
+// geometric normal is the object-space one carried by the inverse transpose (see mirrorsOrientation).
+// Moving shapes (MotionBlur) keep their rest position; their motion rides in Triangle.v*.w and
+// Sphere.motion, and their BVH boxes are swept over the shutter interval (sweptBox).
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -23,8 +27,29 @@ struct MeshTriangles {
     size_t degenerate = 0, nonFinite = 0;
 };
 
+// Whether the transformation's linear part has a negative determinant (a mirror): the world-space
+// cross product of a triangle's edges then points against the transformed object-space normal.
+bool mirrorsOrientation(const Mat4& m) {
+    const double det = m.m[0][0] * (m.m[1][1] * m.m[2][2] - m.m[1][2] * m.m[2][1]) -
+                       m.m[0][1] * (m.m[1][0] * m.m[2][2] - m.m[1][2] * m.m[2][0]) +
+                       m.m[0][2] * (m.m[1][0] * m.m[2][1] - m.m[1][1] * m.m[2][0]);
+    return det < 0;
+}
+
+// The box a primitive sweeps over the shutter interval: moved by t·motion, t in [0, 1], it stays
+// inside the union of its boxes at both ends (the motion is a straight translation).
+Aabb sweptBox(const Aabb& rest, const Vec3& motion) {
+    Aabb box = rest;
+    if (motion == Vec3(0, 0, 0)) return box;
+    box.grow(rest.min + motion);
+    box.grow(rest.max + motion);
+    return box;
+}
+
 void flattenMesh(const Scene& scene, const Shape& s, int texSet, MeshTriangles& out) {
     const MeshData& mesh = scene.meshes.at(s.meshIndex);
+    // Corners (a, b, c) of triangle t; a mirrored mesh takes them as (a, c, b).
+    const int kB = mirrorsOrientation(s.transform) ? 2 : 1, kC = 3 - kB;
     out.triangles.reserve(mesh.indices.size() / 3);
     out.shading.reserve(mesh.indices.size() / 3);
     out.boxes.reserve(mesh.indices.size() / 3);
@@ -40,7 +65,7 @@ void flattenMesh(const Scene& scene, const Shape& s, int texSet, MeshTriangles& 
             for (size_t v = 0; v < nw.size(); ++v) nw[v] = normalize(invT.transformVector(mesh.normals[v]));
         } else {
             for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
-                int a = mesh.indices[t], b = mesh.indices[t + 1], c = mesh.indices[t + 2];
+                int a = mesh.indices[t], b = mesh.indices[t + kB], c = mesh.indices[t + kC];
                 Vec3 n = cross(pw[b] - pw[a], pw[c] - pw[a]);  // length = 2·area: area weighting
                 if (!isFinite(n)) continue;
                 nw[a] += n; nw[b] += n; nw[c] += n;
@@ -50,7 +75,7 @@ void flattenMesh(const Scene& scene, const Shape& s, int texSet, MeshTriangles& 
     }
     bool hasUv = mesh.uvs.size() == mesh.positions.size();
     for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
-        int a = mesh.indices[t], b = mesh.indices[t + 1], c = mesh.indices[t + 2];
+        int a = mesh.indices[t], b = mesh.indices[t + kB], c = mesh.indices[t + kC];
         const Vec3 &p0 = pw[a], &p1 = pw[b], &p2 = pw[c];
         if (!isFinite(p0) || !isFinite(p1) || !isFinite(p2)) { ++out.nonFinite; continue; }
         Vec3 n = cross(p1 - p0, p2 - p0);
@@ -60,7 +85,8 @@ void flattenMesh(const Scene& scene, const Shape& s, int texSet, MeshTriangles& 
             continue;
         }
         n = n / len;
-        dev::Triangle tri{toFloat4(p0), toFloat4(p1), toFloat4(p2)};
+        // w of the three vertices: the motion's x, y, z (0, 0, 0 for a static mesh).
+        dev::Triangle tri{toFloat4(p0, s.motion.x), toFloat4(p1, s.motion.y), toFloat4(p2, s.motion.z)};
         dev::TriangleShading sh{};
         auto normalAt = [&](int v) { return (s.smooth && nw[v] != Vec3(0, 0, 0) && isFinite(nw[v])) ? nw[v] : n; };
         sh.n0 = toFloat4(normalAt(a));
@@ -76,7 +102,7 @@ void flattenMesh(const Scene& scene, const Shape& s, int texSet, MeshTriangles& 
         box.grow(p0); box.grow(p1); box.grow(p2);
         out.triangles.push_back(tri);
         out.shading.push_back(sh);
-        out.boxes.push_back(box);
+        out.boxes.push_back(sweptBox(box, s.motion));
     }
 }
 
@@ -117,6 +143,7 @@ bool flattenSphere(const Shape& s, int texSet, DeviceScene& ds, std::vector<Aabb
     storeRows(sp.worldToObject, inv);
     sp.material = s.materialIndex;
     sp.textureSet = texSet;
+    sp.motion = toFloat4(s.motion);
     Aabb box;
     for (int c = 0; c < 8; ++c) {
         Vec3 corner(s.center.x + ((c & 1) ? s.radius : -s.radius), s.center.y + ((c & 2) ? s.radius : -s.radius),
@@ -124,7 +151,7 @@ bool flattenSphere(const Shape& s, int texSet, DeviceScene& ds, std::vector<Aabb
         box.grow(s.transform.transformPoint(corner));
     }
     ds.spheres.push_back(sp);
-    sphereBoxes.push_back(box);
+    sphereBoxes.push_back(sweptBox(box, s.motion));
     return true;
 }
 
@@ -214,6 +241,8 @@ void flattenGeometry(const Scene& scene, DeviceScene& ds) {
     }
     flattenMeshes(scene, meshJobs, ds, boxes);
     ds.features.spheres = !ds.spheres.empty();
+    for (const Shape& s : scene.shapes)
+        if (s.type != ShapeType::Plane && s.motion != Vec3(0, 0, 0)) ds.features.motionBlur = true;
     const int numTriangles = int(boxes.size());
     boxes.insert(boxes.end(), sphereBoxes.begin(), sphereBoxes.end());
     buildDeviceBvh(boxes, ds);

@@ -53,6 +53,7 @@ TonemapSettings tonemapSettingsFrom(const Tonemap& t) {
     s.burnPercent = t.burnPercent;
     s.saturation = t.saturation;
     s.gamma = t.gamma;
+    s.srgb = t.srgb;
     return s;
 }
 

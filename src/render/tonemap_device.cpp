@@ -145,6 +145,7 @@ struct TonemapDevice::Impl {
         p.hasWhite = r.stats.hasWhite ? 1 : 0;
         p.saturation = s.saturation;
         p.invGamma = 1.0f / s.gamma;
+        p.srgb = s.srgb ? 1 : 0;
         p.truncate = s.truncate ? 1 : 0;
         p.numPixels = cl_uint(numPixels);
         if (floatDisplay) {

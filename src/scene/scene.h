@@ -26,6 +26,7 @@ struct Tonemap {
     float burnPercent = 1.0f;   // TMOOptions[1]
     float saturation = 1.0f;
     float gamma = 2.2f;
+    bool srgb = false;          // <Gamma>sRGB</Gamma>: the sRGB transfer curve instead of a power
     std::string extension;      // e.g. "_aces"; empty when the block names none
 };
 
@@ -107,6 +108,8 @@ struct Shape {
     int materialIndex = 0;        // into Scene::materials
     std::vector<int> textureIndices;  // into Scene::textures
     Mat4 transform;               // object -> world
+    Vec3 motion;                  // <MotionBlur>: world-space translation over the shutter interval [0, 1]
+                                  // (at time t the object is at transform, then moved by t·motion)
     bool smooth = false;          // smooth shading: interpolate vertex normals
     std::string source;           // for messages, e.g. "Mesh id=3"
 };

@@ -14,6 +14,7 @@
 //   Objects: Mesh (shadingMode) Material Textures Transformations Faces (inline | plyFile |
 //          binaryFile; vertexOffset textureOffset), MeshInstance (baseMeshId resetTransform),
 //          Triangle (Indices), Sphere (Center Radius), Plane (Point Normal; JSON 2025 scenes); LightMesh/LightSphere are warned about, skipped.
+//          Mesh, MeshInstance, Triangle and Sphere take MotionBlur (a translation over the shutter).
 // VertexData/TexCoordData may carry a binaryFile attribute instead of text: raw little-endian float32
 // values (no count prefix; no shared scene uses it). Faces binaryFile: raw little-endian int32.
 // Errors: clrt::Error "<location>: <what>", location from SceneNode::location(). Every number must be
@@ -537,8 +538,12 @@ struct Walker {
         }
         if (auto c = n.child("Saturation")) t.saturation = number(*c);
         if (auto c = n.child("Gamma")) {
-            t.gamma = number(*c);
-            if (!(t.gamma > 0)) fail(*c, "<Gamma> must be positive");
+            if (lower(trim(c->text())) == "srgb") {  // some versions of the course's files
+                t.srgb = true;
+            } else {
+                t.gamma = number(*c);
+                if (!(t.gamma > 0)) fail(*c, "<Gamma> must be positive (or sRGB)");
+            }
         }
         if (auto c = n.child("Extension")) t.extension = trim(c->text());
         return t;
@@ -654,6 +659,12 @@ struct Walker {
         if (!t) return Mat4::identity();
         return composeTransforms(t->text(), transforms, t->location() + ": " + describe(owner));
     }
+    // <MotionBlur>x y z</MotionBlur>: a world-space translation over the shutter interval [0, 1],
+    // applied after the object's transformations (the object sits at transform, then + time·motion).
+    Vec3 motionOf(const SceneNode& owner) {
+        auto c = owner.child("MotionBlur");
+        return c ? vec3(*c) : Vec3(0, 0, 0);
+    }
     bool smoothOf(const SceneNode& n, bool dflt) {
         auto a = n.attribute("shadingMode");
         if (!a) return dflt;
@@ -717,7 +728,7 @@ struct Walker {
     }
 
     Shape readMesh(const SceneNode& n) {
-        checkChildren(n, {"Material", "Textures", "Transformations", "Faces"});
+        checkChildren(n, {"Material", "Textures", "Transformations", "Faces", "MotionBlur"});
         Shape s;
         std::string who = describe(n);
         s.id = intAttribute(n, "id", 0);
@@ -727,6 +738,7 @@ struct Walker {
         s.materialIndex = materialRef(n, *need(n, "Material"));
         if (auto t = n.child("Textures")) s.textureIndices = textureRefs(n, *t);
         s.transform = transformOf(n);
+        s.motion = motionOf(n);
         auto faces = need(n, "Faces");
         if (auto ply = faces->attribute("plyFile")) {
             std::string p = resolve(*ply);
@@ -769,7 +781,7 @@ struct Walker {
     }
 
     Shape readTriangle(const SceneNode& n) {
-        checkChildren(n, {"Material", "Textures", "Transformations", "Indices"});
+        checkChildren(n, {"Material", "Textures", "Transformations", "Indices", "MotionBlur"});
         Shape s;
         std::string who = describe(n);
         s.id = intAttribute(n, "id", 0);
@@ -778,6 +790,7 @@ struct Walker {
         s.materialIndex = materialRef(n, *need(n, "Material"));
         if (auto t = n.child("Textures")) s.textureIndices = textureRefs(n, *t);
         s.transform = transformOf(n);
+        s.motion = motionOf(n);
         auto in = need(n, "Indices");
         auto v = numbers(*in, 3);
         std::vector<int> corners(3);
@@ -811,8 +824,9 @@ struct Walker {
     }
 
     Shape readSphere(const SceneNode& n) {
-        checkChildren(n, {"Material", "Textures", "Transformations", "Center", "Radius"});
+        checkChildren(n, {"Material", "Textures", "Transformations", "Center", "Radius", "MotionBlur"});
         Shape s = analyticShape(n, ShapeType::Sphere);
+        s.motion = motionOf(n);
         std::string who = describe(n);
         s.center = vertexAt(n, "Center", who);
         auto rn = need(n, "Radius");
@@ -835,7 +849,7 @@ struct Walker {
     }
 
     Shape readInstance(const SceneNode& n, const std::map<int, MeshProto>& meshes) {
-        checkChildren(n, {"Material", "Textures", "Transformations"});
+        checkChildren(n, {"Material", "Textures", "Transformations", "MotionBlur"});
         std::string who = describe(n);
         if (!n.attribute("baseMeshId")) fail(n, who + " has no baseMeshId attribute");
         int baseId = intAttribute(n, "baseMeshId", 0);
@@ -852,6 +866,7 @@ struct Walker {
         if (auto t = n.child("Textures")) s.textureIndices = textureRefs(n, *t);
         Mat4 own = transformOf(n);
         s.transform = reset ? own : own * base.transform;
+        s.motion = motionOf(n);  // its own motion only: an instance of a moving mesh may stand still
         if (hasImageTexture(s.textureIndices) && scene.meshes[size_t(s.meshIndex)].uvs.empty())
             warnOnce(n.location() + ": " + who + " has an image texture but its mesh has no texture coordinates");
         return s;

@@ -93,9 +93,11 @@ typedef struct Bvh4Node {
     int4 count;
 } Bvh4Node;
 
-/* A world-space triangle. Vertex data for shading lives in TriangleShading at the same index. */
+/* A world-space triangle. Vertex data for shading lives in TriangleShading at the same index.
+ * v0.w, v1.w, v2.w: the x, y, z of its MotionBlur translation (0 when static; read only under
+ * CLRT_HAS_MOTION_BLUR): at shutter time t in [0, 1] the triangle is at v + t·motion. */
 typedef struct Triangle {
-    float4 v0, v1, v2;  /* world-space positions; w unused */
+    float4 v0, v1, v2;  /* world-space positions at time 0; w: motion (above) */
 } Triangle;
 
 typedef struct TriangleShading {
@@ -112,6 +114,7 @@ typedef struct Sphere {
     float4 centerRadius;     /* object space xyz, radius w */
     float4 worldToObject[3]; /* rows of the inverse transform (3x4 affine) */
     float4 objectToWorld[3]; /* rows of the transform */
+    float4 motion;           /* MotionBlur: world-space translation over the shutter [0, 1]; w unused */
     int material;
     int textureSet;
     int pad0, pad1;
@@ -237,7 +240,7 @@ typedef struct SceneParams {
 
 /* Ray and hit record of the wavefront. */
 typedef struct Ray {
-    float4 origin;         /* xyz; w = tMin (unused: origins are offset robustly) */
+    float4 origin;         /* xyz; w = shutter time in [0, 1) with CLRT_HAS_MOTION_BLUR, else 0 */
     float4 direction;      /* xyz; w = tMax */
 } Ray;
 
@@ -259,7 +262,7 @@ typedef struct PathState {
 /* A shadow ray with the radiance it carries if unoccluded. */
 typedef struct ShadowRay {
     float4 origin;         /* xyz; w = tMax */
-    float4 direction;      /* xyz */
+    float4 direction;      /* xyz; w = shutter time in [0, 1) with CLRT_HAS_MOTION_BLUR, else 0 */
     float4 contribution;   /* rgb, already multiplied by the path throughput */
 } ShadowRay;
 
@@ -281,9 +284,11 @@ typedef struct TonemapParams {
     float whiteL;          /* Photographic L_white (when hasWhite) */
     int hasWhite;          /* 1: burn-out white point; 0: L / (1 + L) */
     float saturation;
-    float invGamma;        /* 1 / gamma */
+    float invGamma;        /* 1 / gamma (when srgb is 0) */
     int truncate;          /* 1: floor to 8 bits (the course's); 0: round */
     uint numPixels;
+    int srgb;              /* 1: the sRGB transfer curve (<Gamma>sRGB</Gamma>) instead of v^invGamma */
+    int pad0, pad1, pad2;
 } TonemapParams;
 
 #ifndef __OPENCL_C_VERSION__

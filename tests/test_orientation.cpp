@@ -1,0 +1,89 @@
+// Triangle orientation conventions: a mesh (or triangle, or mesh instance) whose transformation
+// mirrors (det < 0) keeps the orientation of its object space, as in the course: its winding is
+// reversed when flattened, so the world-space geometric normal is the object-space one carried by the
+// inverse transpose (flatten level); and a triangle seen from behind is shaded at the right point
+// (the device's barycentrics of a back-facing hit), so both windings of a quad render alike.
+#include <catch.hpp>
+
+#include <cstring>
+
+#include "render/device_scene.h"
+#include "scene/scene_loader.h"
+#include "test_helpers.h"
+
+using namespace clrt;
+using namespace clrt::test;
+
+namespace {
+
+// A camera at the origin looking down −z, a point light at the camera, one material, and `objects`.
+std::string orientationScene(const std::string& transforms, const std::string& objects) {
+    return R"(<Scene><BackgroundColor>0 0 0</BackgroundColor>
+<Cameras><Camera id="1"><Position>0 0 0</Position><Gaze>0 0 -1</Gaze><Up>0 1 0</Up>
+<NearPlane>-1 1 -1 1</NearPlane><NearDistance>1</NearDistance><ImageResolution>16 16</ImageResolution>
+<ImageName>o.exr</ImageName></Camera></Cameras>
+<Lights><AmbientLight>5 5 5</AmbientLight><PointLight id="1"><Position>0 0 0</Position><Intensity>1000 1000 1000</Intensity></PointLight></Lights>
+<Materials><Material id="1"><AmbientReflectance>1 1 1</AmbientReflectance><DiffuseReflectance>1 1 1</DiffuseReflectance>
+<SpecularReflectance>0 0 0</SpecularReflectance><PhongExponent>1</PhongExponent></Material></Materials>
+<Transformations>)" + transforms + R"(</Transformations>
+<VertexData>-10 -10 -5  10 -10 -5  0 10 -5  0 0 1</VertexData>
+<Objects>)" + objects + "</Objects></Scene>";
+}
+
+Vec3 xyz(const dev::float4& v) { return Vec3(v.x, v.y, v.z); }
+Vec3 faceNormal(const dev::Triangle& t) { return normalize(cross(xyz(t.v1) - xyz(t.v0), xyz(t.v2) - xyz(t.v0))); }
+
+}  // namespace
+
+TEST_CASE("a mirroring transformation (det < 0) keeps the object-space orientation of triangles", "[orientation]") {
+    TempDir dir;
+    // Faces 1 2 3 face +z in object space; Scaling -1 1 1 mirrors x, which leaves +z as it is (the
+    // inverse transpose of diag(-1, 1, 1) maps +z to +z), while the world-space cross product of the
+    // mirrored edges would point to −z.
+    const std::string transforms = R"(<Scaling id="1">-1 1 1</Scaling><Scaling id="2">1 1 1</Scaling><Rotation id="1">90 0 1 0</Rotation>)";
+    const std::string objects = R"(
+<Mesh id="1"><Material>1</Material><Transformations>s1</Transformations><Faces>1 2 3</Faces></Mesh>
+<Triangle id="2"><Material>1</Material><Transformations>s1</Transformations><Indices>1 2 3</Indices></Triangle>
+<MeshInstance id="3" baseMeshId="4"><Transformations>s1</Transformations></MeshInstance>
+<Mesh id="4"><Material>1</Material><Transformations>s2</Transformations><Faces>1 2 3</Faces></Mesh>
+<Mesh id="5" shadingMode="smooth"><Material>1</Material><Transformations>s1 r1</Transformations><Faces>1 2 3</Faces></Mesh>)";
+    const std::string path = dir.file("mirror.xml");
+    writeFileBytes(path, orientationScene(transforms, objects));
+    Scene scene = loadScene(path);
+    DeviceScene ds = flattenScene(scene);
+    REQUIRE(ds.params.numTriangles == 5);
+    int plusZ = 0, plusX = 0;
+    for (int i = 0; i < 5; ++i) {
+        const Vec3 n = faceNormal(ds.triangles[size_t(i)]);
+        const Vec3 shading = normalize(xyz(ds.triangleShading[size_t(i)].n0));
+        INFO("triangle " << i << ": geometric normal " << n.x << " " << n.y << " " << n.z);
+        plusZ += length(n - Vec3(0, 0, 1)) < 1e-5f;
+        // Mesh 5: mirrored, then turned 90° about y: +z goes to +x. Its smooth (area-weighted)
+        // vertex normals agree with the geometric normal.
+        plusX += length(n - Vec3(1, 0, 0)) < 1e-5f;
+        CHECK(dot(shading, n) > 0.999f);
+    }
+    CHECK(plusZ == 4);  // the mirrored mesh, triangle and instance, and the unmirrored base mesh
+    CHECK(plusX == 1);
+}
+
+TEST_CASE("a triangle seen from behind is shaded where it was hit (both windings render alike)", "[orientation][render]") {
+    TempDir dir;
+    ImageRGB img[2];
+    for (int w = 0; w < 2; ++w) {
+        const std::string path = dir.file("wind" + std::to_string(w) + ".xml");
+        const std::string faces = w == 0 ? "1 2 3" : "1 3 2";  // facing the camera, facing away
+        writeFileBytes(path, orientationScene("", "<Mesh id=\"1\"><Material>1</Material><Faces>" + faces + "</Faces></Mesh>"));
+        Scene scene = loadScene(path);
+        img[w] = renderCamera(scene, scene.cameras.at(0));
+    }
+    REQUIRE(img[0].pixels.size() == img[1].pixels.size());
+    float worst = 0, brightest = 0;
+    for (size_t i = 0; i < img[0].pixels.size(); ++i) {
+        worst = std::max(worst, std::fabs(img[0].pixels[i] - img[1].pixels[i]));
+        brightest = std::max(brightest, img[0].pixels[i]);
+    }
+    INFO("max |front - back| = " << worst << ", brightest pixel " << brightest);
+    CHECK(brightest > 30.0f);  // lit: 1000 / 25 + 5 at the centre
+    CHECK(worst <= 1e-4f * brightest);
+}
