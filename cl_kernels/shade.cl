@@ -97,6 +97,7 @@ inline TangentFrame Surface_TangentFrame(Hit h, SurfaceHit s, const __global Tri
     }
     if (h.prim >= numTriangles + numSpheres) {
         makeBasis(planes[h.prim - numTriangles - numSpheres].normal.xyz, &f.dpdu, &f.dpdv);
+        f.objectSpaceBump = 0;
         return f;
     }
     const __global Sphere* sp = &spheres[h.prim - numTriangles];

@@ -2,8 +2,7 @@
 // cl_kernels/shading_frame.cl and textures.cl against the plain C++ references below (PoCL), and the
 // course's hw4 scenes (../shared/scenes/hw4) against their reference renders with the course's 8-bit
 // truncation: ≥ 40 dB for image textures, luminance mean and std within 2% for Perlin scenes (the
-// course's permutation table is not published). The scene that does not reach the bar yet is in the
-// hidden test "[hw4-gaps]" with the bar unchanged.
+// course's permutation table is not published).
 #include <catch.hpp>
 
 #include <array>
@@ -57,7 +56,7 @@ Vec3 normalFromMap(Vec3 c, Frame f, Vec3 n) {
     return normalize(t * (2 * c.x - 1) + b * (2 * c.y - 1) + n * (2 * c.z - 1));
 }
 
-// Object-space displacement: w = world->object linear part (rows), M = its inverse.
+// Triangles' object-space displacement: w = world->object linear part (rows), M = its inverse.
 Vec3 bumpPerturb(Vec3 nW, Frame f, float gu, float gv, float factor, const float w[3][4]) {
     Mat4 W;
     for (int r = 0; r < 3; ++r)
@@ -105,16 +104,18 @@ __kernel void frame_test(const __global float4* in, const __global float4* m, __
     if (i >= n) return;
     const __global float4* a = in + 8 * i;
     TangentFrame t = Frame_Triangle(a[0].xyz, a[1].xyz, a[2].xyz, a[3].xy, a[3].zw, a[4].xy);
-    out[8 * i] = (float4)(t.dpdu, 0.0f);
-    out[8 * i + 1] = (float4)(t.dpdv, 0.0f);
+    out[10 * i] = (float4)(t.dpdu, 0.0f);
+    out[10 * i + 1] = (float4)(t.dpdv, 0.0f);
     TangentFrame s = Frame_Sphere(normalize(a[5].xyz), a[5].w, m + 3 * i);
-    out[8 * i + 2] = (float4)(s.dpdu, 0.0f);
-    out[8 * i + 3] = (float4)(s.dpdv, 0.0f);
+    out[10 * i + 2] = (float4)(s.dpdu, 0.0f);
+    out[10 * i + 3] = (float4)(s.dpdv, 0.0f);
     float3 nT = normalize(cross(t.dpdv, t.dpdu));
-    out[8 * i + 4] = (float4)(Normal_FromMap(a[6].xyz, t, nT), 0.0f);
-    out[8 * i + 5] = (float4)(Bump_Perturb(nT, t, a[7].xy, a[7].z, m + 3 * i), 0.0f);
-    out[8 * i + 6] = (float4)(Perlin_Noise(a[0].xyz * 0.37f), 0.0f, 0.0f, 0.0f);
-    out[8 * i + 7] = (float4)(Bump_PerlinPerturb(nT, a[6].xyz - (float3)(0.5f), a[7].z), 0.0f);
+    out[10 * i + 4] = (float4)(Normal_FromMap(a[6].xyz, t, nT), 0.0f);
+    out[10 * i + 5] = (float4)(Bump_Perturb(nT, t, a[7].xy, a[7].z, m + 3 * i), 0.0f);
+    out[10 * i + 6] = (float4)(Perlin_Noise(a[0].xyz * 0.37f), 0.0f, 0.0f, 0.0f);
+    out[10 * i + 7] = (float4)(Bump_PerlinPerturb(nT, a[6].xyz - (float3)(0.5f), a[7].z), 0.0f);
+    float3 nS = normalize(cross(s.dpdv, s.dpdu));
+    out[10 * i + 8] = (float4)(Bump_Perturb(nS, s, a[7].xy, a[7].z, m + 3 * i), 0.0f);
 }
 __kernel void grad_test(const __global float4* texels, ImageInfo img, const __global float2* uv, __global float2* out, int n) {
     int i = get_global_id(0);
@@ -178,7 +179,7 @@ TEST_CASE("tangent frames, normal/bump perturbations and Perlin noise match the 
     const int n = 4000;
     std::mt19937 rng(5);
     std::uniform_real_distribution<float> sym(-1, 1), uni(0, 1);
-    std::vector<dev::float4> in(8 * size_t(n)), mats(3 * size_t(n)), out(8 * size_t(n));
+    std::vector<dev::float4> in(8 * size_t(n)), mats(3 * size_t(n)), out(10 * size_t(n));
     std::vector<std::array<float, 12>> m(n);
     for (int i = 0; i < n; ++i) {
         dev::float4* a = &in[8 * size_t(i)];
@@ -208,11 +209,11 @@ TEST_CASE("tangent frames, normal/bump perturbations and Perlin noise match the 
     k.setArg(0, inBuf); k.setArg(1, mBuf); k.setArg(2, outBuf); k.setArg(3, n);
     CL_CPP(dc.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(roundUp(n, 64)), cl::NDRange(64)));
     CL_CPP(dc.queue().enqueueReadBuffer(outBuf, CL_TRUE, 0, out.size() * sizeof(dev::float4), out.data()));
-    int triBad = 0, sphBad = 0, nmBad = 0, bumpBad = 0, noiseBad = 0, pbBad = 0, tested = 0;
+    int sphBumpBad = 0, triBad = 0, sphBad = 0, nmBad = 0, bumpBad = 0, noiseBad = 0, pbBad = 0, tested = 0;
     float worst[6] = {0, 0, 0, 0, 0, 0};
     for (int i = 0; i < n; ++i) {
         const dev::float4* a = &in[8 * size_t(i)];
-        const dev::float4* o = &out[8 * size_t(i)];
+        const dev::float4* o = &out[10 * size_t(i)];
         float mm[3][4];
         for (int r = 0; r < 3; ++r)
             for (int c = 0; c < 4; ++c) mm[r][c] = m[i][4 * r + c];
@@ -232,6 +233,11 @@ TEST_CASE("tangent frames, normal/bump perturbations and Perlin noise match the 
             Frame s = frameSphere(nObj, a[5].w, mm);
             if ((e = rel(v3(o[2]), s.dpdu)) > 2e-3f || rel(v3(o[3]), s.dpdv) > 2e-3f) ++sphBad;
             worst[1] = std::fmax(worst[1], e);
+            // spheres: displaced in world space along the unit world normal, turned to its side
+            Vec3 nS = normalize(cross(s.dpdv, s.dpdu));
+            Vec3 nb = normalize(cross(s.dpdv + nS * (a[7].z * a[7].y), s.dpdu + nS * (a[7].z * a[7].x)));
+            if (dot(nb, nS) < 0) nb = nb * -1.0f;
+            if (angleDeg(v3(o[8]), nb) > 0.05f) ++sphBumpBad;
         }
         if ((e = angleDeg(v3(o[4]), normalFromMap(v3(a[6]), t, nT))) > 0.05f) ++nmBad;
         worst[2] = std::fmax(worst[2], e);
@@ -249,6 +255,7 @@ TEST_CASE("tangent frames, normal/bump perturbations and Perlin noise match the 
     CHECK(tested > n / 2);
     CHECK(triBad == 0);
     CHECK(sphBad == 0);
+    CHECK(sphBumpBad == 0);
     CHECK(nmBad == 0);
     CHECK(bumpBad == 0);
     CHECK(noiseBad == 0);
@@ -302,7 +309,8 @@ TEST_CASE("Perlin noise: zero at lattice points, within [-1, 1], gradient by cen
 
 TEST_CASE("course hw4 image-texture scenes match their references at >= 40 dB", "[render][shared][hw4]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
-    for (const char* name : {"brickwall_with_normalmap", "cube_cushion", "cube_wall", "cube_wall_normal", "cube_waves",
+    // bump_mapping_transformed: 41.0 dB (floor 62 dB; its mirrored, stretched sphere is the weak part)
+    for (const char* name : {"brickwall_with_normalmap", "bump_mapping_transformed", "cube_cushion", "cube_wall", "cube_wall_normal", "cube_waves",
                              "sphere_nearest_bilinear", "sphere_nobump_bump", "sphere_nobump_justbump", "wood_box",
                              "wood_box_no_specular"})
         CHECK(floorPsnr(name) >= 40.0);
@@ -319,15 +327,6 @@ TEST_CASE("course hw4 Perlin scenes: luminance mean and std within 2% of the ref
         CHECK(std::fabs(a.mean - b.mean) <= 0.02 * b.mean);
         CHECK(std::fabs(a.stddev - b.stddev) <= 0.02 * b.stddev);
     }
-}
-
-// Not reached yet, the bar kept: bump_mapping_transformed at 34.0 dB. Its floor (scaled by −0.05 in
-// x, image bump with BumpFactor 30) matches at 62 dB below the sphere; the sphere (scaled by −2 in x,
-// BumpFactor 1) reaches 28 dB around it, its error growing toward the sides where the stretch is
-// largest: how the course bumps a non-uniformly scaled sphere is not found yet.
-TEST_CASE("course hw4 scenes not matched yet", "[.][hw4-gaps][shared]") {
-    if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
-    CHECK(floorPsnr("bump_mapping_transformed") >= 40.0);
 }
 
 namespace {
