@@ -45,14 +45,14 @@
 #define CLRT_KERNEL_shade_hits(P)                                                                  \
     P(VAL, int, count) P(VAL, SceneParams, scene) P(VAL, CameraParams, cam) P(IN, PathState, paths) \
     P(IN, Ray, rays) P(IN, Hit, hits) CLRT_PARAMS_SURFACES(P) CLRT_PARAMS_MATERIALS(P)              \
-    CLRT_PARAMS_IMAGES(P) P(BUF, ShadingPoint, points) P(BUF, float4, pathRadiance)                  \
+    CLRT_PARAMS_IMAGES(P) P(IN, Light, lights) P(BUF, ShadingPoint, points) P(BUF, float4, pathRadiance) \
     P(BUF, PathState, nextPaths) P(BUF, Ray, nextRays) P(BUF, int, childValid)
 
 #define CLRT_KERNEL_sample_lights(P)                                                               \
     P(VAL, int, count) P(VAL, int, lightBegin) P(VAL, int, lightEnd) P(VAL, int, lightSlots)       \
     P(VAL, SceneParams, scene) P(IN, PathState, paths) P(IN, ShadingPoint, points) P(IN, Material, materials) \
     P(IN, Light, lights) CLRT_PARAMS_IMAGES(P) \
-    P(IN, float, envDist) P(BUF, ShadowRay, shadows)
+    P(IN, float, envDist) P(IN, float4, lightData) P(BUF, ShadowRay, shadows)
 
 #define CLRT_KERNEL_gather_shadows(P)                                                              \
     P(VAL, int, count) P(VAL, int, chunk) P(IN, ShadowRay, shadows) P(BUF, float4, pathRadiance)
