@@ -92,7 +92,6 @@ double perlinNoise(double x, double y, double z) {
     return sum;
 }
 
-dev::float4 f4(Vec3 v) { return {v.x, v.y, v.z, 0}; }
 Vec3 v3(const dev::float4& v) { return {v.x, v.y, v.z}; }
 float angleDeg(Vec3 a, Vec3 b) {
     return std::acos(std::fmax(-1.0f, std::fmin(1.0f, dot(normalize(a), normalize(b))))) * 180.0f / kPi;
