@@ -29,7 +29,7 @@
     S(Material) M(Material, ambient) M(Material, diffuse) M(Material, specular)                   \
         M(Material, mirror) M(Material, absorption) M(Material, phongExponent)                    \
         M(Material, refractionIndex) M(Material, absorptionIndex) M(Material, roughness)          \
-        M(Material, kind) M(Material, pad0) M(Material, pad1) M(Material, pad2)                   \
+        M(Material, kind) M(Material, brdf) M(Material, brdfExponent) M(Material, brdfFlags)                   \
     S(TextureMap) M(TextureMap, blackColor) M(TextureMap, whiteColor) M(TextureMap, kind)         \
         M(TextureMap, decal) M(TextureMap, interpolation) M(TextureMap, image)                    \
         M(TextureMap, normalizer) M(TextureMap, bumpFactor) M(TextureMap, scale)                  \
@@ -57,6 +57,7 @@
     S(ShadowRay) M(ShadowRay, origin) M(ShadowRay, direction) M(ShadowRay, contribution)        \
     S(ShadingPoint) M(ShadingPoint, position) M(ShadingPoint, normal)                             \
         M(ShadingPoint, geomNormal) M(ShadingPoint, wo) M(ShadingPoint, kd) M(ShadingPoint, ks)    \
+        M(ShadingPoint, material) M(ShadingPoint, pad0) M(ShadingPoint, pad1) M(ShadingPoint, pad2) \
     S(TonemapParams) M(TonemapParams, op) M(TonemapParams, scale) M(TonemapParams, whiteL)        \
         M(TonemapParams, hasWhite) M(TonemapParams, saturation) M(TonemapParams, invGamma)        \
         M(TonemapParams, truncate) M(TonemapParams, numPixels)                                  \

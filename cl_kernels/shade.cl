@@ -2,7 +2,8 @@
  *   shade_hits:      per path, turns a hit into a ShadingPoint (textures applied), adds the terms
  *                    that need no shadow ray (ambient, background on a miss), and writes the
  *                    reflection/refraction children to slots 2i and 2i+1 of the next queue;
- *   sample_lights:   per path and light of a chunk, one shadow ray carrying its Blinn-Phong term
+ *   sample_lights:   per path and light of a chunk, one shadow ray carrying its reflected light
+ *                    (Material_EvalDirect: the classic Blinn-Phong terms, or the material's BRDF)
  *                    (environment lights: one sampled direction, the shadow ray going to infinity);
  *   gather_shadows:  adds the unoccluded shadow contributions of each path in light order;
  *   accumulate:      adds each pixel's paths to the float image (paths of one pixel are adjacent);
@@ -17,6 +18,7 @@
 #include "intersect.cl"
 #include "textures.cl"
 #include "lights.cl"
+#include "brdf.cl"
 
 typedef struct {
     float3 p, ng, ns, dir;
@@ -169,6 +171,8 @@ __kernel void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
     childValid[2 * i + 1] = 0;
     ShadingPoint sp;  /* every field set: misses and dielectric interiors store it whole (oclgrind) */
     sp.position = sp.normal = sp.geomNormal = sp.wo = sp.kd = sp.ks = (float4)(0.0f);
+    sp.material = 0;
+    sp.pad0 = sp.pad1 = sp.pad2 = 0;
     if (h.prim == CLRT_INVALID) {
         points[i] = sp;
         pathRadiance[i] = (float4)(throughput * Miss_Radiance(scene, textures, images, texels, cam, path, ray.direction.xyz), 0.0f);
@@ -224,6 +228,7 @@ __kernel void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
         sp.wo = (float4)(wo, 0.0f);
         sp.kd = (float4)(kd, 0.0f);
         sp.ks = (float4)(ks, m.phongExponent);
+        sp.material = s.material;
     }
     points[i] = sp;
     pathRadiance[i] = (float4)(throughput * radiance, 0.0f);
@@ -284,6 +289,23 @@ __kernel void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
 #endif
 }
 
+/* The light reflected towards sp.wo per unit of what Light_Sample returns from direction wi
+ * (cosTheta = n·wi > 0): f(wo, wi)·cosθ. Materials without a BRDF keep the classic Blinn-Phong
+ * terms kd·cosθ + ks·cos^p αh (bit for bit what sample_lights computed before BRDFs). */
+inline float3 Material_EvalDirect(ShadingPoint sp, const __global Material* materials, float3 wi, float cosTheta) {
+#ifdef CLRT_HAS_BRDFS
+    const __global Material* m = &materials[sp.material];
+    if (m->brdf != CLRT_INVALID) {
+        BrdfParams b;
+        Brdf_FromMaterial(&b, m, sp.kd.xyz, sp.ks.xyz);
+        return Brdf_Eval(&b, sp.normal.xyz, sp.wo.xyz, wi) * cosTheta;
+    }
+#endif
+    float3 hv = normalize(wi + sp.wo.xyz);
+    float spec = Math_PowNonNegative(fmax(0.0f, dot(sp.normal.xyz, hv)), sp.ks.w);
+    return sp.kd.xyz * cosTheta + sp.ks.xyz * spec;
+}
+
 /* One shadow ray per (path, light in [lightBegin, lightEnd)), at slot i·chunk + (l − lightBegin). */
 __kernel void sample_lights(CLRT_KERNEL_PARAMS(sample_lights)) {
     int i = get_global_id(0);
@@ -306,9 +328,7 @@ __kernel void sample_lights(CLRT_KERNEL_PARAMS(sample_lights)) {
             float3 e = Light_Sample(&lights[l], p, n, u, images, texels, envDist, &wi, &dist);
             float cosTheta = dot(n, wi);
             if (cosTheta > 0.0f && dot(ng, wi) > 0.0f && maxComponent(e) > 0.0f) {
-                float3 hv = normalize(wi + sp.wo.xyz);
-                float spec = Math_PowNonNegative(fmax(0.0f, dot(n, hv)), sp.ks.w);
-                float3 c = path.throughput.xyz * (sp.kd.xyz * cosTheta + sp.ks.xyz * spec) * e;
+                float3 c = path.throughput.xyz * Material_EvalDirect(sp, materials, wi, cosTheta) * e;
                 float3 org = Ray_OffsetOrigin(p, ng);
                 float tMax = isinf(dist) ? INFINITY : length(p + dist * wi - org) * (1.0f - 1e-5f);
                 sr.origin = (float4)(org, tMax);

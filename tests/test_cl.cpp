@@ -270,7 +270,7 @@ TEST_CASE("kernel sources: each file brings in what it #includes, once, before i
     auto render = loadKernelSources(KernelProgram::Render);
     CHECK(sourceNames(render) == std::vector<std::string>{"device_types.h", "kernel_params.h", "common.cl",
                                                           "intersect.cl", "camera.cl", "textures.cl", "envmap.cl",
-                                                          "lights.cl", "shade.cl"});
+                                                          "lights.cl", "brdf.cl", "shade.cl"});
     CHECK(sourceNames(loadKernelSources(KernelProgram::Tonemap)) ==
           std::vector<std::string>{"device_types.h", "kernel_params.h", "tonemap.cl"});
     CHECK(sourceNames(loadKernelSources(KernelProgram::Intersect)) ==
@@ -487,12 +487,13 @@ TEST_CASE("KernelArgs refuses a wrong binding before any launch", "[cl]") {
     CHECK_THROWS_AS(KernelArgs(prog, "no_such_kernel"), Error);
 }
 
-TEST_CASE("type tables: every light and material row has its device case under its feature flag", "[cl]") {
+TEST_CASE("type tables: every light, material and BRDF row has its device case under its feature flag", "[cl]") {
     // README "Adding a light or a material": a table row in device_types.h, a `case` in the device
     // dispatcher inside `#ifdef` the row's flag. Checked on the sources: a row without device code
     // (or device code under another flag) fails here, not as a silently black light.
     const std::string lights = clrt::test::readFileBytes(std::string(CLRT_SOURCE_DIR) + "/cl_kernels/lights.cl");
     const std::string shade = clrt::test::readFileBytes(std::string(CLRT_SOURCE_DIR) + "/cl_kernels/shade.cl");
+    const std::string brdf = clrt::test::readFileBytes(std::string(CLRT_SOURCE_DIR) + "/cl_kernels/brdf.cl");
     // The flag guarding `case K:` is the nearest #ifdef before it, closed by an #endif after it.
     auto guardOf = [](const std::string& text, const std::string& constant) -> std::string {
         size_t at = text.find("case " + constant + ":");
@@ -512,8 +513,15 @@ TEST_CASE("type tables: every light and material row has its device case under i
         // Materials that spawn children are those shade_hits writes children for.
         if (row.bounces) CHECK(guardOf(shade, row.constant) != "(no case)");
     }
+    // BRDFs: the first `case` of each row is Brdf_Eval's, under the row's flag.
+    for (const auto& row : brdfTypes()) {
+        INFO("BRDF " << row.constant);
+        CHECK(guardOf(brdf, row.constant) == row.flag);
+    }
     // Every flag a scene can ask for is one FeatureSet::all() sets.
     std::vector<std::string> all = FeatureSet::all().defines();
     for (const auto& row : lightTypes())
+        CHECK(std::find(all.begin(), all.end(), std::string("-D") + row.flag + "=1") != all.end());
+    for (const auto& row : brdfTypes())
         CHECK(std::find(all.begin(), all.end(), std::string("-D") + row.flag + "=1") != all.end());
 }

@@ -27,6 +27,8 @@ std::vector<std::string> FeatureSet::defines() const {
     };
     for (const auto& row : lightTypes()) add(has(row.kind), row.flag);
     for (const auto& row : materialTypes()) add(has(row.kind), row.flag);
+    for (const auto& row : brdfTypes()) add(has(row.kind), row.flag);
+    add(brdfKinds != 0, "CLRT_HAS_BRDFS");  // Material_EvalDirect reads the material's BRDF
     add(textures, "CLRT_HAS_TEXTURES");
     add(spheres, "CLRT_HAS_SPHERES");
     add(primRefsIdentity, "CLRT_PRIMREFS_IDENTITY");

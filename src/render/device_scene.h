@@ -14,10 +14,11 @@
 namespace clrt {
 
 // Which types and features a scene uses: its program is compiled with the matching -D flags only.
-// The flags of lights and materials come from their tables (src/shared/type_tables.h).
+// The flags of lights, materials and BRDFs come from their tables (src/shared/type_tables.h).
 struct FeatureSet {
     uint32_t lightKinds = 0;     // bit k set: the scene has a light of dev::LightKind k
     uint32_t materialKinds = 0;  // bit k set: the scene has a material of dev::MaterialKind k
+    uint32_t brdfKinds = 0;      // bit k set: a material uses a BRDF of dev::BrdfKind k
     bool textures = false;
     bool spheres = false;
     bool primRefsIdentity = false;  // primRefs[i] == i (triangles only, stored in leaf order)
@@ -25,6 +26,8 @@ struct FeatureSet {
     int bvhStack = 0;  // traversal stack entries the scene's BVH needs (0: the header's default)
     void add(dev::LightKind k) { lightKinds |= 1u << k; }
     void add(dev::MaterialKind k) { materialKinds |= 1u << k; }
+    void add(dev::BrdfKind k) { brdfKinds |= 1u << k; }
+    bool has(dev::BrdfKind k) const { return (brdfKinds >> k) & 1u; }
     bool has(dev::LightKind k) const { return (lightKinds >> k) & 1u; }
     bool has(dev::MaterialKind k) const { return (materialKinds >> k) & 1u; }
     bool bounces() const;  // a material that spawns reflection/refraction children
@@ -32,7 +35,7 @@ struct FeatureSet {
     // Every feature on: the unspecialised program (clrt render --all-features).
     static FeatureSet all() {
         FeatureSet f;
-        f.lightKinds = f.materialKinds = ~0u;
+        f.lightKinds = f.materialKinds = f.brdfKinds = ~0u;
         f.textures = f.spheres = f.motionBlur = true;
         return f;
     }

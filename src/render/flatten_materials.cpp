@@ -1,7 +1,20 @@
-// flatten_materials.cpp — scene materials -> dev::Material (see flatten.h).
+// flatten_materials.cpp — scene materials -> dev::Material (see flatten.h), with the parameters of
+// the BRDF each names (Scene::brdfs, from <BRDFs>) copied in.
 #include "render/flatten.h"
 
 namespace clrt {
+
+// The BRDF a material names (Material BRDF="id"): its kind, exponent and flags, copied into the
+// material; CLRT_INVALID keeps the classic Blinn-Phong shading.
+static void flattenBrdf(const Scene& scene, const Material& m, dev::Material& d, FeatureSet& features) {
+    d.brdf = CLRT_INVALID;
+    if (m.brdf < 0) return;
+    const Brdf& b = scene.brdfs.at(size_t(m.brdf));
+    d.brdf = b.type;
+    d.brdfExponent = b.exponent;
+    d.brdfFlags = (b.normalized ? CLRT_BRDF_NORMALIZED : 0) | (b.kdFresnel ? CLRT_BRDF_KD_FRESNEL : 0);
+    features.add(b.type);
+}
 
 void flattenMaterials(const Scene& scene, DeviceScene& ds) {
     for (const Material& m : scene.materials) {
@@ -16,10 +29,15 @@ void flattenMaterials(const Scene& scene, DeviceScene& ds) {
         d.absorptionIndex = m.absorptionIndex;
         d.roughness = m.roughness;
         d.kind = m.type;
+        flattenBrdf(scene, m, d, ds.features);
         ds.materials.push_back(d);
         ds.features.add(m.type);
     }
-    if (ds.materials.empty()) ds.materials.push_back(dev::Material{});
+    if (ds.materials.empty()) {
+        dev::Material d{};
+        d.brdf = CLRT_INVALID;
+        ds.materials.push_back(d);
+    }
 }
 
 }  // namespace clrt

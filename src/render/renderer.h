@@ -44,6 +44,8 @@ struct RenderSettings {
     uint32_t seed = 0;
     size_t maxBatchPixels = 1u << 18;  // camera paths per batch (pixels x samples of each)
     int splitDepthOverride = -1;       // >= 0: force the dielectric split depth
+    bool stratified = true;            // false: independent uniform jitter per sample (strata 1x1),
+                                       // the noise of renderers that jitter so (tests/test_brdf.cpp)
     const std::atomic<bool>* stop = nullptr;  // set (from any thread): end after the current sample pass
 };
 

@@ -55,6 +55,16 @@ struct Material {
     float absorptionIndex = 0;  // conductor k
     Vec3 absorptionCoefficient; // dielectric Beer's law, per unit distance
     float roughness = 0;
+    int brdf = -1;              // index into Scene::brdfs (BRDF="id"), -1: classic Blinn-Phong shading
+};
+
+// A <BRDFs> entry (course hw6): the reflection model a material names with BRDF="id".
+struct Brdf {
+    int id = 0;
+    dev::BrdfKind type = dev::BRDF_ORIGINAL_BLINN_PHONG;
+    float exponent = 1;
+    bool normalized = false;    // Modified(Blinn)Phong normalized="true"
+    bool kdFresnel = false;     // TorranceSparrow kdfresnel="true": diffuse times (1 - F)
 };
 
 struct Texture {
@@ -122,6 +132,7 @@ struct Scene {
     std::vector<Camera> cameras;
     std::vector<Light> lights;     // all but ambient
     std::vector<Material> materials;
+    std::vector<Brdf> brdfs;
     std::vector<std::string> imagePaths;  // absolute or relative to the working dir, resolved by the loader
     std::vector<std::string> plyPaths;    // every PLY file read, resolved as imagePaths (outputs must not overwrite inputs)
     std::vector<Texture> textures;

@@ -6,7 +6,9 @@
 //          NearDistance FovY ImageResolution ImageName NumSamples FocusDistance ApertureSize Tonemap
 //          (TMO TMOOptions Saturation Gamma Extension)
 //   Lights: AmbientLight PointLight AreaLight DirectionalLight SpotLight SphericalDirectionalLight
-//   Material (type, degamma): Ambient/Diffuse/Specular/MirrorReflectance PhongExponent RefractionIndex
+//   BRDFs (hw6): OriginalPhong OriginalBlinnPhong ModifiedPhong ModifiedBlinnPhong (normalized)
+//          TorranceSparrow (kdfresnel), each with id and Exponent
+//   Material (type, degamma, BRDF): Ambient/Diffuse/Specular/MirrorReflectance PhongExponent RefractionIndex
 //          AbsorptionCoefficient AbsorptionIndex Roughness
 //   Transformations: Translation Scaling Rotation Composite
 //   Textures: Images/Image, TextureMap (type, degamma) ImageId Interpolation DecalMode Normalizer
@@ -197,7 +199,7 @@ struct Walker {
     TransformTable transforms;
     std::vector<Vec3> vertices;
     std::vector<Vec2> texcoords;
-    std::map<int, int> materialIds, imageIds, textureIds;
+    std::map<int, int> materialIds, imageIds, textureIds, brdfIds;
     std::set<std::string> warnedUnknown;
     std::unordered_map<std::string, int> plyMeshes;  // resolved ply path -> Scene::meshes index
 
@@ -227,7 +229,7 @@ struct Walker {
     void run(const SceneNode& root) {
         checkChildren(root, {"BackgroundColor", "ShadowRayEpsilon", "IntersectionTestEpsilon", "MaxRecursionDepth",
                              "ZeroBasedIndexing", "Cameras", "Lights", "Materials", "Transformations",
-                             "VertexData", "TexCoordData", "Textures", "Objects"});
+                             "VertexData", "TexCoordData", "Textures", "Objects", "BRDFs"});
         if (auto c = root.child("BackgroundColor")) scene.backgroundColor = vec3(*c);
         // Read (a malformed value is still an error) but not used: ray origins are offset robustly
         // (cl_kernels/common.cl, Ray_OffsetOrigin) and the intersection tests need no epsilon.
@@ -242,6 +244,7 @@ struct Walker {
         for (auto& t : root.children("Transformations")) readTransformations(*t);
         for (auto& v : root.children("VertexData")) readVertexData(*v);
         for (auto& v : root.children("TexCoordData")) readTexCoordData(*v);
+        for (auto& b : root.children("BRDFs")) readBrdfs(*b);
         for (auto& m : root.children("Materials")) readMaterials(*m);
         for (auto& t : root.children("Textures")) readTextures(*t);
         for (auto& c : root.children("Cameras")) readCameras(*c);
@@ -323,6 +326,27 @@ struct Walker {
     }
 
     // ---- Materials ---------------------------------------------------------------------------
+    // ---- BRDFs (course hw6): one element per BRDF, named by the rows of CLRT_BRDF_TABLE ------------
+    void readBrdfs(const SceneNode& n) {
+        for (auto& c : n.children()) readBrdf(*c);
+    }
+    void readBrdf(const SceneNode& n) {
+        Brdf b;
+        if (!lookupType(brdfTypes(), n.name(), b.type))
+            fail(n, "unknown BRDF <" + n.name() + "> in <BRDFs> (expected " + typeNames(brdfTypes()) + ")");
+        checkChildren(n, {"Exponent"});
+        b.id = requiredId(n);
+        if (auto c = n.child("Exponent")) {
+            b.exponent = number(*c);
+            if (!(b.exponent >= 0)) fail(*c, describe(n) + ": <Exponent> must not be negative");
+        }
+        if (auto a = n.attribute("normalized")) b.normalized = boolean(n, *a, describe(n) + ": normalized");
+        if (auto a = n.attribute("kdfresnel")) b.kdFresnel = boolean(n, *a, describe(n) + ": kdfresnel");
+        if (!brdfIds.emplace(b.id, int(scene.brdfs.size())).second)
+            fail(n, "duplicate BRDF id " + std::to_string(b.id));
+        scene.brdfs.push_back(b);
+    }
+
     void readMaterials(const SceneNode& n) {
         checkChildren(n, {"Material"});
         for (auto& c : n.children("Material")) readMaterial(*c);
@@ -361,6 +385,12 @@ struct Walker {
             if (v.size() == 1) m.absorptionCoefficient = Vec3(float(v[0]));
             else if (v.size() == 3) m.absorptionCoefficient = Vec3(float(v[0]), float(v[1]), float(v[2]));
             else fail(*c, "<AbsorptionCoefficient> has " + std::to_string(v.size()) + " values, expected 1 or 3");
+        }
+        if (n.attribute("BRDF")) {
+            int id = intAttribute(n, "BRDF", 0);
+            auto it = brdfIds.find(id);
+            if (it == brdfIds.end()) fail(n, describe(n) + ": BRDF " + std::to_string(id) + " is not defined in <BRDFs>");
+            m.brdf = it->second;
         }
         if (!materialIds.emplace(m.id, int(scene.materials.size())).second)
             fail(n, "duplicate Material id " + std::to_string(m.id));

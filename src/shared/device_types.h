@@ -25,6 +25,7 @@ struct alignas(8) float2 { float x, y; };
  *   lights     L(KIND, element name in scene files, kernel feature flag)
  *   materials  M(KIND, type= name in scene files, kernel feature flag or "" (always compiled),
  *                spawns reflection/refraction children 1/0)
+ *   BRDFs      B(KIND, element name inside <BRDFs>, kernel feature flag) (cl_kernels/brdf.cl)
  * A scene that uses a type gets -D<flag>=1 in its program (FeatureSet, src/render/device_scene.h);
  * the parser looks names up here (src/shared/type_tables.h). Values are the row order. */
 #define CLRT_LIGHT_TABLE(L)                                                                        \
@@ -38,6 +39,14 @@ struct alignas(8) float2 { float x, y; };
     M(MATERIAL_MIRROR, "mirror", "CLRT_HAS_MIRROR", 1)                                             \
     M(MATERIAL_DIELECTRIC, "dielectric", "CLRT_HAS_DIELECTRIC", 1)                                 \
     M(MATERIAL_CONDUCTOR, "conductor", "CLRT_HAS_CONDUCTOR", 1)
+/* The course's hw6 BRDFs (Material BRDF="id"); a material without one keeps the classic Blinn-Phong
+ * shading of sample_lights. */
+#define CLRT_BRDF_TABLE(B)                                                                         \
+    B(BRDF_ORIGINAL_PHONG, "OriginalPhong", "CLRT_HAS_BRDF_ORIGINAL_PHONG")                        \
+    B(BRDF_ORIGINAL_BLINN_PHONG, "OriginalBlinnPhong", "CLRT_HAS_BRDF_ORIGINAL_BLINN_PHONG")       \
+    B(BRDF_MODIFIED_PHONG, "ModifiedPhong", "CLRT_HAS_BRDF_MODIFIED_PHONG")                        \
+    B(BRDF_MODIFIED_BLINN_PHONG, "ModifiedBlinnPhong", "CLRT_HAS_BRDF_MODIFIED_BLINN_PHONG")       \
+    B(BRDF_TORRANCE_SPARROW, "TorranceSparrow", "CLRT_HAS_BRDF_TORRANCE_SPARROW")
 /* The other enums: N(KIND, name in scene files / on the command line). */
 #define CLRT_ENV_MAPPING_TABLE(N) N(ENV_LATLONG, "latlong") N(ENV_PROBE, "probe")
 #define CLRT_ENV_SAMPLER_TABLE(N)                                                                  \
@@ -56,6 +65,7 @@ struct alignas(8) float2 { float x, y; };
 #define CLRT_ENUM_CONSTANT_(KIND, ...) KIND,
 enum LightKind { CLRT_LIGHT_TABLE(CLRT_ENUM_CONSTANT_) };
 enum MaterialKind { CLRT_MATERIAL_TABLE(CLRT_ENUM_CONSTANT_) };
+enum BrdfKind { CLRT_BRDF_TABLE(CLRT_ENUM_CONSTANT_) };
 enum EnvMappingKind { CLRT_ENV_MAPPING_TABLE(CLRT_ENUM_CONSTANT_) };
 enum EnvSamplerKind { CLRT_ENV_SAMPLER_TABLE(CLRT_ENUM_CONSTANT_) };
 enum TextureKind { CLRT_TEXTURE_TABLE(CLRT_ENUM_CONSTANT_) };
@@ -145,8 +155,14 @@ typedef struct Material {
     float absorptionIndex; /* conductor k */
     float roughness;
     int kind;           /* MaterialKind */
-    int pad0, pad1, pad2;
+    int brdf;           /* BrdfKind, or CLRT_INVALID: the classic Blinn-Phong terms */
+    float brdfExponent; /* the BRDF's Exponent (Torrance-Sparrow: of the distribution) */
+    int brdfFlags;      /* CLRT_BRDF_NORMALIZED | CLRT_BRDF_KD_FRESNEL */
 } Material;
+
+/* Material.brdfFlags */
+#define CLRT_BRDF_NORMALIZED 1
+#define CLRT_BRDF_KD_FRESNEL 2
 
 typedef struct TextureMap {
     float4 blackColor;
@@ -258,6 +274,8 @@ typedef struct ShadingPoint {
     float4 wo;             /* unit direction towards the previous vertex */
     float4 kd;             /* diffuse reflectance after textures */
     float4 ks;             /* specular reflectance after textures; w = Phong exponent */
+    int material;          /* index into materials (its BRDF, if any, shades the direct light) */
+    int pad0, pad1, pad2;
 } ShadingPoint;
 
 /* Tone mapping (cl_kernels/tonemap.cl): what the per-pixel mapping needs, computed by the host from

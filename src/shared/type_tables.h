@@ -1,5 +1,5 @@
 // type_tables.h — the host's view of the enum tables of device_types.h: each enum's names (scene
-// files, command line), and for lights and materials the kernel feature flag and whether the type
+// files, command line), and for lights, materials and BRDFs the kernel feature flag and whether the type
 // spawns child rays. The parser (src/scene/scene_walker.cpp), the command line, the flattener and
 // FeatureSet (src/render/) all read these; nothing else lists a type's name or flag.
 #pragma once
@@ -14,7 +14,7 @@ template <class Kind> struct TypeRow {
     Kind kind;
     const char* constant;    // the enum constant's name, e.g. "LIGHT_POINT"
     const char* name;        // in scene files / on the command line
-    const char* flag = "";   // lights, materials: kernel feature flag, "" if always compiled
+    const char* flag = "";   // lights, materials, BRDFs: kernel feature flag, "" if always compiled
     bool bounces = false;    // materials: spawns reflection/refraction children
 };
 template <class Kind> using TypeTable = std::vector<TypeRow<Kind>>;
@@ -28,6 +28,10 @@ inline const TypeTable<dev::LightKind>& lightTypes() {
 }
 inline const TypeTable<dev::MaterialKind>& materialTypes() {
     static const TypeTable<dev::MaterialKind> t = {CLRT_MATERIAL_TABLE(CLRT_TYPE_ROW_M_)};
+    return t;
+}
+inline const TypeTable<dev::BrdfKind>& brdfTypes() {
+    static const TypeTable<dev::BrdfKind> t = {CLRT_BRDF_TABLE(CLRT_TYPE_ROW_L_)};
     return t;
 }
 inline const TypeTable<dev::EnvMappingKind>& envMappings() {
