@@ -1,0 +1,153 @@
+// Path tracing (issue 16, cl_kernels/path.cl): <Renderer>/<RendererParams> parsing and errors, the
+// CLRT_HAS_PATH_TRACING feature flag, and furnaces: scenes whose radiance is known in closed form,
+// rendered under every option set (uniform / importance sampling, next-event estimation, Russian
+// roulette, MIS). Sizes are reduced (32×32 at 64 spp); the tolerances are ≥ 4 standard deviations of
+// the image mean at that size.
+#include <catch.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "image/image.h"
+#include "render/device_scene.h"
+#include "render/renderer.h"
+#include "scene/scene_loader.h"
+#include "test_helpers.h"
+#include "util/error.h"
+
+using namespace clrt;
+using namespace clrt::test;
+
+namespace {
+
+std::string writeText(const std::string& path, const std::string& text) {
+    std::ofstream(path, std::ios::binary) << text;
+    return path;
+}
+
+// One camera with the given Renderer children (verbatim XML), a point light and a sphere.
+std::string rendererScene(const std::string& rendererXml) {
+    return "<Scene><Cameras><Camera id=\"1\"><Position>0 0 5</Position><Gaze>0 0 -1</Gaze><Up>0 1 0</Up>"
+           "<NearPlane>-1 1 -1 1</NearPlane><NearDistance>1</NearDistance><ImageResolution>8 8</ImageResolution>"
+           "<ImageName>o.png</ImageName>" +
+           rendererXml +
+           "</Camera></Cameras>"
+           "<Lights><PointLight id=\"1\"><Position>0 0 5</Position><Intensity>10 10 10</Intensity></PointLight></Lights>"
+           "<Materials><Material id=\"1\"><DiffuseReflectance>0.5 0.5 0.5</DiffuseReflectance></Material></Materials>"
+           "<VertexData>0 0 0</VertexData><Objects><Sphere id=\"1\"><Material>1</Material><Center>1</Center>"
+           "<Radius>1</Radius></Sphere></Objects></Scene>";
+}
+
+std::string loadError(const std::string& path) {
+    try {
+        loadScene(path);
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "(no error)";
+}
+
+double imageMean(const ImageRGB& img, int c) {
+    double s = 0;
+    for (size_t i = c; i < img.pixels.size(); i += 3) s += img.pixels[i];
+    return s / double(img.pixels.size() / 3);
+}
+
+}  // namespace
+
+TEST_CASE("Path tracing: <Renderer> and <RendererParams> set the camera's path mode", "[path][scene]") {
+    TempDir tmp;
+    auto mode = [&](const std::string& xml) {
+        return loadScene(writeText(tmp.file("a.xml"), rendererScene(xml))).cameras.at(0).pathMode;
+    };
+    CHECK(mode("") == 0);
+    CHECK(mode("<Renderer>PathTracing</Renderer>") == CLRT_PATH_ON);
+    CHECK(mode("<Renderer>PathTracing</Renderer><RendererParams></RendererParams>") == CLRT_PATH_ON);
+    CHECK(mode("<Renderer>PathTracing</Renderer><RendererParams>NextEventEstimation ImportanceSampling "
+               "RussianRoulette</RendererParams>") ==
+          (CLRT_PATH_ON | CLRT_PATH_NEE | CLRT_PATH_IMPORTANCE | CLRT_PATH_RR));
+    CHECK(mode("<Renderer>PathTracing</Renderer><RendererParams>MultipleImportanceSampling</RendererParams>") ==
+          (CLRT_PATH_ON | CLRT_PATH_MIS));
+    if (haveShared()) {  // the course's eight cameras, in file order (hw6 README)
+        Scene s = loadScene(sharedDir() + "/scenes/hw6/cornellbox_jaroslav_path_diffuse.xml");
+        const int N = CLRT_PATH_NEE, I = CLRT_PATH_IMPORTANCE, R = CLRT_PATH_RR;
+        const int expected[8] = {N, N | R, N | I, N | I | R, I, R, I, I | R};
+        REQUIRE(s.cameras.size() == 8);
+        for (int k = 0; k < 8; ++k) CHECK(s.cameras[k].pathMode == (CLRT_PATH_ON | expected[k]));
+    }
+}
+
+TEST_CASE("Path tracing: bad <Renderer> input is one error naming file, line and column", "[path][scene]") {
+    TempDir tmp;
+    std::string e = loadError(writeText(tmp.file("r.xml"), rendererScene("<Renderer>RayTracing</Renderer>")));
+    CHECK(e.find("r.xml:1:") != std::string::npos);
+    CHECK(e.find("unknown renderer 'RayTracing' (PathTracing)") != std::string::npos);
+    e = loadError(writeText(tmp.file("p.xml"), rendererScene("<Renderer>PathTracing</Renderer>"
+                                                              "<RendererParams>NEE</RendererParams>")));
+    CHECK(e.find("p.xml:1:") != std::string::npos);
+    CHECK(e.find("unknown RendererParams option 'NEE'") != std::string::npos);
+    e = loadError(writeText(tmp.file("n.xml"), rendererScene("<RendererParams>RussianRoulette</RendererParams>")));
+    CHECK(e.find("n.xml:1:") != std::string::npos);
+    CHECK(e.find("<RendererParams> needs <Renderer>PathTracing</Renderer>") != std::string::npos);
+    CHECK(e.find('\n') == std::string::npos);
+}
+
+TEST_CASE("Path tracing: only scenes with a path-traced camera compile path.cl", "[path][scene]") {
+    TempDir tmp;
+    auto defines = [&](const std::string& xml) {
+        std::vector<std::string> d = flattenScene(loadScene(writeText(tmp.file("f.xml"), rendererScene(xml)))).features.defines();
+        return std::find(d.begin(), d.end(), "-DCLRT_HAS_PATH_TRACING=1") != d.end();
+    };
+    CHECK_FALSE(defines(""));
+    CHECK(defines("<Renderer>PathTracing</Renderer>"));
+}
+
+namespace {
+
+// White furnace under an environment: a diffuse sphere of albedo a (normalized ModifiedPhong, kd = a,
+// ks = 0: f = a/π) under a constant environment of radiance Le fills the whole image (FovY 10°). A convex
+// object sees only the environment, so L = a·Le at every pixel, whatever the strategy.
+std::string envFurnace(const std::string& params, const std::string& sampler, float a) {
+    std::ostringstream s;
+    s << "<Scene><BackgroundColor>0 0 0</BackgroundColor><MaxRecursionDepth>3</MaxRecursionDepth>"
+      << "<Cameras><Camera id=\"1\" type=\"lookAt\"><Position>0 0 0</Position><GazePoint>0 0 -1</GazePoint>"
+      << "<Up>0 1 0</Up><FovY>10</FovY><NearDistance>1</NearDistance><ImageResolution>32 32</ImageResolution>"
+      << "<ImageName>out.exr</ImageName><Renderer>PathTracing</Renderer><RendererParams>" << params
+      << "</RendererParams></Camera></Cameras>"
+      << "<BRDFs><ModifiedPhong id=\"1\" normalized=\"true\"><Exponent>1</Exponent></ModifiedPhong></BRDFs>"
+      << "<Materials><Material id=\"1\" BRDF=\"1\"><DiffuseReflectance>" << a << " " << a << " " << a
+      << "</DiffuseReflectance><SpecularReflectance>0 0 0</SpecularReflectance></Material></Materials>"
+      << "<Textures><Images><Image id=\"1\">env.exr</Image></Images></Textures>"
+      << "<Lights><SphericalDirectionalLight id=\"1\" type=\"latlong\" sampler=\"" << sampler
+      << "\"><ImageId>1</ImageId></SphericalDirectionalLight></Lights>"
+      << "<VertexData>0 0 -5</VertexData><Objects><Sphere id=\"1\"><Center>1</Center><Radius>2</Radius>"
+      << "<Material>1</Material></Sphere></Objects></Scene>";
+    return s.str();
+}
+
+}  // namespace
+
+TEST_CASE("Path tracing: white furnace under a constant environment gives a*Le for every option set", "[path][render]") {
+    TempDir tmp;
+    const float Le = 2.0f, a = 0.8f;
+    ImageRGB env;
+    env.width = 16;
+    env.height = 8;
+    env.isHdr = true;
+    env.pixels.assign(size_t(16 * 8 * 3), Le);
+    writeExr(tmp.file("env.exr"), env);
+    const char* optionSets[] = {"", "ImportanceSampling", "NextEventEstimation", "NextEventEstimation ImportanceSampling",
+                                "RussianRoulette", "NextEventEstimation ImportanceSampling RussianRoulette",
+                                "MultipleImportanceSampling"};
+    for (const char* sampler : {"uniform", "importance", "cosine"}) {
+        for (const char* params : optionSets) {
+            Scene scene = loadScene(writeText(tmp.file("furnace.xml"), envFurnace(params, sampler, a)));
+            ImageRGB img = renderCamera(scene, scene.cameras.at(0), 64, 7);
+            for (int c = 0; c < 3; ++c) {
+                INFO("sampler " << sampler << ", RendererParams '" << params << "', channel " << c);
+                CHECK(imageMean(img, c) == Approx(a * Le).epsilon(0.01));
+            }
+        }
+    }
+}
