@@ -72,8 +72,36 @@ inline float Path_MissWeight(SceneParams scene, PathState path, const __global L
     return Path_EmissionWeight(scene.pathMode, path.throughput.w, lightPdf);
 }
 
-/* The radiance the hit surface emits towards the ray (object lights: after their branch lands). */
-inline float3 Path_Emitted(void) { return (float3)(0.0f); }
+#if defined(CLRT_HAS_LIGHT_MESH) || defined(CLRT_HAS_LIGHT_SPHERE)
+/* The solid-angle density with which sample_lights draws the point pHit a ray hit on object light
+ * `light` (from pHit − t·dirWorld; ngWorld: the geometric normal there): LightMesh: a point by area,
+ * pdf t²/(A·cosθ_L); LightSphere: a direction in its cone, 1/(2π(1 − cosθmax)) (1/4π from inside). */
+inline float Path_ObjectLightPdf(const __global Light* light, float3 pHit, float3 dirWorld, float t, float3 ngWorld) {
+    if (light->kind == LIGHT_MESH) {
+        float cosL = fabs(dot(ngWorld, dirWorld));
+        return cosL > 0.0f && light->area > 0.0f ? t * t / (light->area * cosL) : 0.0f;
+    }
+    float3 axis = light->position.xyz - (pHit - t * dirWorld);
+    float R = light->objRadius, d2 = dot(axis, axis);
+    if (!(d2 > R * R)) return 0.25f * CLRT_INV_PI;
+    float sin2Max = R * R / d2, cosMax = sqrt(fmax(0.0f, 1.0f - sin2Max));
+    return 1.0f / (2.0f * CLRT_PI * (sin2Max / (1.0f + cosMax)));
+}
+
+/* What a ray sees emitted where it hit primitive `prim` (the emitting side of an object light, as
+ * object_lights.cl's ObjectLight_Emission: LightMesh front faces, LightSphere outside), and the
+ * density light sampling draws that point with (*lightPdf). */
+inline float3 Path_HitEmission(int prim, int frontFacing, SceneParams scene, const __global TriangleShading* shading,
+                               const __global Sphere* spheres, const __global Light* lights, float3 pHit,
+                               float3 dirWorld, float t, float3 ngWorld, float* lightPdf) {
+    int light = CLRT_INVALID;
+    if (prim < scene.numTriangles) light = shading[prim].light;
+    else if (prim < scene.numTriangles + scene.numSpheres) light = spheres[prim - scene.numTriangles].light;
+    if (light == CLRT_INVALID || !frontFacing) return (float3)(0.0f);
+    *lightPdf = Path_ObjectLightPdf(&lights[light], pHit, dirWorld, t, ngWorld);
+    return lights[light].radiance.xyz;
+}
+#endif
 
 /* The density Path_SampleBounce draws wi with, for MIS (solid angle; 0 below the surface). */
 inline float Path_BouncePdf(ShadingPoint sp, const __global Material* materials, int mode, float3 wi) {
@@ -93,12 +121,19 @@ inline float Path_BouncePdf(ShadingPoint sp, const __global Material* materials,
 
 /* The MIS weight of a light sample (sample_lights) in direction wi: the power heuristic against the
  * BSDF sampling of the same direction for lights a BSDF ray can reach (environment lights with a
- * normal-independent sampler); 1 for every other light and without MultipleImportanceSampling. */
+ * normal-independent sampler, object lights); 1 for every other light and without
+ * MultipleImportanceSampling. e: what Light_Sample returned. */
 inline float Path_LightSampleWeight(int mode, const __global Light* light, ShadingPoint sp,
-                                    const __global Material* materials, const __global float* envDist, float3 wi) {
+                                    const __global Material* materials, const __global float* envDist, float3 wi,
+                                    float3 e) {
     if (!(mode & CLRT_PATH_MIS)) return 1.0f;
     float lightPdf = -1.0f;
     if (light->kind == LIGHT_ENVIRONMENT) lightPdf = Path_EnvLightPdf(light, envDist, wi);
+#if defined(CLRT_HAS_LIGHT_MESH) || defined(CLRT_HAS_LIGHT_SPHERE)
+    /* object lights return radiance / pdf(wi) (object_lights.cl) */
+    if ((light->kind == LIGHT_MESH || light->kind == LIGHT_SPHERE) && maxComponent(e) > 0.0f)
+        lightPdf = maxComponent(light->radiance.xyz) / maxComponent(e);
+#endif
     if (lightPdf < 0.0f) return 1.0f;
     return Path_PowerHeuristic(lightPdf, Path_BouncePdf(sp, materials, mode, wi));
 }

@@ -224,7 +224,12 @@ __kernel void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
     }
 #ifdef CLRT_HAS_PATH_TRACING
     if (scene.pathMode != 0) {
-        Path_ShadeHit(scene, i, path, m, s.p, ng, ns, wo, s.t, insideDielectric, sp, Path_Emitted(), -1.0f, materials, points, pathRadiance, nextPaths,
+        float3 emitted = (float3)(0.0f);
+        float lightPdf = -1.0f;
+#if defined(CLRT_HAS_LIGHT_MESH) || defined(CLRT_HAS_LIGHT_SPHERE)
+        emitted = Path_HitEmission(h.prim, s.frontFacing, scene, triShading, spheres, lights, s.p, s.dir, s.t, s.ng, &lightPdf);
+#endif
+        Path_ShadeHit(scene, i, path, m, s.p, ng, ns, wo, s.t, insideDielectric, sp, emitted, lightPdf, materials, points, pathRadiance, nextPaths,
                       nextRays, childValid);
 #ifdef CLRT_HAS_MOTION_BLUR
         MotionBlur_StampChildren(nextRays, childValid, i, Ray_Time(ray));
@@ -315,7 +320,7 @@ __kernel void sample_lights(CLRT_KERNEL_PARAMS(sample_lights)) {
             if (cosTheta > 0.0f && dot(ng, wi) > 0.0f && maxComponent(e) > 0.0f) {
                 float3 c = path.throughput.xyz * Material_EvalDirect(sp, materials, wi, cosTheta) * e;
 #ifdef CLRT_HAS_PATH_TRACING
-                c *= Path_LightSampleWeight(scene.pathMode, &lights[l], sp, materials, envDist, wi);
+                c *= Path_LightSampleWeight(scene.pathMode, &lights[l], sp, materials, envDist, wi, e);
 #endif
                 float3 org = Ray_OffsetOrigin(p, ng);
                 float tMax = isinf(dist) ? INFINITY : length(p + dist * wi - org) * (1.0f - 1e-5f);
