@@ -3,7 +3,7 @@
   exr_stats.py mean A.exr [x0 y0 x1 y1]           per-channel mean (of a region)
   exr_stats.py relmse A.exr B.exr [--down 8]      relMSE of A against B after k x k box downsampling:
                                                    mean((A-B)^2 / (B^2 + 1e-2)) over pixels and channels
-  exr_stats.py bias A1.exr A2.exr REF.exr [--down 8]
+  exr_stats.py bias A1.exr A2.exr REF.exr [--down 8] [--down-ref K (REF's block size, default --down)]
       relMSE(A1, REF), relMSE(A1, A2) / 2 ... prints ratio = relMSE(A1,REF) / relMSE(A1,A2):
       for an unbiased A, relMSE(A1,REF) ~ var(A)+var(REF) and relMSE(A1,A2) ~ 2 var(A)."""
 import sys
@@ -34,7 +34,11 @@ def relmse(a, b):
 
 
 def main(argv):
-    k = 8
+    k, kref = 8, None
+    if "--down-ref" in argv:
+        i = argv.index("--down-ref")
+        kref = int(argv[i + 1])
+        argv = argv[:i] + argv[i + 2:]
     if "--down" in argv:
         i = argv.index("--down")
         k = int(argv[i + 1])
@@ -50,7 +54,8 @@ def main(argv):
     elif cmd == "relmse":
         print("relmse %.6g" % relmse(down(load(argv[2]), k), down(load(argv[3]), k)))
     elif cmd == "bias":
-        a1, a2, ref = (down(load(p), k) for p in argv[2:5])
+        a1, a2 = (down(load(p), k) for p in argv[2:4])
+        ref = down(load(argv[4]), kref or k)
         r_ref, r_self = relmse(a1, ref), relmse(a1, a2)
         print("relmse_to_ref %.6g relmse_between_two %.6g ratio %.3f" % (r_ref, r_self, r_ref / r_self))
     else:

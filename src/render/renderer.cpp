@@ -203,6 +203,7 @@ void Renderer::Impl::traceBatch(int n, const dev::SceneParams& sp, bool bounces,
         run(kCompact, slots, STAGE_COMPACT);
         n = next;
         counters.secondaryRays += n;
+        if (sp.pathMode != 0) counters.pathSegments += n;
     }
 }
 
@@ -318,6 +319,7 @@ int Renderer::Impl::renderTile(size_t tileFirst, size_t tileEnd, const BatchPlan
             kGenerate.set("count", n);
             run(kGenerate, n, STAGE_GENERATE);
             counters.cameraRays += n;
+            if (scene.pathMode != 0) counters.pathSegments += n;
             traceBatch(n, scene, plan.bounces, plan.lightChunk, counters);
             ++doneBatches;
             if (progress || events.size() >= kProfileEvents) {

@@ -1,0 +1,81 @@
+#!/usr/bin/env python3
+"""path_convergence.py — convergence of clrt's path tracer per option set (issue 16).
+
+For every camera of hw6/cornellbox_jaroslav_path_diffuse.xml (one option set each) and for
+spp in SPPS, two independent renders a, b (seeds 1, 2) at SIZE² are compared: relMSE(a, b) / 2 is the
+variance of one render (relMSE as clrt-imgdiff: (a-b)²/(b²+1e-2), after 4×4 block means so that a
+block's estimate is far from zero). For an unbiased estimator of finite variance it falls as 1/spp:
+the slope of log relMSE against log spp is fitted by least squares and must lie within 10% of -1.
+Writes docs/path_convergence.png (log-log plot) and prints one line per camera.
+Usage: build/venv/bin/python scripts/path_convergence.py [--size 64] [--spp 4,16,64,256] [--device cpu] [--clrt build/clrt]"""
+import argparse
+import os
+import subprocess
+import sys
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import exr_stats  # noqa: E402
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+SCENE = os.path.join(ROOT, "..", "shared", "scenes", "hw6", "cornellbox_jaroslav_path_diffuse.xml")
+CAMERAS = [(1, "diffuse_next", "NEE"), (2, "diffuse_next_russian", "NEE RR"), (3, "diffuse_next_importance", "NEE IS"),
+           (4, "diffuse_next_importance_russian", "NEE IS RR"), (5, "diffuse", "IS (cam 5)"),
+           (6, "diffuse_russian", "RR"), (7, "diffuse_importance", "IS"), (8, "diffuse_importance_russian", "IS RR")]
+
+
+def render(clrt, cam, spp, seed, size, device, out):
+    os.makedirs(out, exist_ok=True)
+    subprocess.run([clrt, "render", SCENE, "-o", out, "--camera", str(cam), "--spp",
+                    str(spp), "--seed", str(seed), "--resolution", "%dx%d" % (size, size), "--device", device],
+                   check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--size", type=int, default=64)
+    ap.add_argument("--spp", default="4,16,64,256")
+    ap.add_argument("--device", default="cpu")
+    ap.add_argument("--clrt", default=os.path.join(ROOT, "build", "clrt"))
+    ap.add_argument("--out", default=os.path.join(ROOT, "build", "path_convergence"))
+    ap.add_argument("--plot", default=os.path.join(ROOT, "docs", "path_convergence.png"))
+    args = ap.parse_args()
+    spps = [int(s) for s in args.spp.split(",")]
+    results = []
+    worst = 0.0
+    for cam, stem, label in CAMERAS:
+        errs = []
+        for spp in spps:
+            d = os.path.join(args.out, "c%d_s%d" % (cam, spp))
+            for seed in (1, 2):
+                render(args.clrt, cam, spp, seed, args.size, args.device, os.path.join(d, str(seed)))
+            a, b = (exr_stats.down(exr_stats.load(os.path.join(d, str(s), stem + ".exr")), 4) for s in (1, 2))
+            errs.append(exr_stats.relmse(a, b) / 2)
+        slope = float(np.polyfit(np.log(spps), np.log(errs), 1)[0])
+        worst = max(worst, abs(slope + 1))
+        results.append((label, errs, slope))
+        print("camera %d %-10s relMSE %s slope %.3f %s" % (cam, label, " ".join("%.3g" % e for e in errs), slope,
+                                                            "ok" if abs(slope + 1) <= 0.1 else "OUTSIDE 10%"))
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        fig, ax = plt.subplots(figsize=(7, 5))
+        for label, errs, slope in results:
+            ax.loglog(spps, errs, marker="o", label="%s (slope %.2f)" % (label, slope))
+        ax.loglog(spps, [results[0][1][0] * spps[0] / s for s in spps], "k--", label="1/spp")
+        ax.set_xlabel("samples per pixel")
+        ax.set_ylabel("relMSE of one render (two independent renders / 2)")
+        ax.set_title("clrt path tracing, cornellbox_jaroslav_path_diffuse, %d² (4x4 blocks)" % args.size)
+        ax.legend(fontsize=7)
+        fig.tight_layout()
+        fig.savefig(args.plot, dpi=110)
+        print("wrote", args.plot)
+    except ImportError:
+        print("matplotlib missing: no plot")
+    sys.exit(0 if worst <= 0.1 else 1)
+
+
+if __name__ == "__main__":
+    main()
