@@ -108,16 +108,21 @@ namespace {
 // White furnace under an environment: a diffuse sphere of albedo a (normalized ModifiedPhong, kd = a,
 // ks = 0: f = a/π) under a constant environment of radiance Le fills the whole image (FovY 10°). A convex
 // object sees only the environment, so L = a·Le at every pixel, whatever the strategy.
-std::string envFurnace(const std::string& params, const std::string& sampler, float a) {
+std::string envFurnace(const std::string& params, const std::string& sampler, float a, const std::string& material = "",
+                       int maxDepth = 3) {
     std::ostringstream s;
-    s << "<Scene><BackgroundColor>0 0 0</BackgroundColor><MaxRecursionDepth>3</MaxRecursionDepth>"
+    s << "<Scene><BackgroundColor>0 0 0</BackgroundColor><MaxRecursionDepth>" << maxDepth << "</MaxRecursionDepth>"
       << "<Cameras><Camera id=\"1\" type=\"lookAt\"><Position>0 0 0</Position><GazePoint>0 0 -1</GazePoint>"
       << "<Up>0 1 0</Up><FovY>10</FovY><NearDistance>1</NearDistance><ImageResolution>32 32</ImageResolution>"
       << "<ImageName>out.exr</ImageName><Renderer>PathTracing</Renderer><RendererParams>" << params
       << "</RendererParams></Camera></Cameras>"
       << "<BRDFs><ModifiedPhong id=\"1\" normalized=\"true\"><Exponent>1</Exponent></ModifiedPhong></BRDFs>"
-      << "<Materials><Material id=\"1\" BRDF=\"1\"><DiffuseReflectance>" << a << " " << a << " " << a
-      << "</DiffuseReflectance><SpecularReflectance>0 0 0</SpecularReflectance></Material></Materials>"
+      << "<Materials>"
+      << (material.empty() ? "<Material id=\"1\" BRDF=\"1\"><DiffuseReflectance>" + std::to_string(a) + " " +
+                                 std::to_string(a) + " " + std::to_string(a) +
+                                 "</DiffuseReflectance><SpecularReflectance>0 0 0</SpecularReflectance></Material>"
+                           : material)
+      << "</Materials>"
       << "<Textures><Images><Image id=\"1\">env.exr</Image></Images></Textures>"
       << "<Lights><SphericalDirectionalLight id=\"1\" type=\"latlong\" sampler=\"" << sampler
       << "\"><ImageId>1</ImageId></SphericalDirectionalLight></Lights>"
@@ -258,4 +263,30 @@ TEST_CASE("hw6 path_diffuse: MultipleImportanceSampling matches the NEE referenc
     WARN("MIS on camera 3: relMSE to reference " << toRef << ", between two renders " << floorAB << " (limit "
                                                  << floorAB * (1 + r) << ")");
     CHECK(toRef <= floorAB * (1 + r));
+}
+
+// Glass under path tracing (the classic failure: a black sphere): a clear dielectric sphere (no
+// absorption, index 1.5) under a constant environment Le passes all light on, reflected or refracted:
+// L = Le at every pixel once paths are long enough (MaxRecursionDepth 20), for every option set.
+TEST_CASE("Path tracing: a clear glass sphere under a constant environment is Le, not black", "[path][render]") {
+    TempDir tmp;
+    const float Le = 2.0f;
+    ImageRGB env;
+    env.width = 16;
+    env.height = 8;
+    env.isHdr = true;
+    env.pixels.assign(size_t(16 * 8 * 3), Le);
+    writeExr(tmp.file("env.exr"), env);
+    const std::string glass = "<Material id=\"1\" type=\"dielectric\"><DiffuseReflectance>0 0 0</DiffuseReflectance>"
+                              "<SpecularReflectance>0 0 0</SpecularReflectance><MirrorReflectance>1 1 1</MirrorReflectance>"
+                              "<AbsorptionCoefficient>0 0 0</AbsorptionCoefficient><RefractionIndex>1.5</RefractionIndex>"
+                              "</Material>";
+    for (const char* params : {"", "NextEventEstimation ImportanceSampling", "RussianRoulette", "MultipleImportanceSampling"}) {
+        Scene scene = loadScene(writeText(tmp.file("glass.xml"), envFurnace(params, "importance", 0, glass, 20)));
+        ImageRGB img = renderCamera(scene, scene.cameras.at(0), 16, 3);
+        for (int c = 0; c < 3; ++c) {
+            INFO("RendererParams '" << params << "', channel " << c);
+            CHECK(imageMean(img, c) == Approx(Le).epsilon(0.01));
+        }
+    }
 }
