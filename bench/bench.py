@@ -42,9 +42,13 @@ SCENES = [
     dict(name="cube_point", path=os.path.join(SHARED, "hw5", "cube_point.xml"), res=(200, 200), spp=[1, 4, 16, 64], ref_spp=1024),
     dict(name="veachAjar", path=os.path.join(SHARED, "classic", "veachAjar.xml"), res=(256, 180), spp=[1, 4, 16, 64], ref_spp=1024),
     dict(name="sphere_env_light_courtyard", path=os.path.join(SHARED, "hw5", "sphere_env_light_courtyard.xml"),
-         res=(256, 128), spp=[1, 4, 16, 64, 256], ref_spp=4096, env=True),
+         res=(256, 128), spp=[1, 4, 16, 64, 256], ref_spp=4096, env=True, mitsuba=True),
     dict(name="tt_pisa_courtyard", path=os.path.join(SHARED, "hw5", "tt", "scene_pisa_courtyard.xml"),
          res=(300, 167), spp=[1, 4, 16, 64], ref_spp=1024, env=True),
+    # Issue 18's comparison scene: the Audi TT with specular and mirror reflectance zeroed and the
+    # textures dropped (a diffuse-only copy that Mitsuba renders the same; see bench/to_mitsuba.py).
+    dict(name="tt_diffuse", path=os.path.join(SHARED, "hw5", "tt", "scene_pisa_courtyard.xml"),
+         res=(300, 167), spp=[1, 4, 16, 64], ref_spp=1024, env=True, diffuse=True, mitsuba=True),
 ]
 FEATURE_SPP = 16
 FEATURE_SCENES = ["cube_point", "veachAjar", "tt_pisa_courtyard"]
@@ -75,6 +79,8 @@ def prepare_scene(sc, tmpdir):
     for img in root.iter("Image"):
         if img.text and img.text.strip():
             img.text = absp(img.text.strip())
+    if sc.get("diffuse"):
+        make_diffuse(root)
     cams = root.find("Cameras")
     hdr = False
     for i, cam in enumerate(list(cams)):
@@ -91,6 +97,20 @@ def prepare_scene(sc, tmpdir):
     out = os.path.join(tmpdir, sc["name"] + ".xml")
     tree.write(out)
     return out, hdr
+
+
+def make_diffuse(root):
+    """Diffuse-only copy: specular and mirror reflectance zeroed, material types (mirror, ...) and
+    per-object textures removed."""
+    for m in root.iter("Material"):
+        m.attrib.pop("type", None)
+        for tag in ("SpecularReflectance", "MirrorReflectance"):
+            for e in m.findall(tag):
+                e.text = "0 0 0"
+    for obj in root.iter():
+        for t in obj.findall("Textures"):
+            if obj.tag != "Scene":
+                obj.remove(t)
 
 
 def scene_hash(path):
@@ -196,6 +216,117 @@ def med(v):
 
 def spread(v):
     return min(v), max(v)
+
+
+# -------------------------------------------------------------------------------------------- mitsuba
+MITSUBA_PASS_SPP = 64  # a high-spp Mitsuba render is made of passes of this many spp (bounded memory)
+
+
+def load_mitsuba(threads):
+    """(mitsuba module, version) or (None, reason). scripts/bench sets DRJIT_LIBLLVM_PATH."""
+    try:
+        import mitsuba as mi
+        import drjit as dr
+        mi.set_variant("llvm_ad_rgb")
+        dr.set_thread_count(threads)
+        return mi, mi.__version__
+    except Exception as e:  # ImportError, no LLVM, no variant: the benchmark goes on without it
+        return None, "%s: %s" % (type(e).__name__, str(e).splitlines()[0] if str(e) else "")
+
+
+class Mitsuba:
+    """Renders a converted scene (bench/to_mitsuba.py): surfaces (timed) + the camera-visible
+    environment (rendered once at high spp, added to every image: noise-free but for pixel edges)."""
+
+    def __init__(self, mi, scene_path, spp_list):
+        import to_mitsuba
+        self.mi = mi
+        surf, bg, self.warnings = to_mitsuba.scene_dicts(scene_path, 1, warn=log)
+        self.scene = mi.load_dict(to_mitsuba.materialize(surf, mi))
+        self.bg_scene = mi.load_dict(to_mitsuba.materialize(bg, mi)) if bg else None
+        self.bg = 0.0
+
+    def _render(self, scene, spp, seed):
+        return np.array(self.mi.render(scene, spp=spp, seed=seed), dtype=np.float64)[..., :3]
+
+    def render(self, spp, seed):
+        """(seconds, image): the timed surface render plus the background."""
+        t0 = time.perf_counter()
+        img = self._render(self.scene, spp, seed)
+        return time.perf_counter() - t0, img + self.bg
+
+    def render_high(self, spp, seed0, scene=None):
+        scene = scene or self.scene
+        acc, k = 0.0, 0
+        for k in range(max(1, spp // MITSUBA_PASS_SPP)):
+            acc = acc + self._render(scene, min(spp, MITSUBA_PASS_SPP), seed0 + 7919 * k)
+        return acc / (k + 1)
+
+    def reference(self, name, key, ref_spp, cache_dir, refresh):
+        """Two independent halves (like clrt's), cached; the background at ref_spp first."""
+        d = os.path.join(cache_dir, "%s-mitsuba-%s-%d" % (name, key, ref_spp))
+        files = [os.path.join(d, f) for f in ("half_a.npy", "half_b.npy", "bg.npy")]
+        if not refresh and all(os.path.exists(f) for f in files):
+            a, b, self.bg = (np.load(f).astype(np.float64) for f in files)
+            log("  mitsuba reference %s (cached)" % os.path.basename(d))
+            return a, b
+        os.makedirs(d, exist_ok=True)
+        log("  mitsuba reference: 2 x %d spp ..." % (ref_spp // 2))
+        self.bg = self.render_high(ref_spp, REF_SEEDS[0], self.bg_scene) if self.bg_scene else np.zeros(1)
+        if not self.bg_scene:
+            self.bg = 0.0
+        a = self.render_high(ref_spp // 2, REF_SEEDS[0]) + self.bg
+        b = self.render_high(ref_spp // 2, REF_SEEDS[1]) + self.bg
+        for f, v in zip(files, (a, b, np.asarray(self.bg, dtype=np.float64) + np.zeros_like(a))):
+            np.save(f, v.astype(np.float32))
+        return a, b
+
+
+def mitsuba_scene(mi, sc, scene_path, hdr, clrt_ref, clrt_rows, clrt_runs, a):
+    """Runs Mitsuba on one scene at the scene's spp points; returns rows comparing with clrt's."""
+    white = 1.0 if hdr else 255.0
+    ms = Mitsuba(mi, scene_path, sc["spp"])
+    ma, mb = ms.reference(sc["name"], scene_hash(scene_path), sc["ref_spp"], a.refs, a.refresh_refs)
+    mref = 0.5 * (ma + mb)
+    floor = float(np.mean((ma - mb) ** 2 / (mref ** 2 + EPS_REL * white * white)) / 4.0)
+    # Agreement of the two renderers: per-channel means of the references, and their relMSE.
+    cm, mm = clrt_ref.reshape(-1, 3).mean(0), mref.reshape(-1, 3).mean(0)
+    ratio = mm / np.maximum(cm, 1e-30)
+    cross = rel_mse(mref, clrt_ref, white)
+    agree = bool(np.all(np.abs(ratio - 1.0) <= 0.01))
+    log("  mitsuba/clrt reference mean per channel: %s; relMSE between the references %.3g; %s" % (
+        " ".join("%.4f" % r for r in ratio), cross, "agree" if agree else "DISAGREE (> 1%): efficiency not comparable"))
+    rows = []
+    spps = sc["spp"][:2] if a.quick else sc["spp"]
+    for spp in spps:
+        ms.render(spp, 0)  # warm-up: Dr.Jit compiles (and caches) the kernel for this size
+        ts, es = [], []
+        for run in range(a.runs):
+            t, img = ms.render(spp, run + 1)
+            ts.append(t)
+            es.append(rel_mse(img, mref, white))
+        crow = min((r for r in clrt_rows if r["spp"] == spp), key=lambda r: (r["strategy"] != "mis", 0), default=None)
+        row = dict(scene=sc["name"], spp=spp, runs=a.runs, mitsuba_s=med(ts), mitsuba_s_min=min(ts), mitsuba_s_max=max(ts),
+                   mitsuba_relmse=med(es), mitsuba_relmse_min=min(es), mitsuba_relmse_max=max(es),
+                   mitsuba_ref_relmse=floor, mean_ratio_r=ratio[0], mean_ratio_g=ratio[1], mean_ratio_b=ratio[2],
+                   refs_relmse=cross, agree=int(agree), warnings=len(ms.warnings))
+        row["mitsuba_eff"] = 1.0 / (row["mitsuba_relmse"] * row["mitsuba_s"])
+        if crow:
+            row.update(clrt_strategy=crow["strategy"], clrt_s=crow["render_s"], clrt_relmse=crow["relmse"],
+                       clrt_eff=crow["efficiency"])
+            row["eff_ratio"] = row["clrt_eff"] / row["mitsuba_eff"]          # clrt / Mitsuba
+            row["time_factor"] = row["mitsuba_s"] / row["clrt_s"]            # > 1: clrt faster
+            row["noise_factor"] = row["mitsuba_relmse"] / row["clrt_relmse"]  # > 1: clrt less noisy
+            # Spread: run k of clrt against run k of Mitsuba (same seed number), efficiency ratio per pair.
+            cr = [r for r in clrt_runs if r["spp"] == spp and r["strategy"] == crow["strategy"]]
+            pairs = [(1.0 / (c["relmse"] * c["render"])) / (1.0 / (e * t)) for c, e, t in zip(cr, es, ts)]
+            if pairs:
+                row["eff_ratio_min"], row["eff_ratio_max"] = min(pairs), max(pairs)
+        rows.append(row)
+        log("  mitsuba    spp %4d: render %.3fs [%.3f-%.3f]  relMSE %.4g [%.4g-%.4g]  clrt/mitsuba efficiency %s" % (
+            spp, row["mitsuba_s"], min(ts), max(ts), row["mitsuba_relmse"], min(es), max(es),
+            "%.3f" % row["eff_ratio"] if crow else "-"))
+    return rows
 
 
 # ----------------------------------------------------------------------------------------- references
@@ -317,6 +448,8 @@ def main():
     ap.add_argument("--refresh-refs", action="store_true", help="re-render the references")
     ap.add_argument("--no-features", action="store_true", help="skip the specialised vs --all-features part")
     ap.add_argument("--no-ray-bench", action="store_true", help="skip ray_bench")
+    ap.add_argument("--no-mitsuba", action="store_true", help="skip the comparison with Mitsuba 3")
+    ap.add_argument("--mitsuba-only", action="store_true", help="only the scenes compared with Mitsuba, strategy mis")
     ap.add_argument("--quick", action="store_true", help="1 run, first two spp points: a smoke test")
     ap.add_argument("--replot", metavar="DIR", help="only redraw the plots of DIR (a results folder) from its CSVs")
     a = ap.parse_args()
@@ -338,9 +471,17 @@ def main():
         log("bench: this clrt has no --env-sampling option; env scenes run with its default sampler only")
         strategies = ["default"]
     clrt = Clrt(exe, a.device, env_flag or "--env-sampling")
+    mi, mi_version = (None, "--no-mitsuba") if a.no_mitsuba else load_mitsuba(os.cpu_count() or 2)
+    if mi is None:
+        log("bench: Mitsuba 3 not available (%s): the comparison with Mitsuba is skipped" % mi_version)
+    else:
+        log("bench: Mitsuba %s (llvm_ad_rgb, %d threads) for the scenes it converts" % (mi_version, os.cpu_count() or 2))
+    if a.mitsuba_only:
+        a.no_features = a.no_ray_bench = True
+        strategies = [x for x in strategies if x == "mis"] or strategies[-1:]
 
     wanted = set(filter(None, a.scenes.split(",")))
-    scenes = [s for s in SCENES if (not wanted or s["name"] in wanted)]
+    scenes = [s for s in SCENES if (not wanted or s["name"] in wanted) and (not a.mitsuba_only or s.get("mitsuba"))]
     missing = [s["name"] for s in scenes if not os.path.exists(s["path"])]
     if missing:
         log("bench: skipping scenes not present: " + ", ".join(missing))
@@ -361,7 +502,7 @@ def main():
     os.makedirs(a.refs, exist_ok=True)
     log("bench: device '%s' -> %s; %d runs per point; strategies: %s" % (device_name, out, a.runs, ", ".join(strategies)))
 
-    summary, runs_rows, ref_rows = [], [], []
+    summary, runs_rows, ref_rows, mi_rows = [], [], [], []
     t_start = time.perf_counter()
     for sc in scenes:
         scene_path, hdr = prepared[sc["name"]]
@@ -402,6 +543,9 @@ def main():
                     strat, spp, row["render_s"], row["render_s_min"], row["render_s_max"], row["relmse"],
                     row["relmse_min"], row["relmse_max"], row["flip"]))
         summary += scene_rows
+        if mi is not None and sc.get("mitsuba"):
+            mi_rows += mitsuba_scene(mi, sc, scene_path, hdr, ref, scene_rows,
+                                     [r for r in runs_rows if r["scene"] == sc["name"]], a)
         plot_scene(sc["name"], scene_rows, {ref_strategy: meta}, os.path.join(out, sc["name"] + ".png"))
     t_bench = time.perf_counter() - t_start
 
@@ -511,6 +655,34 @@ def main():
                         {"rmse": "%.3g", "flip": "%.4f", "efficiency": "%.3g"}))
     rep += ["", "Columns: render s median [min-max]; stages = parse / bvh / kernel build / output s (medians); Mrays/s = "
             "camera / shadow / secondary rays per render second; efficiency = 1/(relMSE x render s).", ""]
+    rep += ["## clrt against Mitsuba 3", ""]
+    if mi is None:
+        rep += ["Mitsuba 3 was not available (%s): no comparison in this run." % mi_version, ""]
+    elif mi_rows:
+        for r in mi_rows:
+            r["clrt_fmt"] = "%.3f / %.3g" % (r.get("clrt_s", float("nan")), r.get("clrt_relmse", float("nan")))
+            r["mi_fmt"] = "%.3f [%.3f-%.3f] / %.3g [%.3g-%.3g]" % (r["mitsuba_s"], r["mitsuba_s_min"], r["mitsuba_s_max"],
+                                                                 r["mitsuba_relmse"], r["mitsuba_relmse_min"], r["mitsuba_relmse_max"])
+            r["ratio_fmt"] = "%.2f [%.2f-%.2f]" % (r.get("eff_ratio", float("nan")), r.get("eff_ratio_min", float("nan")),
+                                                   r.get("eff_ratio_max", float("nan")))
+            r["means_fmt"] = "%.4f %.4f %.4f" % (r["mean_ratio_r"], r["mean_ratio_g"], r["mean_ratio_b"])
+        rep += ["Mitsuba %s, variant llvm_ad_rgb, %d threads, path integrator max_depth 2 (direct light), box filter, "
+                "independent sampler; scene converted by bench/to_mitsuba.py (emitters x pi for the course's diffuse "
+                "convention, the camera-visible environment added from one high-spp render). Each renderer's error is "
+                "against its own reference of the same spp as clrt's (two independent halves). efficiency ratio = "
+                "clrt / Mitsuba = time factor (Mitsuba s / clrt s) x noise factor (Mitsuba relMSE / clrt relMSE); "
+                "[min-max] over the run pairs of equal seed number. means = Mitsuba/clrt reference mean per channel; "
+                "refs relMSE = between the two references (both noise floors plus any bias)."
+                % (mi_version, os.cpu_count() or 2), "",
+                md_table(mi_rows, ["scene", "spp", "clrt_strategy", "clrt_fmt", "mi_fmt", "time_factor", "noise_factor",
+                                   "ratio_fmt", "means_fmt", "refs_relmse", "agree"],
+                         {"time_factor": "%.2f", "noise_factor": "%.2f", "refs_relmse": "%.3g"}), "",
+                "Columns: clrt s / relMSE (medians); Mitsuba s / relMSE median [min-max]; agree: means within 1%.", ""]
+        write_csv(os.path.join(out, "mitsuba.csv"), mi_rows,
+                  ["scene", "spp", "runs", "clrt_strategy", "clrt_s", "clrt_relmse", "clrt_eff", "mitsuba_s", "mitsuba_s_min",
+                   "mitsuba_s_max", "mitsuba_relmse", "mitsuba_relmse_min", "mitsuba_relmse_max", "mitsuba_eff",
+                   "mitsuba_ref_relmse", "eff_ratio", "eff_ratio_min", "eff_ratio_max", "time_factor", "noise_factor",
+                   "mean_ratio_r", "mean_ratio_g", "mean_ratio_b", "refs_relmse", "agree", "warnings"])
     if feat_rows:
         for r in feat_rows:
             r["render_fmt"] = "%.3f [%.3f-%.3f]" % (r["render_s"], r["render_s_min"], r["render_s_max"])

@@ -4,9 +4,12 @@
  * L(wi)/pdf(wi) for a direction drawn by the light's sampler) divided by the pdf of the chosen
  * direction, and the direction and distance (INFINITY: directional, environment) for the shadow ray.
  * Environment samplers (SCENE_FORMAT.md): uniform (hemisphere around n by rejection, pdf 1/2π),
- * cosine (pdf cosθ/π), importance (the map's luminance distribution, envmap.cl), mis (one-sample
- * MIS: importance or cosine with probability 1/2 each, weighted by the balance heuristic, i.e.
- * divided by the mixture pdf ½·p_imp + ½·p_cos). */
+ * cosine (pdf cosθ/π), importance (the map's luminance distribution, envmap.cl), mis. MIS is
+ * multi-sample (EnvLight_SampleMis): one importance and one cosine direction per shading point, two
+ * shadow rays, each weighted by the power heuristic; the renderer gives such a light two shadow-ray
+ * slots (sample_lights' lightSlots). EnvironmentLight_Sample's `mis` case is the one-sample form
+ * (importance or cosine with probability 1/2 each, divided by the mixture pdf ½·p_imp + ½·p_cos),
+ * kept for callers with one slot. */
 #ifndef CLRT_LIGHTS_CL
 #define CLRT_LIGHTS_CL
 
@@ -126,6 +129,61 @@ inline float3 EnvironmentLight_Sample(const __global Light* light, float3 n, flo
     if (uv.x < 0.0f) uv = EnvMap_DirToUv(mapping, w);
     float3 l = EnvMap_Lookup(texels, images[light->image], mapping, uv.x, uv.y) * light->radiance.xyz;
     return finiteOrZero(l / pdf);
+}
+
+/* Whether an environment light is sampled by multi-sample MIS (two shadow-ray slots). */
+inline int EnvLight_UsesMis(const __global Light* light) {
+    return light->kind == LIGHT_ENVIRONMENT && light->sampler == ENV_SAMPLE_MIS && light->distribution != CLRT_INVALID;
+}
+
+/* Power heuristic weight of a sample of density p drawn with expected count nP per shading point,
+ * against the other strategy's density q and count nQ. */
+inline float Mis_Power(float nP, float p, float nQ, float q) {
+    if (!(p > 0.0f)) return 0.0f;
+    float r = (nQ * q) / (nP * p);  /* r·r overflowing to +inf gives weight 0, the limit */
+    return 1.0f / (1.0f + r * r);
+}
+
+/* One sample of multi-sample MIS for an environment light: from the map's importance distribution
+ * (fromMap = 1, expected count 1 per shading point) or the cosine lobe around n (0, expected count
+ * cosShare: drawn at a fraction cosShare of the shading points), uniforms u. Returns L(wi)·w/(count·p), w the
+ * power-heuristic weight against the other strategy, and the direction in *wi (n when none was drawn). */
+inline float3 EnvLight_MisSample(const __global Light* light, const __global float* d, ImageInfo img, float3 n,
+                                 int fromMap, float cosShare, float2 u, const __global float4* texels, float3* wi) {
+    float3 w = n;
+    float2 uv;
+    float pImp = 0.0f;
+    *wi = n;
+    if (fromMap) {
+        if (!EnvDist_SampleUv(d, u.x, u.y, &w, &pImp, &uv)) return (float3)(0.0f);
+    } else {
+        w = EnvSample_Cosine(n, (float2)(fmin(u.x, CLRT_ONE_MINUS_EPS), u.y));
+        uv = EnvMap_DirToUv(light->mapping, w);
+        pImp = EnvDist_PdfUv(d, uv);
+    }
+    *wi = w;
+    float pCos = fmax(dot(w, n), 0.0f) * CLRT_INV_PI;
+    float p = fromMap ? pImp : pCos, q = fromMap ? pCos : pImp;
+    float nP = fromMap ? 1.0f : cosShare, nQ = fromMap ? cosShare : 1.0f;
+    if (!(p > 0.0f) || !isfinite(p)) return (float3)(0.0f);
+    float3 l = EnvMap_Lookup(texels, img, light->mapping, uv.x, uv.y) * light->radiance.xyz;
+    return finiteOrZero(l * (Mis_Power(nP, p, nQ, q) / (nP * p)));
+}
+
+/* Multi-sample MIS for an environment light: one sample from the map's importance distribution (uniforms
+ * uLight; direction *wiL, value *eL) at every shading point, and one from the cosine lobe around n (uBsdf;
+ * *wiB, *eB) where withCosine is set, which the caller sets at a fraction cosShare of the shading points
+ * (1: all; ½: every other sample of a pixel). Then eL + eB (each times its sample's Blinn-Phong term) is
+ * an unbiased estimate of what Light_Sample's E estimates. Shadow rays go to infinity. */
+inline void EnvLight_SampleMis(const __global Light* light, float3 n, float2 uLight, float2 uBsdf, float cosShare,
+                               int withCosine, const __global ImageInfo* images, const __global float4* texels,
+                               const __global float* envDist, float3* wiL, float3* eL, float3* wiB, float3* eB) {
+    const __global float* d = envDist + light->distribution;
+    const ImageInfo img = images[light->image];
+    *eL = EnvLight_MisSample(light, d, img, n, 1, cosShare, uLight, texels, wiL);
+    *eB = (float3)(0.0f);
+    *wiB = n;
+    if (withCosine) *eB = EnvLight_MisSample(light, d, img, n, 0, cosShare, uBsdf, texels, wiB);
 }
 
 /* The dispatcher. p: the shading point, n: its shading normal (environment samplers), u: two uniform

@@ -26,7 +26,8 @@ inline float Fresnel_Conductor(float cosI, float n, float k) {
 
 /* The light reflected towards sp.wo per unit of what Light_Sample returns from direction wi
  * (cosTheta = n·wi > 0): f(wo, wi)·cosθ. Materials without a BRDF keep the classic Blinn-Phong
- * terms kd·cosθ + ks·cos^p αh (bit for bit what sample_lights computed before BRDFs). */
+ * terms kd·cosθ + ks·cos^p αh (bit for bit what sample_lights computed before BRDFs; ks = 0 adds
+ * exactly 0, so the lobe is skipped then). */
 inline float3 Material_EvalDirect(ShadingPoint sp, const __global Material* materials, float3 wi, float cosTheta) {
 #ifdef CLRT_HAS_BRDFS
     const __global Material* m = &materials[sp.material];
@@ -36,6 +37,7 @@ inline float3 Material_EvalDirect(ShadingPoint sp, const __global Material* mate
         return Brdf_Eval(&b, sp.normal.xyz, sp.wo.xyz, wi) * cosTheta;
     }
 #endif
+    if (!(maxComponent(sp.ks.xyz) > 0.0f)) return sp.kd.xyz * cosTheta;
     float3 hv = normalize(wi + sp.wo.xyz);
     float spec = Math_PowNonNegative(fmax(0.0f, dot(sp.normal.xyz, hv)), sp.ks.w);
     return sp.kd.xyz * cosTheta + sp.ks.xyz * spec;

@@ -5,7 +5,8 @@
  *                    (path-traced cameras: Path_ShadeHit, cl_kernels/path.cl, one child in 2i);
  *   sample_lights:   per path and light of a chunk, one shadow ray carrying its reflected light
  *                    (Material_EvalDirect: the classic Blinn-Phong terms, or the material's BRDF)
- *                    (environment lights: one sampled direction, the shadow ray going to infinity);
+ *                    (environment lights: one sampled direction, the shadow ray going to infinity;
+ *                    two, a light and a cosine sample, under multi-sample MIS: see lightSlots);
  *   gather_shadows:  adds the unoccluded shadow contributions of each path in light order;
  *   accumulate:      adds each pixel's paths to the float image (paths of one pixel are adjacent);
  *   compact_paths:   order-preserving compaction of the children with host-computed indices.
@@ -296,7 +297,39 @@ __kernel void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
 #endif
 }
 
-/* One shadow ray per (path, light in [lightBegin, lightEnd)), at slot i·chunk + (l − lightBegin). */
+/* The shadow ray of one light sample at shading point sp: the reflected light (Material_EvalDirect)
+ * times e (Light_Sample's estimate) and the path throughput, or a ray of zero contribution (not traced). */
+inline ShadowRay Shadow_Make(ShadingPoint sp, const __global Material* materials, float3 throughput, float3 wi,
+                             float dist, float3 e) {
+    ShadowRay sr;
+    sr.contribution = (float4)(0.0f);
+    sr.origin = (float4)(0.0f);
+    sr.direction = (float4)(0.0f, 0.0f, 1.0f, 0.0f);
+    float3 p = sp.position.xyz, n = sp.normal.xyz, ng = sp.geomNormal.xyz;
+    float cosTheta = dot(n, wi);
+    if (cosTheta > 0.0f && dot(ng, wi) > 0.0f && maxComponent(e) > 0.0f) {
+        float3 c = throughput * Material_EvalDirect(sp, materials, wi, cosTheta) * e;
+        float3 org = Ray_OffsetOrigin(p, ng);
+        float tMax = isinf(dist) ? INFINITY : length(p + dist * wi - org) * (1.0f - 1e-5f);
+        sr.origin = (float4)(org, tMax);
+        sr.direction = (float4)(wi, 0.0f);
+        sr.contribution = (float4)(finiteOrZero(c), 0.0f);
+    }
+    return sr;
+}
+
+/* Share of shading points that take multi-sample MIS's cosine sample (1 or ½; see EnvLight_SampleMis).
+ * Measured (scripts/env_mis_compare.py, README "Environment MIS never loses"): ½, every other sample of
+ * a pixel, cuts sample_lights by ~25% but doubles the relMSE on sunset.exr and gains nothing on
+ * studio.exr; so 1, every shading point takes both samples. */
+#ifndef CLRT_ENV_MIS_COSINE_SHARE
+#define CLRT_ENV_MIS_COSINE_SHARE 1.0f
+#endif
+
+/* Shadow-ray slots: each (path i, light l in [lightBegin, lightEnd)) owns lightSlots consecutive
+ * slots from (i·(lightEnd − lightBegin) + l − lightBegin)·lightSlots. lightSlots is 1 unless the scene
+ * has an environment light sampled by multi-sample MIS (EnvLight_SampleMis), which fills two (light
+ * sample, cosine sample); other lights then leave their second slot at zero contribution (not traced). */
 __kernel void sample_lights(CLRT_KERNEL_PARAMS(sample_lights)) {
     int i = get_global_id(0);
     if (i >= count) return;
@@ -304,35 +337,44 @@ __kernel void sample_lights(CLRT_KERNEL_PARAMS(sample_lights)) {
     ShadingPoint sp = points[i];
     PathState path = paths[i];
     RngKey key = Rng_Key(scene.seed, path.pixel, path.sample, path.pathId);
+    const ShadowRay none = Shadow_Make(sp, materials, (float3)(0.0f), (float3)(0.0f, 0.0f, 1.0f), 0.0f, (float3)(0.0f));
     for (int l = lightBegin; l < lightEnd; ++l) {
-        ShadowRay sr;
-        sr.contribution = (float4)(0.0f);
-        sr.origin = (float4)(0.0f);
-        sr.direction = (float4)(0.0f, 0.0f, 1.0f, 0.0f);
+        size_t slot = ((size_t)i * chunk + (l - lightBegin)) * lightSlots;
+        ShadowRay sr = none, sr2 = none;
         if (sp.position.w > 0.0f) {
             uint dim = 4u + 32u * (uint)path.depth + 8u + 2u * (uint)l;
             float2 u = (float2)(Rng_Uniform(key, dim), Rng_Uniform(key, dim + 1));
             float3 wi;
             float dist;
-            float3 p = sp.position.xyz, n = sp.normal.xyz, ng = sp.geomNormal.xyz;
-            float3 e = Light_Sample(&lights[l], p, n, u, images, texels, envDist, &wi, &dist);
-            float cosTheta = dot(n, wi);
-            if (cosTheta > 0.0f && dot(ng, wi) > 0.0f && maxComponent(e) > 0.0f) {
-                float3 c = path.throughput.xyz * Material_EvalDirect(sp, materials, wi, cosTheta) * e;
+#ifdef CLRT_HAS_ENV_LIGHT
+            if (lightSlots == 2 && EnvLight_UsesMis(&lights[l])) {
+                /* the cosine sample's uniforms: the same dimensions, offset by 2^15 */
+                float2 u2 = (float2)(Rng_Uniform(key, dim + 0x8000u), Rng_Uniform(key, dim + 0x8001u));
+                /* With a share of ½: the cosine sample at every other sample of a pixel (parity offset per
+                 * pixel and light), stratified; with 1 (the default): always. */
+                int withCos = CLRT_ENV_MIS_COSINE_SHARE >= 1.0f ||
+                              ((path.sample + (int)(Rng_Uniform(key, 0x7ff0u + (uint)l) < 0.5f)) & 1) == 0;
+                float3 wiB, eL, eB;
+                EnvLight_SampleMis(&lights[l], sp.normal.xyz, u, u2, CLRT_ENV_MIS_COSINE_SHARE, withCos, images, texels,
+                                   envDist, &wi, &eL, &wiB, &eB);
+                sr = Shadow_Make(sp, materials, path.throughput.xyz, wi, INFINITY, eL);
+                sr2 = Shadow_Make(sp, materials, path.throughput.xyz, wiB, INFINITY, eB);
+            } else
+#endif
+            {
+                float3 e = Light_Sample(&lights[l], sp.position.xyz, sp.normal.xyz, u, images, texels, envDist, &wi, &dist);
+                sr = Shadow_Make(sp, materials, path.throughput.xyz, wi, dist, e);
 #ifdef CLRT_HAS_PATH_TRACING
-                c *= Path_LightSampleWeight(scene.pathMode, &lights[l], sp, materials, envDist, wi, e);
+                sr.contribution *= Path_LightSampleWeight(scene.pathMode, &lights[l], sp, materials, envDist, wi, e);
 #endif
-                float3 org = Ray_OffsetOrigin(p, ng);
-                float tMax = isinf(dist) ? INFINITY : length(p + dist * wi - org) * (1.0f - 1e-5f);
-                sr.origin = (float4)(org, tMax);
-                sr.direction = (float4)(wi, 0.0f);
-#ifdef CLRT_HAS_MOTION_BLUR
-                sr.direction.w = MotionBlur_Time(scene.seed, path.pixel, path.sample);
-#endif
-                sr.contribution = (float4)(finiteOrZero(c), 0.0f);
             }
+#ifdef CLRT_HAS_MOTION_BLUR
+            /* the shadow rays of a sample see the scene at the sample's time (camera.cl) */
+            sr.direction.w = sr2.direction.w = MotionBlur_Time(scene.seed, path.pixel, path.sample);
+#endif
         }
-        shadows[(size_t)i * chunk + (l - lightBegin)] = sr;
+        shadows[slot] = sr;
+        if (lightSlots == 2) shadows[slot + 1] = sr2;
     }
 }
 

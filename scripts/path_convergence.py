@@ -2,9 +2,9 @@
 """path_convergence.py — convergence of clrt's path tracer per option set (issue 16).
 
 For every camera of hw6/cornellbox_jaroslav_path_diffuse.xml (one option set each) and for
-spp in SPPS, two independent renders a, b (seeds 1, 2) at SIZE² are compared: relMSE(a, b) / 2 is the
-variance of one render (relMSE as clrt-imgdiff: (a-b)²/(b²+1e-2), after 4×4 block means so that a
-block's estimate is far from zero). For an unbiased estimator of finite variance it falls as 1/spp:
+spp in SPPS, two independent renders a, b (seeds 1, 2) at SIZE² are compared: mean((a-b)²/(r²+1e-2))/2
+is the relative variance of one render, after 4×4 block means; r is the course's reference reduced to
+the same blocks (a fixed denominator: b's own noise in it would bias the estimate at low spp). For an unbiased estimator of finite variance it falls as 1/spp:
 the slope of log relMSE against log spp is fitted by least squares and must lie within 10% of -1.
 Writes docs/path_convergence.png (log-log plot) and prints one line per camera.
 Usage: build/venv/bin/python scripts/path_convergence.py [--size 64] [--spp 4,16,64,256] [--device cpu] [--clrt build/clrt]"""
@@ -20,6 +20,7 @@ import exr_stats  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENE = os.path.join(ROOT, "..", "shared", "scenes", "hw6", "cornellbox_jaroslav_path_diffuse.xml")
+REFS = os.path.join(ROOT, "..", "shared", "scenes", "hw6", "_reference_outputs")
 CAMERAS = [(1, "diffuse_next", "NEE"), (2, "diffuse_next_russian", "NEE RR"), (3, "diffuse_next_importance", "NEE IS"),
            (4, "diffuse_next_importance_russian", "NEE IS RR"), (5, "diffuse", "IS (cam 5)"),
            (6, "diffuse_russian", "RR"), (7, "diffuse_importance", "IS"), (8, "diffuse_importance_russian", "IS RR")]
@@ -51,7 +52,8 @@ def main():
             for seed in (1, 2):
                 render(args.clrt, cam, spp, seed, args.size, args.device, os.path.join(d, str(seed)))
             a, b = (exr_stats.down(exr_stats.load(os.path.join(d, str(s), stem + ".exr")), 4) for s in (1, 2))
-            errs.append(exr_stats.relmse(a, b) / 2)
+            ref = exr_stats.down(exr_stats.load(os.path.join(REFS, stem + ".exr")), 4 * 512 // args.size)
+            errs.append(float(np.mean((a - b) ** 2 / (ref ** 2 + 1e-2))) / 2)
         slope = float(np.polyfit(np.log(spps), np.log(errs), 1)[0])
         worst = max(worst, abs(slope + 1))
         results.append((label, errs, slope))

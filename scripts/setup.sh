@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
 # Installs clrt's Debian build dependencies (when missing) and builds it into build/ (Release).
 # With --test also what the test command needs beyond that: oclgrind, clang (fuzz gate, GPU-target
-# compiles), python3-venv, and Intel's OpenCL CPU runtime from PyPI in build/venv-intel.
+# compiles), python3-venv, Intel's OpenCL CPU runtime from PyPI in build/venv-intel, and OpenMPI
+# (openmpi-bin, libopenmpi-dev: the [mpi] tests run `mpirun -np 3 clrt render`; the build uses MPI
+# whenever libopenmpi-dev is there, and works without it).
 # Usage: bash scripts/setup.sh [--test]   (run as root, or with sudo available, on Debian/Ubuntu)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 PKGS="cmake g++ make pkg-config ocl-icd-opencl-dev opencl-clhpp-headers pocl-opencl-icd libopenexr-dev libpugixml-dev catch2 libstb-dev clinfo nlohmann-json3-dev zlib1g-dev"
-[ "${1:-}" = "--test" ] && PKGS="$PKGS oclgrind clang libclang-rt-dev python3-venv"
+[ "${1:-}" = "--test" ] && PKGS="$PKGS oclgrind clang libclang-rt-dev python3-venv openmpi-bin libopenmpi-dev"
 missing=""
 for p in $PKGS; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"

@@ -11,6 +11,8 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
+#include <sstream>
 #include <string>
 #include <unistd.h>
 #include <vector>
@@ -18,8 +20,12 @@
 #include "cl/devices.h"
 #include "cl/program.h"
 #include "cli/interrupt.h"
+#include "cli/merge_cmd.h"
 #include "cli/output_names.h"
 #include "cli/tonemap_cmd.h"
+#include "dist/dist_render.h"
+#include "dist/mpi_job.h"
+#include "dist/part_file.h"
 #include "image/image.h"
 #include "render/device_scene.h"
 #include "render/multi_device.h"
@@ -41,6 +47,9 @@ const char* kMainHelp =
     "  devices                 list every OpenCL platform/device with its index\n"
     "  render SCENE [options]  render every camera of SCENE (XML or JSON); see `clrt render --help`\n"
     "  tonemap IN.exr [options] tone-map an HDR image to PNG on the device; see `clrt tonemap --help`\n"
+    "  merge PARTS... -o DIR   put together the parts of `clrt render --part K/N`; see `clrt merge --help`\n"
+    "\n"
+    "`mpirun -np N clrt render SCENE ...` renders one image over N MPI ranks (see `clrt render --help`).\n"
     "\n"
     "options:\n"
     "  -h, --help              this text\n"
@@ -79,8 +88,18 @@ const char* kRenderHelp =
     "  --all-features        build the kernels with every feature, not only what the scene uses\n"
     "                        (for measuring what specialisation gains)\n"
     "  --exr-half            write .exr outputs with half-float channels (default: float)\n"
+    "  --part K/N            render only tile set K of N (every N-th tile from the K-th) of each\n"
+    "                        camera into OUTDIR/<ImageName>.part<K>of<N>.exr; `clrt merge` joins them\n"
+    "  --checkpoint DIR      keep every finished tile in DIR; the same command run again renders only\n"
+    "                        the tiles still missing (same image, bit for bit)\n"
+    "  --tile-pixels N       pixels per tile of --part, --checkpoint and MPI renders (default: 1/64\n"
+    "                        of the image, 4096 to 65536)\n"
     "  -v, --verbose         print the kernel build flags and other details\n"
     "  -h, --help            this text\n"
+    "\n"
+    "MPI: `mpirun -np N clrt render SCENE ...` renders one image over N ranks (the scene at the same\n"
+    "path on each): rank 0 hands out tiles, renders too, and writes the outputs; --device applies per\n"
+    "rank. A rank that fails ends the job and nothing is written; with --checkpoint a rerun goes on.\n"
     "\n"
     "limits: at most 1048576 samples per pixel and a MaxRecursionDepth of 256; larger scene values\n"
     "are capped with a warning naming the scene file.\n";
@@ -92,6 +111,7 @@ struct Args {
     uint32_t seed = 0;
     bool verbose = false, help = false, truncatePng = false, exrHalf = false, allFeatures = false;
     std::string envSampling;  // --env-sampling: overrides every environment light's sampler
+    DistSettings dist;        // --part, --checkpoint, --tile-pixels (src/dist/)
 };
 
 int parseInt(const std::string& opt, const std::string& v, long lo, long hi) {
@@ -129,6 +149,15 @@ Args parseRenderArgs(int argc, char** argv, int start) {
         }
         else if (s == "-v" || s == "--verbose") a.verbose = true;
         else if (s == "--exr-half") a.exrHalf = true;
+        else if (s == "--checkpoint") a.dist.checkpointDir = value();
+        else if (s == "--tile-pixels") a.dist.tilePixels = size_t(parseInt(s, value(), 1, 1 << 24));
+        else if (s == "--part") {
+            std::string v = value();
+            size_t slash = v.find('/');
+            if (slash == std::string::npos) throw Error("--part: expected K/N, got '" + v + "'", ExitCode::Usage);
+            a.dist.parts = parseInt(s, v.substr(slash + 1), 1, 1 << 20);
+            a.dist.part = parseInt(s, v.substr(0, slash), 1, a.dist.parts);
+        }
         else if (s == "--all-features") a.allFeatures = true;
         else if (s == "--env-sampling") {
             a.envSampling = value();
@@ -192,27 +221,78 @@ int cmdDevices() {
     return 0;
 }
 
+// A camera through src/dist/ (a part, a checkpoint, MPI ranks). Returns false when this process
+// writes no outputs for it: an MPI rank other than 0, or a part (its part file is written here, when
+// complete).
+bool renderCameraDist(const Args& a, const Camera& cam, int camIndex, const RenderSettings& rs,
+                      std::vector<std::unique_ptr<Renderer>>& renderers, std::vector<DeviceWork>& work,
+                      std::optional<Progress>& prog, ImageRGB& img) {
+    std::vector<Renderer*> rp;
+    for (auto& r : renderers) rp.push_back(r.get());
+    auto t0 = std::chrono::steady_clock::now();
+    DistResult dr = renderDistributed(rp, cam, camIndex, rs, work, a.dist, MpiJob::get(),
+                                      [&](size_t d, size_t n) { prog->update(d, n); });
+    if (!dr.writesOutputs) return false;
+    if (a.dist.parts == 0) {
+        img = std::move(dr.image);
+        return true;
+    }
+    if (!dr.complete) {
+        std::fprintf(stderr, "camera %d: part %d/%d not written: the render was interrupted%s\n", cam.id, a.dist.part,
+                     a.dist.parts, a.dist.checkpointDir.empty() ? "" : " (its finished tiles are in the checkpoint)");
+        return false;
+    }
+    PartHeader h;
+    h.identity = a.dist.identity;
+    h.sceneFile = a.positional[0];
+    h.cameraId = cam.id;
+    h.spp = rs.spp;
+    h.seed = rs.seed;
+    h.imageName = cam.imageName;
+    h.tilePixels = dr.grid.tilePixels;
+    h.part = a.dist.part;
+    h.parts = a.dist.parts;
+    h.tiles = dr.tiles;
+    h.truncatePng = a.truncatePng;
+    h.exrHalf = a.exrHalf;
+    h.tonemaps = cam.tonemaps;
+    h.renderSeconds = since(t0);
+    h.device = renderers.front()->context().info().name;
+    const std::string path = (std::filesystem::path(a.outDir) / partFileName(cam.imageName, a.dist.part, a.dist.parts)).string();
+    writePartFile(path, h, dr.image);
+    std::fprintf(stderr, "wrote %s (part %d/%d: %zu of %zu tiles)\n", path.c_str(), h.part, h.parts, h.tiles.size(),
+                 dr.grid.count());
+    return false;
+}
+
 // Renders one camera on every renderer and writes its outputs. Returns the samples per pixel every
 // pixel reached: fewer than asked if the render was interrupted (stopRequested), and the images
 // written are then partial.
-int renderAndWriteCamera(const Args& a, const Camera& cam, std::vector<std::unique_ptr<Renderer>>& renderers,
+int renderAndWriteCamera(const Args& a, const Camera& cam, int camIndex, std::vector<std::unique_ptr<Renderer>>& renderers,
                          std::vector<DeviceWork>& work, RenderCounters& counters, double& tOutput) {
     RenderSettings rs;
     rs.spp = a.spp > 0 ? a.spp : cam.numSamples;
     rs.seed = a.seed;
     rs.stop = &stopRequested();
     for (DeviceWork& w : work) w.counters.stoppedAtSample = -1;
-    Progress prog("camera " + std::to_string(cam.id) + " (" + cam.imageName + ", " + std::to_string(cam.width) + "x" +
-                  std::to_string(cam.height) + ", " + std::to_string(rs.spp) + " spp)");
+    std::optional<Progress> prog;  // rank 0 (or the only process) shows the progress of the whole image
+    if (MpiJob::get().rank() == 0)
+        prog.emplace("camera " + std::to_string(cam.id) + " (" + cam.imageName + ", " + std::to_string(cam.width) + "x" +
+                     std::to_string(cam.height) + ", " + std::to_string(rs.spp) + " spp)");
     ImageRGB img;
     auto tr = std::chrono::steady_clock::now();
-    if (renderers.size() == 1) {
-        img = renderers.front()->render(cam, rs, work[0].counters, [&](size_t d, size_t n) { prog.update(d, n); });
+    if (distActive(a.dist, MpiJob::get())) {
+        auto w0 = std::chrono::steady_clock::now();
+        const bool write = renderCameraDist(a, cam, camIndex, rs, renderers, work, prog, img);
+        counters.seconds += since(w0);
+        if (!write) return rs.spp;  // another rank, or a part (an interrupted one is not written: nothing partial)
+    } else if (renderers.size() == 1) {
+        img = renderers.front()->render(cam, rs, work[0].counters, [&](size_t d, size_t n) { prog->update(d, n); });
     } else {
         std::vector<Renderer*> rp;
         for (auto& r : renderers) rp.push_back(r.get());
         auto w0 = std::chrono::steady_clock::now();
-        img = renderOnDevices(rp, cam, rs, work, [&](size_t d, size_t n) { prog.update(d, n); });
+        img = renderOnDevices(rp, cam, rs, work, [&](size_t d, size_t n) { prog->update(d, n); });
         counters.seconds += since(w0);
     }
     const double camSeconds = since(tr);
@@ -225,7 +305,7 @@ int renderAndWriteCamera(const Args& a, const Camera& cam, std::vector<std::uniq
     for (const DeviceWork& w : work)  // an interrupted render: the samples every pixel has
         if (w.counters.stoppedAtSample >= 0) oo.spp = std::min(oo.spp, w.counters.stoppedAtSample);
     if (oo.spp < rs.spp) {
-        prog.interrupted(oo.spp, rs.spp);
+        prog->interrupted(oo.spp, rs.spp);
         oo.partial = "interrupted after " + std::to_string(oo.spp) + " of " + std::to_string(rs.spp) +
                      " samples per pixel" + (oo.spp == 0 ? " (some tiles not rendered)" : "");
     }
@@ -378,10 +458,102 @@ void printTimes(const StageTimes& t, const DeviceScene& ds, const Renderer& rend
                 rate(&RenderCounters::secondaryRays, STAGE_TRACE_SECONDARY), spp, pathSegmentRate(work));
 }
 
-int cmdRender(const Args& a) {
+// What a render writes: the cameras' outputs, or with --part K/N one part file per camera.
+std::vector<PlannedOutput> plannedOutputs(const Args& a, const Scene& scene, const std::vector<const Camera*>& cams) {
+    std::vector<PlannedOutput> out = planRenderOutputs(scene, cams, a.outDir);
+    if (a.dist.parts == 0) return out;
+    out.clear();
+    for (const Camera* c : cams) {
+        const std::string name = partFileName(c->imageName, a.dist.part, a.dist.parts);
+        if (!plainNameProblem(name).empty())
+            throw Error(a.positional[0] + ": camera " + std::to_string(c->id) + ": part file name '" + name +
+                        "' is not a plain file name (" + plainNameProblem(name) + ")");
+        out.push_back({(std::filesystem::path(a.outDir) / name).string(), "camera " + std::to_string(c->id) + ": part file"});
+    }
+    return out;
+}
+
+// The command-line options that change pixels, for the render identity of parts and checkpoints
+// (the camera size, spp and seed are part of it elsewhere).
+std::string pixelOptions(const Args& a) {
+    return "env=" + a.envSampling + ";all-features=" + std::to_string(a.allFeatures) +
+           ";resolution=" + std::to_string(a.width) + "x" + std::to_string(a.height) +
+           ";tile=" + std::to_string(a.dist.tilePixels);
+}
+
+// One rank's devices and transfers as text, for rank 0's summary (gatherRankStats).
+std::string rankStatsText(const std::vector<DeviceWork>& work) {
+    const RankTransfer& t = MpiJob::get().transfer();
+    std::ostringstream o;
+    o.precision(17);
+    o << t.tiles << ' ' << t.bytesSent << ' ' << t.bytesReceived << ' ' << t.waitSeconds << ' ' << t.sendSeconds << ' '
+      << t.serveSeconds << '\n';
+    for (const DeviceWork& w : work) {
+        const RenderCounters& c = w.counters;
+        o << c.cameraRays << ' ' << c.secondaryRays << ' ' << c.shadowRays << ' ' << c.tiles << ' ' << c.pixels << ' '
+          << c.seconds << ' ' << c.profiled << ' ' << w.failed;
+        for (double st : c.stageSeconds) o << ' ' << st;
+        o << ' ' << w.name << '\n';
+    }
+    return o.str();
+}
+
+// MPI: every rank's devices become entries of rank 0's `work` ("rank R: [i] name"), and rank 0
+// prints one line per rank: tiles, bytes sent, time spent waiting for tiles and sending them.
+void gatherRankStats(std::vector<DeviceWork>& work) {
+    MpiJob& job = MpiJob::get();
+    std::vector<std::string> all = job.gather(rankStatsText(work));
+    if (job.rank() != 0) return;
+    uint64_t ownTiles = 0;
+    for (DeviceWork& w : work) {
+        w.name = "rank 0: " + w.name;
+        ownTiles += w.counters.tiles;
+    }
+    const RankTransfer& own = job.transfer();
+    std::fprintf(stderr, "rank 0 (%s): %llu tiles; served the other ranks for %.4f s in all (%llu messages, %.1f KB)\n",
+                 job.host().c_str(), (unsigned long long)ownTiles, own.serveSeconds, (unsigned long long)own.messages,
+                 double(own.bytesReceived) / 1024);
+    for (size_t r = 1; r < all.size(); ++r) {
+        std::istringstream in(all[r]);
+        RankTransfer t;
+        in >> t.tiles >> t.bytesSent >> t.bytesReceived >> t.waitSeconds >> t.sendSeconds >> t.serveSeconds;
+        for (std::string line; std::getline(in >> std::ws, line);) {
+            std::istringstream l(line);
+            DeviceWork w;
+            RenderCounters& c = w.counters;
+            l >> c.cameraRays >> c.secondaryRays >> c.shadowRays >> c.tiles >> c.pixels >> c.seconds >> c.profiled >> w.failed;
+            for (double& st : c.stageSeconds) l >> st;
+            std::getline(l >> std::ws, w.name);
+            w.name = "rank " + std::to_string(r) + ": " + w.name;
+            work.push_back(w);
+        }
+        const double n = std::max<double>(1, double(t.tiles));
+        std::fprintf(stderr, "rank %zu: %llu tiles, sent %.1f KB (%.1f KB a tile); per tile %.3f ms waiting for its id, "
+                             "%.3f ms sending it\n", r, (unsigned long long)t.tiles, double(t.bytesSent) / 1024,
+                     double(t.bytesSent) / 1024 / n, t.waitSeconds * 1e3 / n, t.sendSeconds * 1e3 / n);
+    }
+}
+
+// From here on Ctrl-C finishes the pass and writes the partial image; not in an MPI job: a signal
+// there (mpirun ending every rank because one failed, or the job cancelled) exits at once, writing
+// no image of a camera not yet finished, with a line naming the rank.
+void setRenderInterrupts(const Args& a) {
+    MpiJob& job = MpiJob::get();
+    setGracefulInterrupt(!job.distributed());
+    if (!job.distributed()) return;
+    static std::string note;
+    note = "clrt: error: rank " + std::to_string(job.rank()) + " of " + std::to_string(job.size()) + " (" + job.host() +
+           "): the MPI job was ended (a rank failed, see mpirun's message naming it, or the job was cancelled); "
+           "no image of an unfinished camera written" +
+           (a.dist.checkpointDir.empty() ? "" : ", finished tiles kept in " + a.dist.checkpointDir);
+    setImmediateExitNote(note.c_str());
+}
+
+int cmdRender(Args a) {
     if (a.positional.size() != 1) throw Error("render: expected exactly one scene file (see clrt render --help)", ExitCode::Usage);
     setVerbose(a.verbose);
-    checkOutputDirectory(a.outDir);  // exists and accepts a new file: exit 4 before any work
+    MpiJob& job = MpiJob::get();
+    if (job.rank() == 0) checkOutputDirectory(a.outDir);  // exists and accepts a new file: exit 4 before any work
 
     StageTimes times;
     auto t = std::chrono::steady_clock::now();
@@ -400,7 +572,9 @@ int cmdRender(const Args& a) {
 
     std::vector<const Camera*> cams = selectCameras(scene, a);
     // Plain .png/.exr names, no two alike, none of them a file the scene reads: exit 2 before any work.
-    checkOutputsAreNotInputs(planRenderOutputs(scene, cams, a.outDir), sceneInputs(scene), a.positional[0]);
+    checkOutputsAreNotInputs(plannedOutputs(a, scene, cams), sceneInputs(scene), a.positional[0]);
+    if (job.rank() == 0 && (a.dist.parts > 0 || !a.dist.checkpointDir.empty()))
+        a.dist.identity = renderIdentity(sceneInputs(scene), pixelOptions(a));
     std::vector<DeviceInfo> devs = selectDevices(a.device);
     checkImagesFit(a, cams, devs);
 
@@ -425,17 +599,20 @@ int cmdRender(const Args& a) {
     std::string notRendered;  // cameras skipped after an interrupt
     bool anyPartial = false;
     int statsSpp = -1;
-    setGracefulInterrupt(true);  // Ctrl-C from here on: finish the pass, write the partial image
+    setRenderInterrupts(a);
+    int camIndex = 0;
     for (const Camera* cam : cams) {
         if (stopRequested().load()) {
             notRendered += (notRendered.empty() ? "" : ", ") + std::to_string(cam->id);
             continue;
         }
         const int asked = a.spp > 0 ? a.spp : cam->numSamples;
-        const int reached = renderAndWriteCamera(a, *cam, renderers, work, counters, times.output);
+        const int reached = renderAndWriteCamera(a, *cam, camIndex++, renderers, work, counters, times.output);
         if (reached < asked) anyPartial = true;
         if (statsSpp < 0) statsSpp = reached;  // the stats line reports the first camera's
     }
+    if (job.distributed()) gatherRankStats(work);
+    if (job.rank() != 0) return 0;
     sumDeviceCounters(work, counters);
     printTimes(times, ds, *renderers.front(), counters, work, std::max(statsSpp, 0));
     if (stopRequested().load()) {
@@ -447,38 +624,54 @@ int cmdRender(const Args& a) {
     return 0;
 }
 
+
+// The command named by argv[1]; its exit code, or a thrown error.
+int runCommand(int argc, char** argv) {
+    if (argc < 2 || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "--help")) {
+        std::fputs(kMainHelp, argc < 2 ? stderr : stdout);
+        return argc < 2 ? 1 : 0;
+    }
+    std::string cmd = argv[1];
+    if (cmd == "devices") return cmdDevices();
+    if (cmd == "tonemap") return cmdTonemap(argc, argv);
+    if (cmd == "merge") return cmdMerge(argc, argv);
+    if (cmd == "render") {
+        Args a = parseRenderArgs(argc, argv, 2);
+        if (a.help) {
+            std::fputs(kRenderHelp, stdout);
+            return 0;
+        }
+        return cmdRender(a);
+    }
+    throw Error("unknown command '" + cmd + "' (see clrt --help)", ExitCode::Usage);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-    installInterruptHandling();  // before any thread exists
+    installInterruptHandling();  // before any thread exists (MPI's included)
+    int rc = 0;
+    std::string who;  // "rank R: " in an MPI job of several ranks
     try {
-        if (argc < 2 || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "--help")) {
-            std::fputs(kMainHelp, argc < 2 ? stderr : stdout);
-            return argc < 2 ? 1 : 0;
+        if (argc >= 2 && !std::strcmp(argv[1], "render")) {
+            MpiJob& job = MpiJob::start(&argc, &argv);  // only when an MPI launcher started this process
+            if (job.distributed()) who = "rank " + std::to_string(job.rank()) + " (" + job.host() + "): ";
         }
-        std::string cmd = argv[1];
-        if (cmd == "devices") return cmdDevices();
-        if (cmd == "tonemap") return cmdTonemap(argc, argv);
-        if (cmd == "render") {
-            Args a = parseRenderArgs(argc, argv, 2);
-            if (a.help) {
-                std::fputs(kRenderHelp, stdout);
-                return 0;
-            }
-            return cmdRender(a);
-        }
-        throw Error("unknown command '" + cmd + "' (see clrt --help)", ExitCode::Usage);
+        rc = runCommand(argc, argv);
     } catch (const Error& e) {
-        std::fprintf(stderr, "clrt: error: %s\n", e.what());
-        return int(e.code());
+        std::fprintf(stderr, "clrt: error: %s%s\n", who.c_str(), e.what());
+        rc = int(e.code());
     } catch (const cl::Error& e) {
-        std::fprintf(stderr, "clrt: error: OpenCL %s (%d)\n", e.what(), e.err());
-        return int(ExitCode::Device);
+        std::fprintf(stderr, "clrt: error: %sOpenCL %s (%d)\n", who.c_str(), e.what(), e.err());
+        rc = int(ExitCode::Device);
     } catch (const std::bad_alloc&) {
-        std::fprintf(stderr, "clrt: error: out of host memory\n");
-        return int(ExitCode::Device);
+        std::fprintf(stderr, "clrt: error: %sout of host memory\n", who.c_str());
+        rc = int(ExitCode::Device);
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "clrt: error: %s\n", e.what());
-        return 2;
+        std::fprintf(stderr, "clrt: error: %s%s\n", who.c_str(), e.what());
+        rc = 2;
     }
+    std::fflush(stderr);
+    MpiJob::get().end(rc);  // MPI_Finalize, or MPI_Abort after an error (ends the other ranks)
+    return rc;
 }

@@ -17,12 +17,16 @@ namespace {
 std::atomic<bool> gStop{false};
 std::atomic<bool> gGraceful{false};
 std::atomic<int> gSignal{0};
+std::atomic<const char*> gExitNote{nullptr};
 
 const char* sigName(int sig) { return sig == SIGTERM ? "SIGTERM" : sig == SIGHUP ? "SIGHUP" : "SIGINT"; }
 
 [[noreturn]] void exitNow(int sig, const char* why) {
     removeTemporariesForExit();
-    std::fprintf(stderr, "\nclrt: %s (%s); no temporary file left behind\n", why, sigName(sig));
+    if (const char* note = gExitNote.load())
+        std::fprintf(stderr, "\n%s (%s)\n", note, sigName(sig));
+    else
+        std::fprintf(stderr, "\nclrt: %s (%s); no temporary file left behind\n", why, sigName(sig));
     std::fflush(stderr);
     _exit(128 + sig);
 }
@@ -56,5 +60,6 @@ void installInterruptHandling() {
 void setGracefulInterrupt(bool graceful) { gGraceful.store(graceful); }
 const std::atomic<bool>& stopRequested() { return gStop; }
 int stopSignal() { return gSignal.load(); }
+void setImmediateExitNote(const char* line) { gExitNote.store(line); }
 
 }  // namespace clrt

@@ -16,5 +16,8 @@ void setGracefulInterrupt(bool graceful);
 const std::atomic<bool>& stopRequested();
 // The signal that set stopRequested (0 if none).
 int stopSignal();
+// A line printed instead of the usual note when a signal ends the process at once (an MPI rank that
+// mpirun ends because another rank failed). Set it before any signal may arrive.
+void setImmediateExitNote(const char* line);
 
 }  // namespace clrt

@@ -20,41 +20,41 @@ bool envPair(const char* name, int& i, int& n) {
     return v && std::sscanf(v, "%d:%d", &i, &n) == 2;
 }
 
-// The tiles of one render, handed out to the devices' threads (thread-safe); the tile of a failed
-// device goes back to the pool. Progress in thousandths of a tile: finished tiles plus each device's
-// part of the tile in hand, so it moves within a tile too (a 1x1 image at many samples is one tile),
-// reported only when it grows (a failed device's partial tile goes back to the pool).
+// The tiles of one render, handed out to the devices' threads (thread-safe) from a TileFeed; the tile
+// of a failed device goes back to the pool first. Progress in thousandths of a tile: each device's
+// part of the tile in hand (reported to the feed's inHand), so it moves within a tile too.
 class TilePool {
 public:
-    TilePool(size_t numPixels, size_t tile, size_t devices, const std::function<void(size_t, size_t)>& progress)
-        : numPixels_(numPixels), tile_(tile), totalTiles_((numPixels + tile - 1) / tile), partial_(devices, 0),
-          progress_(progress) {}
+    TilePool(size_t numPixels, size_t devices, const TileFeed& feed)
+        : numPixels_(numPixels), feed_(feed), partial_(devices, 0) {}
 
     // Device d finished the tile in hand (`current`, SIZE_MAX if none) and asks for the next one.
+    // Renderer::renderTiles asks for a next tile only after a complete one (a stopped render leaves
+    // its loop instead), so every tile reported finished here has all its samples.
     bool take(size_t d, size_t& current, size_t& first, size_t& count) {
         std::lock_guard<std::mutex> lock(mutex_);
         if (current != SIZE_MAX) {
-            ++doneTiles_;
             partial_[d] = 0;
-            report();
+            reportInHand();  // before the finished tile counts, so that progress never overshoots
+            feed_.finished(current);
             current = SIZE_MAX;
         }
         if (!returned_.empty()) {
             current = returned_.front();
             returned_.pop_front();
-        } else if (nextTile_ < totalTiles_) {
-            current = nextTile_++;
-        } else {
+        } else if (exhausted_ || !feed_.next(current)) {
+            exhausted_ = true;
+            current = SIZE_MAX;
             return false;
         }
-        first = current * tile_;
-        count = std::min(tile_, numPixels_ - first);
+        first = current * feed_.tilePixels;
+        count = std::min(feed_.tilePixels, numPixels_ - first);
         return true;
     }
     void progress(size_t d, size_t done, size_t total) {
         std::lock_guard<std::mutex> lock(mutex_);
         partial_[d] = total ? std::min(kUnits - 1, done * kUnits / total) : 0;
-        report();
+        reportInHand();
     }
     // Device d failed with `current` in hand: that tile goes back to the pool.
     void fail(size_t d, size_t current, DeviceWork& w, const std::exception& e) {
@@ -64,25 +64,26 @@ public:
         partial_[d] = 0;
         if (current != SIZE_MAX) returned_.push_back(current);
         warn("device '" + w.name + "' failed and was dropped: " + w.error);
+        reportInHand();
     }
     bool allHandedOut() {
         std::lock_guard<std::mutex> lock(mutex_);
-        return returned_.empty() && nextTile_ >= totalTiles_;
+        return returned_.empty() && exhausted_;
     }
 
 private:
     static constexpr size_t kUnits = 1000;
-    void report() {  // with mutex_ held
-        size_t done = doneTiles_ * kUnits;
-        for (size_t p : partial_) done += p;
-        if (progress_ && done > reported_) progress_(reported_ = done, totalTiles_ * kUnits);
+    void reportInHand() {  // with mutex_ held
+        size_t units = 0;
+        for (size_t p : partial_) units += p;
+        if (feed_.inHand) feed_.inHand(units);
     }
-    const size_t numPixels_, tile_, totalTiles_;
+    const size_t numPixels_;
+    const TileFeed& feed_;
     std::mutex mutex_;
-    size_t nextTile_ = 0, doneTiles_ = 0, reported_ = 0;
+    bool exhausted_ = false;  // feed_.next said no
     std::vector<size_t> partial_;
     std::deque<size_t> returned_;  // tiles of failed devices
-    const std::function<void(size_t, size_t)>& progress_;
 };
 
 // Test hooks: CLRT_THROTTLE_DEVICE=i:ms sleeps before each tile but the first of device i;
@@ -116,19 +117,11 @@ void renderWorker(size_t d, Renderer& renderer, TilePool& pool, const FaultHooks
 }
 }  // namespace
 
-ImageRGB renderOnDevices(const std::vector<Renderer*>& renderers, const Camera& cam, const RenderSettings& settings,
-                         std::vector<DeviceWork>& work, const std::function<void(size_t, size_t)>& progress) {
+void renderFedTiles(const std::vector<Renderer*>& renderers, const Camera& cam, const RenderSettings& settings,
+                    std::vector<DeviceWork>& work, const TileFeed& feed, ImageRGB& out) {
     const size_t numPixels = size_t(cam.width) * cam.height;
-    ImageRGB out;
-    out.width = cam.width;
-    out.height = cam.height;
-    out.isHdr = true;
-    out.pixels.assign(numPixels * 3, 0.0f);
     work.resize(renderers.size());
-
-    // Enough tiles for balancing, large enough to keep each device busy.
-    const size_t tile = std::max<size_t>(4096, std::min(settings.maxBatchPixels, numPixels / (16 * renderers.size()) + 1));
-    TilePool pool(numPixels, tile, renderers.size(), progress);
+    TilePool pool(numPixels, renderers.size(), feed);
     const FaultHooks hooks;
 
     // Rounds: a tile returned by a device that failed after the others finished is picked up by a
@@ -149,6 +142,42 @@ ImageRGB renderOnDevices(const std::vector<Renderer*>& renderers, const Camera& 
             break;
         }
     }
+}
+
+ImageRGB renderOnDevices(const std::vector<Renderer*>& renderers, const Camera& cam, const RenderSettings& settings,
+                         std::vector<DeviceWork>& work, const std::function<void(size_t, size_t)>& progress) {
+    const size_t numPixels = size_t(cam.width) * cam.height;
+    ImageRGB out;
+    out.width = cam.width;
+    out.height = cam.height;
+    out.isHdr = true;
+    out.pixels.assign(numPixels * 3, 0.0f);
+
+    // Enough tiles for balancing, large enough to keep each device busy; handed out in order.
+    TileFeed feed;
+    feed.tilePixels =
+        std::max<size_t>(4096, std::min(settings.maxBatchPixels, numPixels / (16 * renderers.size()) + 1));
+    const size_t totalTiles = (numPixels + feed.tilePixels - 1) / feed.tilePixels;
+    size_t nextTile = 0, doneTiles = 0, inHand = 0, reported = 0;
+    // Progress only when it grows (a failed device's partial tile goes back to the pool).
+    auto report = [&] {
+        size_t done = doneTiles * 1000 + inHand;
+        if (progress && done > reported) progress(reported = done, totalTiles * 1000);
+    };
+    feed.next = [&](size_t& tile) {
+        if (nextTile >= totalTiles) return false;
+        tile = nextTile++;
+        return true;
+    };
+    feed.finished = [&](size_t) {
+        ++doneTiles;
+        report();
+    };
+    feed.inHand = [&](size_t units) {
+        inHand = units;
+        report();
+    };
+    renderFedTiles(renderers, cam, settings, work, feed, out);
     return out;
 }
 

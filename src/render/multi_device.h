@@ -28,4 +28,21 @@ struct DeviceWork {
 ImageRGB renderOnDevices(const std::vector<Renderer*>& renderers, const Camera& cam, const RenderSettings& settings,
                          std::vector<DeviceWork>& work, const std::function<void(size_t, size_t)>& progress = {});
 
+// Where renderOnDevices takes its tiles from when the caller schedules them (src/dist/: a part of the
+// image, tiles already in a checkpoint, tiles handed out to MPI ranks). Tile t is pixels
+// [t * tilePixels, min(numPixels, (t + 1) * tilePixels)). The functions are called from the device
+// threads, one call at a time (under one lock).
+struct TileFeed {
+    size_t tilePixels = 4096;
+    std::function<bool(size_t& tile)> next;      // the next tile to render; false: none left (not asked again)
+    std::function<void(size_t tile)> finished;   // tile's pixels, all samples, are in the image
+    std::function<void(size_t units)> inHand;    // optional: thousandths of tiles in hand on the devices
+};
+
+// renderOnDevices over the tiles of `feed`, into `out` (already sized width*height*3; pixels of tiles
+// not handed out are left as they are). A tile is reported finished only when complete: a render
+// stopped by settings.stop reports no tile it cut short.
+void renderFedTiles(const std::vector<Renderer*>& renderers, const Camera& cam, const RenderSettings& settings,
+                    std::vector<DeviceWork>& work, const TileFeed& feed, ImageRGB& out);
+
 }  // namespace clrt

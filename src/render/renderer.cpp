@@ -43,7 +43,7 @@ struct Renderer::Impl {
     cl::Buffer image;
     dev::SceneParams scene{};
     dev::CameraParams cam{};
-    int count = 0, firstPixel = 0, firstSample = 0, samples = 1, lightBegin = 0, lightEnd = 0, chunk = 0;
+    int count = 0, firstPixel = 0, firstSample = 0, samples = 1, lightBegin = 0, lightEnd = 0, lightSlots = 1, chunk = 0;
 
     Impl(DeviceContext& d, const DeviceScene& s) : dc(d), ds(s) {
         cl_command_queue_properties qp = 0;
@@ -128,7 +128,8 @@ struct Renderer::Impl {
     void setRenderArgs(const dev::CameraParams& cp, const dev::SceneParams& sp, const cl::Buffer& img);
     // Traces `n` camera paths (already generated) through every bounce and accumulates them into the
     // image; `bounces` says whether any material makes children.
-    void traceBatch(int n, const dev::SceneParams& sp, bool bounces, size_t lightChunk, RenderCounters& counters);
+    void traceBatch(int n, const dev::SceneParams& sp, bool bounces, size_t lightChunk, int slotsPerLight,
+                    RenderCounters& counters);
     // Every batch of pixels [tileFirst, tileEnd), all samples (after setRenderArgs), unless stopped()
     // turns true between two sample groups. Returns the samples each pixel got.
     int renderTile(size_t tileFirst, size_t tileEnd, const BatchPlan& plan, RenderCounters& counters,
@@ -166,7 +167,7 @@ void Renderer::Impl::setRenderArgs(const dev::CameraParams& cp, const dev::Scene
 }
 
 void Renderer::Impl::traceBatch(int n, const dev::SceneParams& sp, bool bounces, size_t lightChunk,
-                                RenderCounters& counters) {
+                                int slotsPerLight, RenderCounters& counters) {
     cl::CommandQueue& q = dc.queue();
     const int numLights = sp.numLights;
     for (int depth = 0; n > 0; ++depth) {
@@ -176,12 +177,12 @@ void Renderer::Impl::traceBatch(int n, const dev::SceneParams& sp, bool bounces,
         run(kShade, n, STAGE_SHADE);
         for (int l0 = 0; l0 < numLights; l0 += int(lightChunk)) {
             int l1 = std::min(numLights, l0 + int(lightChunk));
-            int slots = n * (l1 - l0);
-            kLights.set("count", n).set("lightBegin", l0).set("lightEnd", l1);
+            int slots = n * (l1 - l0) * slotsPerLight;
+            kLights.set("count", n).set("lightBegin", l0).set("lightEnd", l1).set("lightSlots", slotsPerLight);
             run(kLights, n, STAGE_SAMPLE_LIGHTS);
             kShadow.set("count", slots);
             run(kShadow, slots, STAGE_TRACE_SHADOW);
-            kGather.set("count", n).set("chunk", l1 - l0);
+            kGather.set("count", n).set("chunk", (l1 - l0) * slotsPerLight);
             run(kGather, n, STAGE_GATHER);
             counters.shadowRays += slots;
         }
@@ -268,6 +269,7 @@ struct BatchPlan {
     size_t batch = 1;       // pixels per batch
     size_t capacity = 0;    // queue slots: batch * group paths, times 2^splitDepth when materials bounce
     size_t lightChunk = 0;  // lights per sample_lights launch (0: the scene has none)
+    int lightSlots = 1;     // shadow-ray slots per light: 2 with a multi-sample MIS environment light
     bool bounces = false;   // some material spawns children
 };
 
@@ -293,8 +295,11 @@ static BatchPlan planBatches(const DeviceScene& ds, size_t numPixels, const Rend
     if (settings.splitDepthOverride >= 0) split = settings.splitDepthOverride;
     sp.splitDepth = split;
     plan.capacity = plan.bounces ? batchPaths << split : batchPaths;
+    for (const dev::Light& l : ds.lights)
+        if (l.kind == dev::LIGHT_ENVIRONMENT && l.sampler == dev::ENV_SAMPLE_MIS && l.distribution != CLRT_INVALID)
+            plan.lightSlots = 2;  // sample_lights' EnvLight_SampleMis: a light and a cosine sample
     if (sp.numLights > 0) {
-        size_t budget = (size_t(256) << 20) / sizeof(dev::ShadowRay);
+        size_t budget = (size_t(256) << 20) / sizeof(dev::ShadowRay) / size_t(plan.lightSlots);
         plan.lightChunk = std::max<size_t>(1, std::min<size_t>(sp.numLights, budget / plan.capacity));
     }
     return plan;
@@ -320,7 +325,7 @@ int Renderer::Impl::renderTile(size_t tileFirst, size_t tileEnd, const BatchPlan
             run(kGenerate, n, STAGE_GENERATE);
             counters.cameraRays += n;
             if (scene.pathMode != 0) counters.pathSegments += n;
-            traceBatch(n, scene, plan.bounces, plan.lightChunk, counters);
+            traceBatch(n, scene, plan.bounces, plan.lightChunk, plan.lightSlots, counters);
             ++doneBatches;
             if (progress || events.size() >= kProfileEvents) {
                 CL_CPP(dc.queue().finish());
@@ -350,7 +355,7 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     if (sp.pathMode != 0 && !m.ds.features.pathTracing)
         throw Error("camera " + std::to_string(cam.id) + " is path traced but the program was built without CLRT_HAS_PATH_TRACING");
     const BatchPlan plan = planBatches(m.ds, numPixels, settings, cp, sp);
-    m.ensureQueues(plan.capacity, plan.capacity * std::max<size_t>(plan.lightChunk, 1));
+    m.ensureQueues(plan.capacity, plan.capacity * std::max<size_t>(plan.lightChunk, 1) * size_t(plan.lightSlots));
 
     cl::Buffer image = CL_CPP(cl::Buffer(m.dc.context(), CL_MEM_READ_WRITE, imageBytes));
     CL_CPP(m.dc.queue().enqueueFillBuffer(image, dev::float4{0, 0, 0, 0}, 0, imageBytes));

@@ -49,9 +49,9 @@
     P(IN, float, envDist) P(BUF, PathState, nextPaths) P(BUF, Ray, nextRays) P(BUF, int, childValid)
 
 #define CLRT_KERNEL_sample_lights(P)                                                               \
-    P(VAL, int, count) P(VAL, int, lightBegin) P(VAL, int, lightEnd) P(VAL, SceneParams, scene)    \
-    P(IN, PathState, paths) P(IN, ShadingPoint, points) P(IN, Material, materials) P(IN, Light, lights) \
-    CLRT_PARAMS_IMAGES(P) \
+    P(VAL, int, count) P(VAL, int, lightBegin) P(VAL, int, lightEnd) P(VAL, int, lightSlots)       \
+    P(VAL, SceneParams, scene) P(IN, PathState, paths) P(IN, ShadingPoint, points) P(IN, Material, materials) \
+    P(IN, Light, lights) CLRT_PARAMS_IMAGES(P) \
     P(IN, float, envDist) P(BUF, ShadowRay, shadows)
 
 #define CLRT_KERNEL_gather_shadows(P)                                                              \

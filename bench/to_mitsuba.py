@@ -1,0 +1,372 @@
+#!/usr/bin/env python3
+"""to_mitsuba.py — converts a CENG795 XML scene (SCENE_FORMAT.md) into a Mitsuba 3 scene dict, for the
+benchmark (bench/bench.py --mitsuba) and for a reader who wants to check clrt against another renderer.
+
+Reads: the first camera (lookAt or simple; FovY/NearPlane, ImageResolution), VertexData, Mesh (PLY or
+inline Faces; Transformations; shadingMode), Triangle, Sphere (Center, Radius, Transformations), the
+Materials' DiffuseReflectance, Point/Directional/Area lights and SphericalDirectionalLight (lat-long,
+and probe maps resampled to lat-long). Drops, with a warning each: specular/mirror/dielectric/conductor
+terms, textures, spot and ambient lights, MeshInstance, LightMesh/LightSphere, degamma, thin lens.
+
+Conventions (measured against clrt, see README "Benchmark"):
+- Radiance: the course's shading model has no 1/π in the diffuse term (L = kd·cosθ·E), Mitsuba's
+  Lambertian BRDF is kd/π and refuses kd > 1. So every emitter is scaled by π for the surfaces, and the
+  camera is made blind to emitters (path integrator, hide_emitters): Mitsuba's image is then the course's
+  for every pixel that sees a surface and 0 where the camera sees the environment. `background_dict`
+  gives the second half: the environment seen by the camera at scale 1 (path, max_depth 1), which is
+  noise-free but for pixel edges; the benchmark renders it once at high spp and adds it.
+- Direct lighting only (clrt's renderer has no diffuse inter-reflection): path max_depth 2.
+- Environment orientation: clrt's lat-long u = (1 + atan2(dx, −dz)/π)/2 puts −z at u = ½; Mitsuba's
+  envmap puts −z at u = 0, so the map is turned 180° about y.
+- Camera: Mitsuba's look_at with fov_axis y is the course's right-handed camera (gaze × up to the right);
+  handedness="left" is flipped with a negative x scale. Pixel filter: box (as clrt), sampler independent.
+"""
+import math
+import os
+import sys
+import tempfile
+import xml.etree.ElementTree as ET
+
+import numpy as np
+
+
+def _nums(el, default=None):
+    if el is None or el.text is None or not el.text.strip():
+        return default
+    return [float(x) for x in el.text.split()]
+
+
+def _mat_mul(a, b):
+    return (np.asarray(a) @ np.asarray(b)).tolist()
+
+
+class Converter:
+    def __init__(self, path, warn=None):
+        self.path = os.path.abspath(path)
+        self.base = os.path.dirname(self.path)
+        self.root = ET.parse(self.path).getroot()
+        self.warnings = []
+        self._warn_fn = warn
+        self.tmp = tempfile.mkdtemp(prefix="clrt-mitsuba-")
+        self.vertices = np.zeros((0, 3))
+        vd = self.root.find("VertexData")
+        if vd is not None:
+            if vd.get("binaryFile"):
+                self.warn("VertexData binaryFile not supported: dropped")
+            else:
+                self.vertices = np.array(_nums(vd, []), dtype=np.float64).reshape(-1, 3)
+        zb = self.root.find("ZeroBasedIndexing")
+        self.zero_based = zb is not None and zb.text.strip().lower() == "true"
+        self.transforms = self._read_transforms()
+        self.materials = {}
+        self.images = {}
+        for img in self.root.iter("Image"):
+            p = img.text.strip()
+            self.images[img.get("id")] = p if os.path.isabs(p) else os.path.normpath(os.path.join(self.base, p))
+
+    def warn(self, msg):
+        if msg in self.warnings:
+            return
+        self.warnings.append(msg)
+        if self._warn_fn:
+            self._warn_fn("to_mitsuba: " + msg)
+
+    def _abs(self, p):
+        return p if os.path.isabs(p) else os.path.normpath(os.path.join(self.base, p))
+
+    # ------------------------------------------------------------------------------- transformations
+    def _read_transforms(self):
+        t = {}
+        tr = self.root.find("Transformations")
+        if tr is None:
+            return t
+        for el in tr:
+            v = _nums(el, [])
+            i = el.get("id")
+            if el.tag == "Translation":
+                m = np.eye(4)
+                m[:3, 3] = v[:3]
+                t["t" + i] = m
+            elif el.tag == "Scaling":
+                t["s" + i] = np.diag([v[0], v[1], v[2], 1.0])
+            elif el.tag == "Rotation":
+                a = math.radians(v[0])
+                ax = np.array(v[1:4]) / np.linalg.norm(v[1:4])
+                x, y, z = ax
+                c, s, C = math.cos(a), math.sin(a), 1 - math.cos(a)
+                m = np.eye(4)
+                m[:3, :3] = [[c + x * x * C, x * y * C - z * s, x * z * C + y * s],
+                             [y * x * C + z * s, c + y * y * C, y * z * C - x * s],
+                             [z * x * C - y * s, z * y * C + x * s, c + z * z * C]]
+                t["r" + i] = m
+            elif el.tag == "Composite":
+                t["c" + i] = np.array(v, dtype=np.float64).reshape(4, 4)
+        return t
+
+    def object_matrix(self, el):
+        """"t1 s2" means first t1, then s2: M = S2·T1."""
+        m = np.eye(4)
+        tr = el.find("Transformations")
+        if tr is not None and tr.text:
+            for ref in tr.text.split():
+                if ref not in self.transforms:
+                    self.warn("unknown transformation %s: ignored" % ref)
+                    continue
+                m = self.transforms[ref] @ m
+        return m
+
+    # ------------------------------------------------------------------------------------ materials
+    def bsdf(self, mid):
+        if mid in self.materials:
+            return self.materials[mid]
+        mat = None
+        mats = self.root.find("Materials")
+        for m in (mats if mats is not None else []):
+            if m.get("id") == mid:
+                mat = m
+        kd = [0.0, 0.0, 0.0]
+        if mat is not None:
+            kd = _nums(mat.find("DiffuseReflectance"), kd)
+            kind = mat.get("type", "")
+            if kind:
+                self.warn("material %s type=%s: only its diffuse term is kept" % (mid, kind))
+            ks = _nums(mat.find("SpecularReflectance"), [0, 0, 0])
+            if max(ks) > 0:
+                self.warn("material %s: SpecularReflectance dropped (diffuse only)" % mid)
+            if mat.get("degamma", "").lower() == "true":
+                self.warn("material %s: degamma ignored" % mid)
+            if mat.get("BRDF"):
+                self.warn("material %s: BRDF %s replaced by Lambert" % (mid, mat.get("BRDF")))
+        if max(kd) > 1.0:
+            self.warn("material %s: DiffuseReflectance > 1 clamped to 1 (Mitsuba refuses it)" % mid)
+            kd = [min(1.0, x) for x in kd]
+        b = {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": kd}}}
+        self.materials[mid] = b
+        return b
+
+    # ------------------------------------------------------------------------------------- geometry
+    def _write_ply(self, name, pos, faces, normals=None):
+        path = os.path.join(self.tmp, name + ".ply")
+        n = len(pos)
+        with open(path, "wb") as f:
+            hdr = "ply\nformat binary_little_endian 1.0\nelement vertex %d\nproperty float x\nproperty float y\nproperty float z\n" % n
+            if normals is not None:
+                hdr += "property float nx\nproperty float ny\nproperty float nz\n"
+            hdr += "element face %d\nproperty list uchar int vertex_indices\nend_header\n" % len(faces)
+            f.write(hdr.encode())
+            v = pos.astype("<f4") if normals is None else np.hstack([pos, normals]).astype("<f4")
+            f.write(v.tobytes())
+            fa = np.zeros(len(faces), dtype=[("n", "u1"), ("i", "<i4", 3)])
+            fa["n"] = 3
+            fa["i"] = faces
+            f.write(fa.tobytes())
+        return path
+
+    def _mesh(self, el, shapes, kind):
+        mid = el.find("Material").text.strip()
+        m = self.object_matrix(el)
+        smooth = el.get("shadingMode", "flat") == "smooth"
+        if el.find("Textures") is not None:
+            self.warn("%s %s: textures dropped" % (kind, el.get("id")))
+        faces_el = el.find("Faces") if kind == "Mesh" else el.find("Indices")
+        d = {"bsdf": self.bsdf(mid), "to_world": m.tolist()}
+        if kind == "Mesh" and faces_el.get("plyFile"):
+            d.update(type="ply", filename=self._abs(faces_el.get("plyFile")), face_normals=not smooth)
+        else:
+            if faces_el.get("binaryFile"):
+                self.warn("%s %s: binary faces not supported: dropped" % (kind, el.get("id")))
+                return
+            idx = np.array(_nums(faces_el, []), dtype=np.int64).reshape(-1, 3)
+            off = int(faces_el.get("vertexOffset", "0"))
+            idx = idx + off - (0 if self.zero_based else 1)
+            used = np.unique(idx)
+            remap = -np.ones(len(self.vertices), dtype=np.int64)
+            remap[used] = np.arange(len(used))
+            pos, faces = self.vertices[used], remap[idx]
+            normals = None
+            if smooth:  # area-weighted vertex normals, as clrt computes them
+                fn = np.cross(pos[faces[:, 1]] - pos[faces[:, 0]], pos[faces[:, 2]] - pos[faces[:, 0]])
+                normals = np.zeros_like(pos)
+                for k in range(3):
+                    np.add.at(normals, faces[:, k], fn)
+                normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-30)
+            path = self._write_ply("%s_%s" % (kind, el.get("id")), pos, faces, normals)
+            d.update(type="ply", filename=path, face_normals=not smooth)
+        shapes["%s_%s" % (kind.lower(), el.get("id"))] = d
+
+    def shapes(self):
+        out = {}
+        objs = self.root.find("Objects")
+        for el in (objs if objs is not None else []):
+            if el.tag in ("Mesh", "Triangle"):
+                self._mesh(el, out, el.tag)
+            elif el.tag == "Sphere":
+                ci = int(el.find("Center").text) - (0 if self.zero_based else 1)
+                c = self.vertices[ci]
+                r = float(el.find("Radius").text)
+                m = self.object_matrix(el)
+                if el.find("Textures") is not None:
+                    self.warn("Sphere %s: textures dropped" % el.get("id"))
+                world = m @ np.array([[r, 0, 0, c[0]], [0, r, 0, c[1]], [0, 0, r, c[2]], [0, 0, 0, 1.0]])
+                out["sphere_" + el.get("id")] = {"type": "sphere", "to_world": world.tolist(), "bsdf": self.bsdf(el.find("Material").text.strip())}
+            else:
+                self.warn("%s dropped (not converted)" % el.tag)
+        return out
+
+    # ---------------------------------------------------------------------------------------- lights
+    def _latlong_from_probe(self, path):
+        """Resamples an angular (probe) map to a 2:1 lat-long one in clrt's lat-long convention."""
+        import OpenEXR
+        with OpenEXR.File(path) as f:
+            ch = f.channels()
+            img = ch["RGB"].pixels if "RGB" in ch else ch["RGBA"].pixels[..., :3]
+        img = np.asarray(img, dtype=np.float32)
+        h, w = img.shape[:2]
+        H = max(16, h)
+        W = 2 * H
+        u = (np.arange(W) + 0.5) / W
+        v = (np.arange(H) + 0.5) / H
+        uu, vv = np.meshgrid(u, v)
+        phi, theta = math.pi * (2 * uu - 1), math.pi * vv
+        dx, dy, dz = np.sin(theta) * np.sin(phi), np.cos(theta), -np.sin(theta) * np.cos(phi)
+        s = np.sqrt(dx * dx + dy * dy)
+        R = np.arctan2(s, -dz) / math.pi
+        x = np.where(s > 0, R * dx / np.maximum(s, 1e-30), R)
+        y = np.where(s > 0, R * dy / np.maximum(s, 1e-30), 0.0)
+        pu, pv = 0.5 * (x + 1) * w - 0.5, 0.5 * (1 - y) * h - 0.5
+        x0, y0 = np.floor(pu).astype(int), np.floor(pv).astype(int)
+        fx, fy = (pu - x0)[..., None], (pv - y0)[..., None]
+        cl = lambda a, n: np.clip(a, 0, n - 1)
+        t = lambda yy, xx: img[cl(yy, h), cl(xx, w)]
+        out = (t(y0, x0) * (1 - fx) * (1 - fy) + t(y0, x0 + 1) * fx * (1 - fy) + t(y0 + 1, x0) * (1 - fx) * fy
+               + t(y0 + 1, x0 + 1) * fx * fy)
+        p = os.path.join(self.tmp, "probe_latlong.exr")
+        import OpenEXR as E
+        E.File({"compression": E.ZIP_COMPRESSION}, {"RGB": np.ascontiguousarray(out.astype(np.float32))}).write(p)
+        return p
+
+    def env(self):
+        """(filename, mapping) of the scene's environment light, or None."""
+        lights = self.root.find("Lights")
+        for el in (lights if lights is not None else []):
+            if el.tag == "SphericalDirectionalLight":
+                path = self.images.get(el.find("ImageId").text.strip())
+                if el.get("type", "latlong") == "probe":
+                    path = self._latlong_from_probe(path)
+                return path
+        return None
+
+    def emitters(self, scale):
+        out = {}
+        lights = self.root.find("Lights")
+        for el in (lights if lights is not None else []):
+            lid = el.get("id", "0")
+            if el.tag == "PointLight":
+                out["point_" + lid] = {"type": "point", "position": _nums(el.find("Position")),
+                                       "intensity": {"type": "rgb", "value": [scale * x for x in _nums(el.find("Intensity"))]}}
+            elif el.tag == "DirectionalLight":
+                out["dir_" + lid] = {"type": "directional", "direction": _nums(el.find("Direction")),
+                                     "irradiance": {"type": "rgb", "value": [scale * x for x in _nums(el.find("Radiance"))]}}
+            elif el.tag == "AreaLight":
+                p, n, size = np.array(_nums(el.find("Position"))), np.array(_nums(el.find("Normal"))), float(el.find("Size").text)
+                n = n / np.linalg.norm(n)
+                a = np.cross(n, [1.0, 0, 0] if abs(n[0]) < 0.9 else [0, 1.0, 0])
+                a /= np.linalg.norm(a)
+                b = np.cross(n, a)
+                m = np.eye(4)
+                m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = a * size / 2, b * size / 2, n, p
+                self.warn("AreaLight %s: a rectangle in Mitsuba (it occludes; clrt's does not)" % lid)
+                out["area_" + lid] = {"type": "rectangle", "to_world": m.tolist(),
+                                      "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0, 0.0, 0.0]}},
+                                      "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [scale * x for x in _nums(el.find("Radiance"))]}}}
+            elif el.tag == "SphericalDirectionalLight":
+                path = self.env()
+                out["env_" + lid] = {"type": "envmap", "filename": path, "scale": scale,
+                                     "to_world": [[-1, 0, 0, 0], [0, 1, 0, 0], [0, 0, -1, 0], [0, 0, 0, 1]]}
+            elif el.tag == "AmbientLight":
+                if max(_nums(el, [0])) > 0:
+                    self.warn("AmbientLight dropped")
+            else:
+                self.warn("%s dropped (not converted)" % el.tag)
+        return out
+
+    # ---------------------------------------------------------------------------------------- camera
+    def sensor(self, spp, res=None):
+        cam = self.root.find("Cameras")[0]
+        pos = np.array(_nums(cam.find("Position")))
+        up = np.array(_nums(cam.find("Up")))
+        w, h = (int(x) for x in cam.find("ImageResolution").text.split())
+        if res:
+            w, h = res
+        if cam.get("type") == "lookAt":
+            gp = cam.find("GazePoint")
+            gaze = np.array(_nums(gp)) - pos if gp is not None else np.array(_nums(cam.find("Gaze")))
+            fovy = float(cam.find("FovY").text)
+        else:
+            gaze = np.array(_nums(cam.find("Gaze")))
+            l, r, b, t = _nums(cam.find("NearPlane"))
+            nd = float(cam.find("NearDistance").text)
+            if abs(l + r) > 1e-6 * abs(r - l) or abs(b + t) > 1e-6 * abs(t - b):
+                self.warn("off-centre NearPlane: converted as a centred one")
+            fovy = math.degrees(2 * math.atan(0.5 * (t - b) / nd))
+        if cam.find("ApertureSize") is not None:
+            self.warn("thin lens dropped (pinhole)")
+        m = _look_at(pos, pos + gaze, up)
+        if cam.get("handedness") == "left":
+            m = _mat_mul(m, np.diag([-1.0, 1, 1, 1]))
+        return {"type": "perspective", "fov_axis": "y", "fov": fovy, "to_world": m,
+                "near_clip": 1e-3, "far_clip": 1e7,
+                "film": {"type": "hdrfilm", "width": w, "height": h, "rfilter": {"type": "box"}, "pixel_format": "rgb"},
+                "sampler": {"type": "independent", "sample_count": spp}}
+
+
+def _look_at(origin, target, up):
+    """Mitsuba's look_at (camera looks along +z, +x to the left, +y up), as a plain matrix."""
+    d = target - origin
+    d = d / np.linalg.norm(d)
+    left = np.cross(up, d)
+    left /= np.linalg.norm(left)
+    nu = np.cross(d, left)
+    m = np.eye(4)
+    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = left, nu, d, origin
+    return m.tolist()
+
+
+def scene_dicts(path, spp, res=None, warn=None):
+    """(surfaces, background, warnings): two Mitsuba scene dicts whose images add up to the course's
+    image of the scene's first camera (see the module's comment)."""
+    c = Converter(path, warn)
+    shapes = c.shapes()
+    sensor = c.sensor(spp, res)
+    surf = {"type": "scene", "integrator": {"type": "path", "max_depth": 2, "hide_emitters": True}, "sensor": sensor}
+    surf.update(shapes)
+    surf.update(c.emitters(math.pi))
+    env = c.env()
+    bg = None
+    if env:
+        bg = {"type": "scene", "integrator": {"type": "path", "max_depth": 1}, "sensor": dict(sensor)}
+        bg.update(shapes)
+        bg["env"] = {"type": "envmap", "filename": env, "scale": 1.0,
+                     "to_world": [[-1, 0, 0, 0], [0, 1, 0, 0], [0, 0, -1, 0], [0, 0, 0, 1]]}
+    return surf, bg, c.warnings
+
+
+def materialize(d, mi):
+    """The dict with Mitsuba types where load_dict needs them (to_world matrices, points, vectors)."""
+    if isinstance(d, dict):
+        out = {}
+        for k, v in d.items():
+            if k == "to_world":
+                out[k] = mi.ScalarTransform4f(np.asarray(v, dtype=np.float64).tolist())
+            elif k in ("position", "direction") and isinstance(v, list):
+                out[k] = mi.ScalarPoint3f(*v) if k == "position" else mi.ScalarVector3f(*v)
+            else:
+                out[k] = materialize(v, mi)
+        return out
+    return d
+
+
+if __name__ == "__main__":
+    import pprint
+    s, b, w = scene_dicts(sys.argv[1], 4, warn=lambda m: print(m, file=sys.stderr))
+    pprint.pprint({k: v for k, v in s.items() if not k.startswith(("mesh_", "triangle_"))})
