@@ -25,7 +25,7 @@
         M(Sphere, pad1)                                                                           \
     S(Plane) M(Plane, point) M(Plane, normal) M(Plane, material) M(Plane, textureSet)              \
         M(Plane, pad0) M(Plane, pad1)                                                             \
-    S(TextureSet) M(TextureSet, texture)                                                          \
+    S(TextureSet) M(TextureSet, texture) M(TextureSet, worldToObject)                           \
     S(Material) M(Material, ambient) M(Material, diffuse) M(Material, specular)                   \
         M(Material, mirror) M(Material, absorption) M(Material, phongExponent)                    \
         M(Material, refractionIndex) M(Material, absorptionIndex) M(Material, roughness)          \

@@ -19,6 +19,7 @@
 #include "common.cl"
 #include "intersect.cl"
 #include "textures.cl"
+#include "shading_frame.cl"
 #include "lights.cl"
 #include "brdf.cl"
 #include "material.cl"
@@ -88,6 +89,29 @@ inline SurfaceHit Surface_FromHit(Hit h, Ray r, const __global Triangle* tris, c
     return s;
 }
 
+#if defined(CLRT_HAS_NORMAL_MAP) || defined(CLRT_HAS_BUMP_MAP)
+/* dp/du and dp/dv at the hit s (world space): per triangle from its positions and uvs, per sphere from
+ * its parametrisation, per plane the axes of its planar uv. */
+inline TangentFrame Surface_TangentFrame(Hit h, SurfaceHit s, const __global Triangle* tris,
+                                         const __global TriangleShading* shading, const __global Sphere* spheres,
+                                         const __global Plane* planes, int numTriangles, int numSpheres) {
+    TangentFrame f;
+    if (h.prim < numTriangles) {
+        const __global Triangle* tri = &tris[h.prim];
+        const __global TriangleShading* sh = &shading[h.prim];
+        return Frame_Triangle(tri->v0.xyz, tri->v1.xyz, tri->v2.xyz, sh->uv01.xy, sh->uv01.zw, sh->uv2.xy);
+    }
+    if (h.prim >= numTriangles + numSpheres) {
+        makeBasis(planes[h.prim - numTriangles - numSpheres].normal.xyz, &f.dpdu, &f.dpdv);
+        f.objectSpaceBump = 0;
+        return f;
+    }
+    const __global Sphere* sp = &spheres[h.prim - numTriangles];
+    float3 nObj = normalize(affinePoint(sp->worldToObject, s.p) - sp->centerRadius.xyz);
+    return Frame_Sphere(nObj, sp->centerRadius.w, sp->objectToWorld);
+}
+#endif
+
 /* Motion blur: how far the hit primitive has moved at the ray's shutter time (t·motion; planes do not
  * move). Shading takes the ray back by it into the primitive's rest frame and the hit point forward. */
 inline float3 MotionBlur_HitShift(Hit h, Ray r, const __global Triangle* tris, const __global Sphere* spheres,
@@ -125,7 +149,9 @@ inline float3 Miss_Radiance(SceneParams scene, const __global TextureMap* textur
 #endif
     if (path.depth == 0 && scene.backgroundTexture != CLRT_INVALID) {
         int x = path.pixel % cam.width, y = path.pixel / cam.width;
-        float2 uv = (float2)(((float)x + 0.5f) / (float)cam.width, ((float)y + 0.5f) / (float)cam.height);
+        /* The course maps pixel i to texel i·texW/W (its corner, not its centre): texel i exactly when
+         * the image has the render's size. */
+        float2 uv = (float2)((float)x / (float)cam.width, (float)y / (float)cam.height);
         const __global TextureMap* tex = &textures[scene.backgroundTexture];
         return Image_Lookup(texels, images[tex->image], uv.x, uv.y, tex->interpolation) * (255.0f / tex->normalizer);
     }
@@ -179,22 +205,32 @@ __kernel void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
     Material m = materials[s.material];
     float3 wo = -s.dir;
     float3 ng = s.frontFacing ? s.ng : -s.ng;   /* facing the incoming ray */
-    float3 ns = s.frontFacing ? s.ns : -s.ns;
     float3 kd = m.diffuse.xyz, ks = m.specular.xyz;
     float3 radiance = (float3)(0.0f);
     int replaceAll = 0;
 #ifdef CLRT_HAS_TEXTURES
     if (s.textureSet != CLRT_INVALID) {
+        float3 pObj = affinePoint(textureSets[s.textureSet].worldToObject, s.p);  /* procedural textures */
         for (int k = 0; k < CLRT_MAX_TEXTURES_PER_SHAPE; ++k) {
             int ti = textureSets[s.textureSet].texture[k];
             if (ti == CLRT_INVALID) continue;
             const __global TextureMap* tex = &textures[ti];
-            float3 c = Texture_Eval(tex, images, texels, s.uv, s.p);
+            float3 c = Texture_Eval(tex, images, texels, s.uv, s.p, pObj);
             switch (tex->decal) {
             case DECAL_REPLACE_KD: kd = c; break;
             case DECAL_BLEND_KD: kd = 0.5f * (kd + c); break;
             case DECAL_REPLACE_KS: ks = c; break;
-            case DECAL_REPLACE_ALL: radiance = c * 255.0f; replaceAll = 1; break;
+            case DECAL_REPLACE_ALL: radiance = c; replaceAll = 1; break;
+#if defined(CLRT_HAS_NORMAL_MAP) || defined(CLRT_HAS_BUMP_MAP)
+            case DECAL_REPLACE_NORMAL:
+            case DECAL_BUMP_NORMAL: {
+                TangentFrame f = Surface_TangentFrame(h, s, tris, triShading, spheres, planes, scene.numTriangles,
+                                                      scene.numSpheres);
+                s.ns = Texture_PerturbNormal(tex, images, texels, c, s.uv, s.p, f, s.ns,
+                                             textureSets[s.textureSet].worldToObject);
+                break;
+            }
+#endif
             default: break;
             }
         }
@@ -203,6 +239,7 @@ __kernel void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
 #ifdef CLRT_HAS_MOTION_BLUR
     s.p += motionShift; /* the textures above saw the rest-frame point: they move with the object */
 #endif
+    float3 ns = s.frontFacing ? s.ns : -s.ns;
     RngKey key = Rng_Key(scene.seed, path.pixel, path.sample, path.pathId);
     uint dim = 4u + 32u * (uint)path.depth;
     int canBounce = path.depth < scene.maxDepth;

@@ -25,44 +25,65 @@ inline float3 Image_Lookup(const __global float4* texels, ImageInfo img, float u
     return (1.0f - dx) * (1.0f - dy) * c00 + dx * (1.0f - dy) * c10 + (1.0f - dx) * dy * c01 + dx * dy * c11;
 }
 
-/* Perlin gradient noise in [-1, 1] (Perlin 2002 permutation-free hash variant). */
-inline float Perlin_Grad(int3 c, float3 f) {
-    uint h = Rng_Hash((uint)c.x * 73856093u ^ (uint)c.y * 19349663u ^ (uint)c.z * 83492791u) & 15u;
-    float u = h < 8u ? f.x : f.y;
-    float v = h < 4u ? f.y : (h == 12u || h == 14u ? f.x : f.z);
-    return ((h & 1u) ? -u : u) + ((h & 2u) ? -v : v);
+/* Perlin noise as the course defines it: 16 gradients (the 12 cube-edge directions and 4 repeated),
+ * a 16-entry permutation P, the lattice hash P[(i + P[(j + P[k mod 16]) mod 16]) mod 16], and the
+ * weight w(t) = 1 − 6|t|^5 + 15|t|^4 − 10|t|^3 per axis: noise(p) = Σ_corners w·w·w·(g · (p − corner)).
+ * The course's own P is not published; this one is a fixed shuffle of 0..15. */
+__constant int CLRT_PERLIN_PERM[16] = {CLRT_PERLIN_PERM_VALUES};
+__constant float CLRT_PERLIN_GRAD[16][3] = {CLRT_PERLIN_GRAD_VALUES};
+inline int Perlin_Hash(int i, int j, int k) {
+    int a = CLRT_PERLIN_PERM[k & 15];
+    int b = CLRT_PERLIN_PERM[(j + a) & 15];
+    return CLRT_PERLIN_PERM[(i + b) & 15];
 }
-inline float Perlin_Fade(float t) { return t * t * t * (t * (t * 6.0f - 15.0f) + 10.0f); }
+inline float Perlin_Weight(float t) {
+    t = fabs(t);
+    return t >= 1.0f ? 0.0f : 1.0f - t * t * t * (t * (t * 6.0f - 15.0f) + 10.0f);
+}
 inline float Perlin_Noise(float3 p) {
     float3 fl = floor(p);
     int3 c = convert_int3(fl);
-    float3 f = p - fl;
-    float3 w = (float3)(Perlin_Fade(f.x), Perlin_Fade(f.y), Perlin_Fade(f.z));
-    float n000 = Perlin_Grad(c, f), n100 = Perlin_Grad(c + (int3)(1, 0, 0), f - (float3)(1, 0, 0));
-    float n010 = Perlin_Grad(c + (int3)(0, 1, 0), f - (float3)(0, 1, 0)), n110 = Perlin_Grad(c + (int3)(1, 1, 0), f - (float3)(1, 1, 0));
-    float n001 = Perlin_Grad(c + (int3)(0, 0, 1), f - (float3)(0, 0, 1)), n101 = Perlin_Grad(c + (int3)(1, 0, 1), f - (float3)(1, 0, 1));
-    float n011 = Perlin_Grad(c + (int3)(0, 1, 1), f - (float3)(0, 1, 1)), n111 = Perlin_Grad(c + (int3)(1, 1, 1), f - (float3)(1, 1, 1));
-    float x00 = mix(n000, n100, w.x), x10 = mix(n010, n110, w.x), x01 = mix(n001, n101, w.x), x11 = mix(n011, n111, w.x);
-    return mix(mix(x00, x10, w.y), mix(x01, x11, w.y), w.z);
+    float sum = 0.0f;
+    for (int corner = 0; corner < 8; ++corner) {
+        int3 d = (int3)(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
+        float3 v = p - (fl + convert_float3(d));
+        int g = Perlin_Hash(c.x + d.x, c.y + d.y, c.z + d.z);
+        float dotGv = CLRT_PERLIN_GRAD[g][0] * v.x + CLRT_PERLIN_GRAD[g][1] * v.y + CLRT_PERLIN_GRAD[g][2] * v.z;
+        sum += Perlin_Weight(v.x) * Perlin_Weight(v.y) * Perlin_Weight(v.z) * dotGv;
+    }
+    return sum;
+}
+/* The converted noise (absval: |n|, linear: (n + 1)/2) at the scaled point: the texture's value and
+ * the height of a Perlin bump map. */
+inline float Perlin_Value(const __global TextureMap* tex, float3 p) {
+    float n = Perlin_Noise(p * tex->noiseScale);
+    return tex->noiseAbs ? fabs(n) : 0.5f * (n + 1.0f);
+}
+/* ∇ of Perlin_Value at p by central differences (step CLRT_PERLIN_GRAD_STEP in scaled units). */
+inline float3 Perlin_Gradient(const __global TextureMap* tex, float3 p) {
+    float e = CLRT_PERLIN_GRAD_STEP / fmax(tex->noiseScale, 1e-20f);
+    float3 g;
+    g.x = Perlin_Value(tex, p + (float3)(e, 0.0f, 0.0f)) - Perlin_Value(tex, p - (float3)(e, 0.0f, 0.0f));
+    g.y = Perlin_Value(tex, p + (float3)(0.0f, e, 0.0f)) - Perlin_Value(tex, p - (float3)(0.0f, e, 0.0f));
+    g.z = Perlin_Value(tex, p + (float3)(0.0f, 0.0f, e)) - Perlin_Value(tex, p - (float3)(0.0f, 0.0f, e));
+    return g / (2.0f * e);
 }
 
-/* The value of texture `tex` at (uv, world position p), in reflectance units (0..1 for images after
- * the normalizer). */
+/* The value of texture `tex` at (uv, world position p, object-space position pObj), in reflectance
+ * units (0..1 for images after the normalizer). The procedural textures are evaluated in object space
+ * (the checkerboard's tiles and the noise follow the object's scale, as in the course). */
 inline float3 Texture_Eval(const __global TextureMap* tex, const __global ImageInfo* images,
-                           const __global float4* texels, float2 uv, float3 p) {
+                           const __global float4* texels, float2 uv, float3 p, float3 pObj) {
     switch (tex->kind) {
     case TEXTURE_IMAGE:
         return Image_Lookup(texels, images[tex->image], uv.x, uv.y, tex->interpolation) / tex->normalizer;
     case TEXTURE_CHECKERBOARD: {
-        float3 q = (p + tex->offset) * tex->scale;
+        float3 q = (pObj + tex->offset) * tex->scale;
         int s = (int)floor(q.x) + (int)floor(q.y) + (int)floor(q.z);
         return (s & 1) ? tex->blackColor.xyz : tex->whiteColor.xyz;
     }
-    case TEXTURE_PERLIN: {
-        float n = Perlin_Noise(p * tex->noiseScale);
-        float t = tex->noiseAbs ? fabs(n) : 0.5f * (n + 1.0f);
-        return (float3)(clamp(t, 0.0f, 1.0f));
-    }
+    case TEXTURE_PERLIN:
+        return (float3)(clamp(Perlin_Value(tex, pObj), 0.0f, 1.0f));
     }
     return (float3)(0.0f);
 }

@@ -30,6 +30,8 @@ std::vector<std::string> FeatureSet::defines() const {
     for (const auto& row : brdfTypes()) add(has(row.kind), row.flag);
     add(brdfKinds != 0, "CLRT_HAS_BRDFS");  // Material_EvalDirect reads the material's BRDF
     add(textures, "CLRT_HAS_TEXTURES");
+    add(normalMaps, "CLRT_HAS_NORMAL_MAP");
+    add(bumpMaps, "CLRT_HAS_BUMP_MAP");
     add(spheres, "CLRT_HAS_SPHERES");
     add(primRefsIdentity, "CLRT_PRIMREFS_IDENTITY");
     add(motionBlur, "CLRT_HAS_MOTION_BLUR");

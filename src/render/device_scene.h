@@ -20,6 +20,8 @@ struct FeatureSet {
     uint32_t materialKinds = 0;  // bit k set: the scene has a material of dev::MaterialKind k
     uint32_t brdfKinds = 0;      // bit k set: a material uses a BRDF of dev::BrdfKind k
     bool textures = false;
+    bool normalMaps = false;  // a shape uses a replace_normal texture
+    bool bumpMaps = false;    // a shape uses a bump_normal texture
     bool spheres = false;
     bool primRefsIdentity = false;  // primRefs[i] == i (triangles only, stored in leaf order)
     bool motionBlur = false;        // a mesh, triangle or sphere has a MotionBlur translation
@@ -37,7 +39,7 @@ struct FeatureSet {
     static FeatureSet all() {
         FeatureSet f;
         f.lightKinds = f.materialKinds = f.brdfKinds = ~0u;
-        f.textures = f.spheres = f.motionBlur = f.pathTracing = true;
+        f.textures = f.normalMaps = f.bumpMaps = f.spheres = f.motionBlur = f.pathTracing = true;
         return f;
     }
 };

@@ -250,7 +250,7 @@ void flattenGeometry(const Scene& scene, DeviceScene& ds) {
     if (ds.triangles.empty()) { ds.triangles.push_back(dev::Triangle{}); ds.triangleShading.push_back(dev::TriangleShading{}); }
     if (ds.spheres.empty()) ds.spheres.push_back(dev::Sphere{});
     if (ds.planes.empty()) ds.planes.push_back(dev::Plane{});  // a zero normal: never hit, counted in numPlanes
-    if (ds.textureSets.empty()) ds.textureSets.push_back(dev::TextureSet{{-1, -1, -1, -1}});
+    if (ds.textureSets.empty()) ds.textureSets.push_back(dev::TextureSet{{-1, -1, -1, -1}, {}});
     ds.params.numTriangles = numTriangles;
     ds.params.numSpheres = int(sphereBoxes.size());
     ds.params.numPlanes = int(ds.planes.size());

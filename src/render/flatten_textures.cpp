@@ -69,11 +69,11 @@ void flattenTextures(const Scene& scene, DeviceScene& ds, ImageAtlas& atlas) {
         if (t.type == dev::TEXTURE_IMAGE && t.imageIndex >= 0 && imageUsed(scene, t, int(ti))) {
             d.image = atlas.use(t.imageIndex);
             if (!t.normalizerGiven) d.normalizer = atlas.isHdr(d.image) ? 1.0f : 255.0f;
+            // replace_all pastes texel / Normalizer as radiance (the course); without a Normalizer
+            // the texel itself (0..255), as before.
+            if (!t.normalizerGiven && t.decalMode == dev::DECAL_REPLACE_ALL) d.normalizer = 1.0f;
         }
         if (t.decalMode == dev::DECAL_REPLACE_BACKGROUND && d.image != CLRT_INVALID) ds.params.backgroundTexture = int(ti);
-        if (t.decalMode == dev::DECAL_REPLACE_NORMAL || t.decalMode == dev::DECAL_BUMP_NORMAL)
-            warnOnce(scene.path + ": texture id=" + std::to_string(t.id) +
-                     ": normal/bump decal modes are not supported yet; ignored");
         ds.textures.push_back(d);
     }
     // Never an empty buffer. (The dummy image comes before any environment map's.)
@@ -94,8 +94,15 @@ int flattenTextureSet(const Scene& scene, const Shape& s, DeviceScene& ds) {
             break;
         }
         set.texture[k++] = x;
+        ds.features.normalMaps |= scene.textures[x].decalMode == dev::DECAL_REPLACE_NORMAL;
+        ds.features.bumpMaps |= scene.textures[x].decalMode == dev::DECAL_BUMP_NORMAL;
     }
     if (k == 0) return CLRT_INVALID;
+    // The object-space point of a hit (checkerboard): a singular transform keeps world space.
+    Mat4 inv;
+    if (!s.transform.inverse(inv)) inv = Mat4::identity();
+    for (int r = 0; r < 3; ++r)
+        set.worldToObject[r] = {float(inv.m[r][0]), float(inv.m[r][1]), float(inv.m[r][2]), float(inv.m[r][3])};
     ds.features.textures = true;
     ds.textureSets.push_back(set);
     return int(ds.textureSets.size()) - 1;
