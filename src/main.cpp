@@ -452,10 +452,10 @@ void printTimes(const StageTimes& t, const DeviceScene& ds, const Renderer& rend
                  t.parse, ds.bvhSeconds, t.flatten - ds.bvhSeconds, t.build, renderer.buildInfo().cacheHit ? " (cached)" : "",
                  counters.seconds, t.output, rays / secs * 1e-6);
     std::printf("stats: parse=%.3fs flatten=%.3fs bvh=%.3fs build=%.3fs render=%.3fs output=%.3fs camera_mrays=%.2f "
-                "shadow_mrays=%.2f secondary_mrays=%.2f spp=%d path_segments_mps=%.2f\n",
+                "shadow_mrays=%.2f secondary_mrays=%.2f path_segments_mps=%.2f spp=%d\n",
                 t.parse, t.flatten - ds.bvhSeconds, ds.bvhSeconds, t.build, counters.seconds, t.output,
                 rate(&RenderCounters::cameraRays, STAGE_TRACE_CAMERA), rate(&RenderCounters::shadowRays, STAGE_TRACE_SHADOW),
-                rate(&RenderCounters::secondaryRays, STAGE_TRACE_SECONDARY), spp, pathSegmentRate(work));
+                rate(&RenderCounters::secondaryRays, STAGE_TRACE_SECONDARY), pathSegmentRate(work), spp);
 }
 
 // What a render writes: the cameras' outputs, or with --part K/N one part file per camera.
