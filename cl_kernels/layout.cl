@@ -19,9 +19,9 @@
     S(Triangle) M(Triangle, v0) M(Triangle, v1) M(Triangle, v2)                                   \
     S(TriangleShading) M(TriangleShading, n0) M(TriangleShading, n1) M(TriangleShading, n2)       \
         M(TriangleShading, uv01) M(TriangleShading, uv2) M(TriangleShading, material)             \
-        M(TriangleShading, textureSet) M(TriangleShading, pad0) M(TriangleShading, pad1)          \
+        M(TriangleShading, textureSet) M(TriangleShading, light) M(TriangleShading, pad1)          \
     S(Sphere) M(Sphere, centerRadius) M(Sphere, worldToObject) M(Sphere, objectToWorld)           \
-        M(Sphere, motion) M(Sphere, material) M(Sphere, textureSet) M(Sphere, pad0)               \
+        M(Sphere, motion) M(Sphere, material) M(Sphere, textureSet) M(Sphere, light)              \
         M(Sphere, pad1)                                                                           \
     S(Plane) M(Plane, point) M(Plane, normal) M(Plane, material) M(Plane, textureSet)              \
         M(Plane, pad0) M(Plane, pad1)                                                             \
@@ -39,6 +39,7 @@
     S(Light) M(Light, position) M(Light, direction) M(Light, radiance) M(Light, edgeU)            \
         M(Light, edgeV) M(Light, cosCoverageHalf) M(Light, cosFalloffHalf) M(Light, area)         \
         M(Light, kind) M(Light, image) M(Light, mapping) M(Light, sampler) M(Light, distribution)  \
+        M(Light, objFirst) M(Light, objCount) M(Light, objRadius) M(Light, objPad)                 \
     S(CameraParams) M(CameraParams, position) M(CameraParams, u) M(CameraParams, v)               \
         M(CameraParams, w) M(CameraParams, nearPlane) M(CameraParams, nearDistance)               \
         M(CameraParams, focusDistance) M(CameraParams, apertureSize) M(CameraParams, width)       \

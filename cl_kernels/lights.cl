@@ -3,6 +3,7 @@
  * I/d², directional: radiance, area: L·A·cosθ_L/d² for a uniformly drawn point, environment:
  * L(wi)/pdf(wi) for a direction drawn by the light's sampler) divided by the pdf of the chosen
  * direction, and the direction and distance (INFINITY: directional, environment) for the shadow ray.
+ * LightMesh and LightSphere (object lights, also geometry): object_lights.cl.
  * Environment samplers (SCENE_FORMAT.md): uniform (hemisphere around n by rejection, pdf 1/2π),
  * cosine (pdf cosθ/π), importance (the map's luminance distribution, envmap.cl), mis. MIS is
  * multi-sample (EnvLight_SampleMis): one importance and one cosine direction per shading point, two
@@ -16,6 +17,7 @@
 #include "../src/shared/device_types.h"
 #include "common.cl"
 #include "envmap.cl"
+#include "object_lights.cl"
 
 /* Spot fall-off (SCENE_FORMAT.md): 1 inside falloff/2, 0 outside coverage/2, smooth quartic between.
  * Guards coverage == falloff (a hard edge) without dividing by zero. */
@@ -188,9 +190,10 @@ inline void EnvLight_SampleMis(const __global Light* light, float3 n, float2 uLi
 
 /* The dispatcher. p: the shading point, n: its shading normal (environment samplers), u: two uniform
  * numbers for lights that need them; images/texels/envDist: the texel atlas and the environment
- * distributions. */
+ * distributions; lightData: the object lights' triangles and spheres (object_lights.cl). */
 inline float3 Light_Sample(const __global Light* light, float3 p, float3 n, float2 u, const __global ImageInfo* images,
-                           const __global float4* texels, const __global float* envDist, float3* wi, float* dist) {
+                           const __global float4* texels, const __global float* envDist,
+                           const __global float4* lightData, float3* wi, float* dist) {
     *dist = 0.0f;
     *wi = (float3)(0.0f, 0.0f, 1.0f);
     switch (light->kind) {
@@ -208,6 +211,12 @@ inline float3 Light_Sample(const __global Light* light, float3 p, float3 n, floa
 #endif
 #ifdef CLRT_HAS_ENV_LIGHT
     case LIGHT_ENVIRONMENT: return EnvironmentLight_Sample(light, n, u, images, texels, envDist, wi, dist);
+#endif
+#ifdef CLRT_HAS_LIGHT_MESH
+    case LIGHT_MESH: return MeshLight_Sample(light, lightData, p, u, wi, dist);
+#endif
+#ifdef CLRT_HAS_LIGHT_SPHERE
+    case LIGHT_SPHERE: return SphereLight_Sample(light, lightData, p, u, wi, dist);
 #endif
     default: return (float3)(0.0f);
     }

@@ -1,6 +1,7 @@
 /* shade.cl — the shading stages of the wavefront:
  *   shade_hits:      per path, turns a hit into a ShadingPoint (textures applied), adds the terms
- *                    that need no shadow ray (ambient, background on a miss), and writes the
+ *                    that need no shadow ray (ambient, background on a miss, the emission of an
+ *                    object light that is hit), and writes the
  *                    reflection/refraction children to slots 2i and 2i+1 of the next queue
  *                    (path-traced cameras: Path_ShadeHit, cl_kernels/path.cl, one child in 2i);
  *   sample_lights:   per path and light of a chunk, one shadow ray carrying its reflected light
@@ -245,6 +246,9 @@ __kernel void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
     int canBounce = path.depth < scene.maxDepth;
     int insideDielectric = (m.kind == MATERIAL_DIELECTRIC) && !s.frontFacing;
 
+#ifdef CLRT_HAS_OBJECT_LIGHTS
+    radiance += ObjectLight_Emission(h.prim, s.frontFacing, scene.numTriangles, scene.numSpheres, triShading, spheres, lights);
+#endif
     if (replaceAll) {
         pathRadiance[i] = (float4)(throughput * radiance, 0.0f);
         points[i] = sp;
@@ -399,10 +403,14 @@ __kernel void sample_lights(CLRT_KERNEL_PARAMS(sample_lights)) {
             } else
 #endif
             {
-                float3 e = Light_Sample(&lights[l], sp.position.xyz, sp.normal.xyz, u, images, texels, envDist, &wi, &dist);
+                float3 e = Light_Sample(&lights[l], sp.position.xyz, sp.normal.xyz, u, images, texels, envDist, lightData,
+                                        &wi, &dist);
                 sr = Shadow_Make(sp, materials, path.throughput.xyz, wi, dist, e);
 #ifdef CLRT_HAS_PATH_TRACING
                 sr.contribution *= Path_LightSampleWeight(scene.pathMode, &lights[l], sp, materials, envDist, wi, e);
+#endif
+#ifdef CLRT_HAS_OBJECT_LIGHTS
+                if (ObjectLight_IsShape(&lights[l])) ObjectLight_AimShadow(&sr, sp.position.xyz + dist * wi);
 #endif
             }
 #ifdef CLRT_HAS_MOTION_BLUR

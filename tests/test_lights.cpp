@@ -445,7 +445,7 @@ __kernel void light_test(const __global Light* lights, int numLights, const __gl
     for (int l = 0; l < numLights; ++l) {
         float3 wi; float dist;
         float3 e = Light_Sample(&lights[l], pts[i].xyz, nrm[i].xyz, (float2)(pts[i].w, nrm[i].w), images, texels,
-                                envDist, &wi, &dist);
+                                envDist, texels /* no object lights */, &wi, &dist);
         out[2 * (i * numLights + l)] = (float4)(e, dist);
         out[2 * (i * numLights + l) + 1] = (float4)(wi, 0.0f);
     }
@@ -825,7 +825,7 @@ __kernel void edge_test(const __global Light* lights, int numLights, const __glo
     for (int l = 0; l < numLights; ++l) {
         float3 wi; float dist;
         float3 e = Light_Sample(&lights[l], pts[i].xyz, (float3)(0.0f, 1.0f, 0.0f), (float2)(pts[i].w, 0.5f), images,
-                                texels, envDist, &wi, &dist);
+                                texels, envDist, texels /* no object lights */, &wi, &dist);
         out[i * numLights + l] = (float4)(e, dist);
     }
 }

@@ -511,7 +511,7 @@ TEST_CASE("scene: PLY faces relative to the scene file", "[scene][ply]") {
 }
 
 TEST_CASE("scene: unknown elements are ignored", "[scene]") {
-    std::string xml = sceneWith("<Objects><Cylinder id=\"1\"/><LightSphere id=\"1\"/></Objects><Foo/>",
+    std::string xml = sceneWith("<Objects><Cylinder id=\"1\"/></Objects><Foo/>",
                                 "<Scissor>1 2 3 4</Scissor>");
     Scene s = load("unknown.xml", xml);
     CHECK(s.shapes.empty());

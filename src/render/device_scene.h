@@ -56,6 +56,7 @@ struct DeviceScene {
     std::vector<dev::float4> texels;
     std::vector<dev::Light> lights;
     std::vector<float> envDistribution;  // importance distributions of env lights (env_distribution.h)
+    std::vector<dev::float4> lightData;  // object lights' triangles and spheres (layout: device_types.h, Light)
     Bvh bvh;    // binary tree (host reference, statistics)
     Bvh4 bvh4;  // what the device traverses
     dev::SceneParams params{};

@@ -40,6 +40,10 @@ int flattenTextureSet(const Scene& scene, const Shape& s, DeviceScene& ds);
 // Planes, spheres and mesh triangles, then the BVH over triangles and spheres with the triangles
 // stored in leaf order; sets the primitive counts of ds.params.
 void flattenGeometry(const Scene& scene, DeviceScene& ds);
+// Whether the transformation's linear part has a negative determinant (a mirror): the world-space
+// cross product of a triangle's edges then points against the transformed object-space normal, so
+// flattenGeometry (and the LightMesh sampling data, flatten_lights.cpp) take its corners as (a, c, b).
+bool mirrorsOrientation(const Mat4& m);
 void flattenLights(const Scene& scene, DeviceScene& ds, ImageAtlas& atlas);
 // The device fields of environment light `l` (index `lightIndex`), its importance distribution, and
 // the scene's miss radiance (ds.params env fields) from the first environment light.

@@ -27,15 +27,6 @@ struct MeshTriangles {
     size_t degenerate = 0, nonFinite = 0;
 };
 
-// Whether the transformation's linear part has a negative determinant (a mirror): the world-space
-// cross product of a triangle's edges then points against the transformed object-space normal.
-bool mirrorsOrientation(const Mat4& m) {
-    const double det = m.m[0][0] * (m.m[1][1] * m.m[2][2] - m.m[1][2] * m.m[2][1]) -
-                       m.m[0][1] * (m.m[1][0] * m.m[2][2] - m.m[1][2] * m.m[2][0]) +
-                       m.m[0][2] * (m.m[1][0] * m.m[2][1] - m.m[1][1] * m.m[2][0]);
-    return det < 0;
-}
-
 // The box a primitive sweeps over the shutter interval: moved by t·motion, t in [0, 1], it stays
 // inside the union of its boxes at both ends (the motion is a straight translation).
 Aabb sweptBox(const Aabb& rest, const Vec3& motion) {
@@ -98,6 +89,7 @@ void flattenMesh(const Scene& scene, const Shape& s, int texSet, MeshTriangles& 
         }
         sh.material = s.materialIndex;
         sh.textureSet = texSet;
+        sh.light = s.lightIndex;  // LightMesh: its light, else CLRT_INVALID (-1)
         Aabb box;
         box.grow(p0); box.grow(p1); box.grow(p2);
         out.triangles.push_back(tri);
@@ -144,6 +136,7 @@ bool flattenSphere(const Shape& s, int texSet, DeviceScene& ds, std::vector<Aabb
     sp.material = s.materialIndex;
     sp.textureSet = texSet;
     sp.motion = toFloat4(s.motion);
+    sp.light = s.lightIndex;  // LightSphere: its light, else CLRT_INVALID (-1)
     Aabb box;
     for (int c = 0; c < 8; ++c) {
         Vec3 corner(s.center.x + ((c & 1) ? s.radius : -s.radius), s.center.y + ((c & 2) ? s.radius : -s.radius),
@@ -223,6 +216,13 @@ void buildDeviceBvh(const std::vector<Aabb>& boxes, DeviceScene& ds) {
 }
 
 }  // namespace
+
+bool mirrorsOrientation(const Mat4& m) {
+    const double det = m.m[0][0] * (m.m[1][1] * m.m[2][2] - m.m[1][2] * m.m[2][1]) -
+                       m.m[0][1] * (m.m[1][0] * m.m[2][2] - m.m[1][2] * m.m[2][0]) +
+                       m.m[0][2] * (m.m[1][0] * m.m[2][1] - m.m[1][1] * m.m[2][0]);
+    return det < 0;
+}
 
 void flattenGeometry(const Scene& scene, DeviceScene& ds) {
     std::vector<Aabb> boxes, sphereBoxes;

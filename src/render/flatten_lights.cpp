@@ -1,11 +1,78 @@
 // flatten_lights.cpp — scene lights -> dev::Light, one case per light type (environment lights:
-// flatten_environment.cpp); see flatten.h.
+// flatten_environment.cpp); see flatten.h. Object lights (LightMesh, LightSphere) also write their
+// sampling data to ds.lightData (layout: device_types.h, after struct Light): the mesh's world-space
+// triangles with an area CDF, the sphere's object-space centre/radius and worldToObject rows.
 #include <algorithm>
 #include <cmath>
 
 #include "render/flatten.h"
+#include "util/error.h"
 
 namespace clrt {
+namespace {
+
+// LightMesh: its triangles in world space (as flattenGeometry places them, mirrored meshes with their
+// winding reversed; degenerate and non-finite ones left out) with the area CDF in v0.w and the area in v1.w; total area in d.area.
+void flattenMeshLight(const Scene& scene, const Shape& s, dev::Light& d, DeviceScene& ds) {
+    const MeshData& mesh = scene.meshes.at(size_t(s.meshIndex));
+    d.objFirst = int(ds.lightData.size());
+    std::vector<double> areas;
+    const bool mirrored = mirrorsOrientation(s.transform);  // winding as flattenGeometry's (front = emitting)
+    for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+        Vec3 p[3];
+        for (int k = 0; k < 3; ++k) p[k] = s.transform.transformPoint(mesh.positions.at(size_t(mesh.indices[t + k])));
+        if (mirrored) std::swap(p[1], p[2]);
+        if (!isFinite(p[0]) || !isFinite(p[1]) || !isFinite(p[2])) continue;
+        Vec3 c = cross(p[1] - p[0], p[2] - p[0]);
+        double area = 0.5 * std::sqrt(double(c.x) * c.x + double(c.y) * c.y + double(c.z) * c.z);
+        if (!(area > 0) || !std::isfinite(area) || p[0] == p[1] || p[1] == p[2] || p[0] == p[2]) continue;
+        for (int k = 0; k < 3; ++k) ds.lightData.push_back(toFloat4(p[k]));
+        areas.push_back(area);
+    }
+    double total = 0;
+    for (double a : areas) total += a;
+    double run = 0;
+    for (size_t k = 0; k < areas.size(); ++k) {
+        run += areas[k];
+        ds.lightData[size_t(d.objFirst) + 3 * k].w = k + 1 == areas.size() ? 1.0f : float(run / total);
+        ds.lightData[size_t(d.objFirst) + 3 * k + 1].w = float(areas[k]);
+    }
+    d.objCount = int(areas.size());
+    d.area = float(total);
+    if (areas.empty()) warn(s.source + ": LightMesh has no non-degenerate triangle; it emits nothing");
+}
+
+// Largest singular value of the linear part of m (power iteration on MᵀM, double).
+double maxStretch(const Mat4& m) {
+    double v[3] = {1, 0.7548776662, 0.5698402910}, norm = 0;
+    for (int it = 0; it < 200; ++it) {
+        double w[3], x[3];
+        for (int r = 0; r < 3; ++r) w[r] = m.m[r][0] * v[0] + m.m[r][1] * v[1] + m.m[r][2] * v[2];
+        for (int c = 0; c < 3; ++c) x[c] = m.m[0][c] * w[0] + m.m[1][c] * w[1] + m.m[2][c] * w[2];
+        norm = std::sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+        if (!(norm > 0)) return 0;
+        for (int c = 0; c < 3; ++c) v[c] = x[c] / norm;
+    }
+    return std::sqrt(norm);
+}
+
+// LightSphere: world-space centre and bounding radius in d, object-space sphere and worldToObject in lightData.
+void flattenSphereLight(const Shape& s, dev::Light& d, DeviceScene& ds) {
+    Mat4 inv;
+    bool ok = s.transform.inverse(inv);
+    d.objFirst = int(ds.lightData.size());
+    d.position = toFloat4(s.transform.transformPoint(s.center));
+    d.objRadius = ok ? float(s.radius * maxStretch(s.transform) * (1 + 1e-6)) : 0.0f;  // never inside the true sphere
+    ds.lightData.push_back(toFloat4(s.center, s.radius));
+    for (int r = 0; r < 3; ++r)
+        ds.lightData.push_back({float(inv.m[r][0]), float(inv.m[r][1]), float(inv.m[r][2]), float(inv.m[r][3])});
+    if (!ok || !(d.objRadius > 0)) {
+        d.radiance = {0, 0, 0, 0};  // the sphere itself is skipped by flattenGeometry (warned there)
+        d.objRadius = 0;
+    }
+}
+
+}  // namespace
 
 void flattenLights(const Scene& scene, DeviceScene& ds, ImageAtlas& atlas) {
     ds.params.envLight = CLRT_INVALID;
@@ -39,11 +106,14 @@ void flattenLights(const Scene& scene, DeviceScene& ds, ImageAtlas& atlas) {
         case dev::LIGHT_ENVIRONMENT:
             flattenEnvironmentLight(scene, l, int(ds.lights.size()), d, ds, atlas);
             break;
+        case dev::LIGHT_MESH: flattenMeshLight(scene, scene.shapes.at(size_t(l.shapeIndex)), d, ds); break;
+        case dev::LIGHT_SPHERE: flattenSphereLight(scene.shapes.at(size_t(l.shapeIndex)), d, ds); break;
         }
         ds.lights.push_back(d);
     }
     if (ds.lights.empty()) ds.lights.push_back(dev::Light{});  // never an empty buffer; numLights stays 0
     if (ds.envDistribution.empty()) ds.envDistribution.push_back(0.0f);
+    if (ds.lightData.empty()) ds.lightData.push_back(dev::float4{});
     ds.params.numLights = int(scene.lights.size());  // every light is flattened
 }
 

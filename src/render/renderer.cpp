@@ -35,7 +35,7 @@ struct Renderer::Impl {
     KernelArgs kGenerate, kIntersect, kShadow, kShade, kLights, kGather, kAccumulate, kCompact;
     // Every kernel argument, each named as the kernel parameter it is bound to (src/shared/kernel_params.h):
     // bindAll() binds each kernel's whole parameter list from these members, by name.
-    cl::Buffer nodes, primRefs, tris, triShading, spheres, planes, materials, textureSets, textures, images, texels, lights, envDist;
+    cl::Buffer nodes, primRefs, tris, triShading, spheres, planes, materials, textureSets, textures, images, texels, lights, envDist, lightData;
     // Queue buffers (sized per render).
     size_t queueCapacity = 0, shadowCapacity = 0;
     cl::Buffer paths, rays, hits, points, pathRadiance, nextPaths, nextRays, childValid, compactTarget, shadows;
@@ -72,6 +72,7 @@ struct Renderer::Impl {
         texels = uploadBuffer(ctx, ds.texels);
         lights = uploadBuffer(ctx, ds.lights);
         envDist = uploadBuffer(ctx, ds.envDistribution);
+        lightData = uploadBuffer(ctx, ds.lightData);
     }
 
     void ensureQueues(size_t capacity, size_t shadowSlots) {

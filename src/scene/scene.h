@@ -96,6 +96,7 @@ struct Light {
     int imageIndex = -1;  // Environment
     dev::EnvMappingKind mapping = dev::ENV_LATLONG;
     dev::EnvSamplerKind sampler = dev::ENV_SAMPLE_MIS;
+    int shapeIndex = -1;  // LightMesh, LightSphere: the emitting shape (into Scene::shapes); intensity = Radiance
 };
 
 // A triangle mesh in its own object space (before its transformation).
@@ -123,6 +124,7 @@ struct Shape {
                                   // (at time t the object is at transform, then moved by t·motion)
     bool smooth = false;          // smooth shading: interpolate vertex normals
     std::string source;           // for messages, e.g. "Mesh id=3"
+    int lightIndex = -1;          // LightMesh, LightSphere: its light (into Scene::lights), else -1
 };
 
 struct Scene {

@@ -16,8 +16,10 @@
 //          BumpFactor NoiseConversion NoiseScale BlackColor WhiteColor Scale Offset
 //   Objects: Mesh (shadingMode) Material Textures Transformations Faces (inline | plyFile |
 //          binaryFile; vertexOffset textureOffset), MeshInstance (baseMeshId resetTransform),
-//          Triangle (Indices), Sphere (Center Radius), Plane (Point Normal; JSON 2025 scenes); LightMesh/LightSphere are warned about, skipped.
-//          Mesh, MeshInstance, Triangle and Sphere take MotionBlur (a translation over the shutter).
+//          Triangle (Indices), Sphere (Center Radius), Plane (Point Normal; JSON 2025 scenes), LightMesh (as Mesh
+//          + Radiance), LightSphere (as Sphere + Radiance): a shape and a light each.
+//          Mesh, MeshInstance, Triangle and Sphere take MotionBlur (a translation over the shutter); object
+//          lights do not (their sampling data are the rest position).
 // VertexData/TexCoordData may carry a binaryFile attribute instead of text: raw little-endian float32
 // values (no count prefix; no shared scene uses it). Faces binaryFile: raw little-endian int32.
 // Errors: clrt::Error "<location>: <what>", location from SceneNode::location(). Every number must be
@@ -690,6 +692,9 @@ struct Walker {
                 fail(l, describe(l) + ": unknown sampler '" + *sampler + "' (" + typeNames(envSamplers()) + ")");
             break;
         }
+        case dev::LIGHT_MESH:
+        case dev::LIGHT_SPHERE:  // shapes as well as lights: readObjectLight()
+            fail(l, "<" + l.name() + "> is an object: it belongs in <Objects>, not in <Lights>");
         }
     }
 
@@ -786,8 +791,10 @@ struct Walker {
         return std::vector<int32_t>(v.begin(), v.end());
     }
 
-    Shape readMesh(const SceneNode& n) {
-        checkChildren(n, {"Material", "Textures", "Transformations", "Faces", "MotionBlur"});
+    // Mesh and LightMesh (isLight: <Radiance> is read by readObjectLight; no MotionBlur).
+    Shape readMesh(const SceneNode& n, bool isLight = false) {
+        if (isLight) checkChildren(n, {"Material", "Textures", "Transformations", "Faces", "Radiance"});
+        else checkChildren(n, {"Material", "Textures", "Transformations", "Faces", "MotionBlur"});
         Shape s;
         std::string who = describe(n);
         s.id = intAttribute(n, "id", 0);
@@ -882,8 +889,10 @@ struct Walker {
         return vertices[size_t(vertexIndex(*c, who, integer(*c), 0))];
     }
 
-    Shape readSphere(const SceneNode& n) {
-        checkChildren(n, {"Material", "Textures", "Transformations", "Center", "Radius", "MotionBlur"});
+    // Sphere and LightSphere (isLight: <Radiance> is read by readObjectLight; no MotionBlur).
+    Shape readSphere(const SceneNode& n, bool isLight = false) {
+        if (isLight) checkChildren(n, {"Material", "Textures", "Transformations", "Center", "Radius", "Radiance"});
+        else checkChildren(n, {"Material", "Textures", "Transformations", "Center", "Radius", "MotionBlur"});
         Shape s = analyticShape(n, ShapeType::Sphere);
         s.motion = motionOf(n);
         std::string who = describe(n);
@@ -961,9 +970,30 @@ struct Walker {
             else if (name == "Triangle") scene.shapes.push_back(readTriangle(*c));
             else if (name == "Sphere") scene.shapes.push_back(readSphere(*c));
             else if (name == "Plane") scene.shapes.push_back(readPlane(*c));
-            else if ((name == "LightMesh" || name == "LightSphere") && warnedUnknown.insert(name).second)
-                warnOnce(c->location() + ": <" + name + "> (emissive object) is not supported; skipped");
+            else if (const TypeRow<dev::LightKind>* row = findType(lightTypes(), name);
+                     row && (row->kind == dev::LIGHT_MESH || row->kind == dev::LIGHT_SPHERE))
+                readObjectLight(*c, row->kind);
         }
+    }
+
+    // An object light (LightMesh, LightSphere: rows of the light table that are also shapes): the
+    // shape as a Mesh or Sphere reads it, plus its <Radiance>; the shape and its light point at each other.
+    void readObjectLight(const SceneNode& n, dev::LightKind kind) {
+        std::string who = describe(n);
+        Shape s = kind == dev::LIGHT_MESH ? readMesh(n, true) : readSphere(n, true);
+        s.motion = Vec3(0, 0, 0);  // <MotionBlur> is not read for object lights (warned as unknown)
+        auto rn = need(n, "Radiance");
+        Vec3 radiance = vec3(*rn);
+        if (!isFinite(radiance) || radiance.x < 0 || radiance.y < 0 || radiance.z < 0)
+            fail(*rn, who + ": Radiance must be three finite non-negative numbers");
+        Light light;
+        light.id = s.id;
+        light.type = kind;
+        light.intensity = radiance;
+        light.shapeIndex = int(scene.shapes.size());
+        s.lightIndex = int(scene.lights.size());
+        scene.lights.push_back(light);
+        scene.shapes.push_back(s);
     }
 };
 

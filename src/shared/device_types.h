@@ -33,7 +33,9 @@ struct alignas(8) float2 { float x, y; };
     L(LIGHT_AREA, "AreaLight", "CLRT_HAS_AREA_LIGHT")                                              \
     L(LIGHT_DIRECTIONAL, "DirectionalLight", "CLRT_HAS_DIRECTIONAL_LIGHT")                         \
     L(LIGHT_SPOT, "SpotLight", "CLRT_HAS_SPOT_LIGHT")                                              \
-    L(LIGHT_ENVIRONMENT, "SphericalDirectionalLight", "CLRT_HAS_ENV_LIGHT")
+    L(LIGHT_ENVIRONMENT, "SphericalDirectionalLight", "CLRT_HAS_ENV_LIGHT")                        \
+    L(LIGHT_MESH, "LightMesh", "CLRT_HAS_LIGHT_MESH")                                              \
+    L(LIGHT_SPHERE, "LightSphere", "CLRT_HAS_LIGHT_SPHERE")
 #define CLRT_MATERIAL_TABLE(M)                                                                     \
     M(MATERIAL_BLINN_PHONG, "blinnphong", "", 0)                                                   \
     M(MATERIAL_MIRROR, "mirror", "CLRT_HAS_MIRROR", 1)                                             \
@@ -116,7 +118,8 @@ typedef struct TriangleShading {
     float4 uv2;         /* u2 v2, unused, unused */
     int material;       /* index into materials */
     int textureSet;     /* index into textureSets, or CLRT_INVALID */
-    int pad0, pad1;
+    int light;          /* LightMesh: index into lights (its emission), else CLRT_INVALID */
+    int pad1;
 } TriangleShading;
 
 /* A sphere: object-space centre and radius, and the object<->world affine maps as 3 rows each. */
@@ -127,7 +130,8 @@ typedef struct Sphere {
     float4 motion;           /* MotionBlur: world-space translation over the shutter [0, 1]; w unused */
     int material;
     int textureSet;
-    int pad0, pad1;
+    int light;               /* LightSphere: index into lights (its emission), else CLRT_INVALID */
+    int pad1;
 } Sphere;
 
 /* An infinite plane (2025 JSON scenes). Not in the BVH: every ray tests every plane. Primitive
@@ -218,7 +222,17 @@ typedef struct Light {
     int mapping;           /* env: EnvMappingKind */
     int sampler;           /* env: EnvSamplerKind */
     int distribution;      /* env: offset into the env distribution buffer, or CLRT_INVALID */
+    int objFirst;          /* LightMesh, LightSphere: first float4 of its data in lightData (see below) */
+    int objCount;          /* LightMesh: number of triangles */
+    float objRadius;       /* LightSphere: radius of the world-space bounding sphere around position */
+    int objPad;
 } Light;
+/* lightData (float4s) of the object lights, written by src/render/flatten_lights.cpp:
+ *   LightMesh:   per triangle k, 3 float4s: world-space v0, v1, v2; v0.w = the area CDF up to and
+ *                including triangle k (the last is 1), v1.w = the triangle's area. Light.area = total area.
+ *   LightSphere: 4 float4s: the object-space centre and radius (w), then 3 rows of worldToObject.
+ *                Light.position = world-space centre, Light.objRadius = bounding radius (exact for a
+ *                similarity transform; directions of its cone that miss an ellipsoid carry nothing). */
 
 /* Camera: world-space frame and image plane, precomputed by the host. */
 typedef struct CameraParams {

@@ -52,7 +52,7 @@
     P(VAL, int, count) P(VAL, int, lightBegin) P(VAL, int, lightEnd) P(VAL, int, lightSlots)       \
     P(VAL, SceneParams, scene) P(IN, PathState, paths) P(IN, ShadingPoint, points) P(IN, Material, materials) \
     P(IN, Light, lights) CLRT_PARAMS_IMAGES(P) \
-    P(IN, float, envDist) P(BUF, ShadowRay, shadows)
+    P(IN, float, envDist) P(IN, float4, lightData) P(BUF, ShadowRay, shadows)
 
 #define CLRT_KERNEL_gather_shadows(P)                                                              \
     P(VAL, int, count) P(VAL, int, chunk) P(IN, ShadowRay, shadows) P(BUF, float4, pathRadiance)

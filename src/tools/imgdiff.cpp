@@ -6,6 +6,8 @@
 //   psnr    dB over values clamped to [0,1] (8-bit PNGs are divided by 255 first)
 //   bad     fraction of pixels where some channel differs by more than 1e-3 * max(1, |b|)
 //   maxabs  largest |a-b| over all channels
+// --box N: both images are first averaged over N×N blocks (noise of sampled renders); the line then
+// also gives ratio=r,g,b, the per-channel ratio of A's mean to B's.
 // Exit codes: 0 within the limits, 1 over a limit, 2 unreadable input or different sizes.
 #include <cmath>
 #include <cstdio>
@@ -13,6 +15,7 @@
 #include <string>
 
 #include "image/image.h"
+#include "image/image_compare.h"
 #include "util/error.h"
 
 using namespace clrt;
@@ -64,17 +67,19 @@ int main(int argc, char** argv) {
     std::string files[2];
     int nFiles = 0;
     double maxRel = INFINITY, maxBad = INFINITY;
+    int box = 1;
     for (int i = 1; i < argc; ++i) {
         std::string s = argv[i];
         if (s == "--max-relmse") maxRel = numberArg("--max-relmse", i + 1 < argc ? argv[++i] : nullptr);
+        else if (s == "--box") box = int(numberArg("--box", i + 1 < argc ? argv[++i] : nullptr));
         else if (s == "--max-bad") maxBad = numberArg("--max-bad", i + 1 < argc ? argv[++i] : nullptr);
         else if (s == "-h" || s == "--help") {
-            std::printf("usage: clrt-imgdiff A B [--max-relmse X] [--max-bad FRACTION]\n");
+            std::printf("usage: clrt-imgdiff A B [--box N] [--max-relmse X] [--max-bad FRACTION]\n");
             return 0;
         } else if (nFiles < 2) files[nFiles++] = s;
         else { std::fprintf(stderr, "clrt-imgdiff: error: unexpected argument '%s'\n", s.c_str()); return 2; }
     }
-    if (nFiles != 2) { std::fprintf(stderr, "usage: clrt-imgdiff A B [--max-relmse X] [--max-bad FRACTION]\n"); return 2; }
+    if (nFiles != 2) { std::fprintf(stderr, "usage: clrt-imgdiff A B [--box N] [--max-relmse X] [--max-bad FRACTION]\n"); return 2; }
     try {
         ImageRGB a = readImage(files[0]), b = readImage(files[1]);
         if (a.width != b.width || a.height != b.height) {
@@ -82,10 +87,18 @@ int main(int argc, char** argv) {
                          a.height, files[1].c_str(), b.width, b.height);
             return 2;
         }
+        if (box > 1) {
+            a = boxDownsample(a, box);
+            b = boxDownsample(b, box);
+        }
         Metrics m = compare(a, b);
         bool ok = m.relMse <= maxRel && m.badFraction <= maxBad;
-        std::printf("relmse=%.3g psnr=%.2f bad=%.5f maxabs=%.4g %s\n", m.relMse, m.psnr, m.badFraction, m.maxAbs,
-                    ok ? "ok" : "OVER LIMIT");
+        std::printf("relmse=%.3g psnr=%.2f bad=%.5f maxabs=%.4g", m.relMse, m.psnr, m.badFraction, m.maxAbs);
+        if (box > 1) {
+            std::array<double, 3> r = meanRatio(a, b);
+            std::printf(" ratio=%.4f,%.4f,%.4f", r[0], r[1], r[2]);
+        }
+        std::printf(" %s\n", ok ? "ok" : "OVER LIMIT");
         return ok ? 0 : 1;
     } catch (const Error& e) {
         std::fprintf(stderr, "clrt-imgdiff: error: %s\n", e.what());

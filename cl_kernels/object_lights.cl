@@ -1,0 +1,140 @@
+/* object_lights.cl — sampling the object lights (LightMesh, LightSphere: shapes in <Objects> that are
+ * lights too) and the emission a ray sees when it hits one. Their data (world-space triangles with an
+ * area CDF; a sphere's object-space centre, radius and worldToObject rows) is in the lightData buffer,
+ * laid out as device_types.h describes next to struct Light (written by src/render/flatten_lights.cpp).
+ * Both return, like every Light_Sample case, L(wi) / pdf(wi) for the sampled direction wi (solid angle).
+ *   LightMesh:   a triangle by area (binary search of the CDF), a uniform point on it: pdf over the
+ *                area 1/A, in solid angle d²/(A·cosθ_L); one-sided, the front face (counter-clockwise
+ *                winding, as the course's files give their light meshes) emits.
+ *   LightSphere: a direction uniform in the cone the (bounding) sphere subtends: pdf 1/(2π(1 − cosθmax));
+ *                the ray is then intersected with the sphere for the shadow-ray length (a direction
+ *                that misses a non-uniformly scaled sphere carries nothing). From inside the bounding
+ *                sphere: uniform over all directions, pdf 1/4π. */
+#ifndef CLRT_OBJECT_LIGHTS_CL
+#define CLRT_OBJECT_LIGHTS_CL
+
+#include "../src/shared/device_types.h"
+#include "common.cl"
+
+#if defined(CLRT_HAS_LIGHT_MESH) || defined(CLRT_HAS_LIGHT_SPHERE)
+#define CLRT_HAS_OBJECT_LIGHTS 1
+#endif
+
+/* The triangle of a LightMesh whose CDF interval holds u (first k with cdf[k] > u); *uRest: u
+ * rescaled to [0, 1) inside that interval. */
+inline int MeshLight_PickTriangle(const __global float4* tri, int n, float u, float* uRest) {
+    int lo = 0, hi = n - 1;
+    while (lo < hi) {
+        int mid = (lo + hi) / 2;
+        if (tri[3 * mid].w > u) hi = mid;
+        else lo = mid + 1;
+    }
+    float c0 = lo > 0 ? tri[3 * (lo - 1)].w : 0.0f, c1 = tri[3 * lo].w;
+    *uRest = c1 > c0 ? clamp((u - c0) / (c1 - c0), 0.0f, 0.99999994f) : 0.5f;
+    return lo;
+}
+
+inline float3 MeshLight_Sample(const __global Light* light, const __global float4* data, float3 p, float2 u,
+                               float3* wi, float* dist) {
+    if (light->objCount <= 0 || !(light->area > 0.0f)) return (float3)(0.0f);
+    const __global float4* tris = data + light->objFirst;
+    float ux;
+    int k = MeshLight_PickTriangle(tris, light->objCount, u.x, &ux);
+    float3 v0 = tris[3 * k].xyz, v1 = tris[3 * k + 1].xyz, v2 = tris[3 * k + 2].xyz;
+    float su = sqrt(ux); /* uniform on the triangle: b0 = 1 − √u1, b1 = u2·√u1 */
+    float b0 = 1.0f - su, b1 = u.y * su;
+    float3 q = b0 * v0 + b1 * v1 + (1.0f - b0 - b1) * v2;
+    float3 d = q - p;
+    float d2 = dot(d, d);
+    if (!(d2 > 0.0f)) return (float3)(0.0f);
+    *dist = sqrt(d2);
+    *wi = d / *dist;
+    float3 nL = normalize(cross(v1 - v0, v2 - v0));
+    float cosLight = dot(nL, -*wi);
+    if (!(cosLight > 0.0f)) return (float3)(0.0f); /* one-sided */
+    return light->radiance.xyz * (light->area * cosLight / d2);
+}
+
+/* Distance along unit wi from p to the front (outside) surface of the light sphere, or −1 when the
+ * ray misses it or starts inside it. s: object-space centre/radius, then the 3 worldToObject rows. */
+inline float SphereLight_Hit(const __global float4* s, float3 p, float3 wi) {
+    float3 o = (float3)(dot(s[1].xyz, p) + s[1].w, dot(s[2].xyz, p) + s[2].w, dot(s[3].xyz, p) + s[3].w);
+    float3 d = (float3)(dot(s[1].xyz, wi), dot(s[2].xyz, wi), dot(s[3].xyz, wi));
+    float r = s[0].w;
+    float3 f = o - s[0].xyz;
+    float cc = dot(f, f) - r * r;
+    if (!(cc > 0.0f)) return -1.0f; /* inside: the inner side does not emit */
+    float a = dot(d, d), b = dot(f, d);
+    if (!(b < 0.0f) || !(a > 0.0f)) return -1.0f; /* pointing away */
+    float3 l = f - (b / a) * d;
+    float disc = a * (r * r - dot(l, l));
+    if (!(disc >= 0.0f)) return -1.0f;
+    float q = -(b - sqrt(disc)); /* b < 0: q > 0, the near root is cc / q */
+    return cc / q;
+}
+
+inline float3 SphereLight_Sample(const __global Light* light, const __global float4* data, float3 p, float2 u,
+                                 float3* wi, float* dist) {
+    float3 axis = light->position.xyz - p;
+    float R = light->objRadius, d2 = dot(axis, axis);
+    float3 w;
+    float invPdf;
+    if (d2 > R * R) {
+        float sin2Max = R * R / d2, cosMax = sqrt(fmax(0.0f, 1.0f - sin2Max));
+        float oneMinusCosMax = sin2Max / (1.0f + cosMax); /* 1 − cosθmax without cancellation */
+        float oneMinusCos = u.x * oneMinusCosMax;
+        float cosT = 1.0f - oneMinusCos, sinT = sqrt(fmax(0.0f, oneMinusCos * (2.0f - oneMinusCos)));
+        float phi = 2.0f * CLRT_PI * u.y;
+        float3 n = axis / sqrt(d2), t, b;
+        makeBasis(n, &t, &b);
+        w = normalize(sinT * cos(phi) * t + sinT * sin(phi) * b + cosT * n);
+        invPdf = 2.0f * CLRT_PI * oneMinusCosMax;
+    } else { /* inside the bounding sphere (an ellipsoid's): all directions */
+        float z = 1.0f - 2.0f * u.x, r = sqrt(fmax(0.0f, 1.0f - z * z)), phi = 2.0f * CLRT_PI * u.y;
+        w = (float3)(r * cos(phi), r * sin(phi), z);
+        invPdf = 4.0f * CLRT_PI;
+    }
+    float t = SphereLight_Hit(data + light->objFirst, p, w);
+    if (!(t > 0.0f)) return (float3)(0.0f);
+    *wi = w;
+    *dist = t;
+    return light->radiance.xyz * invPdf;
+}
+
+#ifdef CLRT_HAS_OBJECT_LIGHTS
+inline int ObjectLight_IsShape(const __global Light* light) {
+    return light->kind == LIGHT_MESH || light->kind == LIGHT_SPHERE;
+}
+
+/* Re-aims the shadow ray *sr (from its offset origin) at the sampled point q on an object light. The
+ * light is geometry too, so the ray must end just before its surface: it is aimed at q itself rather
+ * than sent along the sampled direction from the shading point, whose parallel offset by the origin
+ * shift moves the light's hit by shift/cos at grazing incidence (on the hw6 sphere box 9% of such rays
+ * hit the light itself short of tMax). Rays of zero contribution (not traced) are left alone. */
+inline void ObjectLight_AimShadow(ShadowRay* sr, float3 q) {
+    if (!(maxComponent(sr->contribution.xyz) > 0.0f)) return;
+    float3 d = q - sr->origin.xyz;
+    float len = length(d);
+    if (!(len > 0.0f) || !isfinite(len)) {
+        sr->contribution = (float4)(0.0f);
+        return;
+    }
+    sr->origin.w = len * (1.0f - 1e-5f);
+    sr->direction.xyz = d / len;
+}
+
+/* The radiance a ray sees where it hits primitive `prim` (frontFacing: it hit the side the geometric
+ * normal points to): the Radiance of its object light from the emitting side (LightMesh: the front
+ * face; LightSphere: outside), else 0. */
+inline float3 ObjectLight_Emission(int prim, int frontFacing, int numTriangles, int numSpheres,
+                                   const __global TriangleShading* shading, const __global Sphere* spheres,
+                                   const __global Light* lights) {
+    int light = CLRT_INVALID;
+    if (prim < numTriangles) light = shading[prim].light;
+    else if (prim < numTriangles + numSpheres) light = spheres[prim - numTriangles].light;
+    if (light == CLRT_INVALID || !frontFacing) return (float3)(0.0f);
+    return lights[light].radiance.xyz;
+}
+#endif
+
+#endif /* CLRT_OBJECT_LIGHTS_CL */
