@@ -2,7 +2,8 @@
  *   shade_hits:      per path, turns a hit into a ShadingPoint (textures applied), adds the terms
  *                    that need no shadow ray (ambient, background on a miss, the emission of an
  *                    object light that is hit), and writes the
- *                    reflection/refraction children to slots 2i and 2i+1 of the next queue;
+ *                    reflection/refraction children to slots 2i and 2i+1 of the next queue
+ *                    (path-traced cameras: Path_ShadeHit, cl_kernels/path.cl, one child in 2i);
  *   sample_lights:   per path and light of a chunk, one shadow ray carrying its reflected light
  *                    (Material_EvalDirect: the classic Blinn-Phong terms, or the material's BRDF)
  *                    (environment lights: one sampled direction, the shadow ray going to infinity;
@@ -22,6 +23,8 @@
 #include "shading_frame.cl"
 #include "lights.cl"
 #include "brdf.cl"
+#include "material.cl"
+#include "path.cl"
 
 typedef struct {
     float3 p, ng, ns, dir;
@@ -125,21 +128,6 @@ inline void MotionBlur_StampChildren(__global Ray* nextRays, const __global int*
         if (childValid[k]) nextRays[k].origin.w = time;
 }
 
-/* Dielectric Fresnel reflectance for unit cosines (course formulas: mean of r∥² and r⊥²). */
-inline float Fresnel_Dielectric(float cosI, float cosT, float n1, float n2) {
-    float rPar = (n2 * cosI - n1 * cosT) / (n2 * cosI + n1 * cosT);
-    float rPerp = (n1 * cosI - n2 * cosT) / (n1 * cosI + n2 * cosT);
-    return 0.5f * (rPar * rPar + rPerp * rPerp);
-}
-
-/* Conductor Fresnel with refraction index n and absorption index k. */
-inline float Fresnel_Conductor(float cosI, float n, float k) {
-    float c2 = cosI * cosI, nk = n * n + k * k;
-    float rs = (nk - 2.0f * n * cosI + c2) / (nk + 2.0f * n * cosI + c2);
-    float rp = (nk * c2 - 2.0f * n * cosI + 1.0f) / (nk * c2 + 2.0f * n * cosI + 1.0f);
-    return 0.5f * (rs + rp);
-}
-
 /* Glossy perturbation of a reflected direction (course: r' = r + roughness·(ξ1·u + ξ2·v)). */
 inline float3 Glossy_Perturb(float3 r, float roughness, float u1, float u2) {
     if (roughness <= 0.0f) return r;
@@ -203,7 +191,11 @@ __kernel void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
     sp.pad0 = sp.pad1 = sp.pad2 = 0;
     if (h.prim == CLRT_INVALID) {
         points[i] = sp;
-        pathRadiance[i] = (float4)(throughput * Miss_Radiance(scene, textures, images, texels, cam, path, ray.direction.xyz), 0.0f);
+        float3 missed = Miss_Radiance(scene, textures, images, texels, cam, path, ray.direction.xyz);
+#ifdef CLRT_HAS_PATH_TRACING
+        if (scene.pathMode != 0) missed *= Path_MissWeight(scene, path, lights, envDist, ray.direction.xyz);
+#endif
+        pathRadiance[i] = (float4)(throughput * missed, 0.0f);
         return;
     }
 #ifdef CLRT_HAS_MOTION_BLUR
@@ -272,6 +264,21 @@ __kernel void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
         sp.ks = (float4)(ks, m.phongExponent);
         sp.material = s.material;
     }
+#ifdef CLRT_HAS_PATH_TRACING
+    if (scene.pathMode != 0) {
+        float3 emitted = (float3)(0.0f);
+        float lightPdf = -1.0f;
+#if defined(CLRT_HAS_LIGHT_MESH) || defined(CLRT_HAS_LIGHT_SPHERE)
+        emitted = Path_HitEmission(h.prim, s.frontFacing, scene, triShading, spheres, lights, s.p, s.dir, s.t, s.ng, &lightPdf);
+#endif
+        Path_ShadeHit(scene, i, path, m, s.p, ng, ns, wo, s.t, insideDielectric, sp, emitted, lightPdf, materials, points, pathRadiance, nextPaths,
+                      nextRays, childValid);
+#ifdef CLRT_HAS_MOTION_BLUR
+        MotionBlur_StampChildren(nextRays, childValid, i, Ray_Time(ray));
+#endif
+        return;
+    }
+#endif
     points[i] = sp;
     pathRadiance[i] = (float4)(throughput * radiance, 0.0f);
     if (!canBounce) return;
@@ -329,25 +336,6 @@ __kernel void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
 #ifdef CLRT_HAS_MOTION_BLUR
     MotionBlur_StampChildren(nextRays, childValid, i, Ray_Time(ray));
 #endif
-}
-
-/* The light reflected towards sp.wo per unit of what Light_Sample returns from direction wi
- * (cosTheta = n·wi > 0): f(wo, wi)·cosθ. Materials without a BRDF keep the classic Blinn-Phong
- * terms kd·cosθ + ks·cos^p αh (bit for bit what sample_lights computed before BRDFs; ks = 0 adds
- * exactly 0, so the lobe is skipped then). */
-inline float3 Material_EvalDirect(ShadingPoint sp, const __global Material* materials, float3 wi, float cosTheta) {
-#ifdef CLRT_HAS_BRDFS
-    const __global Material* m = &materials[sp.material];
-    if (m->brdf != CLRT_INVALID) {
-        BrdfParams b;
-        Brdf_FromMaterial(&b, m, sp.kd.xyz, sp.ks.xyz);
-        return Brdf_Eval(&b, sp.normal.xyz, sp.wo.xyz, wi) * cosTheta;
-    }
-#endif
-    if (!(maxComponent(sp.ks.xyz) > 0.0f)) return sp.kd.xyz * cosTheta;
-    float3 hv = normalize(wi + sp.wo.xyz);
-    float spec = Math_PowNonNegative(fmax(0.0f, dot(sp.normal.xyz, hv)), sp.ks.w);
-    return sp.kd.xyz * cosTheta + sp.ks.xyz * spec;
 }
 
 /* The shadow ray of one light sample at shading point sp: the reflected light (Material_EvalDirect)
@@ -418,6 +406,9 @@ __kernel void sample_lights(CLRT_KERNEL_PARAMS(sample_lights)) {
                 float3 e = Light_Sample(&lights[l], sp.position.xyz, sp.normal.xyz, u, images, texels, envDist, lightData,
                                         &wi, &dist);
                 sr = Shadow_Make(sp, materials, path.throughput.xyz, wi, dist, e);
+#ifdef CLRT_HAS_PATH_TRACING
+                sr.contribution *= Path_LightSampleWeight(scene.pathMode, &lights[l], sp, materials, envDist, wi, e);
+#endif
 #ifdef CLRT_HAS_OBJECT_LIGHTS
                 if (ObjectLight_IsShape(&lights[l])) ObjectLight_AimShadow(&sr, sp.position.xyz + dist * wi);
 #endif

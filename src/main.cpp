@@ -397,6 +397,7 @@ void sumDeviceCounters(const std::vector<DeviceWork>& work, RenderCounters& coun
         counters.cameraRays += w.counters.cameraRays;
         counters.secondaryRays += w.counters.secondaryRays;
         counters.shadowRays += w.counters.shadowRays;
+        counters.pathSegments += w.counters.pathSegments;
         deviceSeconds = std::max(deviceSeconds, w.counters.seconds);
     }
     if (work.size() == 1) counters.seconds = deviceSeconds;
@@ -423,6 +424,15 @@ void sumDeviceCounters(const std::vector<DeviceWork>& work, RenderCounters& coun
     info(line + buf);
 }
 
+// Path-traced cameras: path segments (camera and bounce rays) per second of render wall time, in
+// millions, summed over devices: the throughput of the whole path pipeline (trace, shade, NEE).
+double pathSegmentRate(const std::vector<DeviceWork>& work) {
+    double r = 0;
+    for (const DeviceWork& w : work)
+        if (w.counters.seconds > 0) r += double(w.counters.pathSegments) / w.counters.seconds * 1e-6;
+    return r;
+}
+
 // The `times:` line (stderr) and the `stats:` line (stdout, see README).
 void printTimes(const StageTimes& t, const DeviceScene& ds, const Renderer& renderer, const RenderCounters& counters,
                 const std::vector<DeviceWork>& work, int spp) {
@@ -442,10 +452,10 @@ void printTimes(const StageTimes& t, const DeviceScene& ds, const Renderer& rend
                  t.parse, ds.bvhSeconds, t.flatten - ds.bvhSeconds, t.build, renderer.buildInfo().cacheHit ? " (cached)" : "",
                  counters.seconds, t.output, rays / secs * 1e-6);
     std::printf("stats: parse=%.3fs flatten=%.3fs bvh=%.3fs build=%.3fs render=%.3fs output=%.3fs camera_mrays=%.2f "
-                "shadow_mrays=%.2f secondary_mrays=%.2f spp=%d\n",
+                "shadow_mrays=%.2f secondary_mrays=%.2f path_segments_mps=%.2f spp=%d\n",
                 t.parse, t.flatten - ds.bvhSeconds, ds.bvhSeconds, t.build, counters.seconds, t.output,
                 rate(&RenderCounters::cameraRays, STAGE_TRACE_CAMERA), rate(&RenderCounters::shadowRays, STAGE_TRACE_SHADOW),
-                rate(&RenderCounters::secondaryRays, STAGE_TRACE_SECONDARY), spp);
+                rate(&RenderCounters::secondaryRays, STAGE_TRACE_SECONDARY), pathSegmentRate(work), spp);
 }
 
 // What a render writes: the cameras' outputs, or with --part K/N one part file per camera.

@@ -35,6 +35,7 @@ std::vector<std::string> FeatureSet::defines() const {
     add(spheres, "CLRT_HAS_SPHERES");
     add(primRefsIdentity, "CLRT_PRIMREFS_IDENTITY");
     add(motionBlur, "CLRT_HAS_MOTION_BLUR");
+    add(pathTracing, "CLRT_HAS_PATH_TRACING");
     // Rounded up to a multiple of 8 so that scenes of similar depth share a cached program.
     if (bvhStack > 0) d.push_back("-DCLRT_BVH4_STACK_SIZE=" + std::to_string((bvhStack + 7) / 8 * 8));
     return d;
@@ -80,6 +81,7 @@ DeviceScene flattenScene(const Scene& scene) {
     p.background = toFloat4(scene.backgroundColor);
     p.ambient = toFloat4(scene.ambientLight);
     p.maxDepth = std::max(0, scene.maxRecursionDepth);
+    for (const Camera& c : scene.cameras) ds.features.pathTracing = ds.features.pathTracing || c.pathMode != 0;
     ds.flattenSeconds = secondsSince(t0) - ds.bvhSeconds;
     return ds;
 }

@@ -25,6 +25,7 @@ struct FeatureSet {
     bool spheres = false;
     bool primRefsIdentity = false;  // primRefs[i] == i (triangles only, stored in leaf order)
     bool motionBlur = false;        // a mesh, triangle or sphere has a MotionBlur translation
+    bool pathTracing = false;       // a camera has <Renderer>PathTracing (cl_kernels/path.cl)
     int bvhStack = 0;  // traversal stack entries the scene's BVH needs (0: the header's default)
     void add(dev::LightKind k) { lightKinds |= 1u << k; }
     void add(dev::MaterialKind k) { materialKinds |= 1u << k; }
@@ -38,7 +39,7 @@ struct FeatureSet {
     static FeatureSet all() {
         FeatureSet f;
         f.lightKinds = f.materialKinds = f.brdfKinds = ~0u;
-        f.textures = f.normalMaps = f.bumpMaps = f.spheres = f.motionBlur = true;
+        f.textures = f.normalMaps = f.bumpMaps = f.spheres = f.motionBlur = f.pathTracing = true;
         return f;
     }
 };

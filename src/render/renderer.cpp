@@ -205,6 +205,7 @@ void Renderer::Impl::traceBatch(int n, const dev::SceneParams& sp, bool bounces,
         run(kCompact, slots, STAGE_COMPACT);
         n = next;
         counters.secondaryRays += n;
+        if (sp.pathMode != 0) counters.pathSegments += n;
     }
 }
 
@@ -280,13 +281,16 @@ static BatchPlan planBatches(const DeviceScene& ds, size_t numPixels, const Rend
     plan.group = samplesPerBatch(numPixels, cp.spp);
     plan.batch = std::max<size_t>(1, std::min(numPixels, settings.maxBatchPixels / size_t(plan.group)));
     const size_t batchPaths = plan.batch * size_t(plan.group);
-    plan.bounces = ds.features.bounces();
+    plan.bounces = ds.features.bounces() || sp.pathMode != 0;
     sp.seed = settings.seed;
+    // Path tracing with Russian roulette has no depth cap (the course's references show none): the
+    // roulette ends paths, kMaxRecursionDepth is the backstop.
+    if (sp.pathMode & CLRT_PATH_RR) sp.maxDepth = kMaxRecursionDepth;
     sp.maxDepth = std::min(sp.maxDepth, kMaxRecursionDepth);
     // Dielectrics split into both children while the queue can hold them and few samples are taken;
     // beyond that (or with many samples) one child is chosen by Fresnel weight (same expectation).
     int split = 0;
-    if (ds.features.has(dev::MATERIAL_DIELECTRIC) && cp.spp <= 4) {
+    if (ds.features.has(dev::MATERIAL_DIELECTRIC) && cp.spp <= 4 && sp.pathMode == 0) {
         while (split < sp.maxDepth && (batchPaths << (split + 1)) <= (size_t(1) << 21)) ++split;
     }
     if (settings.splitDepthOverride >= 0) split = settings.splitDepthOverride;
@@ -321,6 +325,7 @@ int Renderer::Impl::renderTile(size_t tileFirst, size_t tileEnd, const BatchPlan
             kGenerate.set("count", n);
             run(kGenerate, n, STAGE_GENERATE);
             counters.cameraRays += n;
+            if (scene.pathMode != 0) counters.pathSegments += n;
             traceBatch(n, scene, plan.bounces, plan.lightChunk, plan.lightSlots, counters);
             ++doneBatches;
             if (progress || events.size() >= kProfileEvents) {
@@ -347,6 +352,9 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     const size_t imageBytes = numPixels * sizeof(dev::float4);
     checkImageFits(m.dc.info(), cam);
     dev::SceneParams sp = m.ds.params;
+    sp.pathMode = cam.pathMode;  // per camera: <Renderer>PathTracing (compiled in when any camera has it)
+    if (sp.pathMode != 0 && !m.ds.features.pathTracing)
+        throw Error("camera " + std::to_string(cam.id) + " is path traced but the program was built without CLRT_HAS_PATH_TRACING");
     const BatchPlan plan = planBatches(m.ds, numPixels, settings, cp, sp);
     m.ensureQueues(plan.capacity, plan.capacity * std::max<size_t>(plan.lightChunk, 1) * size_t(plan.lightSlots));
 

@@ -29,6 +29,7 @@ const char* renderStageName(int stage);
 
 struct RenderCounters {
     uint64_t cameraRays = 0, secondaryRays = 0, shadowRays = 0;
+    uint64_t pathSegments = 0;  // path-traced cameras: camera + bounce rays (segments of the paths)
     uint64_t tiles = 0, pixels = 0;  // work done (tiles and pixels, all samples each)
     double seconds = 0;  // wall time of the render loop (device work included)
     // Device time of each stage's kernels from OpenCL profiling events (all zero when the queue was

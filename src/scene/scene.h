@@ -44,6 +44,7 @@ struct Camera {
     int numSamples = 1;
     std::string imageName;
     std::vector<Tonemap> tonemaps;
+    int pathMode = 0;  // 0: classic ray tracing; <Renderer>PathTracing: dev CLRT_PATH_* bits (CLRT_PATH_ON set)
 };
 
 struct Material {

@@ -265,8 +265,15 @@ typedef struct SceneParams {
     int envImage;          /* its image (index into images) */
     int envMapping;        /* its EnvMappingKind */
     int numPlanes;         /* infinite planes (see Plane) */
-    int envPad1;
+    int pathMode;          /* 0: classic recursive ray tracing; else CLRT_PATH_* bits (cl_kernels/path.cl) */
 } SceneParams;
+
+/* SceneParams.pathMode: the camera's <Renderer>PathTracing and its <RendererParams> (set per render). */
+#define CLRT_PATH_ON 1          /* <Renderer>PathTracing</Renderer> */
+#define CLRT_PATH_NEE 2         /* NextEventEstimation */
+#define CLRT_PATH_IMPORTANCE 4  /* ImportanceSampling: cosine (classic materials), the BRDF's sampler */
+#define CLRT_PATH_RR 8          /* RussianRoulette (q = max throughput, C = 0, no depth cap) */
+#define CLRT_PATH_MIS 16        /* MultipleImportanceSampling (clrt's): NEE + BSDF sampling, power heuristic */
 
 /* Ray and hit record of the wavefront. */
 typedef struct Ray {

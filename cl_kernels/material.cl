@@ -1,0 +1,46 @@
+/* material.cl — what the shading stages of shade.cl and path.cl share about a material: the Fresnel
+ * factors of dielectrics and conductors, and Material_EvalDirect, the light a surface reflects per
+ * unit of incident light (the classic Blinn-Phong terms, or the material's BRDF; reads Material,
+ * ShadingPoint). */
+#ifndef CLRT_MATERIAL_CL
+#define CLRT_MATERIAL_CL
+
+#include "../src/shared/device_types.h"
+#include "common.cl"
+#include "brdf.cl"
+
+/* Dielectric Fresnel reflectance for unit cosines (course formulas: mean of r∥² and r⊥²). */
+inline float Fresnel_Dielectric(float cosI, float cosT, float n1, float n2) {
+    float rPar = (n2 * cosI - n1 * cosT) / (n2 * cosI + n1 * cosT);
+    float rPerp = (n1 * cosI - n2 * cosT) / (n1 * cosI + n2 * cosT);
+    return 0.5f * (rPar * rPar + rPerp * rPerp);
+}
+
+/* Conductor Fresnel with refraction index n and absorption index k. */
+inline float Fresnel_Conductor(float cosI, float n, float k) {
+    float c2 = cosI * cosI, nk = n * n + k * k;
+    float rs = (nk - 2.0f * n * cosI + c2) / (nk + 2.0f * n * cosI + c2);
+    float rp = (nk * c2 - 2.0f * n * cosI + 1.0f) / (nk * c2 + 2.0f * n * cosI + 1.0f);
+    return 0.5f * (rs + rp);
+}
+
+/* The light reflected towards sp.wo per unit of what Light_Sample returns from direction wi
+ * (cosTheta = n·wi > 0): f(wo, wi)·cosθ. Materials without a BRDF keep the classic Blinn-Phong
+ * terms kd·cosθ + ks·cos^p αh (bit for bit what sample_lights computed before BRDFs; ks = 0 adds
+ * exactly 0, so the lobe is skipped then). */
+inline float3 Material_EvalDirect(ShadingPoint sp, const __global Material* materials, float3 wi, float cosTheta) {
+#ifdef CLRT_HAS_BRDFS
+    const __global Material* m = &materials[sp.material];
+    if (m->brdf != CLRT_INVALID) {
+        BrdfParams b;
+        Brdf_FromMaterial(&b, m, sp.kd.xyz, sp.ks.xyz);
+        return Brdf_Eval(&b, sp.normal.xyz, sp.wo.xyz, wi) * cosTheta;
+    }
+#endif
+    if (!(maxComponent(sp.ks.xyz) > 0.0f)) return sp.kd.xyz * cosTheta;
+    float3 hv = normalize(wi + sp.wo.xyz);
+    float spec = Math_PowNonNegative(fmax(0.0f, dot(sp.normal.xyz, hv)), sp.ks.w);
+    return sp.kd.xyz * cosTheta + sp.ks.xyz * spec;
+}
+
+#endif /* CLRT_MATERIAL_CL */

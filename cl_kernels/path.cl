@@ -1,0 +1,255 @@
+/* path.cl — path tracing in the wavefront (<Renderer>PathTracing, <RendererParams>: SceneParams.pathMode,
+ * CLRT_PATH_* bits, set per camera; compiled under CLRT_HAS_PATH_TRACING only). shade_hits hands every
+ * hit of a path-traced camera to Path_ShadeHit, which
+ *   - adds the emission the ray sees (Path_EmissionWeight: whole for camera rays and specular
+ *     bounces; with NextEventEstimation discarded when the previous vertex sampled the lights, as
+ *     the course asks; with MultipleImportanceSampling weighted by the power heuristic),
+ *   - leaves a ShadingPoint for sample_lights (next-event estimation) when the surface has a
+ *     non-specular part (kd or ks), and no ambient term,
+ *   - plays Russian roulette (Path_RussianRoulette: the course's q = the throughput's largest
+ *     component, at most 1, and C = 0; with RussianRoulette there is no depth cap, as the course's
+ *     references show),
+ *   - writes ONE child, in slot 2i: the sampled direction with throughput · f·cosθ / pdf.
+ * PathState.throughput.w: the solid-angle pdf of the BSDF sample that made the path (0: a camera ray
+ * or a specular bounce).
+ * Sampling (Path_SampleBounce): uniform over the hemisphere (pdf 1/2π) by default; with
+ * ImportanceSampling (or MIS) the BRDF's own sampler (Brdf_Sample) for BRDF materials and cosine
+ * (pdf cosθ/π) for classic ones. Classic materials (no BRDF) are path traced with the reflectance
+ * their direct light implies, f·cosθ = kd·cosθ + ks·cos^p αh (Material_EvalDirect: the course's
+ * un-normalized Blinn-Phong), so NEE and BSDF sampling estimate the same integral.
+ * Mirror, conductor, dielectric: their specular child (a dielectric picks reflection or refraction by
+ * its Fresnel weight, never splits), chosen with probability 1/2 against the non-specular part when
+ * the material has kd or ks, else always. */
+#ifndef CLRT_PATH_CL
+#define CLRT_PATH_CL
+
+#include "../src/shared/device_types.h"
+#include "common.cl"
+#include "envmap.cl"
+#include "brdf.cl"
+#include "material.cl"
+
+#ifdef CLRT_HAS_PATH_TRACING
+
+/* Does the path's previous vertex sample the lights? */
+inline int Path_UsesNee(int mode) { return (mode & (CLRT_PATH_NEE | CLRT_PATH_MIS)) != 0; }
+inline int Path_UsesImportance(int mode) { return (mode & (CLRT_PATH_IMPORTANCE | CLRT_PATH_MIS)) != 0; }
+
+/* The power heuristic for one sample of each strategy. */
+inline float Path_PowerHeuristic(float pa, float pb) {
+    float a = pa * pa, b = pb * pb;
+    return a + b > 0.0f && isfinite(a + b) ? a / (a + b) : (pa > 0.0f ? 1.0f : 0.0f);
+}
+
+/* The weight of emission reached by a BSDF ray whose pdf was bsdfPdf (0: camera or specular) where
+ * light sampling would have drawn the same direction with solid-angle pdf lightPdf. */
+inline float Path_EmissionWeight(int mode, float bsdfPdf, float lightPdf) {
+    if (!(bsdfPdf > 0.0f) || !Path_UsesNee(mode)) return 1.0f;
+    /* course NEE, or a light whose sampling density is not known here: it was sampled there already */
+    if (!(mode & CLRT_PATH_MIS) || lightPdf < 0.0f) return 0.0f;
+    return Path_PowerHeuristic(bsdfPdf, lightPdf);
+}
+
+/* The solid-angle density with which sample_lights draws direction dirWorld from an environment light,
+ * or -1 where it depends on the shading normal (the cosine and mis samplers: such a light keeps the
+ * course's NEE rule under MIS). */
+inline float Path_EnvLightPdf(const __global Light* light, const __global float* envDist, float3 dirWorld) {
+#ifdef CLRT_HAS_ENV_LIGHT
+    if (light->sampler == ENV_SAMPLE_UNIFORM) return 0.5f * CLRT_INV_PI;
+    if (light->sampler == ENV_SAMPLE_IMPORTANCE && light->distribution != CLRT_INVALID)
+        return EnvDist_PdfUv(envDist + light->distribution, EnvMap_DirToUv(light->mapping, dirWorld));
+#endif
+    return -1.0f;
+}
+
+/* The weight of what a ray that leaves the scene brings back (the environment light, if any). */
+inline float Path_MissWeight(SceneParams scene, PathState path, const __global Light* lights,
+                             const __global float* envDist, float3 dirWorld) {
+    if (scene.envLight == CLRT_INVALID) return 1.0f; /* a background colour is no light: never sampled */
+    float l = length(dirWorld);
+    if (!(l > 0.0f)) return 0.0f;
+    float lightPdf = (scene.pathMode & CLRT_PATH_MIS) ? Path_EnvLightPdf(&lights[scene.envLight], envDist, dirWorld / l) : -1.0f;
+    return Path_EmissionWeight(scene.pathMode, path.throughput.w, lightPdf);
+}
+
+#if defined(CLRT_HAS_LIGHT_MESH) || defined(CLRT_HAS_LIGHT_SPHERE)
+/* The solid-angle density with which sample_lights draws the point pHit a ray hit on object light
+ * `light` (from pHit − t·dirWorld; ngWorld: the geometric normal there): LightMesh: a point by area,
+ * pdf t²/(A·cosθ_L); LightSphere: a direction in its cone, 1/(2π(1 − cosθmax)) (1/4π from inside). */
+inline float Path_ObjectLightPdf(const __global Light* light, float3 pHit, float3 dirWorld, float t, float3 ngWorld) {
+    if (light->kind == LIGHT_MESH) {
+        float cosL = fabs(dot(ngWorld, dirWorld));
+        return cosL > 0.0f && light->area > 0.0f ? t * t / (light->area * cosL) : 0.0f;
+    }
+    float3 axis = light->position.xyz - (pHit - t * dirWorld);
+    float R = light->objRadius, d2 = dot(axis, axis);
+    if (!(d2 > R * R)) return 0.25f * CLRT_INV_PI;
+    float sin2Max = R * R / d2, cosMax = sqrt(fmax(0.0f, 1.0f - sin2Max));
+    return 1.0f / (2.0f * CLRT_PI * (sin2Max / (1.0f + cosMax)));
+}
+
+/* What a ray sees emitted where it hit primitive `prim` (the emitting side of an object light, as
+ * object_lights.cl's ObjectLight_Emission: LightMesh front faces, LightSphere outside), and the
+ * density light sampling draws that point with (*lightPdf). */
+inline float3 Path_HitEmission(int prim, int frontFacing, SceneParams scene, const __global TriangleShading* shading,
+                               const __global Sphere* spheres, const __global Light* lights, float3 pHit,
+                               float3 dirWorld, float t, float3 ngWorld, float* lightPdf) {
+    int light = CLRT_INVALID;
+    if (prim < scene.numTriangles) light = shading[prim].light;
+    else if (prim < scene.numTriangles + scene.numSpheres) light = spheres[prim - scene.numTriangles].light;
+    if (light == CLRT_INVALID || !frontFacing) return (float3)(0.0f);
+    *lightPdf = Path_ObjectLightPdf(&lights[light], pHit, dirWorld, t, ngWorld);
+    return lights[light].radiance.xyz;
+}
+#endif
+
+/* The density Path_SampleBounce draws wi with, for MIS (solid angle; 0 below the surface). */
+inline float Path_BouncePdf(ShadingPoint sp, const __global Material* materials, int mode, float3 wi) {
+    float c = dot(sp.normal.xyz, wi);
+    if (!(c > 0.0f)) return 0.0f;
+    if (!Path_UsesImportance(mode)) return 0.5f * CLRT_INV_PI;
+#ifdef CLRT_HAS_BRDFS
+    const __global Material* m = &materials[sp.material];
+    if (m->brdf != CLRT_INVALID) {
+        BrdfParams b;
+        Brdf_FromMaterial(&b, m, sp.kd.xyz, sp.ks.xyz);
+        return Brdf_Pdf(&b, sp.normal.xyz, sp.wo.xyz, wi);
+    }
+#endif
+    return c * CLRT_INV_PI;
+}
+
+/* The MIS weight of a light sample (sample_lights) in direction wi: the power heuristic against the
+ * BSDF sampling of the same direction for lights a BSDF ray can reach (environment lights with a
+ * normal-independent sampler, object lights); 1 for every other light and without
+ * MultipleImportanceSampling. e: what Light_Sample returned. */
+inline float Path_LightSampleWeight(int mode, const __global Light* light, ShadingPoint sp,
+                                    const __global Material* materials, const __global float* envDist, float3 wi,
+                                    float3 e) {
+    if (!(mode & CLRT_PATH_MIS)) return 1.0f;
+    float lightPdf = -1.0f;
+    if (light->kind == LIGHT_ENVIRONMENT) lightPdf = Path_EnvLightPdf(light, envDist, wi);
+#if defined(CLRT_HAS_LIGHT_MESH) || defined(CLRT_HAS_LIGHT_SPHERE)
+    /* object lights return radiance / pdf(wi) (object_lights.cl) */
+    if ((light->kind == LIGHT_MESH || light->kind == LIGHT_SPHERE) && maxComponent(e) > 0.0f)
+        lightPdf = maxComponent(light->radiance.xyz) / maxComponent(e);
+#endif
+    if (lightPdf < 0.0f) return 1.0f;
+    return Path_PowerHeuristic(lightPdf, Path_BouncePdf(sp, materials, mode, wi));
+}
+
+/* Draws the non-specular bounce at sp: *wi, *pdf, and returns f·cosθ (0 when the sample carries nothing). */
+inline float3 Path_SampleBounce(ShadingPoint sp, const __global Material* materials, int mode, float2 u, float3* wi,
+                                float* pdf) {
+    float3 n = sp.normal.xyz;
+    *pdf = 0.0f;
+    *wi = n;
+    int sampled = 0;
+#ifdef CLRT_HAS_BRDFS
+    const __global Material* m = &materials[sp.material];
+    if (Path_UsesImportance(mode) && m->brdf != CLRT_INVALID) {
+        BrdfParams b;
+        Brdf_FromMaterial(&b, m, sp.kd.xyz, sp.ks.xyz);
+        if (!Brdf_Sample(&b, n, sp.wo.xyz, u, wi, pdf)) return (float3)(0.0f);
+        sampled = 1;
+    }
+#endif
+    if (!sampled) {
+        float3 t, bt;
+        makeBasis(n, &t, &bt);
+        int cosine = Path_UsesImportance(mode);
+        float3 l = cosine ? Warp_CosineHemisphere(u.x, u.y) : Warp_UniformHemisphere(u.x, u.y);
+        *wi = normalize(l.x * t + l.y * bt + l.z * n);
+        *pdf = cosine ? l.z * CLRT_INV_PI : 0.5f * CLRT_INV_PI;
+    }
+    float c = dot(n, *wi);
+    if (!(c > 0.0f) || !(dot(sp.geomNormal.xyz, *wi) > 0.0f) || !(*pdf > 0.0f)) return (float3)(0.0f);
+    return Material_EvalDirect(sp, materials, *wi, c);
+}
+
+/* Russian roulette (course): survive with q = min(1, max throughput component); a survivor's
+ * throughput is divided by q (C = 0). Returns 0 when the path ends. */
+inline int Path_RussianRoulette(float3* throughput, float u) {
+    float q = fmin(1.0f, maxComponent(*throughput));
+    if (!(q > 0.0f) || u >= q) return 0;
+    *throughput /= q;
+    return 1;
+}
+
+/* The specular child of a mirror, conductor or dielectric (weight w), the same directions as
+ * shade_hits' classic children; insideDielectric: the ray travelled t inside (Beer's law). */
+inline int Path_SpecularBounce(Material m, float3 wo, float3 ns, float3 ng, float3 p, float t, int inside, float u,
+                               float3* weight, float3* org, float3* dir) {
+    float cosI = dot(wo, ns);
+    *dir = normalize(2.0f * cosI * ns - wo);
+    *org = Ray_OffsetOrigin(p, ng);
+    *weight = m.mirror.xyz;
+    if (m.kind == MATERIAL_CONDUCTOR) {
+        *weight = m.mirror.xyz * Fresnel_Conductor(clamp(cosI, 0.0f, 1.0f), m.refractionIndex, m.absorptionIndex);
+    } else if (m.kind == MATERIAL_DIELECTRIC) {
+        *weight = inside ? exp(-m.absorption.xyz * t) : (float3)(1.0f);
+        float n1 = inside ? m.refractionIndex : 1.0f, n2 = inside ? 1.0f : m.refractionIndex;
+        float eta = n1 / n2, c = clamp(cosI, 0.0f, 1.0f);
+        float sin2T = eta * eta * fmax(0.0f, 1.0f - c * c);
+        if (sin2T < 1.0f) {
+            float cosT = sqrt(1.0f - sin2T);
+            if (u >= Fresnel_Dielectric(c, cosT, n1, n2)) {
+                *dir = normalize(-eta * wo + (eta * c - cosT) * ns);
+                *org = Ray_OffsetOrigin(p, -ng);
+            }
+        }
+    } else if (m.kind != MATERIAL_MIRROR) {
+        return 0;
+    }
+    return allFinite3(*dir);
+}
+
+/* One path-traced hit (see the file comment) at pWorld, reached over distance t along -wo; ng, ns:
+ * the normals facing wo; inside: the ray travelled inside a dielectric. sp arrives as shade_hits
+ * fills it (position.w = 1) or zero (inside); emitted: the radiance the surface emits towards wo,
+ * lightPdf: the density light sampling would have drawn it with (-1: unknown). */
+inline void Path_ShadeHit(SceneParams scene, int i, PathState path, Material m, float3 pWorld, float3 ng, float3 ns,
+                          float3 wo, float t, int inside, ShadingPoint sp, float3 emitted, float lightPdf,
+                          const __global Material* materials, __global ShadingPoint* points,
+                          __global float4* pathRadiance, __global PathState* nextPaths, __global Ray* nextRays,
+                          __global int* childValid) {
+    const int mode = scene.pathMode;
+    float3 throughput = path.throughput.xyz;
+    pathRadiance[i] = (float4)(finiteOrZero(throughput * emitted * Path_EmissionWeight(mode, path.throughput.w, lightPdf)), 0.0f);
+    int specular = m.kind == MATERIAL_MIRROR || m.kind == MATERIAL_CONDUCTOR || m.kind == MATERIAL_DIELECTRIC;
+    int diffuse = !inside && (maxComponent(sp.kd.xyz) > 0.0f || maxComponent(sp.ks.xyz) > 0.0f);
+    if (!Path_UsesNee(mode) || !diffuse) sp.position.w = 0.0f;
+    points[i] = sp;
+    RngKey key = Rng_Key(scene.seed, path.pixel, path.sample, path.pathId);
+    uint dim = 4u + 32u * (uint)path.depth;
+    if (path.depth >= scene.maxDepth || (!specular && !diffuse)) return;
+    float pSpecular = specular ? (diffuse ? 0.5f : 1.0f) : 0.0f;
+    int pickSpecular = Rng_Uniform(key, dim + 3u) < pSpecular;
+    float3 weight, org, dir;
+    float pdf = 0.0f;
+    if (pickSpecular) {
+        if (!Path_SpecularBounce(m, wo, ns, ng, pWorld, t, inside, Rng_Uniform(key, dim + 2u), &weight, &org, &dir)) return;
+        weight /= pSpecular;
+    } else {
+        float2 u = (float2)(Rng_Uniform(key, dim + 5u), Rng_Uniform(key, dim + 6u));
+        float3 fCos = Path_SampleBounce(sp, materials, mode, u, &dir, &pdf);
+        weight = fCos / (pdf * (1.0f - pSpecular));
+        org = Ray_OffsetOrigin(pWorld, ng);
+        if (!(maxComponent(fCos) > 0.0f)) return;
+    }
+    float3 next = throughput * weight;
+    if ((mode & CLRT_PATH_RR) && !Path_RussianRoulette(&next, Rng_Uniform(key, dim + 4u))) return;
+    PathState c = path;
+    c.throughput = (float4)(next, pickSpecular ? 0.0f : pdf);
+    c.depth = path.depth + 1;
+    c.pathId = path.pathId < 0x80000000u ? path.pathId * 2u : path.pathId;
+    Ray r;
+    r.origin = (float4)(org, 0.0f);
+    r.direction = (float4)(dir, INFINITY);
+    nextPaths[2 * i] = c;
+    nextRays[2 * i] = r;
+    childValid[2 * i] = maxComponent(next) > 0.0f && allFinite3(next) && allFinite3(dir) ? 1 : 0;
+}
+
+#endif /* CLRT_HAS_PATH_TRACING */
+#endif /* CLRT_PATH_CL */
