@@ -1,10 +1,10 @@
 #!/usr/bin/python3
-"""Contact sheet of the hw6 BRDF scenes: reference | clrt | |difference| x 8, one row per scene.
+"""Contact sheet of the hw6 direct-lighting scenes (BRDFs and object lights): reference | clrt | |difference| x 8, one row per scene.
 
-usage: /usr/bin/python3 scripts/contact_sheet_hw6_brdf.py OUT.png [--spp N] [--clrt BIN]
+usage: /usr/bin/python3 scripts/contact_sheet_hw6_direct.py OUT.png [--spp N] [--clrt BIN]
 
-Renders the five brdf_* scenes (1 spp, --ldr-quantize floor) and the point-lit cornell boxes
-cornellbox_jaroslav_diffuse/_glossy (the scene's 100 spp unless --spp; tone-mapped PNG, the course's
+Renders the five brdf_* scenes (1 spp, --ldr-quantize floor) and the cornell boxes
+cornellbox_jaroslav_diffuse/_glossy (point light), _diffuse_area (LightMesh), _glossy_area_sphere (LightSphere) (the scene's 100 spp unless --spp; tone-mapped PNG, the course's
 Photographic TMO) from ../shared/scenes/hw6 and compares their PNGs with the course's reference PNGs.
 Each row's title gives the PSNR of the 8-bit images. Needs python3-matplotlib and python3-numpy.
 """
@@ -16,7 +16,8 @@ import tempfile
 
 SCENES = ["brdf_phong_original", "brdf_phong_modified", "brdf_blinnphong_original",
           "brdf_blinnphong_modified_normalized", "brdf_torrancesparrow",
-          "cornellbox_jaroslav_diffuse", "cornellbox_jaroslav_glossy"]
+          "cornellbox_jaroslav_diffuse", "cornellbox_jaroslav_glossy",
+          "cornellbox_jaroslav_diffuse_area", "cornellbox_jaroslav_glossy_area_sphere"]
 
 
 def main():
