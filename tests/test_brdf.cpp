@@ -22,6 +22,7 @@
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
 #include "shared/type_tables.h"
+#include "image/image_compare.h"
 #include "test_helpers.h"
 
 using namespace clrt;
@@ -389,29 +390,6 @@ ImageRGB renderHw6(const std::string& name, int spp, uint32_t seed, bool stratif
     return r.render(scene.cameras.at(0), rs, c);
 }
 
-// Mean of each f×f block (the image's size a multiple of f).
-ImageRGB boxDown(const ImageRGB& img, int f) {
-    ImageRGB o;
-    o.width = img.width / f;
-    o.height = img.height / f;
-    o.isHdr = true;
-    o.pixels.assign(size_t(o.width) * o.height * 3, 0.0f);
-    for (int y = 0; y < o.height * f; ++y)
-        for (int x = 0; x < o.width * f; ++x)
-            for (int c = 0; c < 3; ++c) o.at(x / f, y / f, c) += img.at(x, y, c) / float(f * f);
-    return o;
-}
-
-// relMSE as clrt-imgdiff computes it: mean of (a − b)² / (b² + 1e-2).
-double relMse(const ImageRGB& a, const ImageRGB& b) {
-    double s = 0;
-    for (size_t i = 0; i < a.pixels.size(); ++i) {
-        double d = double(a.pixels[i]) - b.pixels[i];
-        s += d * d / (double(b.pixels[i]) * b.pixels[i] + 1e-2);
-    }
-    return s / double(a.pixels.size());
-}
-
 }  // namespace
 
 TEST_CASE("hw6 brdf scenes match the course's PNGs at >= 40 dB (800x800, 1 spp, deterministic)", "[brdf][render][shared][hw6]") {
@@ -447,8 +425,8 @@ TEST_CASE("hw6 cornellbox_jaroslav diffuse/glossy match the course's EXRs within
         ImageRGB a = renderHw6(name, spp, 1, false), b = renderHw6(name, spp, 2, false), st = renderHw6(name, spp, 3);
         REQUIRE(a.width == ref.width);
         REQUIRE(a.height == ref.height);
-        ImageRGB ad = boxDown(a, 8), bd = boxDown(b, 8), rd = boxDown(ref, 8), sd = boxDown(st, 8);
-        double toRef = relMse(ad, rd), floorAB = relMse(ad, bd), limit = floorAB * (1 + spp / R);
+        ImageRGB ad = boxDownsample(a, 8), bd = boxDownsample(b, 8), rd = boxDownsample(ref, 8), sd = boxDownsample(st, 8);
+        double toRef = relativeMse(ad, rd), floorAB = relativeMse(ad, bd), limit = floorAB * (1 + spp / R);
         double mean[2][3] = {};
         for (size_t i = 0; i < a.pixels.size(); ++i) {
             mean[0][i % 3] += a.pixels[i];
@@ -457,8 +435,8 @@ TEST_CASE("hw6 cornellbox_jaroslav diffuse/glossy match the course's EXRs within
         WARN(name << " at " << spp << " spp, independent jitter: relMSE to reference " << toRef
                   << ", between two renders " << floorAB << " (limit " << limit << "); mean ratio clrt/reference r "
                   << mean[0][0] / mean[1][0] << " g " << mean[0][1] / mean[1][1] << " b " << mean[0][2] / mean[1][2]
-                  << "; stratified render: relMSE to reference " << relMse(sd, rd) << ", to the first render "
-                  << relMse(sd, ad));
+                  << "; stratified render: relMSE to reference " << relativeMse(sd, rd) << ", to the first render "
+                  << relativeMse(sd, ad));
         CHECK(toRef <= limit);
         for (int c = 0; c < 3; ++c) CHECK(mean[0][c] / mean[1][c] == Approx(1.0).epsilon(0.01));
     }

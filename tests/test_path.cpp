@@ -13,6 +13,7 @@
 #include "render/device_scene.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
+#include "image/image_compare.h"
 #include "test_helpers.h"
 #include "util/error.h"
 
@@ -159,29 +160,6 @@ TEST_CASE("Path tracing: white furnace under a constant environment gives a*Le f
 
 namespace {
 
-// Mean of each f×f block.
-ImageRGB blockMeans(const ImageRGB& img, int f) {
-    ImageRGB o;
-    o.width = img.width / f;
-    o.height = img.height / f;
-    o.isHdr = true;
-    o.pixels.assign(size_t(o.width) * o.height * 3, 0.0f);
-    for (int y = 0; y < o.height * f; ++y)
-        for (int x = 0; x < o.width * f; ++x)
-            for (int c = 0; c < 3; ++c) o.at(x / f, y / f, c) += img.at(x, y, c) / float(f * f);
-    return o;
-}
-
-// relMSE as clrt-imgdiff computes it: mean of (a − b)² / (b² + 1e-2).
-double relMse(const ImageRGB& a, const ImageRGB& b) {
-    double s = 0;
-    for (size_t i = 0; i < a.pixels.size(); ++i) {
-        double d = double(a.pixels[i]) - b.pixels[i];
-        s += d * d / (double(b.pixels[i]) * b.pixels[i] + 1e-2);
-    }
-    return s / double(a.pixels.size());
-}
-
 ImageRGB renderPathCamera(const Scene& scene, int cam, int size, int spp, uint32_t seed, int maxDepth = -1) {
     Scene s = scene;
     if (maxDepth >= 0) s.maxRecursionDepth = maxDepth;
@@ -221,13 +199,13 @@ TEST_CASE("hw6 path_diffuse: the eight path-tracing cameras against the course's
         const Camera& cam = scene.cameras[k];
         std::string stem = cam.imageName.substr(0, cam.imageName.rfind('.'));
         ImageRGB ref = readImage(sharedDir() + "/scenes/hw6/_reference_outputs/" + stem + ".exr");
-        ImageRGB a = renderPathCamera(scene, k, size, N, 11), rd = blockMeans(ref, refF), ad = blockMeans(a, f);
+        ImageRGB a = renderPathCamera(scene, k, size, N, 11), rd = boxDownsample(ref, refF), ad = boxDownsample(a, f);
         double mean[2][3];
         for (int c = 0; c < 3; ++c) mean[0][c] = imageMean(a, c), mean[1][c] = imageMean(ref, c);
         INFO("camera " << cam.id << " " << stem);
         if (!(cam.pathMode & CLRT_PATH_RR)) {
-            ImageRGB bd = blockMeans(renderPathCamera(scene, k, size, N, 12), f);
-            double toRef = relMse(ad, rd), floorAB = relMse(ad, bd), limit = floorAB * (1 + r);
+            ImageRGB bd = boxDownsample(renderPathCamera(scene, k, size, N, 12), f);
+            double toRef = relativeMse(ad, rd), floorAB = relativeMse(ad, bd), limit = floorAB * (1 + r);
             WARN(stem << ": relMSE to reference " << toRef << ", between two renders " << floorAB << " (limit "
                       << limit << "); mean clrt/reference " << mean[0][0] / mean[1][0] << " " << mean[0][1] / mean[1][1]
                       << " " << mean[0][2] / mean[1][2]);
@@ -257,9 +235,9 @@ TEST_CASE("hw6 path_diffuse: MultipleImportanceSampling matches the NEE referenc
     const int N = 16, size = 128, f = 8, refF = 32;
     const double r = double(f * f * N) / double(refF * refF * 100);
     ImageRGB ref = readImage(sharedDir() + "/scenes/hw6/_reference_outputs/diffuse_next_importance.exr");
-    ImageRGB ad = blockMeans(renderPathCamera(scene, 2, size, N, 21), f),
-             bd = blockMeans(renderPathCamera(scene, 2, size, N, 22), f), rd = blockMeans(ref, refF);
-    double toRef = relMse(ad, rd), floorAB = relMse(ad, bd);
+    ImageRGB ad = boxDownsample(renderPathCamera(scene, 2, size, N, 21), f),
+             bd = boxDownsample(renderPathCamera(scene, 2, size, N, 22), f), rd = boxDownsample(ref, refF);
+    double toRef = relativeMse(ad, rd), floorAB = relativeMse(ad, bd);
     WARN("MIS on camera 3: relMSE to reference " << toRef << ", between two renders " << floorAB << " (limit "
                                                  << floorAB * (1 + r) << ")");
     CHECK(toRef <= floorAB * (1 + r));
