@@ -339,7 +339,11 @@ __kernel void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
 }
 
 /* The shadow ray of one light sample at shading point sp: the reflected light (Material_EvalDirect)
- * times e (Light_Sample's estimate) and the path throughput, or a ray of zero contribution (not traced). */
+ * times e (Light_Sample's estimate) and the path throughput, or a ray of zero contribution (not traced).
+ * Both the shading and the geometric normal must face the light. (The course's references light a
+ * bump-mapped point just past the geometric terminator when its bumped normal faces the light:
+ * bump_mapping_transformed's sphere shows it as two thin lines, README "Textures"; matching it needs a
+ * shadow ray that skips its own primitive.) */
 inline ShadowRay Shadow_Make(ShadingPoint sp, const __global Material* materials, float3 throughput, float3 wi,
                              float dist, float3 e) {
     ShadowRay sr;
