@@ -4,8 +4,9 @@
 # both linear EXRs and the reference reduced to 8×8 block means, then (scripts/exr_stats.py bias)
 #   relMSE(a, ref), relMSE(a, b) and their ratio: ≤ 2 means no bias beyond the noise (at equal spp
 #   relMSE(a, ref) ≈ v + v_ref + bias², relMSE(a, b) ≈ 2v, v_ref = v).
-# Russian-roulette cameras: per-channel means of the back wall region (x 160..352, y 60..260) and of
-# the whole image are printed for clrt and the reference (the references are heavy-tailed: README).
+# Russian-roulette cameras: per-channel means (and medians) of the large regions (back wall, floor,
+# left/right walls, ceiling, spheres; scripts/path_regions.py) and of the whole image, for clrt and the
+# reference (the references are heavy-tailed and brighter: README).
 # Usage: scripts/path_compare.sh [--spp N] [--size S] [--out DIR] [--device SPEC] [--clrt BIN]
 #   (defaults: the scene's 100 spp, 512, build/path_compare, cpu). Needs build/venv with numpy, OpenEXR.
 # A smaller --size keeps clrt's 8×8 blocks and reduces the reference to the same blocks (8·512/size).
@@ -34,8 +35,6 @@ for n in diffuse_next diffuse_next_importance diffuse diffuse_importance; do
   echo "$n: $($py scripts/exr_stats.py bias "$out/a/$n.exr" "$out/b/$n.exr" "$refs/$n.exr" --down 8 --down-ref $(( 8 * 512 / size )))"
 done
 for n in diffuse_next_russian diffuse_next_importance_russian diffuse_russian diffuse_importance_russian; do
-  s=$(( size * 160 / 512 )) t=$(( size * 60 / 512 )) e=$(( size * 352 / 512 )) f=$(( size * 260 / 512 ))
-  echo "$n: back wall clrt $($py scripts/exr_stats.py mean "$out/a/$n.exr" $s $t $e $f)" \
-       "reference $($py scripts/exr_stats.py mean "$refs/$n.exr" 160 60 352 260);" \
-       "image clrt $($py scripts/exr_stats.py mean "$out/a/$n.exr") reference $($py scripts/exr_stats.py mean "$refs/$n.exr")"
+  echo "$n: per-channel region means (scripts/path_regions.py), clrt then the course's reference"
+  $py scripts/path_regions.py "$out/a/$n.exr" "$refs/$n.exr"
 done
