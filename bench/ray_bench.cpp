@@ -7,7 +7,9 @@
 // Embree's single-ray API (rtcIntersect1 / rtcOccluded1) on N threads, and prints Mrays/s, the ratio
 // clrt/Embree, and how often the two agree on hit/miss (and on the primitive hit).
 //
-// usage: ray_bench SCENE [--runs 5] [--device SPEC] [--threads 2]
+// usage: ray_bench SCENE [--runs 5] [--device SPEC] [--threads 2] [--dump FILE]
+//   --dump FILE: also writes clrt's closest hits (t, prim, u, v of every camera and diffuse ray) and
+//   shadow results, as raw bytes, so that two kernel versions can be compared hit by hit (cmp).
 #include <embree3/rtcore.h>
 
 #include <algorithm>
@@ -65,14 +67,17 @@ int main(int argc, char** argv) {
             std::fprintf(stderr, "usage: ray_bench SCENE [--runs N] [--device SPEC] [--threads T]\n");
             return 1;
         }
-        std::string scenePath = argv[1], deviceSpec = "cpu";
+        std::string scenePath = argv[1], deviceSpec = "cpu", dumpPath;
         int runs = 5, threads = 2;
         for (int i = 2; i + 1 < argc; i += 2) {
             std::string o = argv[i];
             if (o == "--runs") runs = std::max(1, std::atoi(argv[i + 1]));
             else if (o == "--device") deviceSpec = argv[i + 1];
             else if (o == "--threads") threads = std::max(1, std::atoi(argv[i + 1]));
+            else if (o == "--dump") dumpPath = argv[i + 1];
         }
+        FILE* dump = dumpPath.empty() ? nullptr : std::fopen(dumpPath.c_str(), "wb");
+        if (!dumpPath.empty() && !dump) throw Error("cannot write " + dumpPath);
         Scene scene = loadScene(scenePath);
         DeviceScene ds = flattenScene(scene);
         const int numTris = ds.params.numTriangles;
@@ -171,6 +176,7 @@ int main(int argc, char** argv) {
                 std::vector<dev::Hit> hits(rays.size());
                 CL_CPP(q.enqueueReadBuffer(hb, CL_TRUE, 0, sizeof(dev::Hit) * hits.size(), hits.data()));
                 for (size_t i = 0; i < hits.size(); ++i) prim[i] = hits[i].prim;
+                if (dump) std::fwrite(hits.data(), sizeof(dev::Hit), hits.size(), dump);
                 return s;
             }
             std::vector<dev::ShadowRay> sr(rays.size());
@@ -189,6 +195,7 @@ int main(int argc, char** argv) {
             double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
             CL_CPP(q.enqueueReadBuffer(sb, CL_TRUE, 0, sizeof(dev::ShadowRay) * sr.size(), sr.data()));
             for (size_t i = 0; i < sr.size(); ++i) prim[i] = sr[i].contribution.x == 0 ? 1 : -1;
+            if (dump) std::fwrite(sr.data(), sizeof(dev::ShadowRay), sr.size(), dump);
             return s;
         };
 
@@ -270,6 +277,7 @@ int main(int argc, char** argv) {
                         mc / me, 100.0 * hitAgree / std::max(1.0, n), 100.0 * primAgree / std::max(1.0, n));
         }
         std::printf("(medians of %d runs)\n", runs);
+        if (dump) std::fclose(dump);
         rtcReleaseScene(escene);
         rtcReleaseDevice(edev);
         return 0;

@@ -42,7 +42,7 @@ inline RayShear RayShear_Make(float3 dir) {
 }
 
 /* Returns 1 and sets *t, *b1, *b2 (weights of v1, v2) for a hit with 0 < t < tMax. */
-inline int Triangle_Intersect(float3 org, RayShear s, float3 v0, float3 v1, float3 v2, float tMax,
+__attribute__((always_inline)) inline int Triangle_Intersect(float3 org, RayShear s, float3 v0, float3 v1, float3 v2, float tMax,
                               float* tOut, float* b1Out, float* b2Out) {
     float3 A = v0 - org, B = v1 - org, C = v2 - org;
     float Az = comp(A, s.kz), Bz = comp(B, s.kz), Cz = comp(C, s.kz);
@@ -171,7 +171,7 @@ inline int Bvh_Traverse(const __global Bvh4Node* nodes, const __global int* prim
                         float3 org, float3 dir, float tMax, float time, int anyHit, Hit* hit) {
     const float3 invDir = safeInverse(dir);
     const RayShear shear = RayShear_Make(dir);
-    const int negX = signbit(invDir.x), negY = signbit(invDir.y), negZ = signbit(invDir.z);
+    const int nearX = signbit(invDir.x) ? 1 : 0, nearY = signbit(invDir.y) ? 3 : 2, nearZ = signbit(invDir.z) ? 5 : 4;
     int stackEntry[CLRT_BVH4_STACK_SIZE];
     float stackT[CLRT_BVH4_STACK_SIZE];
     int sp = 0;
@@ -180,22 +180,37 @@ inline int Bvh_Traverse(const __global Bvh4Node* nodes, const __global int* prim
     for (;;) {
         if (entry >= 0) {
             const __global Bvh4Node* n = &nodes[entry];
-            const float4 tNx = ((negX ? n->maxX : n->minX) - org.x) * invDir.x;
-            const float4 tFx = ((negX ? n->minX : n->maxX) - org.x) * invDir.x;
-            const float4 tNy = ((negY ? n->maxY : n->minY) - org.y) * invDir.y;
-            const float4 tFy = ((negY ? n->minY : n->maxY) - org.y) * invDir.y;
-            const float4 tNz = ((negZ ? n->maxZ : n->minZ) - org.z) * invDir.z;
-            const float4 tFz = ((negZ ? n->minZ : n->maxZ) - org.z) * invDir.z;
-            const float4 tEnter = fmax(fmax(tNx, tNy), fmax(tNz, (float4)(0.0f)));
+            /* The node's planes as an array (minX, maxX, minY, maxY, minZ, maxZ): near and far of
+             * each axis by the precomputed index, one load each (no select between two loads). */
+            const __global float4* planes4 = &n->minX;
+            const float4 tNx = (planes4[nearX] - org.x) * invDir.x;
+            const float4 tFx = (planes4[nearX ^ 1] - org.x) * invDir.x;
+            const float4 tNy = (planes4[nearY] - org.y) * invDir.y;
+            const float4 tFy = (planes4[nearY ^ 1] - org.y) * invDir.y;
+            const float4 tNz = (planes4[nearZ] - org.z) * invDir.z;
+            const float4 tFz = (planes4[nearZ ^ 1] - org.z) * invDir.z;
+            /* max(0, tNx, tNy, tNz) and min(tFx, tFy, tFz) that drop a NaN operand, as fmax/fmin
+             * do, but written as compare-and-select with the NaN candidate first, so that a CPU
+             * compiles each to one min/max instruction (x86 minps/maxps return their second
+             * operand when one is NaN) instead of fmin/fmax's min + unordered-compare + blend. */
+            float4 tEnter = (float4)(0.0f);
+            tEnter = tNx > tEnter ? tNx : tEnter;
+            tEnter = tNy > tEnter ? tNy : tEnter;
+            tEnter = tNz > tEnter ? tNz : tEnter;
+            float4 tExit = (float4)(INFINITY);
+            tExit = tFx < tExit ? tFx : tExit;
+            tExit = tFy < tExit ? tFy : tExit;
+            tExit = tFz < tExit ? tFz : tExit;
             /* Widened by 1 + 2γ3 (pbrt): a hit the watertight triangle test accepts exactly on an
              * edge may lie a few ULPs outside the triangle's tight box. */
-            const float4 tExit = fmin(fmin(fmin(tFx, tFy), tFz) * 1.0000004f, (float4)(tMax));
+            tExit = tExit * 1.0000004f;
+            tExit = tExit < tMax ? tExit : (float4)(tMax);
             const int4 isHit = tEnter <= tExit;
             const int nh = -(isHit.s0 + isHit.s1 + isHit.s2 + isHit.s3);
             if (nh > 0) {
                 const int4 cnt = n->count, child = n->child;
                 const int4 e = select(child, ~((child << 4) | cnt), cnt > (int4)(0));
-                const float4 key = select((float4)(INFINITY), fmin(tEnter, (float4)(FLT_MAX)), isHit);
+                const float4 key = select((float4)(INFINITY), tEnter < FLT_MAX ? tEnter : (float4)(FLT_MAX), isHit);
                 float k0 = key.s0, k1 = key.s1, k2 = key.s2, k3 = key.s3;
                 int e0 = e.s0, e1 = e.s1, e2 = e.s2, e3 = e.s3;
                 if (nh > 1) {
@@ -227,13 +242,16 @@ inline int Bvh_Traverse(const __global Bvh4Node* nodes, const __global int* prim
 #endif
                 float t, b1 = 0.0f, b2 = 0.0f;
                 int h;
-                if (ref < numTriangles) {
+#ifdef CLRT_HAS_SPHERES
+                if (ref >= numTriangles) {
+                    const __global Sphere* sph = &spheres[ref - numTriangles];
+                    h = Sphere_Intersect(sph, MotionBlur_RestOrigin(org, time, sph->motion.xyz), dir, tMax, &t);
+                } else
+#endif
+                {
                     const __global Triangle* tri = &tris[ref];
                     const float3 o = MotionBlur_RestOrigin(org, time, Triangle_Motion(tri));
                     h = Triangle_Intersect(o, shear, tri->v0.xyz, tri->v1.xyz, tri->v2.xyz, tMax, &t, &b1, &b2);
-                } else {
-                    const __global Sphere* sph = &spheres[ref - numTriangles];
-                    h = Sphere_Intersect(sph, MotionBlur_RestOrigin(org, time, sph->motion.xyz), dir, tMax, &t);
                 }
                 if (h) {
                     tMax = t;
