@@ -23,6 +23,7 @@
 typedef struct {
     int kx, ky, kz;
     float sx, sy, sz;
+    int swap;   /* kx, ky are the cyclic successors of kz, exchanged (for a negative dir[kz]) */
 } RayShear;
 
 inline float comp(float3 v, int k) { return k == 0 ? v.x : (k == 1 ? v.y : v.z); }
@@ -33,7 +34,8 @@ inline RayShear RayShear_Make(float3 dir) {
     s.kz = (a.x > a.y) ? (a.x > a.z ? 0 : 2) : (a.y > a.z ? 1 : 2);
     s.kx = s.kz + 1 == 3 ? 0 : s.kz + 1;
     s.ky = s.kx + 1 == 3 ? 0 : s.kx + 1;
-    if (comp(dir, s.kz) < 0.0f) { int t = s.kx; s.kx = s.ky; s.ky = t; }
+    s.swap = comp(dir, s.kz) < 0.0f;
+    if (s.swap) { int t = s.kx; s.kx = s.ky; s.ky = t; }
     float dz = comp(dir, s.kz);
     s.sx = comp(dir, s.kx) / dz;
     s.sy = comp(dir, s.ky) / dz;
@@ -41,14 +43,25 @@ inline RayShear RayShear_Make(float3 dir) {
     return s;
 }
 
+/* (v[kx], v[ky], v[kz], 0) by swizzles: kz picks the cyclic rotation, swap exchanges x and y. */
+inline float4 RayShear_Permute(RayShear s, float3 v3) {
+    const float4 v = (float4)(v3, 0.0f);
+    const float4 r = s.kz == 0 ? v.yzxw : (s.kz == 1 ? v.zxyw : v);
+    return s.swap ? r.yxzw : r;
+}
+
 /* Returns 1 and sets *t, *b1, *b2 (weights of v1, v2) for a hit with 0 < t < tMax. */
 __attribute__((always_inline)) inline int Triangle_Intersect(float3 org, RayShear s, float3 v0, float3 v1, float3 v2, float tMax,
                               float* tOut, float* b1Out, float* b2Out) {
-    float3 A = v0 - org, B = v1 - org, C = v2 - org;
-    float Az = comp(A, s.kz), Bz = comp(B, s.kz), Cz = comp(C, s.kz);
-    float Ax = comp(A, s.kx) - s.sx * Az, Ay = comp(A, s.ky) - s.sy * Az;
-    float Bx = comp(B, s.kx) - s.sx * Bz, By = comp(B, s.ky) - s.sy * Bz;
-    float Cx = comp(C, s.kx) - s.sx * Cz, Cy = comp(C, s.ky) - s.sy * Cz;
+    /* The vertices relative to the origin, their components permuted to (kx, ky, kz) by whole-vector
+     * swizzles and selects (the same values comp() would pick one by one). */
+    const float4 A4 = RayShear_Permute(s, v0 - org);
+    const float4 B4 = RayShear_Permute(s, v1 - org);
+    const float4 C4 = RayShear_Permute(s, v2 - org);
+    float Az = A4.z, Bz = B4.z, Cz = C4.z;
+    float Ax = A4.x - s.sx * Az, Ay = A4.y - s.sy * Az;
+    float Bx = B4.x - s.sx * Bz, By = B4.y - s.sy * Bz;
+    float Cx = C4.x - s.sx * Cz, Cy = C4.y - s.sy * Cz;
     float U = Cx * By - Cy * Bx;
     float V = Ax * Cy - Ay * Cx;
     float W = Bx * Ay - By * Ax;
