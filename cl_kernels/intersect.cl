@@ -255,16 +255,15 @@ inline int Bvh_Traverse(const __global Bvh4Node* nodes, const __global int* prim
 #endif
                 float t, b1 = 0.0f, b2 = 0.0f;
                 int h;
-#ifdef CLRT_HAS_SPHERES
-                if (ref >= numTriangles) {
-                    const __global Sphere* sph = &spheres[ref - numTriangles];
-                    h = Sphere_Intersect(sph, MotionBlur_RestOrigin(org, time, sph->motion.xyz), dir, tMax, &t);
-                } else
-#endif
-                {
+                if (ref < numTriangles) {
                     const __global Triangle* tri = &tris[ref];
                     const float3 o = MotionBlur_RestOrigin(org, time, Triangle_Motion(tri));
                     h = Triangle_Intersect(o, shear, tri->v0.xyz, tri->v1.xyz, tri->v2.xyz, tMax, &t, &b1, &b2);
+                } else {
+                    /* Not compiled out without CLRT_HAS_SPHERES: with the sphere test gone, Intel's
+                     * CPU runtime traced the Audi TT's rays at about half the speed (measured). */
+                    const __global Sphere* sph = &spheres[ref - numTriangles];
+                    h = Sphere_Intersect(sph, MotionBlur_RestOrigin(org, time, sph->motion.xyz), dir, tMax, &t);
                 }
                 if (h) {
                     tMax = t;
