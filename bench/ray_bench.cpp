@@ -7,8 +7,14 @@
 // Embree's single-ray API (rtcIntersect1 / rtcOccluded1) on N threads, and prints Mrays/s, the ratio
 // clrt/Embree, and how often the two agree on hit/miss (and on the primitive hit).
 //
-// usage: ray_bench SCENE [--runs 5] [--device SPEC] [--threads 2]
+// usage: ray_bench SCENE [--runs 5] [--device SPEC] [--threads 2] [--dump FILE]
+//   --threads T: Embree's thread count, and the whole process (so the OpenCL runtime's workers too) is
+//   pinned to the first T CPUs it may run on; PoCL is also told T workers (POCL_MAX_PTHREAD_COUNT,
+//   unless already set). Without --threads, Embree gets 2 threads and nothing is pinned.
+//   --dump FILE: also writes clrt's closest hits (t, prim, u, v of every camera and diffuse ray) and
+//   shadow results, as raw bytes, so that two kernel versions can be compared hit by hit (cmp).
 #include <embree3/rtcore.h>
+#include <sched.h>
 
 #include <algorithm>
 #include <atomic>
@@ -52,6 +58,18 @@ Vec3 offsetOrigin(Vec3 p, Vec3 n) {
     return {one(p.x, n.x), one(p.y, n.y), one(p.z, n.z)};
 }
 
+// Restricts this process to the first n CPUs of its affinity mask (before any OpenCL or Embree
+// thread starts), so that both sides of the comparison run on the same n cores.
+void pinToCpus(int n) {
+    cpu_set_t cur, want;
+    CPU_ZERO(&want);
+    if (sched_getaffinity(0, sizeof(cur), &cur) != 0) return;
+    for (int c = 0, k = 0; c < CPU_SETSIZE && k < n; ++c)
+        if (CPU_ISSET(c, &cur)) { CPU_SET(c, &want); ++k; }
+    if (sched_setaffinity(0, sizeof(want), &want) != 0) std::fprintf(stderr, "note: could not pin to %d CPUs\n", n);
+    setenv("POCL_MAX_PTHREAD_COUNT", std::to_string(n).c_str(), 0);
+}
+
 struct RaySet {
     std::string name;
     std::vector<dev::Ray> rays;
@@ -65,14 +83,19 @@ int main(int argc, char** argv) {
             std::fprintf(stderr, "usage: ray_bench SCENE [--runs N] [--device SPEC] [--threads T]\n");
             return 1;
         }
-        std::string scenePath = argv[1], deviceSpec = "cpu";
+        std::string scenePath = argv[1], deviceSpec = "cpu", dumpPath;
         int runs = 5, threads = 2;
+        bool threadsGiven = false;
         for (int i = 2; i + 1 < argc; i += 2) {
             std::string o = argv[i];
             if (o == "--runs") runs = std::max(1, std::atoi(argv[i + 1]));
             else if (o == "--device") deviceSpec = argv[i + 1];
-            else if (o == "--threads") threads = std::max(1, std::atoi(argv[i + 1]));
+            else if (o == "--threads") threads = std::max(1, std::atoi(argv[i + 1])), threadsGiven = true;
+            else if (o == "--dump") dumpPath = argv[i + 1];
         }
+        if (threadsGiven) pinToCpus(threads);
+        FILE* dump = dumpPath.empty() ? nullptr : std::fopen(dumpPath.c_str(), "wb");
+        if (!dumpPath.empty() && !dump) throw Error("cannot write " + dumpPath);
         Scene scene = loadScene(scenePath);
         DeviceScene ds = flattenScene(scene);
         const int numTris = ds.params.numTriangles;
@@ -171,6 +194,7 @@ int main(int argc, char** argv) {
                 std::vector<dev::Hit> hits(rays.size());
                 CL_CPP(q.enqueueReadBuffer(hb, CL_TRUE, 0, sizeof(dev::Hit) * hits.size(), hits.data()));
                 for (size_t i = 0; i < hits.size(); ++i) prim[i] = hits[i].prim;
+                if (dump) std::fwrite(hits.data(), sizeof(dev::Hit), hits.size(), dump);
                 return s;
             }
             std::vector<dev::ShadowRay> sr(rays.size());
@@ -189,6 +213,7 @@ int main(int argc, char** argv) {
             double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
             CL_CPP(q.enqueueReadBuffer(sb, CL_TRUE, 0, sizeof(dev::ShadowRay) * sr.size(), sr.data()));
             for (size_t i = 0; i < sr.size(); ++i) prim[i] = sr[i].contribution.x == 0 ? 1 : -1;
+            if (dump) std::fwrite(sr.data(), sizeof(dev::ShadowRay), sr.size(), dump);
             return s;
         };
 
@@ -245,8 +270,9 @@ int main(int argc, char** argv) {
             diffuse.rays.push_back({{ph.x, ph.y, ph.z, 0}, {dd.x, dd.y, dd.z, INFINITY}});
         }
 
-        std::printf("scene %s: %d triangles; clrt device: %s; Embree %d threads (BVH build %.3f s)\n",
-                    scenePath.c_str(), numTris, di.name.c_str(), threads, embreeBuild);
+        std::printf("scene %s: %d triangles; clrt device: %s; Embree %d threads (BVH build %.3f s)%s\n",
+                    scenePath.c_str(), numTris, di.name.c_str(), threads, embreeBuild,
+                    threadsGiven ? "; process pinned to that many CPUs" : "");
         std::printf("%-8s %10s %12s %12s %8s %10s %10s\n", "rays", "count", "clrt Mray/s", "embree Mray/s", "ratio",
                     "hit agree", "prim agree");
         for (RaySet* set : {&camera, &shadow, &diffuse}) {
@@ -270,6 +296,7 @@ int main(int argc, char** argv) {
                         mc / me, 100.0 * hitAgree / std::max(1.0, n), 100.0 * primAgree / std::max(1.0, n));
         }
         std::printf("(medians of %d runs)\n", runs);
+        if (dump) std::fclose(dump);
         rtcReleaseScene(escene);
         rtcReleaseDevice(edev);
         return 0;

@@ -10,7 +10,10 @@
 Prints Markdown on stdout. Needs build/clrt and build/ray_bench (cmake --build build --target ray_bench;
 Debian libembree-dev) and ../shared/scenes. Uses only the standard library.
 
-usage: scripts/speed_table.py [--runs 5] [--device cpu] [--build build]
+usage: scripts/speed_table.py [--runs 5] [--device cpu] [--build build] [--threads 1,2] [--rays-only]
+  --threads: one ray_bench table per thread count, each run with ray_bench --threads T (Embree on T
+  threads, the process pinned to T CPUs, PoCL told T workers); default: one table, Embree on 2 threads,
+  nothing pinned. --rays-only: the ray_bench tables only, no renders.
 """
 import argparse
 import datetime
@@ -60,8 +63,8 @@ def fmt(m, digits=2):
     return "%.*f [%.*f–%.*f]" % (digits, m[0], digits, m[1], digits, m[2])
 
 
-def ray_bench(exe, scene, runs, device):
-    p = sh([exe, scene, "--runs", str(runs), "--device", device])
+def ray_bench(exe, scene, runs, device, threads=None):
+    p = sh([exe, scene, "--runs", str(runs), "--device", device] + (["--threads", str(threads)] if threads else []))
     if p.returncode != 0:
         return None, p.stderr.strip().splitlines()[-1:]
     rows = {}
@@ -93,26 +96,35 @@ def main():
     ap.add_argument("--runs", type=int, default=5)
     ap.add_argument("--device", default="cpu")
     ap.add_argument("--build", default=os.path.join(ROOT, "build"))
+    ap.add_argument("--threads", default="", help="comma-separated thread counts for ray_bench, e.g. 1,2")
+    ap.add_argument("--rays-only", action="store_true", help="only the ray_bench tables")
     a = ap.parse_args()
     clrt, rb = os.path.join(a.build, "clrt"), os.path.join(a.build, "ray_bench")
     cpu, cores, dev = machine(clrt, a.device)
     print("Measured %s on %s, %d cores; OpenCL device %s. Medians of %d runs [min–max].\n"
           % (datetime.date.today().isoformat(), cpu, cores, dev, a.runs))
 
-    print("| scene | triangles | camera clrt / Embree Mrays/s (ratio) | shadow | diffuse | hit agreement |")
-    print("|---|---|---|---|---|---|")
-    for name, rel in SCENES:
-        path = os.path.join(SHARED, rel)
-        if not os.path.exists(path) or not os.path.exists(rb):
-            continue
-        res, err = ray_bench(rb, path, a.runs, a.device)
-        if res is None:
-            print("| %s | ray_bench failed: %s | | | | |" % (name, err))
-            continue
-        rows, tris = res
-        cells = ["%.2f / %.2f (%.2f)" % (rows[k][0], rows[k][1], rows[k][2]) for k in ("camera", "shadow", "diffuse")]
-        agree = min(rows[k][3] for k in rows)
-        print("| %s | %s | %s | %s | %s | ≥ %.3f%% |" % (name, tris, cells[0], cells[1], cells[2], agree))
+    for threads in [int(t) for t in a.threads.split(",") if t] or [None]:
+        if threads:
+            print("ray_bench --threads %d (Embree on %d threads; the process pinned to %d CPUs):\n"
+                  % (threads, threads, threads))
+        print("| scene | triangles | camera clrt / Embree Mrays/s (ratio) | shadow | diffuse | hit agreement |")
+        print("|---|---|---|---|---|---|")
+        for name, rel in SCENES:
+            path = os.path.join(SHARED, rel)
+            if not os.path.exists(path) or not os.path.exists(rb):
+                continue
+            res, err = ray_bench(rb, path, a.runs, a.device, threads)
+            if res is None:
+                print("| %s | ray_bench failed: %s | | | | |" % (name, err))
+                continue
+            rows, tris = res
+            cells = ["%.2f / %.2f (%.2f)" % (rows[k][0], rows[k][1], rows[k][2]) for k in ("camera", "shadow", "diffuse")]
+            agree = min(rows[k][3] for k in rows)
+            print("| %s | %s | %s | %s | %s | ≥ %.3f%% |" % (name, tris, cells[0], cells[1], cells[2], agree))
+        print()
+    if a.rays_only:
+        return
 
     print("\n`clrt render SCENE --spp 1` (full resolution, after one uncounted warm-up run that fills the kernel "
           "cache; seconds; Mrays/s per kind from the `stats:` line):\n")
