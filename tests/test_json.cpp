@@ -84,6 +84,9 @@ std::string transliterateFile(const fs::path& xmlPath, const fs::path& dir) {
         if (e.is_directory() && !fs::exists(fs::symlink_status(link))) fs::create_directory_symlink(e.path(), link);
     }
     fs::path out = dir / (xmlPath.stem().string() + ".json");
+    // Never write through a link: the output must stay inside the test's own temp folder.
+    REQUIRE(fs::weakly_canonical(out).parent_path() == fs::weakly_canonical(dir));
+    REQUIRE(fs::weakly_canonical(dir).string().rfind(fs::weakly_canonical(fs::temp_directory_path()).string(), 0) == 0);
     std::ofstream(out, std::ios::binary) << root.dump(2);
     return out.string();
 }
@@ -394,7 +397,12 @@ TEST_CASE("json: every shared XML scene and its mechanical JSON transliteration 
         for (auto& e : fs::directory_iterator(dir))
             if (e.path().extension() == ".xml") xmls.push_back(e.path());
         std::sort(xmls.begin(), xmls.end());
-        fs::path tmp = jsonTempDir(std::string("translit/") + sub);
+        // One flat folder per scene folder ("hw5/tt" -> "hw5_tt"): the sibling-folder links that
+        // transliterateFile makes in "hw5" include one named "tt", and a folder "hw5/tt" under it
+        // would resolve through that link into the shared scenes themselves.
+        std::string flat = sub;
+        std::replace(flat.begin(), flat.end(), '/', '_');
+        fs::path tmp = jsonTempDir("translit_" + flat);
         for (auto& x : xmls) {
             INFO(x.string());
             std::string j = transliterateFile(x, tmp);
