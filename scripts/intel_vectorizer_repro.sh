@@ -10,6 +10,9 @@
 #   4. on Intel's runtime with the sources as they are (workaround in place: agrees).
 # Prints one clrt-imgdiff line against PoCL per render. Expected: 2 shows relmse ~0.1 and ~1.5% of
 # pixels, 3 and 4 relmse ~1e-8 (the last-bit differences of "Conformance" in the README).
+# Then the standalone reproducer, tests/intel_repro/shade_hits_alone.cpp: the same program (dumped by
+# CLRT_DUMP_PROGRAM), shade_hits alone on synthetic hits, no scene; its outputs on Intel against PoCL's
+# (expected: ~1500 of 16384 child slots differ vectorised, none without the vectoriser or with the hint).
 # Needs build/clrt, build/clrt-imgdiff, build/opencl-env.sh (scripts/setup_intel_ocl.sh) and ../shared.
 # Usage: bash scripts/intel_vectorizer_repro.sh
 set -euo pipefail
@@ -43,3 +46,27 @@ for r in "intel1:Intel, vectorised (no workaround)" "intel2:Intel, vectorised, a
 done
 printf '%-50s %s\n' "Intel run 1 vs run 2 (no workaround)" \
   "$(build/clrt-imgdiff "$TMP/intel1/VeachAjar.png" "$TMP/intel2/VeachAjar.png")"
+
+# The standalone reproducer: shade_hits alone, on synthetic hits.
+g++ -std=c++17 -O1 -Isrc -o "$TMP/shade_hits_alone" tests/intel_repro/shade_hits_alone.cpp -lOpenCL
+dump() {  # dump NAME KERNEL_DIR: the veachAjar program's source and options
+  mkdir -p "$TMP/dump-$1"
+  CLRT_DUMP_PROGRAM="$TMP/dump-$1" CLRT_KERNEL_DIR="$2" build/clrt render "$SCENE" --resolution 8x8 --spp 1 \
+    --device platform:portable -o "$TMP/pocl" > /dev/null 2>&1
+  ls "$TMP/dump-$1"/*.cl > /dev/null
+}
+dump nohint "$TMP/cl_kernels"
+dump hint "$ROOT/cl_kernels"
+alone() {  # alone OUT PROGRAM PLATFORM [env...]
+  local out=$1 prog=$2 plat=$3; shift 3
+  local src; src=$(ls "$TMP/dump-$prog"/*.cl)
+  env "$@" "$TMP/shade_hits_alone" "$src" "$(cat "${src%.cl}.options")" "$plat" "$TMP/$out.bin"
+}
+alone pocl nohint Portable
+alone intel nohint Intel
+alone novec nohint Intel CL_CONFIG_USE_VECTORIZER=False
+alone hint hint Intel
+for r in "intel:shade_hits alone, Intel vectorised (no workaround)" "novec:shade_hits alone, Intel without vectoriser" \
+         "hint:shade_hits alone, Intel with vec_type_hint"; do
+  printf '%-50s %s\n' "${r#*:}" "$("$TMP/shade_hits_alone" --compare "$TMP/pocl.bin" "$TMP/${r%%:*}.bin")"
+done
