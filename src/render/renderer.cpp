@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 
 #include "cl/check.h"
 #include "cl/kernel_args.h"
@@ -71,6 +72,8 @@ struct Renderer::Impl {
         kGather = KernelArgs(program, "gather_shadows");
         kAccumulate = KernelArgs(program, "accumulate");
         compactor = QueueCompactor(program);
+        const char* bounds = std::getenv("CLRT_QUEUE_BOUNDS");
+        exactBounds = bounds && *bounds ? std::string(bounds) == "exact" : (dc.info().type & CL_DEVICE_TYPE_CPU) != 0;
         cl::Context& ctx = dc.context();
         queueCount = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(int)));
         nextCount = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(int)));
@@ -125,6 +128,9 @@ struct Renderer::Impl {
     };
     std::vector<Launched> events;
     int depthBin = 0;  // RenderCounters' depth bin of the bounce being enqueued
+    // Launch each bounce over its exact queue length (wait for it) rather than a bound (see traceBatch):
+    // CPU devices; CLRT_QUEUE_BOUNDS=exact|lagged overrides (for measuring both).
+    bool exactBounds = false;
     // n work-items (rounded up to whole work-groups of `local`, default localSize).
     void run(KernelArgs& k, size_t n, int stage, size_t local = 0) {
         if (n == 0) return;
@@ -345,22 +351,30 @@ void Renderer::Impl::countBounce(int depth, int length, const BatchPlan& plan, R
     counters.shadowRaysAt[depthBin] += shadowRays;
 }
 
-// Every bounce of a batch of n camera paths. The host knows the queue length one bounce late, so
-// each bounce is launched over a bound: the length two depths back times the children a path may
-// have (2 while dielectrics split, else 1), at most the queue capacity. Ends after MaxRecursionDepth
-// or at the first empty queue (one empty bounce may already be enqueued: its kernels return at once).
+// Every bounce of a batch of n camera paths. Lagged (GPUs): the host learns each queue length one
+// bounce late, so each bounce is launched over a bound, the length two depths back times the children
+// a path may have (2 while dielectrics split, else 1), at most the queue capacity; the device always
+// has the next bounce queued. Exact (CPU devices): the host waits for each length as soon as the
+// compaction has run and launches the next bounce over exactly that many paths (a CPU pays for
+// every launched work-group, and the host's wait idles nothing). Ends after MaxRecursionDepth or at
+// the first empty queue (lagged: one empty bounce may already be enqueued; its kernels return at once).
 void Renderer::Impl::traceBatch(int n, const BatchPlan& plan, RenderCounters& counters) {
     CL_CPP(dc.queue().enqueueFillBuffer(queueCount, n, 0, sizeof(int)));
     size_t bound = size_t(n);
+    int length = n;  // the length of the queue at `depth`, once known
     for (int depth = 0;; ++depth) {
         depthBin = std::min(depth, RenderCounters::kDepthBins - 1);
         enqueueBounce(bound, plan);
         const bool last = !plan.bounces || depth >= scene.maxDepth;
         if (!last) enqueueCompaction(depth, bound);
-        const int length = depth == 0 ? n : queueLength(depth, counters);
+        if (depth > 0 && !exactBounds) length = queueLength(depth, counters);
         countBounce(depth, length, plan, counters);
         if (last || length == 0) break;
         bound = std::min(plan.capacity, size_t(length) * (depth < scene.splitDepth ? 2 : 1));
+        if (!exactBounds) continue;
+        length = queueLength(depth + 1, counters);  // waits for this bounce's compaction
+        bound = size_t(length);
+        if (length == 0) break;
     }
 }
 
