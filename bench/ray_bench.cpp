@@ -182,10 +182,12 @@ int main(int argc, char** argv) {
             cl::CommandQueue& q = dc.queue();
             const size_t local = std::getenv("CLRT_LOCAL_SIZE") ? size_t(std::atoi(std::getenv("CLRT_LOCAL_SIZE"))) : 64;
             const size_t global = roundUp(rays.size(), local);
+            std::vector<int> queueLength{n};  // the kernels read the queue length on the device
+            cl::Buffer cb = upload(queueLength);
             if (!shadow) {
                 cl::Buffer rb = upload(const_cast<std::vector<dev::Ray>&>(rays));
                 cl::Buffer hb = CL_CPP(cl::Buffer(dc.context(), CL_MEM_READ_WRITE, sizeof(dev::Hit) * rays.size()));
-                kClosest.set("rays", rb).set("hits", hb).set("count", n);
+                kClosest.set("rays", rb).set("hits", hb).set("queueCount", cb);
                 CL_CPP(q.finish());
                 auto t0 = std::chrono::steady_clock::now();
                 CL_CPP(q.enqueueNDRangeKernel(kClosest.ready(), cl::NullRange, cl::NDRange(global), cl::NDRange(local)));
@@ -205,7 +207,7 @@ int main(int argc, char** argv) {
                 sr[i].contribution = {1, 1, 1, 0};
             }
             cl::Buffer sb = upload(sr);
-            kShadow.set("shadows", sb).set("count", n);
+            kShadow.set("shadows", sb).set("queueCount", cb).set("raysPerPath", 1);
             CL_CPP(q.finish());
             auto t0 = std::chrono::steady_clock::now();
             CL_CPP(q.enqueueNDRangeKernel(kShadow.ready(), cl::NullRange, cl::NDRange(global), cl::NDRange(local)));

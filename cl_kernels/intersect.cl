@@ -305,7 +305,7 @@ inline int Planes_Intersect(const __global Plane* planes, int numPlanes, int fir
 /* Parameters of both kernels: src/shared/kernel_params.h. */
 __kernel void intersect_closest(CLRT_KERNEL_PARAMS(intersect_closest)) {
     int i = get_global_id(0);
-    if (i >= count) return;
+    if (i >= *queueCount) return;
     const int numTriangles = scene.numTriangles, numPlanes = scene.numPlanes;
     const int firstPlaneRef = scene.numTriangles + scene.numSpheres;
     Ray r = rays[i];
@@ -323,7 +323,7 @@ __kernel void intersect_closest(CLRT_KERNEL_PARAMS(intersect_closest)) {
 /* Any hit for each shadow ray: an occluded ray's contribution is set to zero. */
 __kernel void intersect_shadow(CLRT_KERNEL_PARAMS(intersect_shadow)) {
     int i = get_global_id(0);
-    if (i >= count) return;
+    if (i >= *queueCount * raysPerPath) return;
     const int numTriangles = scene.numTriangles, numPlanes = scene.numPlanes;
     const int firstPlaneRef = scene.numTriangles + scene.numSpheres;
     __global ShadowRay* s = &shadows[i];

@@ -9,8 +9,9 @@
  *                    (environment lights: one sampled direction, the shadow ray going to infinity;
  *                    two, a light and a cosine sample, under multi-sample MIS: see lightSlots);
  *   gather_shadows:  adds the unoccluded shadow contributions of each path in light order;
- *   accumulate:      adds each pixel's paths to the float image (paths of one pixel are adjacent);
- *   compact_paths:   order-preserving compaction of the children with host-computed indices.
+ *   accumulate:      adds each pixel's paths to the float image (paths of one pixel are adjacent).
+ * Each kernel's queue length is the device int *queueCount (launches are sized by a bound); the
+ * children are compacted in order on the device by compact.cl.
  * Deterministic by construction: no float atomics, fixed summation order. */
 #ifndef CLRT_SHADE_CL
 #define CLRT_SHADE_CL
@@ -187,7 +188,7 @@ inline void Child_Write(__global PathState* nextPaths, __global Ray* nextRays, _
  * and on Oclgrind (no report); README "Conformance" and issue 17 have the evidence. */
 __kernel __attribute__((vec_type_hint(float4))) void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
     int i = get_global_id(0);
-    if (i >= count) return;
+    if (i >= *queueCount) return;
     PathState path = paths[i];
     Hit h = hits[i];
     Ray ray = rays[i];
@@ -394,7 +395,7 @@ inline ShadowRay Shadow_Make(ShadingPoint sp, const __global Material* materials
  * sample, cosine sample); other lights then leave their second slot at zero contribution (not traced). */
 __kernel void sample_lights(CLRT_KERNEL_PARAMS(sample_lights)) {
     int i = get_global_id(0);
-    if (i >= count) return;
+    if (i >= *queueCount) return;
     int chunk = lightEnd - lightBegin;
     ShadingPoint sp = points[i];
     PathState path = paths[i];
@@ -446,7 +447,7 @@ __kernel void sample_lights(CLRT_KERNEL_PARAMS(sample_lights)) {
 
 __kernel void gather_shadows(CLRT_KERNEL_PARAMS(gather_shadows)) {
     int i = get_global_id(0);
-    if (i >= count) return;
+    if (i >= *queueCount) return;
     float4 sum = pathRadiance[i];
     for (int l = 0; l < chunk; ++l) sum += shadows[(size_t)i * chunk + l].contribution;
     pathRadiance[i] = sum;
@@ -454,6 +455,7 @@ __kernel void gather_shadows(CLRT_KERNEL_PARAMS(gather_shadows)) {
 
 /* Paths of one pixel are adjacent; the first of each run adds the whole run (fixed order). */
 __kernel void accumulate(CLRT_KERNEL_PARAMS(accumulate)) {
+    const int count = *queueCount;
     int i = get_global_id(0);
     if (i >= count) return;
     int pixel = paths[i].pixel;
@@ -461,15 +463,6 @@ __kernel void accumulate(CLRT_KERNEL_PARAMS(accumulate)) {
     float3 sum = (float3)(0.0f);
     for (int j = i; j < count && paths[j].pixel == pixel; ++j) sum += finiteOrZero(pathRadiance[j].xyz);
     image[pixel] += (float4)(sum, 0.0f);
-}
-
-__kernel void compact_paths(CLRT_KERNEL_PARAMS(compact_paths)) {
-    int i = get_global_id(0);
-    if (i >= count) return; /* count: child slots, 2 per parent path */
-    int t = compactTarget[i];
-    if (t < 0) return;
-    paths[t] = nextPaths[i];
-    rays[t] = nextRays[i];
 }
 
 #endif /* CLRT_SHADE_CL */

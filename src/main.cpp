@@ -5,6 +5,7 @@
 #include <CL/opencl.hpp>
 
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
@@ -30,6 +31,7 @@
 #include "render/device_scene.h"
 #include "render/multi_device.h"
 #include "render/output.h"
+#include "render/progressive.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
 #include "util/error.h"
@@ -78,6 +80,15 @@ const char* kRenderHelp =
     "                        (default: the first GPU, else the CPU device)\n"
     "  --spp N               samples per pixel (1 to 1048576), overriding each camera's NumSamples\n"
     "  --seed N              random seed (default 0); the same seed gives the same image\n"
+    "  --target-error X      render in passes until the estimated relMSE of the image is <= X (> 0):\n"
+    "                        even and odd passes form two independent half-images, and their\n"
+    "                        difference estimates the error (relative to 1, or to 255 for .png\n"
+    "                        outputs); the camera's NumSamples is ignored, --spp (>= 4) caps the\n"
+    "                        samples. Prints the estimate, the spp and the time, and writes them into\n"
+    "                        the EXR header (relMseEstimate, spp, renderTime, stopReason)\n"
+    "  --time-limit S        the same passes until the next pair of passes would end after S seconds\n"
+    "                        (per camera; at least one pair); with --target-error, whichever comes\n"
+    "                        first. Neither: the image is rendered as before, bit for bit\n"
     "  --camera ID           render only the camera with this id\n"
     "  --resolution WxH      render every camera at W x H pixels (same view) instead of its\n"
     "                        ImageResolution: tiny renders for checking kernels (oclgrind)\n"
@@ -111,6 +122,7 @@ struct Args {
     uint32_t seed = 0;
     bool verbose = false, help = false, truncatePng = false, exrHalf = false, allFeatures = false;
     std::string envSampling;  // --env-sampling: overrides every environment light's sampler
+    StopRule stop;            // --target-error, --time-limit (render/progressive.h)
     DistSettings dist;        // --part, --checkpoint, --tile-pixels (src/dist/)
 };
 
@@ -122,6 +134,17 @@ int parseInt(const std::string& opt, const std::string& v, long lo, long hi) {
         throw Error(opt + ": expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got '" + v + "'",
                     ExitCode::Usage);
     return int(x);
+}
+
+// A finite number >= lo (> lo when `open`), for --target-error and --time-limit.
+double parseNumber(const std::string& opt, const std::string& v, double lo, bool open) {
+    char* end = nullptr;
+    errno = 0;
+    const double x = std::strtod(v.c_str(), &end);
+    if (v.empty() || *end != '\0' || errno != 0 || !std::isfinite(x) || x < lo || (open && x == lo))
+        throw Error(opt + ": expected a number " + (open ? "> " : ">= ") + std::to_string(int(lo)) + ", got '" + v + "'",
+                    ExitCode::Usage);
+    return x;
 }
 
 static_assert(kMaxSamplesPerPixel == 1048576 && kMaxRecursionDepth == 256, "update kRenderHelp and README");
@@ -140,6 +163,8 @@ Args parseRenderArgs(int argc, char** argv, int start) {
         else if (s == "--spp") a.spp = parseInt(s, value(), 1, kMaxSamplesPerPixel);
         else if (s == "--seed") a.seed = uint32_t(parseInt(s, value(), 0, 2147483647));
         else if (s == "--camera") a.cameraId = value();
+        else if (s == "--target-error") a.stop.targetError = parseNumber(s, value(), 0, true);
+        else if (s == "--time-limit") a.stop.timeLimit = parseNumber(s, value(), 0, false);
         else if (s == "--resolution") {
             std::string v = value();
             size_t x = v.find('x');
@@ -265,6 +290,62 @@ bool renderCameraDist(const Args& a, const Camera& cam, int camIndex, const Rend
     return false;
 }
 
+// Renders samples [first, first + count) of every pixel of `cam` on every renderer; `reached`: the
+// samples every pixel got (fewer only when interrupted).
+ImageRGB renderPass(const Camera& cam, RenderSettings rs, std::vector<std::unique_ptr<Renderer>>& renderers,
+                    std::vector<DeviceWork>& work, int first, int count, int& reached) {
+    rs.firstSample = first;
+    rs.spp = count;
+    for (DeviceWork& w : work) w.counters.stoppedAtSample = -1;
+    std::vector<Renderer*> rp;
+    for (auto& r : renderers) rp.push_back(r.get());
+    ImageRGB img = rp.size() == 1 ? rp[0]->render(cam, rs, work[0].counters) : renderOnDevices(rp, cam, rs, work);
+    reached = count;
+    for (const DeviceWork& w : work)
+        if (w.counters.stoppedAtSample >= 0) reached = std::min(reached, w.counters.stoppedAtSample);
+    return img;
+}
+
+// One camera in sample passes until --target-error or --time-limit (render/progressive.h): prints
+// the estimate, spp and time (a line at 1, 2, 4, 8... pairs of passes, and one at the end) and puts
+// them into the outputs' options (EXR header attributes).
+ImageRGB renderCameraProgressive(const Args& a, const Camera& cam, const RenderSettings& rs,
+                                 std::vector<std::unique_ptr<Renderer>>& renderers, std::vector<DeviceWork>& work,
+                                 RenderCounters& counters, OutputOptions& oo) {
+    StopRule rule = a.stop;
+    rule.maxSpp = a.spp > 0 ? a.spp : kMaxSamplesPerPixel;
+    rule.white = lowerExtension(cam.imageName) == ".png" ? 255.0 : 1.0;
+    const PassRenderer pass = [&](int first, int count, int& reached) {
+        return renderPass(cam, rs, renderers, work, first, count, reached);
+    };
+    int pairs = 0;
+    const auto onPair = [&](const ProgressiveResult& r) {
+        ++pairs;
+        if ((pairs & (pairs - 1)) == 0)
+            std::fprintf(stderr, "camera %d: %d spp, relMSE estimate %.4g, %.2f s\n", cam.id, r.spp, r.relMse, r.seconds);
+    };
+    const auto t0 = std::chrono::steady_clock::now();
+    ProgressiveResult r = renderProgressive(size_t(cam.width) * size_t(cam.height), rule, pass,
+                                            [] { return stopRequested().load(); }, onPair);
+    if (renderers.size() > 1) counters.seconds += since(t0);  // one device: its counters have it
+    const auto number = [](const char* format, double x) {
+        char buf[64];
+        std::snprintf(buf, sizeof buf, format, x);
+        return std::string(buf);
+    };
+    oo.attributes["relMseEstimate"] = number("%.6g", r.relMse);
+    oo.attributes["stopReason"] = r.stopReason;
+    oo.attributes["passSamples"] = std::to_string(r.passSamples);
+    if (rule.targetError > 0) oo.attributes["targetError"] = number("%g", rule.targetError);
+    if (rule.timeLimit >= 0) oo.attributes["timeLimit"] = number("%g s", rule.timeLimit);
+    std::fprintf(stderr, "camera %d: stopped (%s) at %d spp after %.3f s; relMSE estimate %.6g\n", cam.id,
+                 r.stopReason.c_str(), r.spp, r.seconds, r.relMse);
+    oo.spp = r.spp;
+    if (r.stopReason == "interrupted")
+        oo.partial = "interrupted after " + std::to_string(r.spp) + " samples per pixel (--target-error/--time-limit)";
+    return std::move(r.image);
+}
+
 // Renders one camera on every renderer and writes its outputs. Returns the samples per pixel every
 // pixel reached: fewer than asked if the render was interrupted (stopRequested), and the images
 // written are then partial.
@@ -278,14 +359,17 @@ int renderAndWriteCamera(const Args& a, const Camera& cam, int camIndex, std::ve
     std::optional<Progress> prog;  // rank 0 (or the only process) shows the progress of the whole image
     if (MpiJob::get().rank() == 0)
         prog.emplace("camera " + std::to_string(cam.id) + " (" + cam.imageName + ", " + std::to_string(cam.width) + "x" +
-                     std::to_string(cam.height) + ", " + std::to_string(rs.spp) + " spp)");
+                     std::to_string(cam.height) + ", " + (a.stop.active() ? "passes" : std::to_string(rs.spp) + " spp") + ")");
     ImageRGB img;
+    OutputOptions oo;
     auto tr = std::chrono::steady_clock::now();
     if (distActive(a.dist, MpiJob::get())) {
         auto w0 = std::chrono::steady_clock::now();
         const bool write = renderCameraDist(a, cam, camIndex, rs, renderers, work, prog, img);
         counters.seconds += since(w0);
         if (!write) return rs.spp;  // another rank, or a part (an interrupted one is not written: nothing partial)
+    } else if (a.stop.active()) {
+        img = renderCameraProgressive(a, cam, rs, renderers, work, counters, oo);
     } else if (renderers.size() == 1) {
         img = renderers.front()->render(cam, rs, work[0].counters, [&](size_t d, size_t n) { prog->update(d, n); });
     } else {
@@ -297,14 +381,13 @@ int renderAndWriteCamera(const Args& a, const Camera& cam, int camIndex, std::ve
     }
     const double camSeconds = since(tr);
     auto to = std::chrono::steady_clock::now();
-    OutputOptions oo;
     oo.outDir = a.outDir;
     oo.truncatePng = a.truncatePng;
     oo.exrHalf = a.exrHalf;
-    oo.spp = rs.spp;
+    if (!a.stop.active()) oo.spp = rs.spp;
     for (const DeviceWork& w : work)  // an interrupted render: the samples every pixel has
-        if (w.counters.stoppedAtSample >= 0) oo.spp = std::min(oo.spp, w.counters.stoppedAtSample);
-    if (oo.spp < rs.spp) {
+        if (!a.stop.active() && w.counters.stoppedAtSample >= 0) oo.spp = std::min(oo.spp, w.counters.stoppedAtSample);
+    if (!a.stop.active() && oo.spp < rs.spp) {
         prog->interrupted(oo.spp, rs.spp);
         oo.partial = "interrupted after " + std::to_string(oo.spp) + " of " + std::to_string(rs.spp) +
                      " samples per pixel" + (oo.spp == 0 ? " (some tiles not rendered)" : "");
@@ -433,6 +516,32 @@ double pathSegmentRate(const std::vector<DeviceWork>& work) {
     return r;
 }
 
+// Rays per second of their trace kernels' device time, in millions, of the rays traced at depth bin
+// `bin` (RenderCounters::kDepthBins), summed over devices: extension rays, or shadow rays.
+double depthRate(const std::vector<DeviceWork>& work, int bin, bool shadow) {
+    double r = 0;
+    for (const DeviceWork& w : work) {
+        const RenderCounters& c = w.counters;
+        const double rays = double(shadow ? c.shadowRaysAt[bin] : c.extendRays[bin]);
+        const double s = c.profiled ? (shadow ? c.shadowSeconds[bin] : c.extendSeconds[bin]) : c.seconds;
+        if (s > 0) r += rays / s * 1e-6;
+    }
+    return r;
+}
+
+// The `stats:` line's rays per depth: secondary rays of bounces 1, 2, >= 3 and shadow rays cast from
+// vertices at depth 0 (camera hits), 1, 2, >= 3 (README "Using it").
+std::string depthStats(const std::vector<DeviceWork>& work) {
+    static_assert(RenderCounters::kDepthBins == 4, "update the key names");
+    char buf[256];
+    std::snprintf(buf, sizeof buf,
+                  " secondary_mrays_d1=%.2f secondary_mrays_d2=%.2f secondary_mrays_d3plus=%.2f shadow_mrays_d0=%.2f"
+                  " shadow_mrays_d1=%.2f shadow_mrays_d2=%.2f shadow_mrays_d3plus=%.2f",
+                  depthRate(work, 1, false), depthRate(work, 2, false), depthRate(work, 3, false), depthRate(work, 0, true),
+                  depthRate(work, 1, true), depthRate(work, 2, true), depthRate(work, 3, true));
+    return buf;
+}
+
 // The `times:` line (stderr) and the `stats:` line (stdout, see README).
 void printTimes(const StageTimes& t, const DeviceScene& ds, const Renderer& renderer, const RenderCounters& counters,
                 const std::vector<DeviceWork>& work, int spp) {
@@ -452,10 +561,11 @@ void printTimes(const StageTimes& t, const DeviceScene& ds, const Renderer& rend
                  t.parse, ds.bvhSeconds, t.flatten - ds.bvhSeconds, t.build, renderer.buildInfo().cacheHit ? " (cached)" : "",
                  counters.seconds, t.output, rays / secs * 1e-6);
     std::printf("stats: parse=%.3fs flatten=%.3fs bvh=%.3fs build=%.3fs render=%.3fs output=%.3fs camera_mrays=%.2f "
-                "shadow_mrays=%.2f secondary_mrays=%.2f path_segments_mps=%.2f spp=%d\n",
+                "shadow_mrays=%.2f secondary_mrays=%.2f path_segments_mps=%.2f%s spp=%d\n",
                 t.parse, t.flatten - ds.bvhSeconds, ds.bvhSeconds, t.build, counters.seconds, t.output,
                 rate(&RenderCounters::cameraRays, STAGE_TRACE_CAMERA), rate(&RenderCounters::shadowRays, STAGE_TRACE_SHADOW),
-                rate(&RenderCounters::secondaryRays, STAGE_TRACE_SECONDARY), pathSegmentRate(work), spp);
+                rate(&RenderCounters::secondaryRays, STAGE_TRACE_SECONDARY), pathSegmentRate(work),
+                depthStats(work).c_str(), spp);
 }
 
 // What a render writes: the cameras' outputs, or with --part K/N one part file per camera.
@@ -493,6 +603,8 @@ std::string rankStatsText(const std::vector<DeviceWork>& work) {
         o << c.cameraRays << ' ' << c.secondaryRays << ' ' << c.shadowRays << ' ' << c.tiles << ' ' << c.pixels << ' '
           << c.seconds << ' ' << c.profiled << ' ' << w.failed;
         for (double st : c.stageSeconds) o << ' ' << st;
+        for (int b = 0; b < RenderCounters::kDepthBins; ++b)
+            o << ' ' << c.extendRays[b] << ' ' << c.shadowRaysAt[b] << ' ' << c.extendSeconds[b] << ' ' << c.shadowSeconds[b];
         o << ' ' << w.name << '\n';
     }
     return o.str();
@@ -523,6 +635,8 @@ void gatherRankStats(std::vector<DeviceWork>& work) {
             RenderCounters& c = w.counters;
             l >> c.cameraRays >> c.secondaryRays >> c.shadowRays >> c.tiles >> c.pixels >> c.seconds >> c.profiled >> w.failed;
             for (double& st : c.stageSeconds) l >> st;
+            for (int b = 0; b < RenderCounters::kDepthBins; ++b)
+                l >> c.extendRays[b] >> c.shadowRaysAt[b] >> c.extendSeconds[b] >> c.shadowSeconds[b];
             std::getline(l >> std::ws, w.name);
             w.name = "rank " + std::to_string(r) + ": " + w.name;
             work.push_back(w);
@@ -575,6 +689,11 @@ int cmdRender(Args a) {
     checkOutputsAreNotInputs(plannedOutputs(a, scene, cams), sceneInputs(scene), a.positional[0]);
     if (job.rank() == 0 && (a.dist.parts > 0 || !a.dist.checkpointDir.empty()))
         a.dist.identity = renderIdentity(sceneInputs(scene), pixelOptions(a));
+    if (a.stop.active() && (a.dist.parts > 0 || !a.dist.checkpointDir.empty() || job.distributed()))
+        throw Error("--target-error/--time-limit: not with --part, --checkpoint or MPI ranks", ExitCode::Usage);
+    if (a.stop.active() && a.spp > 0 && a.spp < 4)
+        throw Error("--target-error/--time-limit: --spp caps the samples and must be at least 4 (one pair of "
+                    "2-sample passes), got " + std::to_string(a.spp), ExitCode::Usage);
     std::vector<DeviceInfo> devs = selectDevices(a.device);
     checkImagesFit(a, cams, devs);
 
@@ -606,9 +725,9 @@ int cmdRender(Args a) {
             notRendered += (notRendered.empty() ? "" : ", ") + std::to_string(cam->id);
             continue;
         }
-        const int asked = a.spp > 0 ? a.spp : cam->numSamples;
+        const int asked = a.stop.active() ? 0 : a.spp > 0 ? a.spp : cam->numSamples;  // progressive: no target spp
         const int reached = renderAndWriteCamera(a, *cam, camIndex++, renderers, work, counters, times.output);
-        if (reached < asked) anyPartial = true;
+        if (reached < asked || (a.stop.active() && stopRequested().load())) anyPartial = true;
         if (statsSpp < 0) statsSpp = reached;  // the stats line reports the first camera's
     }
     if (job.distributed()) gatherRankStats(work);

@@ -330,7 +330,9 @@ TEST_CASE("BVH4 traversal stack: the host bound holds, and the kernel with exact
     cl::Buffer hb = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(dev::Hit) * numRays));
     dev::SceneParams sp{};
     sp.numTriangles = int(tris.size());  // no spheres, no planes
-    closest.set("count", numRays).set("scene", sp).set("nodes", nodes).set("primRefs", refs).set("tris", tb);
+    std::vector<int> queueLength{numRays};  // the kernel reads the queue length on the device
+    cl::Buffer cb = ro(queueLength);
+    closest.set("queueCount", cb).set("scene", sp).set("nodes", nodes).set("primRefs", refs).set("tris", tb);
     closest.set("spheres", sb).set("planes", pb).set("rays", rb).set("hits", hb);
     CL_CPP(dc.queue().enqueueNDRangeKernel(closest.ready(), cl::NullRange, cl::NDRange(roundUp(size_t(numRays), 64)),
                                            cl::NDRange(64)));

@@ -270,7 +270,8 @@ TEST_CASE("kernel sources: each file brings in what it #includes, once, before i
     auto render = loadKernelSources(KernelProgram::Render);
     CHECK(sourceNames(render) == std::vector<std::string>{"device_types.h", "kernel_params.h", "common.cl",
                                                           "intersect.cl", "camera.cl", "textures.cl", "shading_frame.cl",
-                                                          "envmap.cl", "object_lights.cl", "lights.cl", "brdf.cl", "material.cl", "path.cl", "shade.cl"});
+                                                          "envmap.cl", "object_lights.cl", "lights.cl", "brdf.cl", "material.cl", "path.cl", "shade.cl",
+                                                          "compact.cl"});
     CHECK(sourceNames(loadKernelSources(KernelProgram::Tonemap)) ==
           std::vector<std::string>{"device_types.h", "kernel_params.h", "tonemap.cl"});
     CHECK(sourceNames(loadKernelSources(KernelProgram::Intersect)) ==
@@ -477,10 +478,10 @@ TEST_CASE("KernelArgs refuses a wrong binding before any launch", "[cl]") {
         FAIL("no error for: " << what);
     };
     throwsWith([&] { k.set("nope", b); }, "kernel gather_shadows has no parameter nope");
-    throwsWith([&] { k.set("count", b); }, "parameter count is a value; a buffer was bound");
+    throwsWith([&] { k.set("chunk", b); }, "parameter chunk is a value; a buffer was bound");
     throwsWith([&] { k.set("shadows", 3); }, "parameter shadows is a buffer; a value was bound");
-    throwsWith([&] { k.set("count", size_t(3)); }, "parameter count takes 4 bytes; 8 were bound");
-    k.set("count", 1).set("chunk", 1).set("shadows", b);
+    throwsWith([&] { k.set("chunk", size_t(3)); }, "parameter chunk takes 4 bytes; 8 were bound");
+    k.set("queueCount", b).set("chunk", 1).set("shadows", b);
     throwsWith([&] { k.ready(); }, "parameter pathRadiance is not bound");
     k.set("pathRadiance", b);
     CHECK_NOTHROW(k.ready());

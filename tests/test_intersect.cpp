@@ -132,8 +132,11 @@ void compareWithHost(const cl::Program& program, const RandomScene& s, bool time
     sp.numTriangles = numTris;
     sp.numSpheres = int(s.spheres.size());
     sp.numPlanes = 2;
+    std::vector<int> queueLength{numRays};  // the kernels read the queue length on the device
+    cl::Buffer countBuf = ro(queueLength);
+    shadow.set("raysPerPath", 1);
     for (KernelArgs* k : {&closest, &shadow})
-        k->set("count", numRays).set("scene", sp).set("nodes", nodes).set("primRefs", refs).set("tris", tris)
+        k->set("queueCount", countBuf).set("scene", sp).set("nodes", nodes).set("primRefs", refs).set("tris", tris)
             .set("spheres", sph).set("planes", planeBuf);
     closest.set("rays", rayBuf).set("hits", hitBuf);
     shadow.set("shadows", shadowBuf);

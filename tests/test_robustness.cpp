@@ -122,7 +122,9 @@ std::vector<dev::Hit> deviceClosest(const std::vector<dev::Triangle>& trisIn, co
     dev::SceneParams sp{};
     sp.numTriangles = int(trisIn.size());
     sp.numSpheres = int(sphIn.size());  // no planes
-    k.set("count", n).set("scene", sp).set("nodes", nodes).set("primRefs", refs).set("tris", tb).set("spheres", sb);
+    std::vector<int> queueLength{n};  // the kernel reads the queue length on the device
+    cl::Buffer cb = ro(queueLength);
+    k.set("queueCount", cb).set("scene", sp).set("nodes", nodes).set("primRefs", refs).set("tris", tb).set("spheres", sb);
     k.set("planes", pb).set("rays", rb).set("hits", hb);
     CL_CPP(dc.queue().enqueueNDRangeKernel(k.ready(), cl::NullRange, cl::NDRange(roundUp(size_t(n), 64)), cl::NDRange(64)));
     std::vector<dev::Hit> hits(rays.size());

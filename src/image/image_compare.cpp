@@ -34,6 +34,16 @@ double relativeMse(const ImageRGB& a, const ImageRGB& b) {
     return a.pixels.empty() ? 0.0 : rel / double(a.pixels.size());
 }
 
+double halvesRelativeMse(const ImageRGB& a, const ImageRGB& b, double white) {
+    double rel = 0;
+    const size_t n = std::min(a.pixels.size(), b.pixels.size());
+    for (size_t i = 0; i < n; ++i) {
+        const double d = double(a.pixels[i]) - b.pixels[i], m = 0.5 * (double(a.pixels[i]) + b.pixels[i]);
+        rel += d * d / 4.0 / (m * m + 1e-2 * white * white);
+    }
+    return n == 0 ? 0.0 : rel / double(n);
+}
+
 std::array<double, 3> meanRatio(const ImageRGB& a, const ImageRGB& b) {
     double sa[3] = {0, 0, 0}, sb[3] = {0, 0, 0};
     for (size_t i = 0; i < a.pixels.size() && i < b.pixels.size(); ++i) {

@@ -13,6 +13,11 @@ namespace clrt {
 ImageRGB boxDownsample(const ImageRGB& img, int n);
 // relMSE of a against reference b (same size; values as stored, no 8-bit scaling).
 double relativeMse(const ImageRGB& a, const ImageRGB& b);
+// The relMSE of the mean (a+b)/2 of two independent, equally sampled renders a and b of one image,
+// estimated from their difference alone: E|a-b|^2 = 2 Var(half) and Var((a+b)/2) = Var(half)/2, so
+// each value's squared error is estimated by |a-b|^2/4, relative to ((a+b)/2)^2 + 1e-2 white^2
+// (white: 1 for HDR images, 255 for the course's LDR ones; bench/bench.py's reference estimate).
+double halvesRelativeMse(const ImageRGB& a, const ImageRGB& b, double white = 1.0);
 // mean(a_c) / mean(b_c) per channel (NaN where b's mean is 0).
 std::array<double, 3> meanRatio(const ImageRGB& a, const ImageRGB& b);
 

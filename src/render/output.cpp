@@ -110,6 +110,7 @@ ExrWriteOptions exrOptions(const OutputOptions& opts, DeviceContext& dc) {
     eo.attributes["renderTime"] = formatSeconds(opts.renderSeconds) + " s";
     eo.attributes["device"] = opts.deviceName.empty() ? dc.info().name : opts.deviceName;
     if (!opts.partial.empty()) eo.attributes["partial"] = opts.partial;
+    for (const auto& kv : opts.attributes) eo.attributes[kv.first] = kv.second;
     return eo;
 }
 

@@ -7,6 +7,7 @@
 // all of them are complete, so a tone-mapping or write failure changes none of them (only a failing
 // rename, after the others succeeded, can leave a partial set).
 #pragma once
+#include <map>
 #include <string>
 #include <vector>
 
@@ -26,6 +27,7 @@ struct OutputOptions {
     double renderSeconds = 0;
     std::string deviceName;
     std::string partial;           // non-empty: an interrupted render; the EXR's "partial" attribute
+    std::map<std::string, std::string> attributes;  // more EXR header attributes (--target-error, ...)
 };
 
 // "" if `name` is a plain file name clrt may create: not empty, no '/' or '\\', no control

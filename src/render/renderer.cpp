@@ -1,14 +1,18 @@
 // Wavefront renderer driver (see renderer.h). Queue layout: paths/rays/hits of the current depth at
-// [0, n); children at slots 2i and 2i+1 of the next-queue buffers, then compacted in order with
-// indices from a prefix sum, so paths of one pixel stay adjacent and summation order is fixed.
+// [0, n); children at slots 2i and 2i+1 of the next-queue buffers, then compacted in order on the
+// device (render/queue_compact.h), so paths of one pixel stay adjacent and summation order is fixed.
+// The queue length n lives on the device (queueCount); the host launches each bounce over a bound
+// and learns n one bounce late from a non-blocking read, so the device never waits for the host.
 #include "render/renderer.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 
 #include "cl/check.h"
 #include "cl/kernel_args.h"
+#include "render/queue_compact.h"
 #include "shared/kernel_params.h"
 #include "util/error.h"
 
@@ -32,18 +36,28 @@ struct Renderer::Impl {
     const DeviceScene& ds;
     BuildInfo build;
     cl::Program program;
-    KernelArgs kGenerate, kIntersect, kShadow, kShade, kLights, kGather, kAccumulate, kCompact;
+    KernelArgs kGenerate, kIntersect, kShadow, kShade, kLights, kGather, kAccumulate;
+    QueueCompactor compactor;
     // Every kernel argument, each named as the kernel parameter it is bound to (src/shared/kernel_params.h):
     // bindAll() binds each kernel's whole parameter list from these members, by name.
     cl::Buffer nodes, primRefs, tris, triShading, spheres, planes, materials, textureSets, textures, images, texels, lights, envDist, lightData;
     // Queue buffers (sized per render).
     size_t queueCapacity = 0, shadowCapacity = 0;
-    cl::Buffer paths, rays, hits, points, pathRadiance, nextPaths, nextRays, childValid, compactTarget, shadows;
+    cl::Buffer paths, rays, hits, points, pathRadiance, nextPaths, nextRays, childValid, shadows;
+    // The queue length on the device (one int each): the current bounce's, and the next one's that
+    // the compaction writes (swapped after it). hostCounts[d]: the length at depth d, read back
+    // without blocking (countReads[d] completes it).
+    cl::Buffer queueCount, nextCount;
+    std::vector<int> hostCounts = std::vector<int>(kMaxRecursionDepth + 2, 0);
+    std::vector<cl::Event> countReads = std::vector<cl::Event>(kMaxRecursionDepth + 2);
+    std::vector<size_t> countReadMarks = std::vector<size_t>(kMaxRecursionDepth + 2, 0);  // events.size() then
     // Per render: the image and the parameter blocks. Per launch (set again before each): the rest.
     cl::Buffer image;
     dev::SceneParams scene{};
     dev::CameraParams cam{};
-    int count = 0, firstPixel = 0, firstSample = 0, samples = 1, lightBegin = 0, lightEnd = 0, lightSlots = 1, chunk = 0;
+    int count = 0, firstPixel = 0, firstSample = 0, samples = 1, lightBegin = 0, lightEnd = 0, lightSlots = 1, chunk = 0,
+        raysPerPath = 0;
+    int sampleBase = 0;  // RenderSettings::firstSample of the render in progress
 
     Impl(DeviceContext& d, const DeviceScene& s) : dc(d), ds(s) {
         cl_command_queue_properties qp = 0;
@@ -57,8 +71,12 @@ struct Renderer::Impl {
         kLights = KernelArgs(program, "sample_lights");
         kGather = KernelArgs(program, "gather_shadows");
         kAccumulate = KernelArgs(program, "accumulate");
-        kCompact = KernelArgs(program, "compact_paths");
+        compactor = QueueCompactor(program);
+        const char* bounds = std::getenv("CLRT_QUEUE_BOUNDS");
+        exactBounds = bounds && *bounds ? std::string(bounds) == "exact" : (dc.info().type & CL_DEVICE_TYPE_CPU) != 0;
         cl::Context& ctx = dc.context();
+        queueCount = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(int)));
+        nextCount = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(int)));
         nodes = uploadBuffer(ctx, ds.bvh4.nodes);
         primRefs = uploadBuffer(ctx, ds.bvh.primRefs);
         tris = uploadBuffer(ctx, ds.triangles);
@@ -88,7 +106,7 @@ struct Renderer::Impl {
             nextPaths = rw(sizeof(dev::PathState) * capacity * 2);
             nextRays = rw(sizeof(dev::Ray) * capacity * 2);
             childValid = rw(sizeof(int) * capacity * 2);
-            compactTarget = rw(sizeof(int) * capacity * 2);
+            compactor.setBuffers(ctx, capacity * 2, childValid, nextPaths, nextRays, paths, rays);
         }
         if (shadowSlots > shadowCapacity) {
             shadowCapacity = shadowSlots;
@@ -104,38 +122,56 @@ struct Renderer::Impl {
     // host memory stays flat however many samples or bounces a render takes.
     static constexpr size_t kProfileEvents = 256;
     bool profiling = false;
-    std::vector<std::pair<int, cl::Event>> events;
-    void run(KernelArgs& k, size_t n, int stage) {
-        if (n == 0) return;
+    struct Launched {
+        int stage, depthBin;
         cl::Event ev;
-        CL_CPP(dc.queue().enqueueNDRangeKernel(k.ready(), cl::NullRange, cl::NDRange(roundUp(n, localSize)),
-                                               cl::NDRange(localSize), nullptr, profiling ? &ev : nullptr));
-        if (profiling) events.emplace_back(stage, ev);
+    };
+    std::vector<Launched> events;
+    int depthBin = 0;  // RenderCounters' depth bin of the bounce being enqueued
+    // Launch each bounce over its exact queue length (wait for it) rather than a bound (see traceBatch):
+    // CPU devices; CLRT_QUEUE_BOUNDS=exact|lagged overrides (for measuring both).
+    bool exactBounds = false;
+    // n work-items (rounded up to whole work-groups of `local`, default localSize).
+    void run(KernelArgs& k, size_t n, int stage, size_t local = 0) {
+        if (n == 0) return;
+        if (local == 0) local = localSize;
+        cl::Event ev;
+        CL_CPP(dc.queue().enqueueNDRangeKernel(k.ready(), cl::NullRange, cl::NDRange(roundUp(n, local)),
+                                               cl::NDRange(local), nullptr, profiling ? &ev : nullptr));
+        if (profiling) events.push_back({stage, depthBin, ev});
     }
-    // Adds the device time of the finished launches to `c` and releases their events (the queue
-    // must have been drained).
-    void collectProfile(RenderCounters& c) {
-        for (auto& [stage, ev] : events) {
+    // Adds the device time of the first `upTo` launches (all by default; they must have finished:
+    // the queue drained, or a later command waited for) to `c` and releases their events.
+    void collectProfile(RenderCounters& c, size_t upTo = SIZE_MAX) {
+        upTo = std::min(upTo, events.size());
+        for (size_t i = 0; i < upTo; ++i) {
             cl_ulong start = 0, end = 0;
-            CL_CHECK(clGetEventProfilingInfo(ev(), CL_PROFILING_COMMAND_START, sizeof start, &start, nullptr));
-            CL_CHECK(clGetEventProfilingInfo(ev(), CL_PROFILING_COMMAND_END, sizeof end, &end, nullptr));
-            c.stageSeconds[stage] += end > start ? double(end - start) * 1e-9 : 0.0;
+            CL_CHECK(clGetEventProfilingInfo(events[i].ev(), CL_PROFILING_COMMAND_START, sizeof start, &start, nullptr));
+            CL_CHECK(clGetEventProfilingInfo(events[i].ev(), CL_PROFILING_COMMAND_END, sizeof end, &end, nullptr));
+            const double s = end > start ? double(end - start) * 1e-9 : 0.0;
+            const int stage = events[i].stage;
+            c.stageSeconds[stage] += s;
+            if (stage == STAGE_TRACE_CAMERA || stage == STAGE_TRACE_SECONDARY) c.extendSeconds[events[i].depthBin] += s;
+            if (stage == STAGE_TRACE_SHADOW) c.shadowSeconds[events[i].depthBin] += s;
         }
-        events.clear();
+        events.erase(events.begin(), events.begin() + std::ptrdiff_t(upTo));
+        for (size_t& mark : countReadMarks) mark = mark > upTo ? mark - upTo : 0;
     }
 
     // Binds every parameter of every kernel from the member of the same name: the per-render values
     // given here, the per-launch ones with their current values (the loop sets those again).
     void setRenderArgs(const dev::CameraParams& cp, const dev::SceneParams& sp, const cl::Buffer& img);
     // Traces `n` camera paths (already generated) through every bounce and accumulates them into the
-    // image; `bounces` says whether any material makes children.
-    void traceBatch(int n, const dev::SceneParams& sp, bool bounces, size_t lightChunk, int slotsPerLight,
-                    RenderCounters& counters);
+    // image (see traceBatch in renderer.cpp).
+    void traceBatch(int n, const BatchPlan& plan, RenderCounters& counters);
+    void enqueueBounce(size_t bound, const BatchPlan& plan);
+    void enqueueCompaction(int depth, size_t bound);
+    int queueLength(int depth, RenderCounters& counters);
+    void countBounce(int depth, int length, const BatchPlan& plan, RenderCounters& counters);
     // Every batch of pixels [tileFirst, tileEnd), all samples (after setRenderArgs), unless stopped()
     // turns true between two sample groups. Returns the samples each pixel got.
     int renderTile(size_t tileFirst, size_t tileEnd, const BatchPlan& plan, RenderCounters& counters,
                    const std::function<void(size_t, size_t)>& progress, const std::function<bool()>& stopped);
-    std::vector<int> valid, target;  // compaction scratch, at most 2 * queueCapacity each
 
     // Reads pixels [first, end) back into `out`, scaled by `inv` (each tile's pixels are written by
     // exactly one device). Blocking, so the queue is drained afterwards.
@@ -164,49 +200,6 @@ void Renderer::Impl::setRenderArgs(const dev::CameraParams& cp, const dev::Scene
     CLRT_BIND_GROUP(kLights, CLRT_KERNEL_sample_lights, *this);
     CLRT_BIND_GROUP(kGather, CLRT_KERNEL_gather_shadows, *this);
     CLRT_BIND_GROUP(kAccumulate, CLRT_KERNEL_accumulate, *this);
-    CLRT_BIND_GROUP(kCompact, CLRT_KERNEL_compact_paths, *this);
-}
-
-void Renderer::Impl::traceBatch(int n, const dev::SceneParams& sp, bool bounces, size_t lightChunk,
-                                int slotsPerLight, RenderCounters& counters) {
-    cl::CommandQueue& q = dc.queue();
-    const int numLights = sp.numLights;
-    for (int depth = 0; n > 0; ++depth) {
-        kIntersect.set("count", n);
-        run(kIntersect, n, depth == 0 ? STAGE_TRACE_CAMERA : STAGE_TRACE_SECONDARY);
-        kShade.set("count", n);
-        run(kShade, n, STAGE_SHADE);
-        for (int l0 = 0; l0 < numLights; l0 += int(lightChunk)) {
-            int l1 = std::min(numLights, l0 + int(lightChunk));
-            int slots = n * (l1 - l0) * slotsPerLight;
-            kLights.set("count", n).set("lightBegin", l0).set("lightEnd", l1).set("lightSlots", slotsPerLight);
-            run(kLights, n, STAGE_SAMPLE_LIGHTS);
-            kShadow.set("count", slots);
-            run(kShadow, slots, STAGE_TRACE_SHADOW);
-            kGather.set("count", n).set("chunk", (l1 - l0) * slotsPerLight);
-            run(kGather, n, STAGE_GATHER);
-            counters.shadowRays += slots;
-        }
-        kAccumulate.set("count", n);
-        run(kAccumulate, n, STAGE_ACCUMULATE);
-        if (!bounces || depth >= sp.maxDepth) break;
-        // Order-preserving compaction of the children.
-        size_t slots = size_t(n) * 2;
-        valid.resize(slots);
-        target.resize(slots);
-        CL_CPP(q.enqueueReadBuffer(childValid, CL_TRUE, 0, slots * sizeof(int), valid.data()));
-        if (events.size() >= kProfileEvents) collectProfile(counters);  // the blocking read drained the queue
-        int next = 0;
-        for (size_t i = 0; i < slots; ++i) target[i] = valid[i] ? next++ : -1;
-        if (next == 0) break;
-        // Blocking: `target` is resized on the next pass, so the copy must be done before then.
-        CL_CPP(q.enqueueWriteBuffer(compactTarget, CL_TRUE, 0, slots * sizeof(int), target.data()));
-        kCompact.set("count", int(slots));
-        run(kCompact, slots, STAGE_COMPACT);
-        n = next;
-        counters.secondaryRays += n;
-        if (sp.pathMode != 0) counters.pathSegments += n;
-    }
 }
 
 const char* renderStageName(int stage) {
@@ -306,6 +299,85 @@ static BatchPlan planBatches(const DeviceScene& ds, size_t numPixels, const Rend
     return plan;
 }
 
+// Enqueues the kernels of one bounce over `bound` paths: the queue holds *queueCount <= bound of them
+// on the device, and each kernel returns beyond that.
+void Renderer::Impl::enqueueBounce(size_t bound, const BatchPlan& plan) {
+    run(kIntersect, bound, depthBin == 0 ? STAGE_TRACE_CAMERA : STAGE_TRACE_SECONDARY);
+    run(kShade, bound, STAGE_SHADE);
+    const int numLights = scene.numLights;
+    for (int l0 = 0; l0 < numLights; l0 += int(plan.lightChunk)) {
+        const int l1 = std::min(numLights, l0 + int(plan.lightChunk));
+        const int perPath = (l1 - l0) * plan.lightSlots;
+        kLights.set("lightBegin", l0).set("lightEnd", l1).set("lightSlots", plan.lightSlots);
+        run(kLights, bound, STAGE_SAMPLE_LIGHTS);
+        kShadow.set("raysPerPath", perPath);
+        run(kShadow, bound * size_t(perPath), STAGE_TRACE_SHADOW);
+        kGather.set("chunk", perPath);
+        run(kGather, bound, STAGE_GATHER);
+    }
+    run(kAccumulate, bound, STAGE_ACCUMULATE);
+}
+
+// Compacts the children of depth `depth` (2 slots per path, at most 2 * bound) on the device into the
+// next queue, reads its length into hostCounts[depth + 1] without blocking, and makes it current.
+void Renderer::Impl::enqueueCompaction(int depth, size_t bound) {
+    const QueueCompactor::Launch launch = [this](KernelArgs& k, size_t items, size_t local) {
+        run(k, items, STAGE_COMPACT, local);
+    };
+    compactor.enqueue(launch, queueCount, nextCount, 2, 2 * bound);
+    CL_CPP(dc.queue().enqueueReadBuffer(nextCount, CL_FALSE, 0, sizeof(int), &hostCounts[size_t(depth) + 1], nullptr,
+                                        &countReads[size_t(depth) + 1]));
+    countReadMarks[size_t(depth) + 1] = events.size();  // the launches before the read
+    std::swap(queueCount, nextCount);
+    for (KernelArgs* k : {&kIntersect, &kShadow, &kShade, &kLights, &kGather, &kAccumulate}) k->set("queueCount", queueCount);
+}
+
+// The length of the queue at depth >= 1, waiting for its read (enqueued a bounce earlier, so the
+// device still has the current bounce to work on). Releases the profiling events it has finished.
+int Renderer::Impl::queueLength(int depth, RenderCounters& counters) {
+    CL_CPP(countReads[size_t(depth)].wait());
+    countReads[size_t(depth)] = cl::Event();
+    if (countReadMarks[size_t(depth)] >= kProfileEvents) collectProfile(counters, countReadMarks[size_t(depth)]);
+    return hostCounts[size_t(depth)];
+}
+
+// Rays traced at `depth` for a queue of `length` paths (shadow slots: one per path, light and slot).
+void Renderer::Impl::countBounce(int depth, int length, const BatchPlan& plan, RenderCounters& counters) {
+    const uint64_t n = uint64_t(length), shadowRays = n * uint64_t(scene.numLights) * uint64_t(plan.lightSlots);
+    if (depth > 0) counters.secondaryRays += n;
+    if (depth > 0 && scene.pathMode != 0) counters.pathSegments += n;
+    counters.extendRays[depthBin] += n;
+    counters.shadowRays += shadowRays;
+    counters.shadowRaysAt[depthBin] += shadowRays;
+}
+
+// Every bounce of a batch of n camera paths. Lagged (GPUs): the host learns each queue length one
+// bounce late, so each bounce is launched over a bound, the length two depths back times the children
+// a path may have (2 while dielectrics split, else 1), at most the queue capacity; the device always
+// has the next bounce queued. Exact (CPU devices): the host waits for each length as soon as the
+// compaction has run and launches the next bounce over exactly that many paths (a CPU pays for
+// every launched work-group, and the host's wait idles nothing). Ends after MaxRecursionDepth or at
+// the first empty queue (lagged: one empty bounce may already be enqueued; its kernels return at once).
+void Renderer::Impl::traceBatch(int n, const BatchPlan& plan, RenderCounters& counters) {
+    CL_CPP(dc.queue().enqueueFillBuffer(queueCount, n, 0, sizeof(int)));
+    size_t bound = size_t(n);
+    int length = n;  // the length of the queue at `depth`, once known
+    for (int depth = 0;; ++depth) {
+        depthBin = std::min(depth, RenderCounters::kDepthBins - 1);
+        enqueueBounce(bound, plan);
+        const bool last = !plan.bounces || depth >= scene.maxDepth;
+        if (!last) enqueueCompaction(depth, bound);
+        if (depth > 0 && !exactBounds) length = queueLength(depth, counters);
+        countBounce(depth, length, plan, counters);
+        if (last || length == 0) break;
+        bound = std::min(plan.capacity, size_t(length) * (depth < scene.splitDepth ? 2 : 1));
+        if (!exactBounds) continue;
+        length = queueLength(depth + 1, counters);  // waits for this bounce's compaction
+        bound = size_t(length);
+        if (length == 0) break;
+    }
+}
+
 int Renderer::Impl::renderTile(size_t tileFirst, size_t tileEnd, const BatchPlan& plan, RenderCounters& counters,
                                const std::function<void(size_t, size_t)>& progress,
                                const std::function<bool()>& stopped) {
@@ -321,12 +393,12 @@ int Renderer::Impl::renderTile(size_t tileFirst, size_t tileEnd, const BatchPlan
         const int samples = std::min(plan.group, spp - sample);
         for (size_t first = tileFirst; first < tileEnd; first += plan.batch) {
             const int n = int(std::min(plan.batch, tileEnd - first)) * samples;
-            kGenerate.set("firstPixel", int(first)).set("firstSample", sample).set("samples", samples);
+            kGenerate.set("firstPixel", int(first)).set("firstSample", sampleBase + sample).set("samples", samples);
             kGenerate.set("count", n);
             run(kGenerate, n, STAGE_GENERATE);
             counters.cameraRays += n;
             if (scene.pathMode != 0) counters.pathSegments += n;
-            traceBatch(n, scene, plan.bounces, plan.lightChunk, plan.lightSlots, counters);
+            traceBatch(n, plan, counters);
             ++doneBatches;
             if (progress || events.size() >= kProfileEvents) {
                 CL_CPP(dc.queue().finish());
@@ -361,6 +433,7 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     cl::Buffer image = CL_CPP(cl::Buffer(m.dc.context(), CL_MEM_READ_WRITE, imageBytes));
     CL_CPP(m.dc.queue().enqueueFillBuffer(image, dev::float4{0, 0, 0, 0}, 0, imageBytes));
     m.setRenderArgs(cp, sp, image);
+    m.sampleBase = settings.firstSample;
 
     // settings.stop: a tile in progress ends after its current group of samples (at least one), no
     // new tile is started after the first.

@@ -3,7 +3,7 @@
 // to its feature set, and renders a camera as a sequence of batches (a few samples of a pixel range;
 // several samples per batch only for small images):
 //   generate -> [intersect -> shade -> (sample lights -> shadow rays -> gather) -> accumulate
-//   -> compact children] until no path is left or MaxRecursionDepth is reached.
+//   -> compact children (on the device)] until no path is left or MaxRecursionDepth is reached.
 // Every figure of the result is a pure function of (scene, camera, seed): deterministic. Host and
 // device memory stay flat however many samples or bounces a render takes (profiling events are
 // released as batches complete; queue sizes depend only on the batch size).
@@ -35,6 +35,12 @@ struct RenderCounters {
     // Device time of each stage's kernels from OpenCL profiling events (all zero when the queue was
     // made without profiling). Ray throughputs: rays of a kind / time of its trace kernel.
     double stageSeconds[STAGE_COUNT] = {};
+    // By path depth, in bins 0, 1, 2 and >= 3 (kDepthBins - 1): the extension rays traced at that
+    // depth (depth 0: camera rays; then the secondary rays of bounce d) and the shadow rays cast from
+    // vertices of that depth, with the device time of the kernels that traced them.
+    static constexpr int kDepthBins = 4;
+    uint64_t extendRays[kDepthBins] = {}, shadowRaysAt[kDepthBins] = {};
+    double extendSeconds[kDepthBins] = {}, shadowSeconds[kDepthBins] = {};
     bool profiled = false;
     int stoppedAtSample = -1;  // >= 0: RenderSettings::stop ended the render early; the fewest samples
                                // any pixel got (tiles in progress finish their current pass, >= 1)
@@ -42,6 +48,9 @@ struct RenderCounters {
 
 struct RenderSettings {
     int spp = 1;
+    int firstSample = 0;               // renders samples [firstSample, firstSample + spp) of each pixel
+                                       // (their mean; the stratification is that of spp samples):
+                                       // a pass of a progressive render (render/progressive.h)
     uint32_t seed = 0;
     size_t maxBatchPixels = 1u << 18;  // camera paths per batch (pixels x samples of each)
     int splitDepthOverride = -1;       // >= 0: force the dielectric split depth

@@ -81,6 +81,12 @@ enum TmoKind { CLRT_TMO_TABLE(CLRT_ENUM_CONSTANT_) };
 #define CLRT_BVH_STACK_SIZE 64
 #define CLRT_INVALID (-1)
 
+/* Queue compaction on the device (cl_kernels/compact.cl, src/render/queue_compact.h): the work-group
+ * size of its scans (the host launches them with exactly this local size) and the child slots each
+ * work-item of a scan takes; a block of CLRT_COMPACT_GROUP * CLRT_COMPACT_ITEMS slots has one sum. */
+#define CLRT_COMPACT_GROUP 128
+#define CLRT_COMPACT_ITEMS 4
+
 /* The binary SAH tree (src/bvh/bvh.cpp) keeps its depth <= CLRT_BVH_STACK_SIZE - 8 levels; the device
  * traverses it collapsed to 4-wide nodes (src/bvh/bvh4.cpp), whose near-first traversal needs at most
  * 3 stack entries per level. The renderer passes the exact need of a scene with -D; this default holds

@@ -29,7 +29,11 @@
 /* The texel atlas: textures, background and environment maps. */
 #define CLRT_PARAMS_IMAGES(P) P(IN, ImageInfo, images) P(IN, float4, texels)
 
-/* ---- render program (camera.cl, intersect.cl, shade.cl) -------------------------------------- */
+/* ---- render program (camera.cl, intersect.cl, shade.cl, compact.cl) -------------------------- */
+
+/* The wavefront's queue length lives on the device (one int, written by the host before a batch and
+ * by the compaction after each bounce): the kernels of a bounce are launched over an upper bound and
+ * return at get_global_id(0) >= *queueCount, so no bounce waits for the host to read a length. */
 
 /* count = pixels x samples: samples [firstSample, firstSample + samples) of pixels from firstPixel. */
 #define CLRT_KERNEL_generate_camera_rays(P)                                                        \
@@ -37,32 +41,41 @@
     P(VAL, CameraParams, cam) P(VAL, SceneParams, scene) P(BUF, PathState, paths) P(BUF, Ray, rays)
 
 #define CLRT_KERNEL_intersect_closest(P)                                                           \
-    P(VAL, int, count) P(VAL, SceneParams, scene) CLRT_PARAMS_GEOMETRY(P) P(IN, Ray, rays) P(BUF, Hit, hits)
+    P(IN, int, queueCount) P(VAL, SceneParams, scene) CLRT_PARAMS_GEOMETRY(P) P(IN, Ray, rays) P(BUF, Hit, hits)
 
+/* The shadow queue: raysPerPath slots for each of the *queueCount paths. */
 #define CLRT_KERNEL_intersect_shadow(P)                                                            \
-    P(VAL, int, count) P(VAL, SceneParams, scene) CLRT_PARAMS_GEOMETRY(P) P(BUF, ShadowRay, shadows)
+    P(IN, int, queueCount) P(VAL, int, raysPerPath) P(VAL, SceneParams, scene) CLRT_PARAMS_GEOMETRY(P) P(BUF, ShadowRay, shadows)
 
 #define CLRT_KERNEL_shade_hits(P)                                                                  \
-    P(VAL, int, count) P(VAL, SceneParams, scene) P(VAL, CameraParams, cam) P(IN, PathState, paths) \
+    P(IN, int, queueCount) P(VAL, SceneParams, scene) P(VAL, CameraParams, cam) P(IN, PathState, paths) \
     P(IN, Ray, rays) P(IN, Hit, hits) CLRT_PARAMS_SURFACES(P) CLRT_PARAMS_MATERIALS(P)              \
     CLRT_PARAMS_IMAGES(P) P(IN, Light, lights) P(BUF, ShadingPoint, points) P(BUF, float4, pathRadiance) \
     P(IN, float, envDist) P(BUF, PathState, nextPaths) P(BUF, Ray, nextRays) P(BUF, int, childValid)
 
 #define CLRT_KERNEL_sample_lights(P)                                                               \
-    P(VAL, int, count) P(VAL, int, lightBegin) P(VAL, int, lightEnd) P(VAL, int, lightSlots)       \
+    P(IN, int, queueCount) P(VAL, int, lightBegin) P(VAL, int, lightEnd) P(VAL, int, lightSlots)       \
     P(VAL, SceneParams, scene) P(IN, PathState, paths) P(IN, ShadingPoint, points) P(IN, Material, materials) \
     P(IN, Light, lights) CLRT_PARAMS_IMAGES(P) \
     P(IN, float, envDist) P(IN, float4, lightData) P(BUF, ShadowRay, shadows)
 
 #define CLRT_KERNEL_gather_shadows(P)                                                              \
-    P(VAL, int, count) P(VAL, int, chunk) P(IN, ShadowRay, shadows) P(BUF, float4, pathRadiance)
+    P(IN, int, queueCount) P(VAL, int, chunk) P(IN, ShadowRay, shadows) P(BUF, float4, pathRadiance)
 
 #define CLRT_KERNEL_accumulate(P)                                                                  \
-    P(VAL, int, count) P(IN, PathState, paths) P(IN, float4, pathRadiance) P(BUF, float4, image)
+    P(IN, int, queueCount) P(IN, PathState, paths) P(IN, float4, pathRadiance) P(BUF, float4, image)
 
-#define CLRT_KERNEL_compact_paths(P)                                                               \
-    P(VAL, int, count) P(IN, int, compactTarget) P(IN, PathState, nextPaths) P(IN, Ray, nextRays)   \
-    P(BUF, PathState, paths) P(BUF, Ray, rays)
+/* Compaction (compact.cl): the child slots i < *queueCount * childSlots; nextCount gets the survivors. */
+#define CLRT_PARAMS_COMPACT(P) P(IN, int, queueCount) P(VAL, int, childSlots)
+
+#define CLRT_KERNEL_compact_scan_blocks(P)                                                         \
+    CLRT_PARAMS_COMPACT(P) P(IN, int, childValid) P(BUF, int, compactTarget) P(BUF, int, blockSums)
+
+#define CLRT_KERNEL_compact_scan_sums(P) CLRT_PARAMS_COMPACT(P) P(BUF, int, blockSums) P(BUF, int, nextCount)
+
+#define CLRT_KERNEL_compact_scatter(P)                                                             \
+    CLRT_PARAMS_COMPACT(P) P(IN, int, childValid) P(IN, int, compactTarget) P(IN, int, blockSums)   \
+    P(IN, PathState, nextPaths) P(IN, Ray, nextRays) P(BUF, PathState, paths) P(BUF, Ray, rays)
 
 /* ---- tone-mapping program (tonemap.cl) -------------------------------------------------------- */
 
@@ -83,7 +96,7 @@
 /* Every kernel, by program (the host's table and the tests iterate these). */
 #define CLRT_RENDER_KERNELS(K)                                                                     \
     K(generate_camera_rays) K(intersect_closest) K(intersect_shadow) K(shade_hits) K(sample_lights) \
-    K(gather_shadows) K(accumulate) K(compact_paths)
+    K(gather_shadows) K(accumulate) K(compact_scan_blocks) K(compact_scan_sums) K(compact_scatter)
 #define CLRT_TONEMAP_KERNELS(K) K(Tonemap_Luminance) K(Tonemap_Histogram) K(Tonemap_Map) K(Tonemap_MapFloat)
 #define CLRT_LAYOUT_KERNELS(K) K(layout_report)
 
