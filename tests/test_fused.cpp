@@ -67,6 +67,8 @@ TEST_CASE("fused path: the wavefront's image bit for bit, and the same ray count
     // dielectrics at <= 4 spp split into both children (the explicit stack).
     const Case cases[] = {
         {"hw5/cube_point.xml", 48, 48, 1, 0},
+        {"hw5/cube_point.xml", 256, 256, 3, 0},  // one sample per group, 3 passes in one launch
+        {"hw5/cube_point.xml", 200, 100, 8, 0},  // 3 per group: 2 passes in a launch, then a group of 2
         {"hw5/sphere_env_light_courtyard.xml", 64, 32, 4, 0},       // environment MIS: two slots, 4 per group
         {"hw5/glass_sphere_env_interior.xml", 48, 48, 1, 0},        // dielectric split tree
         {"hw5/glass_sphere_env_interior_probe.xml", 32, 32, 8, 0},  // one child chosen by Fresnel, 8 per group
@@ -102,7 +104,7 @@ TEST_CASE("fused path: the wavefront's image bit for bit, and the same ray count
     }
 }
 
-TEST_CASE("fused path: the demo scene bit for bit under every batching, and deterministic", "[fused]") {
+TEST_CASE("fused path: the demo and motion-blur scenes bit for bit, any batching, deterministic", "[fused]") {
     Scene scene = loadScene(std::string(CLRT_SOURCE_DIR) + "/scenes/demo.xml");
     DeviceScene ds = flattenScene(scene);
     Renderer r(testContext(), ds);
@@ -126,6 +128,14 @@ TEST_CASE("fused path: the demo scene bit for bit under every batching, and dete
     RenderCounters c;
     ImageRGB batched = r.render(small, rs, c);
     CHECK(differingFloats(a.image, batched) == 0);
+    // Motion blur: every ray of a sample at its shutter time.
+    Scene mb = loadScene(std::string(CLRT_SOURCE_DIR) + "/scenes/motion_blur.xml");
+    DeviceScene mbScene = flattenScene(mb);
+    Renderer mbRenderer(testContext(), mbScene);
+    Rendered mbF = renderWith(mbRenderer, mb.cameras.at(0), 64, 48, 4, 5, Pipeline::Fused);
+    Rendered mbW = renderWith(mbRenderer, mb.cameras.at(0), 64, 48, 4, 5, Pipeline::Wavefront);
+    CHECK(differingFloats(mbF.image, mbW.image) == 0);
+    CHECK(imageSum(mbF.image) > 0.0);
 }
 
 TEST_CASE("pipeline choice: auto is fused on CPU devices and the wavefront on GPUs", "[fused]") {
