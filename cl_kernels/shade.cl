@@ -364,13 +364,18 @@ __kernel void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
     ShadeResult res;
     Shade_Hit(scene, cam, paths[i], rays[i], hits[i], tris, triShading, spheres, planes, materials, textureSets,
               textures, images, texels, lights, envDist, &res);
-    points[i] = res.sp;
+    /* Whole structs go to global memory from plain locals: oclgrind 21.10's uninitialised-value check
+     * (-cl-opt-disable) reports a struct copied straight from a member of res, initialised or not. */
+    const ShadingPoint sp = res.sp;
+    points[i] = sp;
     pathRadiance[i] = res.radiance;
     for (int k = 0; k < 2; ++k) {
         childValid[2 * i + k] = res.childValid[k];
         if (res.childValid[k]) {  /* compact_paths reads only the valid children */
-            nextPaths[2 * i + k] = res.childPath[k];
-            nextRays[2 * i + k] = res.childRay[k];
+            const PathState child = res.childPath[k];
+            const Ray childRay = res.childRay[k];
+            nextPaths[2 * i + k] = child;
+            nextRays[2 * i + k] = childRay;
         }
     }
 }
