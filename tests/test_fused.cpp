@@ -146,6 +146,10 @@ TEST_CASE("pipeline choice: auto is fused on CPU devices and the wavefront on GP
     CHECK(choosePipeline(Pipeline::Auto, gpu) == Pipeline::Wavefront);
     CHECK(choosePipeline(Pipeline::Wavefront, cpu) == Pipeline::Wavefront);
     CHECK(choosePipeline(Pipeline::Fused, gpu) == Pipeline::Fused);
+    std::string why;
+    CHECK(choosePipeline(Pipeline::Auto, cpu, kFusedMinPixels - 1, &why) == Pipeline::Wavefront);  // a tiny image
+    CHECK(why.find("pixels < ") != std::string::npos);
+    CHECK(choosePipeline(Pipeline::Fused, cpu, 1) == Pipeline::Fused);
     Pipeline p = Pipeline::Auto;
     CHECK(parsePipeline("fused", p));
     CHECK(p == Pipeline::Fused);
@@ -172,7 +176,7 @@ TEST_CASE("pipeline choice: auto is fused on CPU devices and the wavefront on GP
 TEST_CASE("clrt render --pipeline: -v names the pipeline, a bad value is a usage error", "[fused][cli]") {
     TempDir t;
     const std::string scene = std::string(CLRT_SOURCE_DIR) + "/scenes/demo.xml";
-    const std::string base = "render " + scene + " -o " + t.path.string() + " --resolution 16x12 --spp 1 -v";
+    const std::string base = "render " + scene + " -o " + t.path.string() + " --resolution 40x30 --spp 1 -v";
     int rc = runClrt(base + " --device cpu", t.file("auto.log"));
     INFO(readFileBytes(t.file("auto.log")));
     CHECK(rc == 0);

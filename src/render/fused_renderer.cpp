@@ -28,9 +28,23 @@ bool parsePipeline(const std::string& s, Pipeline& out) {
     return true;
 }
 
-Pipeline choosePipeline(Pipeline requested, const DeviceInfo& device) {
-    if (requested != Pipeline::Auto) return requested;
-    return (device.type & CL_DEVICE_TYPE_CPU) ? Pipeline::Fused : Pipeline::Wavefront;
+Pipeline choosePipeline(Pipeline requested, const DeviceInfo& device, size_t numPixels, std::string* why) {
+    auto say = [&](const std::string& w) { if (why) *why = w; };
+    if (requested != Pipeline::Auto) {
+        say("--pipeline");
+        return requested;
+    }
+    if (!(device.type & CL_DEVICE_TYPE_CPU)) {
+        say(std::string("auto: ") + deviceTypeName(device.type) + " device");
+        return Pipeline::Wavefront;
+    }
+    if (numPixels < kFusedMinPixels) {
+        say("auto: CPU device, " + std::to_string(numPixels) + " pixels < " + std::to_string(kFusedMinPixels) +
+            ": one work-item per pixel would leave cores idle");
+        return Pipeline::Wavefront;
+    }
+    say("auto: CPU device");
+    return Pipeline::Fused;
 }
 
 std::string fusedUnsupported(const dev::SceneParams& sp, const FusedPlan& plan) {
@@ -66,9 +80,11 @@ int FusedPath::renderTile(cl::CommandQueue& q, bool profiling, size_t tileFirst,
                           const std::function<bool()>& stopped) {
     const int group = std::max(1, plan.group);
     const size_t batch = std::max<size_t>(1, std::min(tileEnd - tileFirst, maxBatchPixels / size_t(group)));
-    const int maxPasses = int(std::max<size_t>(1, kPathsPerLaunch / (batch * size_t(group))));
+    const int allGroups = spp / group;  // whole groups; a partial last one is a launch of its own
+    const int maxPasses = int(std::max<size_t>(
+        1, std::min<size_t>(kPathsPerLaunch / (batch * size_t(group)), size_t(allGroups / kLaunchesPerTile))));
     const size_t pixelBatches = (tileEnd - tileFirst + batch - 1) / batch;
-    const size_t steps = size_t((spp / group + maxPasses - 1) / maxPasses) + (spp % group ? 1 : 0);
+    const size_t steps = size_t((allGroups + maxPasses - 1) / maxPasses) + (spp % group ? 1 : 0);
     const size_t totalBatches = steps * pixelBatches;
     const uint64_t shadowPerPath = uint64_t(std::max(sp.numLights, 0)) * uint64_t(plan.lightSlots);
     size_t doneBatches = 0;

@@ -28,8 +28,12 @@ struct FusedPlan {
     bool bounces = false;
 };
 
-// Auto: fused on CPU devices, wavefront elsewhere; an explicit request is kept.
-Pipeline choosePipeline(Pipeline requested, const DeviceInfo& device);
+// Auto: fused on CPU devices for images of at least kFusedMinPixels pixels (the fused kernel has one
+// work-item per pixel, the wavefront one per sample: a tiny image would leave cores idle), wavefront
+// elsewhere; an explicit request is kept. *why (optional): the reason, for -v.
+constexpr size_t kFusedMinPixels = 1024;
+Pipeline choosePipeline(Pipeline requested, const DeviceInfo& device, size_t numPixels = kFusedMinPixels,
+                        std::string* why = nullptr);
 
 // Why the fused path cannot render this plan ("" when it can): more depths than CLRT_FUSED_MAX_LEVELS
 // with per-depth sums, or a dielectric split deeper than CLRT_FUSED_STACK_SIZE.
@@ -43,13 +47,15 @@ public:
     KernelArgs& kernel() { return k_; }
 
     // Renders every sample of pixels [tileFirst, tileEnd) into the bound image (as the wavefront's
-    // renderTile), in launches of at most kPathsPerLaunch camera paths, unless stopped() turns true
-    // between two launches. Returns the samples each pixel got.
+    // renderTile), in launches of at most kPathsPerLaunch camera paths and at least kLaunchesPerTile
+    // launches when there are that many sample groups (progress moves within a tile), unless stopped()
+    // turns true between two launches. Returns the samples each pixel got.
     int renderTile(cl::CommandQueue& q, bool profiling, size_t tileFirst, size_t tileEnd, size_t maxBatchPixels,
                    int spp, const FusedPlan& plan, const dev::SceneParams& sp, RenderCounters& counters,
                    const std::function<void(size_t, size_t)>& progress, const std::function<bool()>& stopped);
 
     static constexpr size_t kPathsPerLaunch = size_t(1) << 18;
+    static constexpr int kLaunchesPerTile = 32;
 
 private:
     KernelArgs k_;

@@ -367,14 +367,13 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     m.setRenderArgs(cp, sp, image);
     // Fused (CPU devices) or wavefront: the same image either way (fused_renderer.h).
     const FusedPlan fusedPlan{plan.group, plan.lightSlots, plan.bounces};
-    Pipeline pipeline = choosePipeline(settings.pipeline, m.dc.info());
+    std::string why;
+    Pipeline pipeline = choosePipeline(settings.pipeline, m.dc.info(), numPixels, &why);
     const std::string notFused = pipeline == Pipeline::Fused ? fusedUnsupported(sp, fusedPlan) : "";
     if (!notFused.empty()) pipeline = Pipeline::Wavefront;
     if (verbose())
         info("camera " + std::to_string(cam.id) + " on " + m.dc.info().name + ": pipeline " + pipelineName(pipeline) +
-             (settings.pipeline == Pipeline::Auto ? std::string(" (auto: ") + deviceTypeName(m.dc.info().type) + " device)"
-                                                  : std::string(" (--pipeline)")) +
-             (notFused.empty() ? "" : "; not fused: " + notFused));
+             " (" + why + ")" + (notFused.empty() ? "" : "; not fused: " + notFused));
 
     // settings.stop: a tile in progress ends after its current group of samples (at least one), no
     // new tile is started after the first.
