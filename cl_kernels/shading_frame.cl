@@ -79,8 +79,9 @@ inline float Bump_TexelHeight(const __global float4* texels, ImageInfo img, int 
 
 /* (dh/du, dh/dv) at uv as the course takes them: the forward differences of the texel heights at the
  * texel that contains uv, h(x+1, y) − h(x, y) and h(x, y+1) − h(x, y), used as derivatives per unit
- * of u and v. (Fitted to the references: sphere_nobump_justbump 47.4 dB; the same differences divided
- * by 255 and scaled by 0.4·(width, height) reach 39.8 dB, central differences less.) */
+ * of u and v. (Fitted to the references: sphere_nobump_justbump 47.4 dB, 47.7 with Shadow_Make's
+ * rule for bump-mapped scenes; the same differences divided by 255 and scaled by 0.4·(width, height)
+ * reach 39.8 dB, central differences less.) */
 inline float2 Bump_ImageGradient(const __global float4* texels, ImageInfo img, float2 uv) {
     int x = (int)floor(uv.x * (float)img.width), y = (int)floor(uv.y * (float)img.height);
     float h = Bump_TexelHeight(texels, img, x, y);

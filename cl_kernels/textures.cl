@@ -26,15 +26,17 @@ inline float3 Image_Lookup(const __global float4* texels, ImageInfo img, float u
 }
 
 /* Perlin noise as the course defines it: 16 gradients (the 12 cube-edge directions and 4 repeated),
- * a 16-entry permutation P, the lattice hash P[(i + P[(j + P[k mod 16]) mod 16]) mod 16], and the
- * weight w(t) = 1 − 6|t|^5 + 15|t|^4 − 10|t|^3 per axis: noise(p) = Σ_corners w·w·w·(g · (p − corner)).
- * The course's own P is not published; this one is a fixed shuffle of 0..15. */
+ * the course's 16-entry permutation P (src/shared/device_types.h says how it was found), the lattice
+ * hash P[|i + P[|j + P[|k| mod 16]| mod 16]| mod 16] (the absolute value, not a wrap: the course's
+ * lattice is mirrored about 0, which the references show on negative coordinates), and the weight
+ * w(t) = 1 − 6|t|^5 + 15|t|^4 − 10|t|^3 per axis: noise(p) = Σ_corners w·w·w·(g · (p − corner)). */
 __constant int CLRT_PERLIN_PERM[16] = {CLRT_PERLIN_PERM_VALUES};
 __constant float CLRT_PERLIN_GRAD[16][3] = {CLRT_PERLIN_GRAD_VALUES};
+inline int Perlin_Index(int a) { return (int)(abs(a) & 15u); }
 inline int Perlin_Hash(int i, int j, int k) {
-    int a = CLRT_PERLIN_PERM[k & 15];
-    int b = CLRT_PERLIN_PERM[(j + a) & 15];
-    return CLRT_PERLIN_PERM[(i + b) & 15];
+    int a = CLRT_PERLIN_PERM[Perlin_Index(k)];
+    int b = CLRT_PERLIN_PERM[Perlin_Index(j + a)];
+    return CLRT_PERLIN_PERM[Perlin_Index(i + b)];
 }
 inline float Perlin_Weight(float t) {
     t = fabs(t);

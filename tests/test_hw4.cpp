@@ -1,8 +1,8 @@
 // hw4 texture tests: the tangent frames, normal-map and bump-map perturbations and the Perlin noise of
 // cl_kernels/shading_frame.cl and textures.cl against the plain C++ references below (PoCL), and the
 // course's hw4 scenes (../shared/scenes/hw4) against their reference renders with the course's 8-bit
-// truncation: ≥ 40 dB for image textures, luminance mean and std within 2% for Perlin scenes (the
-// course's permutation table is not published).
+// truncation: ≥ 40 dB, image textures and Perlin noise alike (the course's permutation table, found
+// as src/shared/device_types.h says).
 #include <catch.hpp>
 
 #include <array>
@@ -85,7 +85,7 @@ double perlinNoise(double x, double y, double z) {
     for (int c = 0; c < 8; ++c) {
         int dx = c & 1, dy = (c >> 1) & 1, dz = (c >> 2) & 1;
         int i = int(fx) + dx, j = int(fy) + dy, k = int(fz) + dz;
-        int g = kPerm[(i + kPerm[(j + kPerm[k & 15]) & 15]) & 15];
+        int g = kPerm[std::abs(i + kPerm[std::abs(j + kPerm[std::abs(k) % 16]) % 16]) % 16];
         double vx = x - (fx + dx), vy = y - (fy + dy), vz = z - (fz + dz);
         sum += w(vx) * w(vy) * w(vz) * (kGrad[g][0] * vx + kGrad[g][1] * vy + kGrad[g][2] * vz);
     }
@@ -143,21 +143,6 @@ ImageRGB renderHw4(const std::string& name, int spp = 0) {
 ImageRGB hw4Reference(const std::string& name) {
     return readImage(sharedDir() + "/scenes/hw4/_reference_outputs/" + name + ".png");
 }
-struct LumStats { double mean = 0, stddev = 0; };
-LumStats luminance(const ImageRGB& img) {
-    double s = 0, s2 = 0;
-    size_t n = size_t(img.width) * img.height;
-    for (size_t p = 0; p < n; ++p) {
-        double y = 0.2126 * img.pixels[3 * p] + 0.7152 * img.pixels[3 * p + 1] + 0.0722 * img.pixels[3 * p + 2];
-        s += y;
-        s2 += y * y;
-    }
-    LumStats r;
-    r.mean = s / n;
-    r.stddev = std::sqrt(std::fmax(0.0, s2 / n - r.mean * r.mean));
-    return r;
-}
-
 double floorPsnr(const std::string& name, int spp = 0) {
     ImageRGB img = renderHw4(name, spp), ref = hw4Reference(name);
     REQUIRE(img.width == ref.width);
@@ -308,7 +293,7 @@ TEST_CASE("Perlin noise: zero at lattice points, within [-1, 1], gradient by cen
 
 TEST_CASE("course hw4 image-texture scenes match their references at >= 40 dB", "[render][shared][hw4]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
-    // bump_mapping_transformed: 41.0 dB (floor 62 dB; its mirrored, stretched sphere is the weak part)
+    // bump_mapping_transformed: 41.5 dB (floor 62 dB; its mirrored, stretched sphere is the weak part: 36.5 dB)
     for (const char* name : {"brickwall_with_normalmap", "bump_mapping_transformed", "cube_cushion", "cube_wall", "cube_wall_normal", "cube_waves",
                              "sphere_nearest_bilinear", "sphere_nobump_bump", "sphere_nobump_justbump", "wood_box",
                              "wood_box_no_specular"})
@@ -318,13 +303,13 @@ TEST_CASE("course hw4 image-texture scenes match their references at >= 40 dB", 
     CHECK(floorPsnr("sphere_normal", 16) >= 40.0);
 }
 
-TEST_CASE("course hw4 Perlin scenes: luminance mean and std within 2% of the references", "[render][shared][hw4]") {
+TEST_CASE("course hw4 Perlin scenes match their references at >= 40 dB", "[render][shared][hw4]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
+    // With the course's permutation (src/shared/device_types.h): cube_perlin 66.9 dB, sphere_perlin
+    // 61.4 dB, sphere_perlin_scale 60.4 dB, sphere_perlin_bump 41.8 dB (clrt render --ldr-quantize floor
+    // + clrt-imgdiff); with the table fitted to the statistics before, 19.8-21.7 dB.
     for (const char* name : {"cube_perlin", "sphere_perlin", "sphere_perlin_scale", "sphere_perlin_bump"}) {
-        LumStats a = luminance(quantize(renderHw4(name), true)), b = luminance(hw4Reference(name));
-        INFO(name << ": mean " << a.mean << " / " << b.mean << ", std " << a.stddev << " / " << b.stddev);
-        CHECK(std::fabs(a.mean - b.mean) <= 0.02 * b.mean);
-        CHECK(std::fabs(a.stddev - b.stddev) <= 0.02 * b.stddev);
+        CHECK(floorPsnr(name) >= 40.0);
     }
 }
 

@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "cl/check.h"
+#include "image/image_compare.h"
 #include "render/device_scene.h"
 #include "render/env_distribution.h"
 #include "render/renderer.h"
@@ -586,16 +587,6 @@ TEST_CASE("white furnace: a kd=0.5 sphere under radiance 1 shows pi/2 with every
 }
 
 namespace {
-// Relative MSE of `img` against `ref`, mean over pixels and channels of (x - r)² / (r² + 1e-2).
-double relMse(const ImageRGB& img, const ImageRGB& ref) {
-    double s = 0;
-    for (size_t i = 0; i < img.pixels.size(); ++i) {
-        double d = double(img.pixels[i]) - ref.pixels[i];
-        s += d * d / (double(ref.pixels[i]) * ref.pixels[i] + 1e-2);
-    }
-    return s / double(img.pixels.size());
-}
-
 // Side-by-side strip for the docs: x·exposure / (1 + x·exposure), gamma 2.2.
 void writeStrip(const std::string& path, const std::vector<const ImageRGB*>& imgs, float exposure) {
     int w = imgs[0]->width, h = imgs[0]->height, gap = 4, W = int(imgs.size()) * (w + gap) - gap;
@@ -637,7 +628,7 @@ TEST_CASE("env samplers on sunset.exr: importance and MIS beat uniform >= 10x in
     for (int s = 0; s < 4; ++s) {
         dev::EnvSamplerKind es = dev::EnvSamplerKind(s);
         imgs.push_back(renderFile(path, spp, &es, 7));
-        err.push_back(relMse(imgs.back(), ref));
+        err.push_back(relativeMse(imgs.back(), ref));
         WARN("sunset.exr, " << size << "x" << size << ", " << spp << " spp, " << kSamplerNames[s] << ": relMSE " << err.back()
                             << " (uniform / this = " << err[0] / err.back() << ")");
     }

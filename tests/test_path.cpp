@@ -132,17 +132,22 @@ std::string envFurnace(const std::string& params, const std::string& sampler, fl
     return s.str();
 }
 
-}  // namespace
-
-TEST_CASE("Path tracing: white furnace under a constant environment gives a*Le for every option set", "[path][render]") {
-    TempDir tmp;
-    const float Le = 2.0f, a = 0.8f;
+// A 16×8 latlong environment map of constant radiance Le (the furnace tests' light).
+void writeConstantEnv(const std::string& path, float Le) {
     ImageRGB env;
     env.width = 16;
     env.height = 8;
     env.isHdr = true;
     env.pixels.assign(size_t(16 * 8 * 3), Le);
-    writeExr(tmp.file("env.exr"), env);
+    writeExr(path, env);
+}
+
+}  // namespace
+
+TEST_CASE("Path tracing: white furnace under a constant environment gives a*Le for every option set", "[path][render]") {
+    TempDir tmp;
+    const float Le = 2.0f, a = 0.8f;
+    writeConstantEnv(tmp.file("env.exr"), Le);
     const char* optionSets[] = {"", "ImportanceSampling", "NextEventEstimation", "NextEventEstimation ImportanceSampling",
                                 "RussianRoulette", "NextEventEstimation ImportanceSampling RussianRoulette",
                                 "MultipleImportanceSampling"};
@@ -249,12 +254,7 @@ TEST_CASE("hw6 path_diffuse: MultipleImportanceSampling matches the NEE referenc
 TEST_CASE("Path tracing: a clear glass sphere under a constant environment is Le, not black", "[path][render]") {
     TempDir tmp;
     const float Le = 2.0f;
-    ImageRGB env;
-    env.width = 16;
-    env.height = 8;
-    env.isHdr = true;
-    env.pixels.assign(size_t(16 * 8 * 3), Le);
-    writeExr(tmp.file("env.exr"), env);
+    writeConstantEnv(tmp.file("env.exr"), Le);
     const std::string glass = "<Material id=\"1\" type=\"dielectric\"><DiffuseReflectance>0 0 0</DiffuseReflectance>"
                               "<SpecularReflectance>0 0 0</SpecularReflectance><MirrorReflectance>1 1 1</MirrorReflectance>"
                               "<AbsorptionCoefficient>0 0 0</AbsorptionCoefficient><RefractionIndex>1.5</RefractionIndex>"

@@ -81,3 +81,37 @@ TEST_CASE("every classic scene renders at 1 spp without NaN or Inf", "[render][s
         CHECK(countNonFinite(img) == 0);
     }
 }
+
+TEST_CASE("<Transparency>: the centre of scenes/transparency.xml equals its closed-form path sum", "[render]") {
+    // The centre pixel's ray runs along the sphere's axis (radius 1, n = 1.5, T per unit distance):
+    // every reflection and refraction stays on that line, at normal incidence (Fresnel R = ((n-1)/(n+1))²),
+    // and every ray that leaves the sphere misses all else and returns the background B. Each crossing
+    // of the inside (length 2) keeps a = T². With depth limit D (children only while depth < D):
+    //   L = R·B + (1-R)·I(1),  I(d) = d < D ? a·((1-R)·B + R·I(d+1)) : 0.
+    // Kd = Ks = Ka = 0, so the point light adds nothing there. The split depth is forced to D so both
+    // children of every dielectric hit are traced (no random choice).
+    Scene scene = loadScene(std::string(CLRT_SOURCE_DIR) + "/scenes/transparency.xml");
+    const Camera& cam = scene.cameras.at(0);
+    REQUIRE(cam.width % 2 == 1);
+    REQUIRE(scene.materials.at(1).type == dev::MATERIAL_DIELECTRIC);
+    DeviceScene ds = flattenScene(scene);
+    CHECK(ds.features.has(dev::MATERIAL_DIELECTRIC));
+    Renderer r(testContext(), ds);
+    RenderSettings rs;
+    rs.spp = 1;
+    const int depth = scene.maxRecursionDepth;
+    rs.splitDepthOverride = depth;
+    RenderCounters counters;
+    ImageRGB img = r.render(cam, rs, counters);
+    REQUIRE(countNonFinite(img) == 0);
+    const double n = 1.5, R = (n - 1) * (n - 1) / ((n + 1) * (n + 1));
+    const double T[3] = {0.35, 0.7, 0.95}, B[3] = {200, 190, 170};
+    size_t centre = (size_t(cam.height / 2) * size_t(cam.width) + size_t(cam.width / 2)) * 3;
+    for (int c = 0; c < 3; ++c) {
+        double a = T[c] * T[c], inside = 0;
+        for (int d = depth - 1; d >= 1; --d) inside = a * ((1 - R) * B[c] + R * inside);
+        double expected = R * B[c] + (1 - R) * inside;
+        INFO("channel " << c << ": clrt " << img.pixels[centre + c] << ", closed form " << expected);
+        CHECK(img.pixels[centre + c] == Approx(expected).epsilon(1e-4));
+    }
+}

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <string>
 #include <unistd.h>
 
@@ -390,6 +391,53 @@ TEST_CASE("scene: materials, degamma, absorption", "[scene]") {
     CHECK(s.materials[2].absorptionIndex == Approx(2.82f));
     CHECK(s.materials[2].roughness == Approx(0.1f));
     CHECK(s.materials[2].absorptionCoefficient == Vec3(0.1f, 0.2f, 0.3f));
+}
+
+TEST_CASE("scene: <Transparency> (the older format's dielectric)", "[scene]") {
+    // T is the fraction of light kept per unit distance inside: Beer's coefficient -ln T, added to any
+    // AbsorptionCoefficient; non-zero T without a type makes a dielectric; zero T leaves it opaque.
+    std::string xml = R"(<Scene>
+  <Materials>
+    <Material id="1"><Transparency>0.99 0.5 1</Transparency><RefractionIndex>2</RefractionIndex></Material>
+    <Material id="2" type="dielectric"><Transparency>0.5</Transparency><AbsorptionCoefficient>0.1</AbsorptionCoefficient></Material>
+    <Material id="3"><Transparency>0 0 0</Transparency><DiffuseReflectance>1 1 1</DiffuseReflectance></Material>
+    <Material id="4"><Transparency>0.5 0 0.25</Transparency></Material>
+    <Material id="5" BRDF="1"><SpecularReflectance>0.3 0.3 0.3</SpecularReflectance>
+      <Transparency>0.99 0.99 0.99</Transparency><RefractionIndex>2</RefractionIndex></Material>
+  </Materials>
+  <BRDFs><ModifiedBlinnPhong id="1"><Exponent>10</Exponent></ModifiedBlinnPhong></BRDFs>
+</Scene>)";
+    Scene s = load("transparency.xml", xml);
+    REQUIRE(s.materials.size() == 5);
+    CHECK(s.materials[0].type == dev::MATERIAL_DIELECTRIC);
+    CHECK(s.materials[0].refractionIndex == 2.0f);
+    CHECK(s.materials[0].absorptionCoefficient.x == Approx(-std::log(0.99)));
+    CHECK(s.materials[0].absorptionCoefficient.y == Approx(std::log(2.0)));
+    CHECK(s.materials[0].absorptionCoefficient.z == 0.0f);
+    CHECK(s.materials[1].type == dev::MATERIAL_DIELECTRIC);
+    CHECK(s.materials[1].absorptionCoefficient.x == Approx(0.1 + std::log(2.0)));
+    CHECK(s.materials[2].type == dev::MATERIAL_BLINN_PHONG);
+    CHECK(s.materials[2].absorptionCoefficient == Vec3(0, 0, 0));
+    CHECK(s.materials[3].type == dev::MATERIAL_DIELECTRIC);
+    CHECK(s.materials[3].absorptionCoefficient.y == std::numeric_limits<float>::max());  // keeps nothing
+    CHECK(s.materials[3].absorptionCoefficient.z == Approx(std::log(4.0)));
+    CHECK(s.materials[4].type == dev::MATERIAL_DIELECTRIC);  // hw6's material 7: a BRDF and Transparency
+    CHECK(s.materials[4].brdf == 0);
+}
+
+TEST_CASE("scene: bad <Transparency> values are one-line errors at line:col", "[scene]") {
+    auto mat = [](const std::string& attrs, const std::string& t) {
+        return sceneWith("<Materials>\n  <Material id=\"9\"" + attrs + ">\n    <Transparency>" + t +
+                         "</Transparency></Material>\n</Materials>");
+    };
+    expectErrorAt("tr_range.xml", mat("", "0.5 1.5 0.5"), "<Transparency>", "in [0, 1]");
+    expectErrorAt("tr_neg.xml", mat("", "-0.1"), "<Transparency>", "in [0, 1]");
+    expectErrorAt("tr_count.xml", mat("", "0.5 0.5"), "<Transparency>", "expected 1 or 3");
+    expectErrorAt("tr_text.xml", mat("", "clear"), "<Transparency>", "'clear' is not a number");
+    expectErrorAt("tr_empty.xml", mat("", ""), "<Transparency>", "expected 1 or 3");
+    expectErrorAt("tr_type.xml", mat(" type=\"mirror\"", "0.9"), "<Transparency>", "type=\"mirror\"");
+    Scene ok = load("tr_zero_typed.xml", mat(" type=\"mirror\"", "0 0 0"));  // zero: opaque, no conflict
+    CHECK(ok.materials.back().type == dev::MATERIAL_MIRROR);
 }
 
 TEST_CASE("scene: lights", "[scene]") {

@@ -54,7 +54,7 @@ struct Material {
     float phongExponent = 1;
     float refractionIndex = 1;
     float absorptionIndex = 0;  // conductor k
-    Vec3 absorptionCoefficient; // dielectric Beer's law, per unit distance
+    Vec3 absorptionCoefficient; // dielectric Beer's law, per unit distance (<Transparency> T adds -ln T)
     float roughness = 0;
     int brdf = -1;              // index into Scene::brdfs (BRDF="id"), -1: classic Blinn-Phong shading
 };

@@ -10,7 +10,8 @@
 //   BRDFs (hw6): OriginalPhong OriginalBlinnPhong ModifiedPhong ModifiedBlinnPhong (normalized)
 //          TorranceSparrow (kdfresnel), each with id and Exponent
 //   Material (type, degamma, BRDF): Ambient/Diffuse/Specular/MirrorReflectance PhongExponent RefractionIndex
-//          AbsorptionCoefficient AbsorptionIndex Roughness
+//          AbsorptionCoefficient AbsorptionIndex Roughness Transparency (the older course format's
+//          dielectric: see readTransparency)
 //   Transformations: Translation Scaling Rotation Composite
 //   Textures: Images/Image, TextureMap (type, degamma) ImageId Interpolation DecalMode Normalizer
 //          BumpFactor NoiseConversion NoiseScale BlackColor WhiteColor Scale Offset
@@ -358,7 +359,7 @@ struct Walker {
     void readMaterial(const SceneNode& n) {
         checkChildren(n, {"AmbientReflectance", "DiffuseReflectance", "SpecularReflectance", "MirrorReflectance",
                           "PhongExponent", "RefractionIndex", "AbsorptionCoefficient", "AbsorptionIndex",
-                          "Roughness"});
+                          "Roughness", "Transparency"});
         Material m;
         m.id = requiredId(n);
         std::string type = lower(trim(n.attribute("type").value_or("")));
@@ -390,6 +391,7 @@ struct Walker {
             else if (v.size() == 3) m.absorptionCoefficient = Vec3(float(v[0]), float(v[1]), float(v[2]));
             else fail(*c, "<AbsorptionCoefficient> has " + std::to_string(v.size()) + " values, expected 1 or 3");
         }
+        if (auto c = n.child("Transparency")) readTransparency(n, *c, m);
         if (n.attribute("BRDF")) {
             int id = intAttribute(n, "BRDF", 0);
             auto it = brdfIds.find(id);
@@ -399,6 +401,30 @@ struct Walker {
         if (!materialIds.emplace(m.id, int(scene.materials.size())).second)
             fail(n, "duplicate Material id " + std::to_string(m.id));
         scene.materials.push_back(m);
+    }
+
+    // <Transparency>T</Transparency> with <RefractionIndex>: the course's older material format (kept in
+    // hw6's cornellbox_jaroslav_path_diffuse.xml; the students' parsers of that format make a material
+    // refractive when T is non-zero, split reflection and refraction by Fresnel, and weight light that
+    // crossed the inside by T^d, d the distance travelled: T is the fraction kept per unit distance).
+    // That is this renderer's dielectric with Beer's coefficient -ln T, added to any
+    // <AbsorptionCoefficient>; a channel with T = 0 keeps nothing. T = 0 0 0 leaves the material opaque.
+    void readTransparency(const SceneNode& n, const SceneNode& c, Material& m) {
+        auto v = numbers(c);
+        if (v.size() != 1 && v.size() != 3)
+            fail(c, describe(n) + ": <Transparency> has " + std::to_string(v.size()) + " values, expected 1 or 3");
+        if (v.size() == 1) v.assign(3, v[0]);
+        for (double t : v)
+            if (!(t >= 0.0 && t <= 1.0))
+                fail(c, describe(n) + ": <Transparency> " + trim(c.text()) +
+                            ": each value is the fraction of light kept per unit distance, in [0, 1]");
+        if (v[0] == 0.0 && v[1] == 0.0 && v[2] == 0.0) return;
+        if (auto type = n.attribute("type"); type && m.type != dev::MATERIAL_DIELECTRIC)
+            fail(c, describe(n) + ": <Transparency> makes a dielectric, but the material has type=\"" + *type + "\"");
+        m.type = dev::MATERIAL_DIELECTRIC;
+        float* a[3] = {&m.absorptionCoefficient.x, &m.absorptionCoefficient.y, &m.absorptionCoefficient.z};
+        for (int k = 0; k < 3; ++k)
+            *a[k] = v[k] > 0.0 ? *a[k] - float(std::log(v[k])) : std::numeric_limits<float>::max();
     }
 
     // ---- Textures ----------------------------------------------------------------------------

@@ -158,13 +158,17 @@ typedef struct TextureSet {
     float4 worldToObject[3];                  /* rows of the shape's inverse transform (3x4 affine) */
 } TextureSet;
 
-/* Perlin noise (textures.cl, its host reference in tests/test_hw4.cpp): the course's 16 gradients, a
- * fixed permutation of 0..15, and the step of the bump gradient. The course's own permutation is not
- * published; this one was picked from 300 random permutations as the one whose mean |noise| over the
- * hw4 spheres (NoiseScale 1 and 3) is closest to what the references show (absval spheres ~9% darker
- * than with the first table tried), so the hw4 Perlin scenes match the references' luminance mean and
- * std within 1% (not pixel for pixel). */
-#define CLRT_PERLIN_PERM_VALUES 7, 0, 10, 14, 2, 6, 5, 1, 11, 12, 4, 3, 13, 15, 8, 9
+/* Perlin noise (textures.cl, its host reference in tests/test_hw4.cpp): the course's 16 gradients, its
+ * permutation of 0..15, and the step of the bump gradient. The course text defines P only as a random
+ * permutation (students' CENG795 hw4 code shuffles 0..15 at run time, seeded by the clock or
+ * random_device), so the instructor's table is whatever his generator drew. Scoring the tables of the
+ * common generators against the references (kd recovered from renders at kd = 1 and kd = 0, predicted
+ * per pixel) finds it: std::random_shuffle of 0..15 with glibc rand() at its default seed
+ * (libstdc++), with lattice indices taken as |a| mod 16 (Perlin_Index): the sphere pixels of
+ * sphere_perlin match at 60.0 dB, sphere_perlin_scale at 58.5 dB; every other table tried (mt19937 and
+ * minstd at default and small seeds, hand-written Fisher-Yates with rand(), the identity) gives
+ * 15.6-16.5 dB, and the same table with a wrapped (a & 15) index 20.7 dB. */
+#define CLRT_PERLIN_PERM_VALUES 4, 10, 11, 15, 14, 5, 13, 1, 6, 9, 3, 7, 8, 2, 0, 12
 #define CLRT_PERLIN_GRAD_VALUES                                                                    \
     {1, 1, 0}, {-1, 1, 0}, {1, -1, 0}, {-1, -1, 0}, {1, 0, 1}, {-1, 0, 1}, {1, 0, -1}, {-1, 0, -1},    \
     {0, 1, 1}, {0, -1, 1}, {0, 1, -1}, {0, -1, -1}, {1, 1, 0}, {-1, 1, 0}, {0, -1, 1}, {0, -1, -1}
