@@ -141,6 +141,9 @@ class Clrt:
         cmd = [self.exe, "render", scene, "-o", out, "--spp", str(spp), "--seed", str(seed)]
         if self.device:
             cmd += ["--device", self.device]
+        strategy, _, pipeline = (strategy or "").partition("+")  # "mis+fused": --pipeline fused
+        if pipeline:
+            cmd += ["--pipeline", pipeline]
         if strategy and strategy != "default":
             cmd += [self.env_flag, strategy]
         if all_features:
@@ -282,50 +285,51 @@ class Mitsuba:
         return a, b
 
 
-def mitsuba_scene(mi, sc, scene_path, hdr, clrt_ref, clrt_rows, clrt_runs, a):
-    """Runs Mitsuba on one scene at the scene's spp points; returns rows comparing with clrt's."""
+def mitsuba_setup(mi, sc, scene_path, hdr, clrt_ref, a):
+    """The converted scene and its reference; checks that the two renderers agree (reference means)."""
     white = 1.0 if hdr else 255.0
     ms = Mitsuba(mi, scene_path, sc["spp"])
     ma, mb = ms.reference(sc["name"], scene_hash(scene_path), sc["ref_spp"], a.refs, a.refresh_refs)
-    mref = 0.5 * (ma + mb)
-    floor = float(np.mean((ma - mb) ** 2 / (mref ** 2 + EPS_REL * white * white)) / 4.0)
+    ms.ref = 0.5 * (ma + mb)
+    ms.floor = float(np.mean((ma - mb) ** 2 / (ms.ref ** 2 + EPS_REL * white * white)) / 4.0)
     # Agreement of the two renderers: per-channel means of the references, and their relMSE.
-    cm, mm = clrt_ref.reshape(-1, 3).mean(0), mref.reshape(-1, 3).mean(0)
-    ratio = mm / np.maximum(cm, 1e-30)
-    cross = rel_mse(mref, clrt_ref, white)
-    agree = bool(np.all(np.abs(ratio - 1.0) <= 0.01))
+    cm, mm = clrt_ref.reshape(-1, 3).mean(0), ms.ref.reshape(-1, 3).mean(0)
+    ms.ratio = mm / np.maximum(cm, 1e-30)
+    ms.cross = rel_mse(ms.ref, clrt_ref, white)
+    ms.agree = bool(np.all(np.abs(ms.ratio - 1.0) <= 0.01))
     log("  mitsuba/clrt reference mean per channel: %s; relMSE between the references %.3g; %s" % (
-        " ".join("%.4f" % r for r in ratio), cross, "agree" if agree else "DISAGREE (> 1%): efficiency not comparable"))
+        " ".join("%.4f" % r for r in ms.ratio), ms.cross, "agree" if ms.agree else "DISAGREE (> 1%): efficiency not comparable"))
+    return ms
+
+
+def mitsuba_rows(ms, sc, spp, ts, es, clrt_rows, clrt_runs, a):
+    """Rows comparing Mitsuba's runs (times ts, relMSEs es) at spp with each clrt variant's (strategy label)."""
     rows = []
-    spps = sc["spp"][:2] if a.quick else sc["spp"]
-    for spp in spps:
-        ms.render(spp, 0)  # warm-up: Dr.Jit compiles (and caches) the kernel for this size
-        ts, es = [], []
-        for run in range(a.runs):
-            t, img = ms.render(spp, run + 1)
-            ts.append(t)
-            es.append(rel_mse(img, mref, white))
-        crow = min((r for r in clrt_rows if r["spp"] == spp), key=lambda r: (r["strategy"] != "mis", 0), default=None)
+    for crow in sorted((r for r in clrt_rows if r["spp"] == spp), key=lambda r: (not r["strategy"].startswith("mis"), r["strategy"])):
+        if not crow["strategy"].startswith("mis") and any(r["strategy"].startswith("mis") for r in clrt_rows):
+            continue  # the comparison is with clrt's MIS (Mitsuba's path integrator uses MIS)
         row = dict(scene=sc["name"], spp=spp, runs=a.runs, mitsuba_s=med(ts), mitsuba_s_min=min(ts), mitsuba_s_max=max(ts),
                    mitsuba_relmse=med(es), mitsuba_relmse_min=min(es), mitsuba_relmse_max=max(es),
-                   mitsuba_ref_relmse=floor, mean_ratio_r=ratio[0], mean_ratio_g=ratio[1], mean_ratio_b=ratio[2],
-                   refs_relmse=cross, agree=int(agree), warnings=len(ms.warnings))
+                   mitsuba_ref_relmse=ms.floor, mean_ratio_r=ms.ratio[0], mean_ratio_g=ms.ratio[1], mean_ratio_b=ms.ratio[2],
+                   refs_relmse=ms.cross, agree=int(ms.agree), warnings=len(ms.warnings))
         row["mitsuba_eff"] = 1.0 / (row["mitsuba_relmse"] * row["mitsuba_s"])
-        if crow:
-            row.update(clrt_strategy=crow["strategy"], clrt_s=crow["render_s"], clrt_relmse=crow["relmse"],
-                       clrt_eff=crow["efficiency"])
-            row["eff_ratio"] = row["clrt_eff"] / row["mitsuba_eff"]          # clrt / Mitsuba
-            row["time_factor"] = row["mitsuba_s"] / row["clrt_s"]            # > 1: clrt faster
-            row["noise_factor"] = row["mitsuba_relmse"] / row["clrt_relmse"]  # > 1: clrt less noisy
-            # Spread: run k of clrt against run k of Mitsuba (same seed number), efficiency ratio per pair.
-            cr = [r for r in clrt_runs if r["spp"] == spp and r["strategy"] == crow["strategy"]]
-            pairs = [(1.0 / (c["relmse"] * c["render"])) / (1.0 / (e * t)) for c, e, t in zip(cr, es, ts)]
-            if pairs:
-                row["eff_ratio_min"], row["eff_ratio_max"] = min(pairs), max(pairs)
+        row.update(clrt_strategy=crow["strategy"], clrt_s=crow["render_s"], clrt_relmse=crow["relmse"],
+                   clrt_eff=crow["efficiency"])
+        row["eff_ratio"] = row["clrt_eff"] / row["mitsuba_eff"]          # clrt / Mitsuba
+        row["time_factor"] = row["mitsuba_s"] / row["clrt_s"]            # > 1: clrt faster
+        row["noise_factor"] = row["mitsuba_relmse"] / row["clrt_relmse"]  # > 1: clrt less noisy
+        # Spread: run k of clrt against run k of Mitsuba (same seed number, run back to back), per pair.
+        cr = [r for r in clrt_runs if r["spp"] == spp and r["strategy"] == crow["strategy"]]
+        pairs = [(1.0 / (c["relmse"] * c["render"])) / (1.0 / (e * t)) for c, e, t in zip(cr, es, ts)]
+        if pairs:
+            row["eff_ratio_min"], row["eff_ratio_max"] = min(pairs), max(pairs)
+        tpairs = [t / c["render"] for c, t in zip(cr, ts)]
+        if tpairs:
+            row["time_factor_min"], row["time_factor_max"] = min(tpairs), max(tpairs)
         rows.append(row)
-        log("  mitsuba    spp %4d: render %.3fs [%.3f-%.3f]  relMSE %.4g [%.4g-%.4g]  clrt/mitsuba efficiency %s" % (
-            spp, row["mitsuba_s"], min(ts), max(ts), row["mitsuba_relmse"], min(es), max(es),
-            "%.3f" % row["eff_ratio"] if crow else "-"))
+        log("  mitsuba    spp %4d: render %.3fs [%.3f-%.3f]  relMSE %.4g [%.4g-%.4g]  clrt %s/mitsuba efficiency %.3f" % (
+            spp, row["mitsuba_s"], min(ts), max(ts), row["mitsuba_relmse"], min(es), max(es), crow["strategy"],
+            row["eff_ratio"]))
     return rows
 
 
@@ -451,6 +455,9 @@ def main():
     ap.add_argument("--no-mitsuba", action="store_true", help="skip the comparison with Mitsuba 3")
     ap.add_argument("--mitsuba-only", action="store_true", help="only the scenes compared with Mitsuba, strategy mis")
     ap.add_argument("--quick", action="store_true", help="1 run, first two spp points: a smoke test")
+    ap.add_argument("--spp", default="", help="comma list: only these spp points of each scene (default: all)")
+    ap.add_argument("--pipelines", default="", help="comma list of clrt --pipeline values (fused, wavefront), each run "
+                    "as its own variant (strategy label 'mis+fused'), interleaved run by run; default: clrt's own choice")
     ap.add_argument("--replot", metavar="DIR", help="only redraw the plots of DIR (a results folder) from its CSVs")
     a = ap.parse_args()
     if a.replot:
@@ -479,6 +486,10 @@ def main():
     if a.mitsuba_only:
         a.no_features = a.no_ray_bench = True
         strategies = [x for x in strategies if x == "mis"] or strategies[-1:]
+    pipelines = [p for p in a.pipelines.split(",") if p]
+    if pipelines and "--pipeline" not in help_text:
+        log("bench: this clrt has no --pipeline option; --pipelines ignored")
+        pipelines = []
 
     wanted = set(filter(None, a.scenes.split(",")))
     scenes = [s for s in SCENES if (not wanted or s["name"] in wanted) and (not a.mitsuba_only or s.get("mitsuba"))]
@@ -508,6 +519,8 @@ def main():
         scene_path, hdr = prepared[sc["name"]]
         strats = strategies if sc.get("env") else ["default"]
         ref_strategy = ("mis" if "mis" in strats else strats[-1]) if sc.get("env") else "default"
+        if pipelines:
+            strats = ["%s+%s" % (st, p) for st in strats for p in pipelines]
         log("%s (%dx%d, %s)" % (sc["name"], sc["res"][0], sc["res"][1], "HDR" if hdr else "LDR"))
         ref, meta = reference(clrt, sc, scene_path, ref_strategy, a.refs, hdr, a.refresh_refs)
         ref_rows.append(dict(scene=sc["name"], ref_spp=meta["spp"], ref_strategy=meta["strategy"], ref_seeds="%d+%d" % tuple(meta["seeds"]),
@@ -515,18 +528,33 @@ def main():
                              ref_seconds=meta["seconds"], hash=meta["hash"]))
         scene_rows = []
         spps = sc["spp"][:2] if a.quick else sc["spp"]
+        if a.spp:
+            spps = [x for x in spps if str(x) in a.spp.split(",")]
+        ms = mitsuba_setup(mi, sc, scene_path, hdr, ref, a) if mi is not None and sc.get("mitsuba") else None
         for strat in strats:
             clrt.render(scene_path, 1, 0, strat)  # warm-up: kernel cache, file cache
-            for spp in spps:
-                rs = []
-                for run in range(a.runs):
+        # Run k of every variant (and of Mitsuba) back to back, so that the machine's drift hits all alike.
+        for spp in spps:
+            by_strat = {strat: [] for strat in strats}
+            if ms is not None:
+                ms.render(spp, 0)  # warm-up: Dr.Jit compiles (and caches) the kernel for this size
+            mts, mes = [], []
+            for run in range(a.runs):
+                for strat in strats:
                     st, img, _ = clrt.render(scene_path, spp, run + 1, strat)
                     r = dict(scene=sc["name"], strategy=strat, spp=spp, seed=run + 1, **st)
                     r["relmse"] = rel_mse(img, ref, 1.0 if hdr else 255.0)
                     r["rmse"] = rmse(img, ref)
                     r["flip"] = flip(img, ref, hdr)
                     runs_rows.append(r)
-                    rs.append(r)
+                    by_strat[strat].append(r)
+                if ms is not None:
+                    t, img = ms.render(spp, run + 1)
+                    mts.append(t)
+                    mes.append(rel_mse(img, ms.ref, 1.0 if hdr else 255.0))
+            spp_rows = []
+            for strat in strats:
+                rs = by_strat[strat]
                 row = dict(scene=sc["name"], strategy=strat, spp=spp, runs=len(rs), width=sc["res"][0], height=sc["res"][1])
                 for k in ("parse", "bvh", "build", "render", "output", "wall", "camera_mrays", "shadow_mrays",
                           "secondary_mrays", "relmse", "rmse", "flip"):
@@ -539,13 +567,14 @@ def main():
                 row["ref_relmse"] = meta["relmse"]
                 row["above_floor"] = int(row["relmse"] >= 2.0 * meta["relmse"])
                 scene_rows.append(row)
+                spp_rows.append(row)
                 log("  %-10s spp %4d: render %.3fs [%.3f-%.3f]  relMSE %.4g [%.4g-%.4g]  FLIP %.4f" % (
                     strat, spp, row["render_s"], row["render_s_min"], row["render_s_max"], row["relmse"],
                     row["relmse_min"], row["relmse_max"], row["flip"]))
+            if ms is not None:
+                mi_rows += mitsuba_rows(ms, sc, spp, mts, mes, spp_rows,
+                                        [r for r in runs_rows if r["scene"] == sc["name"]], a)
         summary += scene_rows
-        if mi is not None and sc.get("mitsuba"):
-            mi_rows += mitsuba_scene(mi, sc, scene_path, hdr, ref, scene_rows,
-                                     [r for r in runs_rows if r["scene"] == sc["name"]], a)
         plot_scene(sc["name"], scene_rows, {ref_strategy: meta}, os.path.join(out, sc["name"] + ".png"))
     t_bench = time.perf_counter() - t_start
 
@@ -666,6 +695,8 @@ def main():
             r["ratio_fmt"] = "%.2f [%.2f-%.2f]" % (r.get("eff_ratio", float("nan")), r.get("eff_ratio_min", float("nan")),
                                                    r.get("eff_ratio_max", float("nan")))
             r["means_fmt"] = "%.4f %.4f %.4f" % (r["mean_ratio_r"], r["mean_ratio_g"], r["mean_ratio_b"])
+            r["time_fmt"] = "%.2f [%.2f-%.2f]" % (r["time_factor"], r.get("time_factor_min", float("nan")),
+                                                  r.get("time_factor_max", float("nan")))
         rep += ["Mitsuba %s, variant llvm_ad_rgb, %d threads, path integrator max_depth 2 (direct light), box filter, "
                 "independent sampler; scene converted by bench/to_mitsuba.py (emitters x pi for the course's diffuse "
                 "convention, the camera-visible environment added from one high-spp render). Each renderer's error is "
@@ -674,7 +705,7 @@ def main():
                 "[min-max] over the run pairs of equal seed number. means = Mitsuba/clrt reference mean per channel; "
                 "refs relMSE = between the two references (both noise floors plus any bias)."
                 % (mi_version, os.cpu_count() or 2), "",
-                md_table(mi_rows, ["scene", "spp", "clrt_strategy", "clrt_fmt", "mi_fmt", "time_factor", "noise_factor",
+                md_table(mi_rows, ["scene", "spp", "clrt_strategy", "clrt_fmt", "mi_fmt", "time_fmt", "noise_factor",
                                    "ratio_fmt", "means_fmt", "refs_relmse", "agree"],
                          {"time_factor": "%.2f", "noise_factor": "%.2f", "refs_relmse": "%.3g"}), "",
                 "Columns: clrt s / relMSE (medians); Mitsuba s / relMSE median [min-max]; agree: means within 1%.", ""]
@@ -683,6 +714,27 @@ def main():
                    "mitsuba_s_max", "mitsuba_relmse", "mitsuba_relmse_min", "mitsuba_relmse_max", "mitsuba_eff",
                    "mitsuba_ref_relmse", "eff_ratio", "eff_ratio_min", "eff_ratio_max", "time_factor", "noise_factor",
                    "mean_ratio_r", "mean_ratio_g", "mean_ratio_b", "refs_relmse", "agree", "warnings"])
+    # ---- fused against wavefront (clrt --pipeline), when both ran
+    pipe_rows = []
+    for r in summary:
+        st, _, pipe = r["strategy"].partition("+")
+        if pipe != "fused":
+            continue
+        w = next((x for x in summary if x["scene"] == r["scene"] and x["spp"] == r["spp"] and x["strategy"] == st + "+wavefront"), None)
+        if w is None:
+            continue
+        fr = [x for x in runs_rows if x["scene"] == r["scene"] and x["spp"] == r["spp"] and x["strategy"] == r["strategy"]]
+        wr = [x for x in runs_rows if x["scene"] == r["scene"] and x["spp"] == r["spp"] and x["strategy"] == w["strategy"]]
+        pairs = [b["render"] / f["render"] for f, b in zip(fr, wr)]
+        pipe_rows.append(dict(scene=r["scene"], strategy=st, spp=r["spp"], fused_s=r["render_s"], wavefront_s=w["render_s"],
+                              speedup="%.2f [%.2f-%.2f]" % (w["render_s"] / r["render_s"], min(pairs), max(pairs)),
+                              relmse_same="yes" if r["relmse"] == w["relmse"] else "NO (%.4g vs %.4g)" % (r["relmse"], w["relmse"])))
+    if pipe_rows:
+        rep += ["## Fused against wavefront (clrt --pipeline)", "",
+                "Render s medians of the interleaved runs; speedup = wavefront s / fused s, [min-max] over the run pairs "
+                "of equal seed; relMSE same: the two pipelines' images have the same error (they are the same image).", "",
+                md_table(pipe_rows, ["scene", "strategy", "spp", "fused_s", "wavefront_s", "speedup", "relmse_same"],
+                         {"fused_s": "%.3f", "wavefront_s": "%.3f"}), ""]
     if feat_rows:
         for r in feat_rows:
             r["render_fmt"] = "%.3f [%.3f-%.3f]" % (r["render_s"], r["render_s_min"], r["render_s_max"])

@@ -17,12 +17,8 @@ inline float3 Camera_Direction(CameraParams cam, float px, float py) {
     return uc * cam.u.xyz + vc * cam.v.xyz - cam.nearDistance * cam.w.xyz;
 }
 
-/* Parameters: src/shared/kernel_params.h. */
-__kernel void generate_camera_rays(CLRT_KERNEL_PARAMS(generate_camera_rays)) {
-    int i = get_global_id(0);
-    if (i >= count) return;
-    int pixel = firstPixel + i / samples;
-    int sample = firstSample + i % samples;
+/* The camera ray and path of sample `sample` of pixel `pixel`. */
+inline void Camera_Generate(CameraParams cam, SceneParams scene, int pixel, int sample, PathState* path, Ray* ray) {
     int x = pixel % cam.width, y = pixel / cam.width;
     RngKey key = Rng_Key(scene.seed, pixel, sample, 1u);
     float jx = 0.5f, jy = 0.5f;
@@ -50,13 +46,24 @@ __kernel void generate_camera_rays(CLRT_KERNEL_PARAMS(generate_camera_rays)) {
     r.origin.w = MotionBlur_Time(scene.seed, pixel, sample);
 #endif
     r.direction = (float4)(dir, INFINITY);
-    rays[i] = r;
+    *ray = r;
     PathState p;
     p.throughput = (float4)(1.0f, 1.0f, 1.0f, 0.0f);
     p.pixel = pixel;
     p.sample = sample;
     p.depth = 0;
     p.pathId = 1u;
+    *path = p;
+}
+
+/* Parameters: src/shared/kernel_params.h. */
+__kernel void generate_camera_rays(CLRT_KERNEL_PARAMS(generate_camera_rays)) {
+    int i = get_global_id(0);
+    if (i >= count) return;
+    PathState p;
+    Ray r;
+    Camera_Generate(cam, scene, firstPixel + i / samples, firstSample + i % samples, &p, &r);
+    rays[i] = r;
     paths[i] = p;
 }
 

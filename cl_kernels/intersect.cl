@@ -301,14 +301,11 @@ inline int Planes_Intersect(const __global Plane* planes, int numPlanes, int fir
     return found;
 }
 
-/* Closest hit for each ray of the queue. */
-/* Parameters of both kernels: src/shared/kernel_params.h. */
-__kernel void intersect_closest(CLRT_KERNEL_PARAMS(intersect_closest)) {
-    int i = get_global_id(0);
-    if (i >= *queueCount) return;
+/* The closest hit of ray r (planes, then the BVH); prim CLRT_INVALID when it hits nothing. */
+inline Hit Ray_Closest(Ray r, SceneParams scene, const __global Bvh4Node* nodes, const __global int* primRefs,
+                       const __global Triangle* tris, const __global Sphere* spheres, const __global Plane* planes) {
     const int numTriangles = scene.numTriangles, numPlanes = scene.numPlanes;
     const int firstPlaneRef = scene.numTriangles + scene.numSpheres;
-    Ray r = rays[i];
     Hit h;
     h.t = -1.0f; h.prim = CLRT_INVALID; h.u = 0.0f; h.v = 0.0f;
     float3 dir = r.direction.xyz;
@@ -317,23 +314,35 @@ __kernel void intersect_closest(CLRT_KERNEL_PARAMS(intersect_closest)) {
         if (numPlanes > 0 && Planes_Intersect(planes, numPlanes, firstPlaneRef, r.origin.xyz, dir, tMax, 0, &h)) tMax = h.t;
         Bvh_Traverse(nodes, primRefs, tris, spheres, numTriangles, r.origin.xyz, dir, tMax, Ray_Time(r), 0, &h);
     }
-    hits[i] = h;
+    return h;
+}
+
+/* Whether shadow ray s is blocked before its tMax (any hit). */
+inline int Shadow_Occluded(ShadowRay s, SceneParams scene, const __global Bvh4Node* nodes, const __global int* primRefs,
+                           const __global Triangle* tris, const __global Sphere* spheres, const __global Plane* planes) {
+    const int numTriangles = scene.numTriangles, numPlanes = scene.numPlanes;
+    const int firstPlaneRef = scene.numTriangles + scene.numSpheres;
+    Hit h;
+    return (numPlanes > 0 && Planes_Intersect(planes, numPlanes, firstPlaneRef, s.origin.xyz, s.direction.xyz, s.origin.w, 1, &h)) ||
+           Bvh_Traverse(nodes, primRefs, tris, spheres, numTriangles, s.origin.xyz, s.direction.xyz, s.origin.w,
+                        s.direction.w, 1, &h);
+}
+
+/* Closest hit for each ray of the queue. */
+/* Parameters of both kernels: src/shared/kernel_params.h. */
+__kernel void intersect_closest(CLRT_KERNEL_PARAMS(intersect_closest)) {
+    int i = get_global_id(0);
+    if (i >= *queueCount) return;
+    hits[i] = Ray_Closest(rays[i], scene, nodes, primRefs, tris, spheres, planes);
 }
 
 /* Any hit for each shadow ray: an occluded ray's contribution is set to zero. */
 __kernel void intersect_shadow(CLRT_KERNEL_PARAMS(intersect_shadow)) {
     int i = get_global_id(0);
     if (i >= *queueCount * raysPerPath) return;
-    const int numTriangles = scene.numTriangles, numPlanes = scene.numPlanes;
-    const int firstPlaneRef = scene.numTriangles + scene.numSpheres;
-    __global ShadowRay* s = &shadows[i];
-    float4 c = s->contribution;
+    float4 c = shadows[i].contribution;
     if (c.x == 0.0f && c.y == 0.0f && c.z == 0.0f) return;
-    Hit h;
-    if ((numPlanes > 0 && Planes_Intersect(planes, numPlanes, firstPlaneRef, s->origin.xyz, s->direction.xyz, s->origin.w, 1, &h)) ||
-        Bvh_Traverse(nodes, primRefs, tris, spheres, numTriangles, s->origin.xyz, s->direction.xyz, s->origin.w,
-                     s->direction.w, 1, &h))
-        s->contribution = (float4)(0.0f);
+    if (Shadow_Occluded(shadows[i], scene, nodes, primRefs, tris, spheres, planes)) shadows[i].contribution = (float4)(0.0f);
 }
 
 /* End of the FP_CONTRACT OFF scope: contraction back to ON, the OpenCL default, which every other

@@ -43,4 +43,16 @@ inline float3 Material_EvalDirect(ShadingPoint sp, const __global Material* mate
     return sp.kd.xyz * cosTheta + sp.ks.xyz * spec;
 }
 
+/* What shading one hit leaves (Shade_Hit in shade.cl, Path_ShadeHit in path.cl): the ShadingPoint for
+ * light sampling, the radiance that needs no shadow ray (already times the path throughput) and up to
+ * two children (k = 0: reflection or the path tracer's one child, pathId·2; k = 1: refraction,
+ * pathId·2 + 1). The wavefront writes them to its queues, the fused kernel (fused.cl) keeps them. */
+typedef struct {
+    ShadingPoint sp;
+    float4 radiance;
+    PathState childPath[2];
+    Ray childRay[2];
+    int childValid[2];
+} ShadeResult;
+
 #endif /* CLRT_MATERIAL_CL */

@@ -9,7 +9,8 @@
  *   - plays Russian roulette (Path_RussianRoulette: the course's q = the throughput's largest
  *     component, at most 1, and C = 0; with RussianRoulette there is no depth cap, as the course's
  *     references show),
- *   - writes ONE child, in slot 2i: the sampled direction with throughput · f·cosθ / pdf.
+ *   - makes ONE child (ShadeResult child 0; the wavefront's slot 2i): the sampled direction with
+ *     throughput · f·cosθ / pdf.
  * PathState.throughput.w: the solid-angle pdf of the BSDF sample that made the path (0: a camera ray
  * or a specular bounce).
  * Sampling (Path_SampleBounce): uniform over the hemisphere (pdf 1/2π) by default; with
@@ -207,19 +208,18 @@ inline int Path_SpecularBounce(Material m, float3 wo, float3 ns, float3 ng, floa
 /* One path-traced hit (see the file comment) at pWorld, reached over distance t along -wo; ng, ns:
  * the normals facing wo; inside: the ray travelled inside a dielectric. sp arrives as shade_hits
  * fills it (position.w = 1) or zero (inside); emitted: the radiance the surface emits towards wo,
- * lightPdf: the density light sampling would have drawn it with (-1: unknown). */
-inline void Path_ShadeHit(SceneParams scene, int i, PathState path, Material m, float3 pWorld, float3 ng, float3 ns,
+ * lightPdf: the density light sampling would have drawn it with (-1: unknown). res arrives with both
+ * children invalid; it receives the ShadingPoint, the radiance and child 0. */
+inline void Path_ShadeHit(SceneParams scene, PathState path, Material m, float3 pWorld, float3 ng, float3 ns,
                           float3 wo, float t, int inside, ShadingPoint sp, float3 emitted, float lightPdf,
-                          const __global Material* materials, __global ShadingPoint* points,
-                          __global float4* pathRadiance, __global PathState* nextPaths, __global Ray* nextRays,
-                          __global int* childValid) {
+                          const __global Material* materials, ShadeResult* res) {
     const int mode = scene.pathMode;
     float3 throughput = path.throughput.xyz;
-    pathRadiance[i] = (float4)(finiteOrZero(throughput * emitted * Path_EmissionWeight(mode, path.throughput.w, lightPdf)), 0.0f);
+    res->radiance = (float4)(finiteOrZero(throughput * emitted * Path_EmissionWeight(mode, path.throughput.w, lightPdf)), 0.0f);
     int specular = m.kind == MATERIAL_MIRROR || m.kind == MATERIAL_CONDUCTOR || m.kind == MATERIAL_DIELECTRIC;
     int diffuse = !inside && (maxComponent(sp.kd.xyz) > 0.0f || maxComponent(sp.ks.xyz) > 0.0f);
     if (!Path_UsesNee(mode) || !diffuse) sp.position.w = 0.0f;
-    points[i] = sp;
+    res->sp = sp;
     RngKey key = Rng_Key(scene.seed, path.pixel, path.sample, path.pathId);
     uint dim = 4u + 32u * (uint)path.depth;
     if (path.depth >= scene.maxDepth || (!specular && !diffuse)) return;
@@ -246,9 +246,9 @@ inline void Path_ShadeHit(SceneParams scene, int i, PathState path, Material m, 
     Ray r;
     r.origin = (float4)(org, 0.0f);
     r.direction = (float4)(dir, INFINITY);
-    nextPaths[2 * i] = c;
-    nextRays[2 * i] = r;
-    childValid[2 * i] = maxComponent(next) > 0.0f && allFinite3(next) && allFinite3(dir) ? 1 : 0;
+    res->childPath[0] = c;
+    res->childRay[0] = r;
+    res->childValid[0] = maxComponent(next) > 0.0f && allFinite3(next) && allFinite3(dir) ? 1 : 0;
 }
 
 #endif /* CLRT_HAS_PATH_TRACING */

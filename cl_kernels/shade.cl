@@ -123,10 +123,10 @@ inline float3 MotionBlur_HitShift(Hit h, Ray r, const __global Triangle* tris, c
     return (float3)(0.0f);
 }
 
-/* Motion blur: the children of path i (slots 2i, 2i+1) see the scene at its shutter time. */
-inline void MotionBlur_StampChildren(__global Ray* nextRays, const __global int* childValid, int i, float time) {
-    for (int k = 2 * i; k <= 2 * i + 1; ++k)
-        if (childValid[k]) nextRays[k].origin.w = time;
+/* Motion blur: the children of a path see the scene at its shutter time. */
+inline void MotionBlur_StampChildren(ShadeResult* res, float time) {
+    for (int k = 0; k < 2; ++k)
+        if (res->childValid[k]) res->childRay[k].origin.w = time;
 }
 
 /* Glossy perturbation of a reflected direction (course: r' = r + roughness·(ξ1·u + ξ2·v)). */
@@ -160,8 +160,8 @@ inline float3 Miss_Radiance(SceneParams scene, const __global TextureMap* textur
     return scene.background.xyz;
 }
 
-inline void Child_Write(__global PathState* nextPaths, __global Ray* nextRays, __global int* childValid, int slot,
-                        PathState parent, float3 weight, uint childBit, float3 org, float3 dir) {
+/* Child k (0: reflection, 1: refraction) of `parent` into res. */
+inline void Child_Make(ShadeResult* res, int k, PathState parent, float3 weight, uint childBit, float3 org, float3 dir) {
     PathState c = parent;
     c.throughput = (float4)(parent.throughput.xyz * weight, 0.0f);
     c.depth = parent.depth + 1;
@@ -171,41 +171,127 @@ inline void Child_Write(__global PathState* nextPaths, __global Ray* nextRays, _
     Ray r;
     r.origin = (float4)(org, 0.0f);
     r.direction = (float4)(dir, INFINITY);
-    nextPaths[slot] = c;
-    nextRays[slot] = r;
-    childValid[slot] = maxComponent(c.throughput.xyz) > 0.0f && allFinite3(dir) ? 1 : 0;
+    res->childPath[k] = c;
+    res->childRay[k] = r;
+    res->childValid[k] = maxComponent(c.throughput.xyz) > 0.0f && allFinite3(dir) ? 1 : 0;
 }
 
-/* Parameters of every kernel here: src/shared/kernel_params.h.
- * vec_type_hint(float4): a workaround for a miscompile by Intel's OpenCL CPU runtime (2026.22, its
- * implicit 16-way work-item vectoriser), which that hint turns off for this kernel alone ("Kernel
- * "shade_hits" was not vectorized" in the build log); other implementations ignore it (it only
- * describes the kernel's data). Vectorised, this kernel hands Child_Write float3 values (weight,
- * origin, direction) that hold other work-items' components and, at times, memory never written, so
- * classic/veachAjar's glass teapot went wrong on ~1.5% of pixels, differently from run to run, and
- * only when enough other code (textures, --all-features) was compiled in — even code never executed
- * (the Perlin evaluation). The same source is right with CL_CONFIG_USE_VECTORIZER=False, on PoCL
- * and on Oclgrind (no report); README "Conformance" and issue 17 have the evidence. */
-__kernel __attribute__((vec_type_hint(float4))) void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
-    int i = get_global_id(0);
-    if (i >= *queueCount) return;
-    PathState path = paths[i];
-    Hit h = hits[i];
-    Ray ray = rays[i];
+#ifdef CLRT_HAS_TEXTURES
+/* The textures of the hit's shape: kd, ks, the shading normal (normal and bump maps), or the whole
+ * radiance (replace_all: returns 1, *radiance set). */
+inline int Shade_Textures(Hit h, SurfaceHit* s, SceneParams scene, const __global Triangle* tris,
+                          const __global TriangleShading* triShading, const __global Sphere* spheres,
+                          const __global Plane* planes, const __global TextureSet* textureSets,
+                          const __global TextureMap* textures, const __global ImageInfo* images,
+                          const __global float4* texels, float3* kd, float3* ks, float3* radiance) {
+    int replaceAll = 0;
+    float3 pObj = affinePoint(textureSets[s->textureSet].worldToObject, s->p);  /* procedural textures */
+    for (int k = 0; k < CLRT_MAX_TEXTURES_PER_SHAPE; ++k) {
+        int ti = textureSets[s->textureSet].texture[k];
+        if (ti == CLRT_INVALID) continue;
+        const __global TextureMap* tex = &textures[ti];
+        float3 c = Texture_Eval(tex, images, texels, s->uv, s->p, pObj);
+        switch (tex->decal) {
+        case DECAL_REPLACE_KD: *kd = c; break;
+        case DECAL_BLEND_KD: *kd = 0.5f * (*kd + c); break;
+        case DECAL_REPLACE_KS: *ks = c; break;
+        case DECAL_REPLACE_ALL: *radiance = c; replaceAll = 1; break;
+#if defined(CLRT_HAS_NORMAL_MAP) || defined(CLRT_HAS_BUMP_MAP)
+        case DECAL_REPLACE_NORMAL:
+        case DECAL_BUMP_NORMAL: {
+            TangentFrame f = Surface_TangentFrame(h, *s, tris, triShading, spheres, planes, scene.numTriangles,
+                                                  scene.numSpheres);
+            s->ns = Texture_PerturbNormal(tex, images, texels, c, s->uv, s->p, f, s->ns,
+                                          textureSets[s->textureSet].worldToObject);
+            break;
+        }
+#endif
+        default: break;
+        }
+    }
+    return replaceAll;
+}
+#endif
+
+/* The reflection/refraction children of a classic (not path-traced) hit at p: mirror, conductor
+ * (conductor Fresnel), dielectric (Fresnel split below scene.splitDepth, else one child chosen by its
+ * Fresnel weight; Beer's law inside). */
+inline void Shade_ClassicChildren(SceneParams scene, PathState path, Material m, float3 p, float3 ng, float3 ns,
+                                  float3 wo, float t, int insideDielectric, RngKey key, uint dim, ShadeResult* res) {
+    float cosI = dot(wo, ns);
+    float3 reflDir = normalize(2.0f * cosI * ns - wo);
+    reflDir = Glossy_Perturb(reflDir, m.roughness, Rng_Uniform(key, dim), Rng_Uniform(key, dim + 1));
+    float3 reflOrg = Ray_OffsetOrigin(p, ng);
+    switch (m.kind) {
+#ifdef CLRT_HAS_MIRROR
+    case MATERIAL_MIRROR:
+        Child_Make(res, 0, path, m.mirror.xyz, 0u, reflOrg, reflDir);
+        break;
+#endif
+#ifdef CLRT_HAS_CONDUCTOR
+    case MATERIAL_CONDUCTOR: {
+        float fr = Fresnel_Conductor(clamp(cosI, 0.0f, 1.0f), m.refractionIndex, m.absorptionIndex);
+        Child_Make(res, 0, path, m.mirror.xyz * fr, 0u, reflOrg, reflDir);
+        break;
+    }
+#endif
+#ifdef CLRT_HAS_DIELECTRIC
+    case MATERIAL_DIELECTRIC: {
+        float3 weight = (float3)(1.0f);
+        if (insideDielectric)  /* Beer's law over the distance travelled inside */
+            weight = exp(-m.absorption.xyz * t);
+        float n1 = insideDielectric ? m.refractionIndex : 1.0f;
+        float n2 = insideDielectric ? 1.0f : m.refractionIndex;
+        float eta = n1 / n2;
+        float c = clamp(cosI, 0.0f, 1.0f);
+        float sin2T = eta * eta * fmax(0.0f, 1.0f - c * c);
+        float fr = 1.0f, cosT = 0.0f;
+        if (sin2T < 1.0f) {
+            cosT = sqrt(1.0f - sin2T);
+            fr = Fresnel_Dielectric(c, cosT, n1, n2);
+        }
+        float3 refrDir = normalize(-eta * wo + (eta * c - cosT) * ns);
+        float3 refrOrg = Ray_OffsetOrigin(p, -ng);
+        if (fr >= 1.0f) {
+            Child_Make(res, 0, path, weight, 0u, reflOrg, reflDir);
+        } else if (path.depth < scene.splitDepth) {
+            Child_Make(res, 0, path, weight * fr, 0u, reflOrg, reflDir);
+            Child_Make(res, 1, path, weight * (1.0f - fr), 1u, refrOrg, refrDir);
+        } else if (Rng_Uniform(key, dim + 2) < fr) {
+            Child_Make(res, 0, path, weight, 0u, reflOrg, reflDir);
+        } else {
+            Child_Make(res, 1, path, weight, 1u, refrOrg, refrDir);
+        }
+        break;
+    }
+#endif
+    default:
+        break;
+    }
+}
+
+/* Shading of one path's hit h along ray (the whole of shade_hits for one path; the fused kernel calls
+ * it too): the ShadingPoint for light sampling, the radiance that needs no shadow ray (ambient,
+ * background or environment on a miss, object-light emission, replace_all) and the children. */
+inline void Shade_Hit(SceneParams scene, CameraParams cam, PathState path, Ray ray, Hit h,
+                      const __global Triangle* tris, const __global TriangleShading* triShading,
+                      const __global Sphere* spheres, const __global Plane* planes, const __global Material* materials,
+                      const __global TextureSet* textureSets, const __global TextureMap* textures,
+                      const __global ImageInfo* images, const __global float4* texels, const __global Light* lights,
+                      const __global float* envDist, ShadeResult* res) {
     float3 throughput = path.throughput.xyz;
-    childValid[2 * i] = 0;
-    childValid[2 * i + 1] = 0;
+    res->childValid[0] = res->childValid[1] = 0;
     ShadingPoint sp;  /* every field set: misses and dielectric interiors store it whole (oclgrind) */
     sp.position = sp.normal = sp.geomNormal = sp.wo = sp.kd = sp.ks = (float4)(0.0f);
     sp.material = 0;
     sp.pad0 = sp.pad1 = sp.pad2 = 0;
+    res->sp = sp;
     if (h.prim == CLRT_INVALID) {
-        points[i] = sp;
         float3 missed = Miss_Radiance(scene, textures, images, texels, cam, path, ray.direction.xyz);
 #ifdef CLRT_HAS_PATH_TRACING
         if (scene.pathMode != 0) missed *= Path_MissWeight(scene, path, lights, envDist, ray.direction.xyz);
 #endif
-        pathRadiance[i] = (float4)(throughput * missed, 0.0f);
+        res->radiance = (float4)(throughput * missed, 0.0f);
         return;
     }
 #ifdef CLRT_HAS_MOTION_BLUR
@@ -220,32 +306,9 @@ __kernel __attribute__((vec_type_hint(float4))) void shade_hits(CLRT_KERNEL_PARA
     float3 radiance = (float3)(0.0f);
     int replaceAll = 0;
 #ifdef CLRT_HAS_TEXTURES
-    if (s.textureSet != CLRT_INVALID) {
-        float3 pObj = affinePoint(textureSets[s.textureSet].worldToObject, s.p);  /* procedural textures */
-        for (int k = 0; k < CLRT_MAX_TEXTURES_PER_SHAPE; ++k) {
-            int ti = textureSets[s.textureSet].texture[k];
-            if (ti == CLRT_INVALID) continue;
-            const __global TextureMap* tex = &textures[ti];
-            float3 c = Texture_Eval(tex, images, texels, s.uv, s.p, pObj);
-            switch (tex->decal) {
-            case DECAL_REPLACE_KD: kd = c; break;
-            case DECAL_BLEND_KD: kd = 0.5f * (kd + c); break;
-            case DECAL_REPLACE_KS: ks = c; break;
-            case DECAL_REPLACE_ALL: radiance = c; replaceAll = 1; break;
-#if defined(CLRT_HAS_NORMAL_MAP) || defined(CLRT_HAS_BUMP_MAP)
-            case DECAL_REPLACE_NORMAL:
-            case DECAL_BUMP_NORMAL: {
-                TangentFrame f = Surface_TangentFrame(h, s, tris, triShading, spheres, planes, scene.numTriangles,
-                                                      scene.numSpheres);
-                s.ns = Texture_PerturbNormal(tex, images, texels, c, s.uv, s.p, f, s.ns,
-                                             textureSets[s.textureSet].worldToObject);
-                break;
-            }
-#endif
-            default: break;
-            }
-        }
-    }
+    if (s.textureSet != CLRT_INVALID)
+        replaceAll = Shade_Textures(h, &s, scene, tris, triShading, spheres, planes, textureSets, textures, images,
+                                    texels, &kd, &ks, &radiance);
 #endif
 #ifdef CLRT_HAS_MOTION_BLUR
     s.p += motionShift; /* the textures above saw the rest-frame point: they move with the object */
@@ -253,15 +316,13 @@ __kernel __attribute__((vec_type_hint(float4))) void shade_hits(CLRT_KERNEL_PARA
     float3 ns = s.frontFacing ? s.ns : -s.ns;
     RngKey key = Rng_Key(scene.seed, path.pixel, path.sample, path.pathId);
     uint dim = 4u + 32u * (uint)path.depth;
-    int canBounce = path.depth < scene.maxDepth;
     int insideDielectric = (m.kind == MATERIAL_DIELECTRIC) && !s.frontFacing;
 
 #ifdef CLRT_HAS_OBJECT_LIGHTS
     radiance += ObjectLight_Emission(h.prim, s.frontFacing, scene.numTriangles, scene.numSpheres, triShading, spheres, lights);
 #endif
     if (replaceAll) {
-        pathRadiance[i] = (float4)(throughput * radiance, 0.0f);
-        points[i] = sp;
+        res->radiance = (float4)(throughput * radiance, 0.0f);
         return;
     }
     if (!insideDielectric) {
@@ -281,71 +342,52 @@ __kernel __attribute__((vec_type_hint(float4))) void shade_hits(CLRT_KERNEL_PARA
 #if defined(CLRT_HAS_LIGHT_MESH) || defined(CLRT_HAS_LIGHT_SPHERE)
         emitted = Path_HitEmission(h.prim, s.frontFacing, scene, triShading, spheres, lights, s.p, s.dir, s.t, s.ng, &lightPdf);
 #endif
-        Path_ShadeHit(scene, i, path, m, s.p, ng, ns, wo, s.t, insideDielectric, sp, emitted, lightPdf, materials, points, pathRadiance, nextPaths,
-                      nextRays, childValid);
+        Path_ShadeHit(scene, path, m, s.p, ng, ns, wo, s.t, insideDielectric, sp, emitted, lightPdf, materials, res);
 #ifdef CLRT_HAS_MOTION_BLUR
-        MotionBlur_StampChildren(nextRays, childValid, i, Ray_Time(ray));
+        MotionBlur_StampChildren(res, Ray_Time(ray));
 #endif
         return;
     }
 #endif
-    points[i] = sp;
-    pathRadiance[i] = (float4)(throughput * radiance, 0.0f);
-    if (!canBounce) return;
-
-    float cosI = dot(wo, ns);
-    float3 reflDir = normalize(2.0f * cosI * ns - wo);
-    reflDir = Glossy_Perturb(reflDir, m.roughness, Rng_Uniform(key, dim), Rng_Uniform(key, dim + 1));
-    float3 reflOrg = Ray_OffsetOrigin(s.p, ng);
-    switch (m.kind) {
-#ifdef CLRT_HAS_MIRROR
-    case MATERIAL_MIRROR:
-        Child_Write(nextPaths, nextRays, childValid, 2 * i, path, m.mirror.xyz, 0u, reflOrg, reflDir);
-        break;
-#endif
-#ifdef CLRT_HAS_CONDUCTOR
-    case MATERIAL_CONDUCTOR: {
-        float fr = Fresnel_Conductor(clamp(cosI, 0.0f, 1.0f), m.refractionIndex, m.absorptionIndex);
-        Child_Write(nextPaths, nextRays, childValid, 2 * i, path, m.mirror.xyz * fr, 0u, reflOrg, reflDir);
-        break;
-    }
-#endif
-#ifdef CLRT_HAS_DIELECTRIC
-    case MATERIAL_DIELECTRIC: {
-        float3 weight = (float3)(1.0f);
-        if (insideDielectric)  /* Beer's law over the distance travelled inside */
-            weight = exp(-m.absorption.xyz * s.t);
-        float n1 = insideDielectric ? m.refractionIndex : 1.0f;
-        float n2 = insideDielectric ? 1.0f : m.refractionIndex;
-        float eta = n1 / n2;
-        float c = clamp(cosI, 0.0f, 1.0f);
-        float sin2T = eta * eta * fmax(0.0f, 1.0f - c * c);
-        float fr = 1.0f, cosT = 0.0f;
-        if (sin2T < 1.0f) {
-            cosT = sqrt(1.0f - sin2T);
-            fr = Fresnel_Dielectric(c, cosT, n1, n2);
-        }
-        float3 refrDir = normalize(-eta * wo + (eta * c - cosT) * ns);
-        float3 refrOrg = Ray_OffsetOrigin(s.p, -ng);
-        if (fr >= 1.0f) {
-            Child_Write(nextPaths, nextRays, childValid, 2 * i, path, weight, 0u, reflOrg, reflDir);
-        } else if (path.depth < scene.splitDepth) {
-            Child_Write(nextPaths, nextRays, childValid, 2 * i, path, weight * fr, 0u, reflOrg, reflDir);
-            Child_Write(nextPaths, nextRays, childValid, 2 * i + 1, path, weight * (1.0f - fr), 1u, refrOrg, refrDir);
-        } else if (Rng_Uniform(key, dim + 2) < fr) {
-            Child_Write(nextPaths, nextRays, childValid, 2 * i, path, weight, 0u, reflOrg, reflDir);
-        } else {
-            Child_Write(nextPaths, nextRays, childValid, 2 * i + 1, path, weight, 1u, refrOrg, refrDir);
-        }
-        break;
-    }
-#endif
-    default:
-        break;
-    }
+    res->sp = sp;
+    res->radiance = (float4)(throughput * radiance, 0.0f);
+    if (path.depth >= scene.maxDepth) return;
+    Shade_ClassicChildren(scene, path, m, s.p, ng, ns, wo, s.t, insideDielectric, key, dim, res);
 #ifdef CLRT_HAS_MOTION_BLUR
-    MotionBlur_StampChildren(nextRays, childValid, i, Ray_Time(ray));
+    MotionBlur_StampChildren(res, Ray_Time(ray));
 #endif
+}
+
+/* Parameters of every kernel here: src/shared/kernel_params.h.
+ * vec_type_hint(float4): a workaround for a miscompile by Intel's OpenCL CPU runtime (2026.22, its
+ * implicit 16-way work-item vectoriser), which that hint turns off for this kernel alone ("Kernel
+ * "shade_hits" was not vectorized" in the build log); other implementations ignore it (it only
+ * describes the kernel's data). Vectorised, this kernel hands Child_Write float3 values (weight,
+ * origin, direction) that hold other work-items' components and, at times, memory never written, so
+ * classic/veachAjar's glass teapot went wrong on ~1.5% of pixels, differently from run to run, and
+ * only when enough other code (textures, --all-features) was compiled in — even code never executed
+ * (the Perlin evaluation). The same source is right with CL_CONFIG_USE_VECTORIZER=False, on PoCL
+ * and on Oclgrind (no report); README "Conformance" and issue 17 have the evidence. */
+__kernel __attribute__((vec_type_hint(float4))) void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
+    int i = get_global_id(0);
+    if (i >= *queueCount) return;
+    ShadeResult res;
+    Shade_Hit(scene, cam, paths[i], rays[i], hits[i], tris, triShading, spheres, planes, materials, textureSets,
+              textures, images, texels, lights, envDist, &res);
+    /* Whole structs go to global memory from plain locals: oclgrind 21.10's uninitialised-value check
+     * (-cl-opt-disable) reports a struct copied straight from a member of res, initialised or not. */
+    const ShadingPoint sp = res.sp;
+    points[i] = sp;
+    pathRadiance[i] = res.radiance;
+    for (int k = 0; k < 2; ++k) {
+        childValid[2 * i + k] = res.childValid[k];
+        if (res.childValid[k]) {  /* compact_paths reads only the valid children */
+            const PathState child = res.childPath[k];
+            const Ray childRay = res.childRay[k];
+            nextPaths[2 * i + k] = child;
+            nextRays[2 * i + k] = childRay;
+        }
+    }
 }
 
 /* The shadow ray of one light sample at shading point sp: the reflected light (Material_EvalDirect)
@@ -389,6 +431,50 @@ inline ShadowRay Shadow_Make(ShadingPoint sp, const __global Material* materials
 #define CLRT_ENV_MIS_COSINE_SHARE 1.0f
 #endif
 
+/* The shadow rays of light l for a path at shading point sp (sp.position.w > 0): *sr, and under
+ * multi-sample MIS of an environment light (lightSlots 2) the cosine sample's *sr2; a slot a light
+ * does not use keeps `none` (zero contribution: not traced). */
+inline void Light_ShadowRays(SceneParams scene, PathState path, ShadingPoint sp, int l, int lightSlots, RngKey key,
+                             const __global Material* materials, const __global Light* lights,
+                             const __global ImageInfo* images, const __global float4* texels,
+                             const __global float* envDist, const __global float4* lightData, ShadowRay* sr,
+                             ShadowRay* sr2) {
+    uint dim = 4u + 32u * (uint)path.depth + 8u + 2u * (uint)l;
+    float2 u = (float2)(Rng_Uniform(key, dim), Rng_Uniform(key, dim + 1));
+    float3 wi;
+    float dist;
+#ifdef CLRT_HAS_ENV_LIGHT
+    if (lightSlots == 2 && EnvLight_UsesMis(&lights[l])) {
+        /* the cosine sample's uniforms: the same dimensions, offset by 2^15 */
+        float2 u2 = (float2)(Rng_Uniform(key, dim + 0x8000u), Rng_Uniform(key, dim + 0x8001u));
+        /* With a share of ½: the cosine sample at every other sample of a pixel (parity offset per
+         * pixel and light), stratified; with 1 (the default): always. */
+        int withCos = CLRT_ENV_MIS_COSINE_SHARE >= 1.0f ||
+                      ((path.sample + (int)(Rng_Uniform(key, 0x7ff0u + (uint)l) < 0.5f)) & 1) == 0;
+        float3 wiB, eL, eB;
+        EnvLight_SampleMis(&lights[l], sp.normal.xyz, u, u2, CLRT_ENV_MIS_COSINE_SHARE, withCos, images, texels,
+                           envDist, &wi, &eL, &wiB, &eB);
+        *sr = Shadow_Make(sp, materials, path.throughput.xyz, wi, INFINITY, eL);
+        *sr2 = Shadow_Make(sp, materials, path.throughput.xyz, wiB, INFINITY, eB);
+    } else
+#endif
+    {
+        float3 e = Light_Sample(&lights[l], sp.position.xyz, sp.normal.xyz, u, images, texels, envDist, lightData,
+                                &wi, &dist);
+        *sr = Shadow_Make(sp, materials, path.throughput.xyz, wi, dist, e);
+#ifdef CLRT_HAS_PATH_TRACING
+        sr->contribution *= Path_LightSampleWeight(scene.pathMode, &lights[l], sp, materials, envDist, wi, e);
+#endif
+#ifdef CLRT_HAS_OBJECT_LIGHTS
+        if (ObjectLight_IsShape(&lights[l])) ObjectLight_AimShadow(sr, sp.position.xyz + dist * wi);
+#endif
+    }
+#ifdef CLRT_HAS_MOTION_BLUR
+    /* the shadow rays of a sample see the scene at the sample's time (camera.cl) */
+    sr->direction.w = sr2->direction.w = MotionBlur_Time(scene.seed, path.pixel, path.sample);
+#endif
+}
+
 /* Shadow-ray slots: each (path i, light l in [lightBegin, lightEnd)) owns lightSlots consecutive
  * slots from (i·(lightEnd − lightBegin) + l − lightBegin)·lightSlots. lightSlots is 1 unless the scene
  * has an environment light sampled by multi-sample MIS (EnvLight_SampleMis), which fills two (light
@@ -404,42 +490,9 @@ __kernel void sample_lights(CLRT_KERNEL_PARAMS(sample_lights)) {
     for (int l = lightBegin; l < lightEnd; ++l) {
         size_t slot = ((size_t)i * chunk + (l - lightBegin)) * lightSlots;
         ShadowRay sr = none, sr2 = none;
-        if (sp.position.w > 0.0f) {
-            uint dim = 4u + 32u * (uint)path.depth + 8u + 2u * (uint)l;
-            float2 u = (float2)(Rng_Uniform(key, dim), Rng_Uniform(key, dim + 1));
-            float3 wi;
-            float dist;
-#ifdef CLRT_HAS_ENV_LIGHT
-            if (lightSlots == 2 && EnvLight_UsesMis(&lights[l])) {
-                /* the cosine sample's uniforms: the same dimensions, offset by 2^15 */
-                float2 u2 = (float2)(Rng_Uniform(key, dim + 0x8000u), Rng_Uniform(key, dim + 0x8001u));
-                /* With a share of ½: the cosine sample at every other sample of a pixel (parity offset per
-                 * pixel and light), stratified; with 1 (the default): always. */
-                int withCos = CLRT_ENV_MIS_COSINE_SHARE >= 1.0f ||
-                              ((path.sample + (int)(Rng_Uniform(key, 0x7ff0u + (uint)l) < 0.5f)) & 1) == 0;
-                float3 wiB, eL, eB;
-                EnvLight_SampleMis(&lights[l], sp.normal.xyz, u, u2, CLRT_ENV_MIS_COSINE_SHARE, withCos, images, texels,
-                                   envDist, &wi, &eL, &wiB, &eB);
-                sr = Shadow_Make(sp, materials, path.throughput.xyz, wi, INFINITY, eL);
-                sr2 = Shadow_Make(sp, materials, path.throughput.xyz, wiB, INFINITY, eB);
-            } else
-#endif
-            {
-                float3 e = Light_Sample(&lights[l], sp.position.xyz, sp.normal.xyz, u, images, texels, envDist, lightData,
-                                        &wi, &dist);
-                sr = Shadow_Make(sp, materials, path.throughput.xyz, wi, dist, e);
-#ifdef CLRT_HAS_PATH_TRACING
-                sr.contribution *= Path_LightSampleWeight(scene.pathMode, &lights[l], sp, materials, envDist, wi, e);
-#endif
-#ifdef CLRT_HAS_OBJECT_LIGHTS
-                if (ObjectLight_IsShape(&lights[l])) ObjectLight_AimShadow(&sr, sp.position.xyz + dist * wi);
-#endif
-            }
-#ifdef CLRT_HAS_MOTION_BLUR
-            /* the shadow rays of a sample see the scene at the sample's time (camera.cl) */
-            sr.direction.w = sr2.direction.w = MotionBlur_Time(scene.seed, path.pixel, path.sample);
-#endif
-        }
+        if (sp.position.w > 0.0f)
+            Light_ShadowRays(scene, path, sp, l, lightSlots, key, materials, lights, images, texels, envDist, lightData,
+                             &sr, &sr2);
         shadows[slot] = sr;
         if (lightSlots == 2) shadows[slot + 1] = sr2;
     }

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # oclgrind suite: tiny renders (8x8, 1 spp) of every kernel feature variant listed in
-# scripts/kernel_variants.txt, plus `clrt tonemap` with each operator (8-bit and float output) and
+# scripts/kernel_variants.txt, each with both pipelines (--pipeline wavefront and fused), plus
+# `clrt tonemap` with each operator (8-bit and float output) and
 # the device struct-layout kernel (clrt_tests "[layout]"), run on Oclgrind's simulator with its checks:
 #   pass 1  memory (always on), API misuse and data races  (OCLGRIND_CHECK_API, OCLGRIND_DATA_RACES)
 #           on the optimised program, as clrt builds it;
@@ -72,8 +73,12 @@ while read -r scene args; do
   case "$scene" in ''|\#*) continue ;; esac
   n=$((n + 1)); name=$(printf "%02d-%s" $n "$(basename "${scene%.*}")")
   for pass in $PASSES; do
-    check "$name" "$pass" build/clrt render "$SCENES/$scene" --resolution 8x8 --spp 1 -o "$OUT/img" -v $args
-    grep -q "(Oclgrind)" "$OUT/$name.$pass.out" || { bad=$((bad + 1)); echo "oclgrind_suite: $name did not run on Oclgrind"; }
+    for pipe in wavefront fused; do
+      check "$name-$pipe" "$pass" build/clrt render "$SCENES/$scene" --resolution 8x8 --spp 1 -o "$OUT/img" -v \
+        --pipeline $pipe $args
+      grep -q "(Oclgrind)" "$OUT/$name-$pipe.$pass.out" || { bad=$((bad + 1)); echo "oclgrind_suite: $name-$pipe did not run on Oclgrind"; }
+      grep -q "pipeline $pipe" "$OUT/$name-$pipe.$pass.out" || { bad=$((bad + 1)); echo "oclgrind_suite: $name did not render with the $pipe pipeline"; }
+    done
   done
 done < scripts/kernel_variants.txt
 

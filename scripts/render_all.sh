@@ -8,6 +8,7 @@
 #
 # Usage: scripts/render_all.sh [--clrt BIN] [--scenes DIR] [--out DIR] [--spp N] [--seed N]
 #                              [--device SPEC] [--timeout S] [--compare BASELINE_DIR] [--rehash]
+#                              [--pipeline fused|wavefront] (clrt render --pipeline; default: clrt's auto)
 #   defaults: --clrt build/clrt --scenes ../shared/scenes --out build/render_all --spp 1 --seed 1
 #             --device cpu --timeout 900
 #   Writes OUT/<scene path with / -> __>/..., OUT/md5sums.txt (outputs; EXR sums leave out the
@@ -17,6 +18,7 @@
 set -uo pipefail
 cd "$(dirname "$0")/.."
 clrt=build/clrt scenes=../shared/scenes out=build/render_all spp=1 seed=1 device=cpu timeout=900 compare= rehash=
+pipeline=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --clrt) clrt=$2; shift 2 ;;
@@ -28,7 +30,8 @@ while [ $# -gt 0 ]; do
     --timeout) timeout=$2; shift 2 ;;
     --compare) compare=$2; shift 2 ;;
     --rehash) rehash=1; shift ;;
-    -h|--help) sed -n '2,17p' "$0"; exit 0 ;;
+    --pipeline) pipeline=(--pipeline "$2"); shift 2 ;;
+    -h|--help) sed -n '2,18p' "$0"; exit 0 ;;
     *) echo "render_all.sh: unknown option $1" >&2; exit 1 ;;
   esac
 done
@@ -46,7 +49,7 @@ skipped=()
   rm -rf "$dir" && mkdir -p "$dir"
   t0=$(date +%s)
   timeout "$timeout" "$clrt" render "$scene" -o "$dir" --spp "$spp" --seed "$seed" --device "$device" \
-    > "$dir/.log" 2>&1
+    "${pipeline[@]}" > "$dir/.log" 2>&1
   rc=$?
   err=$(grep -m1 '^clrt: error:' "$dir/.log")
   status="rc=$rc"

@@ -32,6 +32,7 @@
 #include "render/multi_device.h"
 #include "render/output.h"
 #include "render/progressive.h"
+#include "render/fused_renderer.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
 #include "util/error.h"
@@ -96,6 +97,10 @@ const char* kRenderHelp =
     "                        8 bits; the course's reference renders truncate (floor)\n"
     "  --env-sampling S      sampler of every SphericalDirectionalLight: uniform, cosine, importance or\n"
     "                        mis (default: the scene's sampler=, else mis)\n"
+    "  --pipeline P          fused (one kernel per sample pass), wavefront (a kernel per stage) or\n"
+    "                        auto (default: fused on CPU devices for images of >= 1024 pixels,\n"
+    "                        wavefront otherwise); the image is\n"
+    "                        the same either way; -v says which one rendered\n"
     "  --all-features        build the kernels with every feature, not only what the scene uses\n"
     "                        (for measuring what specialisation gains)\n"
     "  --exr-half            write .exr outputs with half-float channels (default: float)\n"
@@ -123,6 +128,7 @@ struct Args {
     bool verbose = false, help = false, truncatePng = false, exrHalf = false, allFeatures = false;
     std::string envSampling;  // --env-sampling: overrides every environment light's sampler
     StopRule stop;            // --target-error, --time-limit (render/progressive.h)
+    Pipeline pipeline = Pipeline::Auto;  // --pipeline
     DistSettings dist;        // --part, --checkpoint, --tile-pixels (src/dist/)
 };
 
@@ -184,6 +190,11 @@ Args parseRenderArgs(int argc, char** argv, int start) {
             a.dist.part = parseInt(s, v.substr(0, slash), 1, a.dist.parts);
         }
         else if (s == "--all-features") a.allFeatures = true;
+        else if (s == "--pipeline") {
+            std::string v = value();
+            if (!parsePipeline(v, a.pipeline))
+                throw Error("--pipeline: expected fused, wavefront or auto, got '" + v + "'", ExitCode::Usage);
+        }
         else if (s == "--env-sampling") {
             a.envSampling = value();
             dev::EnvSamplerKind es;
@@ -355,6 +366,7 @@ int renderAndWriteCamera(const Args& a, const Camera& cam, int camIndex, std::ve
     rs.spp = a.spp > 0 ? a.spp : cam.numSamples;
     rs.seed = a.seed;
     rs.stop = &stopRequested();
+    rs.pipeline = a.pipeline;
     for (DeviceWork& w : work) w.counters.stoppedAtSample = -1;
     std::optional<Progress> prog;  // rank 0 (or the only process) shows the progress of the whole image
     if (MpiJob::get().rank() == 0)
@@ -552,7 +564,9 @@ void printTimes(const StageTimes& t, const DeviceScene& ds, const Renderer& rend
     auto rate = [&](uint64_t RenderCounters::*rayCount, int stage) {
         double r = 0;
         for (const DeviceWork& w : work) {
-            double s = w.counters.profiled ? w.counters.stageSeconds[stage] : w.counters.seconds;
+            // the fused path traces every kind in its one kernel: its rays over that kernel's time
+            double s = w.counters.profiled ? w.counters.stageSeconds[stage] + w.counters.stageSeconds[STAGE_FUSED]
+                                           : w.counters.seconds;
             if (s > 0) r += double(w.counters.*rayCount) / s * 1e-6;
         }
         return r;

@@ -13,6 +13,7 @@
 #include "cl/check.h"
 #include "cl/kernel_args.h"
 #include "render/queue_compact.h"
+#include "render/fused_renderer.h"
 #include "shared/kernel_params.h"
 #include "util/error.h"
 
@@ -38,6 +39,7 @@ struct Renderer::Impl {
     cl::Program program;
     KernelArgs kGenerate, kIntersect, kShadow, kShade, kLights, kGather, kAccumulate;
     QueueCompactor compactor;
+    FusedPath fused;  // the fused CPU path (fused_renderer.h), bound to the same scene buffers
     // Every kernel argument, each named as the kernel parameter it is bound to (src/shared/kernel_params.h):
     // bindAll() binds each kernel's whole parameter list from these members, by name.
     cl::Buffer nodes, primRefs, tris, triShading, spheres, planes, materials, textureSets, textures, images, texels, lights, envDist, lightData;
@@ -77,6 +79,7 @@ struct Renderer::Impl {
         cl::Context& ctx = dc.context();
         queueCount = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(int)));
         nextCount = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(int)));
+        fused = FusedPath(ctx, program);
         nodes = uploadBuffer(ctx, ds.bvh4.nodes);
         primRefs = uploadBuffer(ctx, ds.bvh.primRefs);
         tris = uploadBuffer(ctx, ds.triangles);
@@ -200,11 +203,12 @@ void Renderer::Impl::setRenderArgs(const dev::CameraParams& cp, const dev::Scene
     CLRT_BIND_GROUP(kLights, CLRT_KERNEL_sample_lights, *this);
     CLRT_BIND_GROUP(kGather, CLRT_KERNEL_gather_shadows, *this);
     CLRT_BIND_GROUP(kAccumulate, CLRT_KERNEL_accumulate, *this);
+    CLRT_BIND_GROUP(fused.kernel(), CLRT_PARAMS_FUSED_SCENE, *this);
 }
 
 const char* renderStageName(int stage) {
     static const char* names[STAGE_COUNT] = {"generate", "trace camera", "trace secondary", "shade", "sample lights",
-                                             "trace shadow", "gather", "accumulate", "compact"};
+                                             "trace shadow", "gather", "accumulate", "compact", "fused"};
     return stage >= 0 && stage < STAGE_COUNT ? names[stage] : "?";
 }
 
@@ -434,6 +438,16 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     CL_CPP(m.dc.queue().enqueueFillBuffer(image, dev::float4{0, 0, 0, 0}, 0, imageBytes));
     m.setRenderArgs(cp, sp, image);
     m.sampleBase = settings.firstSample;
+    m.fused.sampleBase = settings.firstSample;
+    // Fused (CPU devices) or wavefront: the same image either way (fused_renderer.h).
+    const FusedPlan fusedPlan{plan.group, plan.lightSlots, plan.bounces};
+    std::string why;
+    Pipeline pipeline = choosePipeline(settings.pipeline, m.dc.info(), numPixels, &why);
+    const std::string notFused = pipeline == Pipeline::Fused ? fusedUnsupported(sp, fusedPlan) : "";
+    if (!notFused.empty()) pipeline = Pipeline::Wavefront;
+    if (verbose())
+        info("camera " + std::to_string(cam.id) + " on " + m.dc.info().name + ": pipeline " + pipelineName(pipeline) +
+             " (" + why + ")" + (notFused.empty() ? "" : "; not fused: " + notFused));
 
     // settings.stop: a tile in progress ends after its current group of samples (at least one), no
     // new tile is started after the first.
@@ -441,7 +455,11 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     size_t tileFirst = 0, tileCount = 0, tilesHere = 0;
     while (!(tilesHere++ > 0 && stopped()) && nextTile(tileFirst, tileCount)) {
         const size_t tileEnd = std::min(numPixels, tileFirst + tileCount);
-        const int reached = m.renderTile(tileFirst, tileEnd, plan, counters, progress, stopped);
+        const int reached =
+            pipeline == Pipeline::Fused
+                ? m.fused.renderTile(m.dc.queue(), m.profiling, tileFirst, tileEnd, settings.maxBatchPixels, cp.spp,
+                                     fusedPlan, sp, counters, progress, stopped)
+                : m.renderTile(tileFirst, tileEnd, plan, counters, progress, stopped);
         m.readTile(image, tileFirst, tileEnd, 1.0f / float(reached), out);
         counters.tiles += 1;
         counters.pixels += tileEnd - tileFirst;

@@ -23,8 +23,15 @@ namespace clrt {
 // The kernels of one bounce, for per-stage device times.
 enum RenderStage {
     STAGE_GENERATE, STAGE_TRACE_CAMERA, STAGE_TRACE_SECONDARY, STAGE_SHADE, STAGE_SAMPLE_LIGHTS,
-    STAGE_TRACE_SHADOW, STAGE_GATHER, STAGE_ACCUMULATE, STAGE_COMPACT, STAGE_COUNT
+    STAGE_TRACE_SHADOW, STAGE_GATHER, STAGE_ACCUMULATE, STAGE_COMPACT,
+    STAGE_FUSED,  // the fused CPU path's one kernel (src/render/fused_renderer.h): all of the above
+    STAGE_COUNT
 };
+
+// Which kernels render: the wavefront (a kernel per stage, queues between them) or the fused path
+// (one kernel per batch of pixels and sample passes, cl_kernels/fused.cl). Auto: fused on CPU
+// devices, wavefront on the others; `clrt render --pipeline` overrides.
+enum class Pipeline { Auto, Wavefront, Fused };
 const char* renderStageName(int stage);
 
 struct RenderCounters {
@@ -57,6 +64,7 @@ struct RenderSettings {
     bool stratified = true;            // false: independent uniform jitter per sample (strata 1x1),
                                        // the noise of renderers that jitter so (tests/test_brdf.cpp)
     const std::atomic<bool>* stop = nullptr;  // set (from any thread): end after the current sample pass
+    Pipeline pipeline = Pipeline::Auto;
 };
 
 class Renderer {

@@ -95,6 +95,12 @@ enum TmoKind { CLRT_TMO_TABLE(CLRT_ENUM_CONSTANT_) };
 #define CLRT_BVH4_STACK_SIZE (3 * (CLRT_BVH_STACK_SIZE - 8))
 #endif
 
+/* The fused CPU path (cl_kernels/fused.cl): per-depth sums kept per work-item (a render with more
+ * depths and several samples per group, or with a dielectric split, takes the wavefront), and the
+ * stack of pending right children (a split depth of at most CLRT_FUSED_STACK_SIZE). */
+#define CLRT_FUSED_MAX_LEVELS 32
+#define CLRT_FUSED_STACK_SIZE 24
+
 /* A leaf enters the traversal stack as one int, ~(first << 4 | count). */
 #define CLRT_BVH4_MAX_LEAF 15
 #define CLRT_BVH4_MAX_PRIMS (1 << 27)

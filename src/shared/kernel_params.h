@@ -77,6 +77,19 @@
     CLRT_PARAMS_COMPACT(P) P(IN, int, childValid) P(IN, int, compactTarget) P(IN, int, blockSums)   \
     P(IN, PathState, nextPaths) P(IN, Ray, nextRays) P(BUF, PathState, paths) P(BUF, Ray, rays)
 
+/* ---- fused CPU path (fused.cl; host: src/render/fused_renderer.cpp) ----------------------------
+ * The scene group is bound by the renderer with the wavefront's (Renderer::Impl's members), the launch
+ * group by the fused path: `count` pixels from firstPixel, `passes` groups of `samples` samples each
+ * from firstSample; lightSlots as sample_lights'; rayCounts[0] += secondary rays traced. */
+#define CLRT_PARAMS_FUSED_SCENE(P)                                                                 \
+    P(VAL, CameraParams, cam) P(VAL, SceneParams, scene) CLRT_PARAMS_GEOMETRY(P)                   \
+    P(IN, TriangleShading, triShading) CLRT_PARAMS_MATERIALS(P) CLRT_PARAMS_IMAGES(P)               \
+    P(IN, Light, lights) P(IN, float, envDist) P(IN, float4, lightData) P(BUF, float4, image)
+#define CLRT_PARAMS_FUSED_LAUNCH(P)                                                                \
+    P(VAL, int, count) P(VAL, int, firstPixel) P(VAL, int, firstSample) P(VAL, int, samples)       \
+    P(VAL, int, passes) P(VAL, int, lightSlots) P(BUF, uint, rayCounts)
+#define CLRT_KERNEL_render_fused(P) CLRT_PARAMS_FUSED_LAUNCH(P) CLRT_PARAMS_FUSED_SCENE(P)
+
 /* ---- tone-mapping program (tonemap.cl) -------------------------------------------------------- */
 
 #define CLRT_KERNEL_Tonemap_Luminance(P)                                                           \
@@ -96,7 +109,7 @@
 /* Every kernel, by program (the host's table and the tests iterate these). */
 #define CLRT_RENDER_KERNELS(K)                                                                     \
     K(generate_camera_rays) K(intersect_closest) K(intersect_shadow) K(shade_hits) K(sample_lights) \
-    K(gather_shadows) K(accumulate) K(compact_scan_blocks) K(compact_scan_sums) K(compact_scatter)
+    K(gather_shadows) K(accumulate) K(compact_scan_blocks) K(compact_scan_sums) K(compact_scatter) K(render_fused)
 #define CLRT_TONEMAP_KERNELS(K) K(Tonemap_Luminance) K(Tonemap_Histogram) K(Tonemap_Map) K(Tonemap_MapFloat)
 #define CLRT_LAYOUT_KERNELS(K) K(layout_report)
 
@@ -110,6 +123,12 @@
 #define CLRT_APPLY_(m, ...) m(__VA_ARGS__)
 /* Every row expands to ", TYPE NAME"; the first comma is dropped. */
 #define CLRT_KERNEL_PARAMS(K_) CLRT_APPLY_(CLRT_DROP_FIRST_, CLRT_KERNEL_##K_(CLRT_PARAM_DECL_))
+/* A helper that takes a whole group as its first parameters, and a call passing them on:
+ *   inline float f(CLRT_GROUP_PARAMS(CLRT_PARAMS_X) int more) ... f(CLRT_GROUP_ARGS(CLRT_PARAMS_X) more) */
+#define CLRT_GROUP_PARAM_DECL_(KIND, T, name) CLRT_PARAM_TYPE_##KIND(T) name,
+#define CLRT_GROUP_ARG_(KIND, T, name) name,
+#define CLRT_GROUP_PARAMS(GROUP) GROUP(CLRT_GROUP_PARAM_DECL_)
+#define CLRT_GROUP_ARGS(GROUP) GROUP(CLRT_GROUP_ARG_)
 #endif
 
 #endif /* CLRT_KERNEL_PARAMS_H */

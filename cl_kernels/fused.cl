@@ -1,0 +1,134 @@
+/* fused.cl — the fused render kernel for CPU devices (src/render/fused_renderer.cpp): one work-item per
+ * pixel takes `passes` groups of `samples` samples of it and, for each, generates the camera ray,
+ * traces it, shades the hit, samples every light and traces the shadow rays, follows the children
+ * (mirror, conductor, dielectric, the path tracer's bounce) depth first with a small explicit stack,
+ * and adds the result to the image: no queues, one launch per batch of pixels and passes.
+ * Every physics function is the wavefront's (Camera_Generate, Ray_Closest, Shade_Hit,
+ * Light_ShadowRays, Shadow_Occluded), with the same random streams (keyed by pixel, sample, path id
+ * and dimension), and the sums are made in the wavefront's order, so the image is the same, bit for
+ * bit: a path's radiance is its shading term plus its shadow contributions in light and slot order
+ * (gather_shadows), and a pixel adds, per group of samples, the sum over the group's paths of each
+ * depth in turn (accumulate). Depth first visits the paths of one depth in the wavefront's queue
+ * order (sample, then left child before right); with one sample per group and no split there is one
+ * path per depth and each is added at once, else per-depth sums are kept (CLRT_FUSED_MAX_LEVELS; the
+ * host uses the wavefront when a render needs more, or more stack than CLRT_FUSED_STACK_SIZE).
+ * Reads: the scene's geometry, surfaces, materials, textures, lights and environment (as the
+ * wavefront); writes: image, and rayCounts[0] += the secondary rays traced. */
+#ifndef CLRT_FUSED_CL
+#define CLRT_FUSED_CL
+
+#include "../src/shared/device_types.h"
+#include "../src/shared/kernel_params.h"
+#include "common.cl"
+#include "intersect.cl"
+#include "camera.cl"
+#include "shade.cl"
+
+#if defined(CLRT_HAS_MIRROR) || defined(CLRT_HAS_DIELECTRIC) || defined(CLRT_HAS_CONDUCTOR) || \
+    defined(CLRT_HAS_PATH_TRACING)
+#define CLRT_FUSED_BOUNCES 1 /* some path can have children */
+#endif
+
+/* A shadow ray's contribution as gather_shadows adds it: zero (untraced) or occluded: zero. */
+inline float4 Fused_Shadow(ShadowRay sr, SceneParams scene, const __global Bvh4Node* nodes,
+                           const __global int* primRefs, const __global Triangle* tris,
+                           const __global Sphere* spheres, const __global Plane* planes) {
+    float4 c = sr.contribution;
+    if (c.x == 0.0f && c.y == 0.0f && c.z == 0.0f) return c;
+    return Shadow_Occluded(sr, scene, nodes, primRefs, tris, spheres, planes) ? (float4)(0.0f) : c;
+}
+
+/* One path: its closest hit, shading (children into *res) and direct light; returns its radiance as
+ * accumulate adds it (finite). */
+inline float3 Fused_Path(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int lightSlots, PathState path, Ray ray, ShadeResult* res) {
+    Hit h = Ray_Closest(ray, scene, nodes, primRefs, tris, spheres, planes);
+    Shade_Hit(scene, cam, path, ray, h, tris, triShading, spheres, planes, materials, textureSets, textures, images,
+              texels, lights, envDist, res);
+    float4 sum = res->radiance;
+    const ShadingPoint sp = res->sp;
+    if (!(sp.position.w > 0.0f)) {
+        if (scene.numLights > 0) sum += (float4)(0.0f); /* the wavefront adds the empty slots (-0 + 0 = +0) */
+        return finiteOrZero(sum.xyz);
+    }
+    RngKey key = Rng_Key(scene.seed, path.pixel, path.sample, path.pathId);
+    const ShadowRay none = Shadow_Make(sp, materials, (float3)(0.0f), (float3)(0.0f, 0.0f, 1.0f), 0.0f, (float3)(0.0f));
+    for (int l = 0; l < scene.numLights; ++l) {
+        ShadowRay sr = none, sr2 = none;
+        Light_ShadowRays(scene, path, sp, l, lightSlots, key, materials, lights, images, texels, envDist, lightData,
+                         &sr, &sr2);
+        sum += Fused_Shadow(sr, scene, nodes, primRefs, tris, spheres, planes);
+        if (lightSlots == 2) sum += Fused_Shadow(sr2, scene, nodes, primRefs, tris, spheres, planes);
+    }
+    return finiteOrZero(sum.xyz);
+}
+
+typedef struct {
+    PathState path;
+    Ray ray;
+} FusedEntry;
+
+/* Parameters: src/shared/kernel_params.h (CLRT_KERNEL_render_fused). */
+__kernel void render_fused(CLRT_KERNEL_PARAMS(render_fused)) {
+    const int i = get_global_id(0);
+    if (i >= count) return;
+    const int pixel = firstPixel + i;
+    /* One path per depth: add each as it comes; else per-depth sums (levels <= CLRT_FUSED_MAX_LEVELS). */
+    const int direct = samples == 1 && scene.splitDepth == 0;
+#ifdef CLRT_FUSED_BOUNCES
+    const int levels = min(scene.maxDepth + 1, CLRT_FUSED_MAX_LEVELS);
+#else
+    const int levels = 1;
+#endif
+    float3 levelSum[CLRT_FUSED_MAX_LEVELS];
+    float4 acc = image[pixel];
+    uint secondary = 0;
+    for (int pass = 0; pass < passes; ++pass) {
+        for (int d = 0; d < levels; ++d) levelSum[d] = (float3)(0.0f);
+        const int s0 = firstSample + pass * samples;
+        for (int s = s0; s < s0 + samples; ++s) {
+            PathState path;
+            Ray ray;
+            Camera_Generate(cam, scene, pixel, s, &path, &ray);
+#ifdef CLRT_FUSED_BOUNCES
+            FusedEntry stack[CLRT_FUSED_STACK_SIZE];
+            int top = 0;
+#endif
+            for (;;) {
+                ShadeResult res;
+                float3 r = Fused_Path(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) lightSlots, path, ray, &res);
+                if (direct) acc.xyz += r;
+                else levelSum[min(path.depth, levels - 1)] += r;
+#ifdef CLRT_FUSED_BOUNCES
+                /* left (reflection) child next, the right one later: each depth in queue order */
+                if (res.childValid[1] && top < CLRT_FUSED_STACK_SIZE) {
+                    stack[top].path = res.childPath[1];
+                    stack[top].ray = res.childRay[1];
+                    ++top;
+                    ++secondary;
+                }
+                if (res.childValid[0]) {
+                    path = res.childPath[0];
+                    ray = res.childRay[0];
+                    ++secondary;
+                    continue;
+                }
+                if (top > 0) {
+                    --top;
+                    path = stack[top].path;
+                    ray = stack[top].ray;
+                    continue;
+                }
+#endif
+                break;
+            }
+        }
+        if (!direct)
+            for (int d = 0; d < levels; ++d) acc.xyz += levelSum[d];
+    }
+    image[pixel] = acc;
+#ifdef CLRT_FUSED_BOUNCES
+    if (secondary > 0) atomic_add(&rayCounts[0], secondary);
+#endif
+}
+
+#endif /* CLRT_FUSED_CL */
