@@ -407,12 +407,11 @@ inline ShadowRay Shadow_Make(ShadingPoint sp, const __global Material* materials
     sr.direction = (float4)(0.0f, 0.0f, 1.0f, 0.0f);
     float3 p = sp.position.xyz, n = sp.normal.xyz, ng = sp.geomNormal.xyz;
     float cosTheta = dot(n, wi);
-#if defined(CLRT_HAS_BUMP_MAP) || defined(CLRT_HAS_NORMAL_MAP)
-    const int facing = 1;
-#else
-    const int facing = dot(ng, wi) > 0.0f;
+    int lit = cosTheta > 0.0f && maxComponent(e) > 0.0f;
+#if !defined(CLRT_HAS_BUMP_MAP) && !defined(CLRT_HAS_NORMAL_MAP)
+    lit = lit && dot(ng, wi) > 0.0f; /* with bump/normal maps the shadow ray decides (above) */
 #endif
-    if (cosTheta > 0.0f && facing && maxComponent(e) > 0.0f) {
+    if (lit) {
         float3 c = throughput * Material_EvalDirect(sp, materials, wi, cosTheta) * e;
         float3 org = Ray_OffsetOrigin(p, ng);
         float tMax = isinf(dist) ? INFINITY : length(p + dist * wi - org) * (1.0f - 1e-5f);
