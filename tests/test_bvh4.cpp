@@ -40,11 +40,11 @@ std::vector<Aabb> triBoxes(const std::vector<Tri>& tris) {
 float lane(const dev::float4& v, int i) { return (&v.x)[i]; }
 int lane(const dev::int4& v, int i) { return (&v.x)[i]; }
 
-// Walks the 4-wide tree from the root: every node reached once, every primRef position covered by
-// exactly one leaf lane, every lane's box inside the box its parent lane gave, empty lanes marked.
+// Walks the 4-wide tree from the root: every node reached once, every leaf block owned by one leaf
+// lane, every primitive in exactly one leaf lane's blocks (and lanes past a leaf's end empty), every lane's box inside the box its parent lane gave, empty lanes marked.
 void checkStructure4(const Bvh& bin, const Bvh4& b4, const std::vector<Aabb>& boxes) {
     const int n = int(bin.primRefs.size());
-    std::vector<int> covered(size_t(n), 0), reached(b4.nodes.size(), 0);
+    std::vector<int> covered(size_t(n), 0), reached(b4.nodes.size(), 0), blockUse(b4.leaves.size(), 0);
     int badBox = 0, badEmpty = 0, badChild = 0, maxLevel = 0;
     struct Item { int node, level; Aabb box; };
     Aabb all;
@@ -74,10 +74,15 @@ void checkStructure4(const Bvh& bin, const Bvh4& b4, const std::vector<Aabb>& bo
                   box.max.x <= it.box.max.x && box.max.y <= it.box.max.y && box.max.z <= it.box.max.z))
                 ++badBox;
             if (count > 0) {
-                if (child < 0 || child + count > n) { ++badChild; continue; }
-                for (int k = child; k < child + count; ++k) {
-                    covered[size_t(k)]++;
-                    const Aabb& pb = boxes[size_t(bin.primRefs[size_t(k)])];
+                const int blocks = (count + 3) / 4;
+                if (child < 0 || child + blocks > int(b4.leaves.size())) { ++badChild; continue; }
+                for (int k = 0; k < 4 * blocks; ++k) {
+                    const int ref = lane(b4.leaves[size_t(child + k / 4)].prim, k % 4);
+                    if (k % 4 == 0) blockUse[size_t(child + k / 4)]++;
+                    if (k >= count) { badEmpty += ref != CLRT_INVALID; continue; }
+                    if (ref < 0 || ref >= n) { ++badChild; continue; }
+                    covered[size_t(ref)]++;
+                    const Aabb& pb = boxes[size_t(ref)];
                     if (pb.valid() && isFinite(pb.min) && isFinite(pb.max) &&
                         !(box.min.x <= pb.min.x && box.min.y <= pb.min.y && box.min.z <= pb.min.z &&
                           pb.max.x <= box.max.x && pb.max.y <= box.max.y && pb.max.z <= box.max.z))
@@ -92,6 +97,7 @@ void checkStructure4(const Bvh& bin, const Bvh4& b4, const std::vector<Aabb>& bo
     int wrongCover = 0, wrongReach = 0;
     for (int c : covered) wrongCover += (c != 1);
     for (int r : reached) wrongReach += (r != 1);
+    for (int u : blockUse) wrongReach += (u != 1);  // every leaf block belongs to exactly one leaf lane
     CHECK(wrongCover == 0);
     CHECK(wrongReach == 0);
     CHECK(badBox == 0);
@@ -142,8 +148,8 @@ Trace4 traverse4(const Bvh& bin, const Bvh4& b4, const std::vector<Tri>& tris, V
             }
         } else {
             const int first = (~entry) >> 4, count = (~entry) & 15;
-            for (int k = first; k < first + count; ++k) {
-                const int p = bin.primRefs[size_t(k)];
+            for (int k = 0; k < count; ++k) {
+                const int p = lane(b4.leaves[size_t(first + k / 4)].prim, k % 4);
                 float t, b1, b2;
                 if (intersectTriangleWatertight(o, d, tris[size_t(p)][0], tris[size_t(p)][1], tris[size_t(p)][2],
                                                 tMax, t, b1, b2)) {
@@ -324,15 +330,16 @@ TEST_CASE("BVH4 traversal stack: the host bound holds, and the kernel with exact
         using T = typename std::decay_t<decltype(v)>::value_type;
         return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), v.data()));
     };
-    // primRef values index devTris directly (the renderer reorders triangles; here there is no need).
-    cl::Buffer nodes = ro(b4.nodes), refs = ro(bin.primRefs), tb = ro(devTris), sb = ro(noSpheres),
+    // Leaf prim values index devTris directly (the renderer reorders triangles; here there is no need).
+    setLeafTriangles(b4, devTris, int(devTris.size()));
+    cl::Buffer nodes = ro(b4.nodes), leaves = ro(b4.leaves), tb = ro(devTris), sb = ro(noSpheres),
                pb = ro(noPlanes), rb = ro(rays);
     cl::Buffer hb = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(dev::Hit) * numRays));
     dev::SceneParams sp{};
     sp.numTriangles = int(tris.size());  // no spheres, no planes
     std::vector<int> queueLength{numRays};  // the kernel reads the queue length on the device
     cl::Buffer cb = ro(queueLength);
-    closest.set("queueCount", cb).set("scene", sp).set("nodes", nodes).set("primRefs", refs).set("tris", tb);
+    closest.set("queueCount", cb).set("scene", sp).set("nodes", nodes).set("leaves", leaves).set("tris", tb);
     closest.set("spheres", sb).set("planes", pb).set("rays", rb).set("hits", hb);
     CL_CPP(dc.queue().enqueueNDRangeKernel(closest.ready(), cl::NullRange, cl::NDRange(roundUp(size_t(numRays), 64)),
                                            cl::NDRange(64)));
