@@ -194,7 +194,12 @@ void flattenMeshes(const Scene& scene, const std::vector<MeshJob>& meshJobs, Dev
 // triangles copied into their struct-of-arrays blocks.
 void buildDeviceBvh(const std::vector<Aabb>& boxes, DeviceScene& ds) {
     auto tb = std::chrono::steady_clock::now();
-    ds.bvh = buildBvh(boxes);
+    // The device tests a leaf's triangles four at a time (Bvh4Leaf), so a leaf of up to four costs
+    // about what one triangle test did: a node is costed as two triangle tests, which gives fuller
+    // leaves (Audi TT: 2.1 -> 3.0 primitives per block) and fewer nodes (86k -> 61k).
+    BvhBuildOptions opts;
+    opts.traversalCost = 2;
+    ds.bvh = buildBvh(boxes, opts);
     const int numTris = int(ds.triangles.size());
     std::vector<dev::Triangle> tris(ds.triangles.size());
     std::vector<dev::TriangleShading> shading(ds.triangleShading.size());
