@@ -167,14 +167,14 @@ int main(int argc, char** argv) {
             using T = typename std::decay_t<decltype(v)>::value_type;
             return CL_CPP(cl::Buffer(dc.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), v.data()));
         };
-        cl::Buffer nodes = upload(ds.bvh4.nodes), refs = upload(ds.bvh.primRefs), tris = upload(ds.triangles),
+        cl::Buffer nodes = upload(ds.bvh4.nodes), leaves = upload(ds.bvh4.leaves), tris = upload(ds.triangles),
                    sph = upload(ds.spheres);
         cl::Buffer planes = upload(ds.planes);
         if (ds.params.numPlanes > 0) std::fprintf(stderr, "note: planes are ignored by this benchmark\n");
         dev::SceneParams sp = ds.params;
         sp.numPlanes = 0;  // planes left out (Embree has none)
         for (KernelArgs* k : {&kClosest, &kShadow})
-            k->set("scene", sp).set("nodes", nodes).set("primRefs", refs).set("tris", tris).set("spheres", sph)
+            k->set("scene", sp).set("nodes", nodes).set("leaves", leaves).set("tris", tris).set("spheres", sph)
                 .set("planes", planes);
         auto traceClrt = [&](const std::vector<dev::Ray>& rays, bool shadow, std::vector<int>& prim) {
             const int n = int(rays.size());
@@ -275,6 +275,8 @@ int main(int argc, char** argv) {
         std::printf("scene %s: %d triangles; clrt device: %s; Embree %d threads (BVH build %.3f s)%s\n",
                     scenePath.c_str(), numTris, di.name.c_str(), threads, embreeBuild,
                     threadsGiven ? "; process pinned to that many CPUs" : "");
+        std::printf("clrt BVH: %zu 4-wide nodes, %zu leaf blocks (%.2f primitives per block)\n", ds.bvh4.nodes.size(),
+                    ds.bvh4.leaves.size(), double(ds.bvh.primRefs.size()) / double(std::max<size_t>(1, ds.bvh4.leaves.size())));
         std::printf("%-8s %10s %12s %12s %8s %10s %10s\n", "rays", "count", "clrt Mray/s", "embree Mray/s", "ratio",
                     "hit agree", "prim agree");
         for (RaySet* set : {&camera, &shadow, &diffuse}) {

@@ -16,6 +16,7 @@
 #define CLRT_LAYOUT_TABLE(S, M)                                                                   \
     S(Bvh4Node) M(Bvh4Node, minX) M(Bvh4Node, maxX) M(Bvh4Node, minY) M(Bvh4Node, maxY)          \
         M(Bvh4Node, minZ) M(Bvh4Node, maxZ) M(Bvh4Node, child) M(Bvh4Node, count)                 \
+    S(Bvh4Leaf) M(Bvh4Leaf, vertex) M(Bvh4Leaf, prim)                                            \
     S(Triangle) M(Triangle, v0) M(Triangle, v1) M(Triangle, v2)                                   \
     S(TriangleShading) M(TriangleShading, n0) M(TriangleShading, n1) M(TriangleShading, n2)       \
         M(TriangleShading, uv01) M(TriangleShading, uv2) M(TriangleShading, material)             \

@@ -716,7 +716,7 @@ int cmdRender(Args a) {
     times.flatten = since(t);
     if (a.allFeatures) {
         const int stack = ds.features.bvhStack;  // not a feature: the tree's own need
-        ds.features = FeatureSet::all();        // (primRefsIdentity off: the generic program)
+        ds.features = FeatureSet::all();
         ds.features.bvhStack = stack;
     }
     t = std::chrono::steady_clock::now();

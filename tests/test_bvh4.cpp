@@ -3,7 +3,8 @@
 // exactly one leaf lane, lanes inside their parent, empty lanes never hit), the traversal stack bound
 // the host computes (a host replica of the kernel's traversal never exceeds it; the kernel compiled
 // with exactly that stack finds what brute force finds on a deep tree built to fill its stack), and
-// the limits of the leaf packing.
+// the limits of the leaf packing, and the device's four-wide leaf blocks against brute force on degenerate
+// inputs (empty, one triangle, a coplanar grid hit through shared edges and vertices, huge coordinates).
 #include <catch.hpp>
 
 #include <array>
@@ -40,11 +41,11 @@ std::vector<Aabb> triBoxes(const std::vector<Tri>& tris) {
 float lane(const dev::float4& v, int i) { return (&v.x)[i]; }
 int lane(const dev::int4& v, int i) { return (&v.x)[i]; }
 
-// Walks the 4-wide tree from the root: every node reached once, every primRef position covered by
-// exactly one leaf lane, every lane's box inside the box its parent lane gave, empty lanes marked.
+// Walks the 4-wide tree from the root: every node reached once, every leaf block owned by one leaf
+// lane, every primitive in exactly one leaf lane's blocks (and lanes past a leaf's end empty), every lane's box inside the box its parent lane gave, empty lanes marked.
 void checkStructure4(const Bvh& bin, const Bvh4& b4, const std::vector<Aabb>& boxes) {
     const int n = int(bin.primRefs.size());
-    std::vector<int> covered(size_t(n), 0), reached(b4.nodes.size(), 0);
+    std::vector<int> covered(size_t(n), 0), reached(b4.nodes.size(), 0), blockUse(b4.leaves.size(), 0);
     int badBox = 0, badEmpty = 0, badChild = 0, maxLevel = 0;
     struct Item { int node, level; Aabb box; };
     Aabb all;
@@ -74,10 +75,15 @@ void checkStructure4(const Bvh& bin, const Bvh4& b4, const std::vector<Aabb>& bo
                   box.max.x <= it.box.max.x && box.max.y <= it.box.max.y && box.max.z <= it.box.max.z))
                 ++badBox;
             if (count > 0) {
-                if (child < 0 || child + count > n) { ++badChild; continue; }
-                for (int k = child; k < child + count; ++k) {
-                    covered[size_t(k)]++;
-                    const Aabb& pb = boxes[size_t(bin.primRefs[size_t(k)])];
+                const int blocks = (count + 3) / 4;
+                if (child < 0 || child + blocks > int(b4.leaves.size())) { ++badChild; continue; }
+                for (int k = 0; k < 4 * blocks; ++k) {
+                    const int ref = lane(b4.leaves[size_t(child + k / 4)].prim, k % 4);
+                    if (k % 4 == 0) blockUse[size_t(child + k / 4)]++;
+                    if (k >= count) { badEmpty += ref != CLRT_INVALID; continue; }
+                    if (ref < 0 || ref >= n) { ++badChild; continue; }
+                    covered[size_t(ref)]++;
+                    const Aabb& pb = boxes[size_t(ref)];
                     if (pb.valid() && isFinite(pb.min) && isFinite(pb.max) &&
                         !(box.min.x <= pb.min.x && box.min.y <= pb.min.y && box.min.z <= pb.min.z &&
                           pb.max.x <= box.max.x && pb.max.y <= box.max.y && pb.max.z <= box.max.z))
@@ -92,6 +98,7 @@ void checkStructure4(const Bvh& bin, const Bvh4& b4, const std::vector<Aabb>& bo
     int wrongCover = 0, wrongReach = 0;
     for (int c : covered) wrongCover += (c != 1);
     for (int r : reached) wrongReach += (r != 1);
+    for (int u : blockUse) wrongReach += (u != 1);  // every leaf block belongs to exactly one leaf lane
     CHECK(wrongCover == 0);
     CHECK(wrongReach == 0);
     CHECK(badBox == 0);
@@ -142,8 +149,8 @@ Trace4 traverse4(const Bvh& bin, const Bvh4& b4, const std::vector<Tri>& tris, V
             }
         } else {
             const int first = (~entry) >> 4, count = (~entry) & 15;
-            for (int k = first; k < first + count; ++k) {
-                const int p = bin.primRefs[size_t(k)];
+            for (int k = 0; k < count; ++k) {
+                const int p = lane(b4.leaves[size_t(first + k / 4)].prim, k % 4);
                 float t, b1, b2;
                 if (intersectTriangleWatertight(o, d, tris[size_t(p)][0], tris[size_t(p)][1], tris[size_t(p)][2],
                                                 tMax, t, b1, b2)) {
@@ -324,15 +331,16 @@ TEST_CASE("BVH4 traversal stack: the host bound holds, and the kernel with exact
         using T = typename std::decay_t<decltype(v)>::value_type;
         return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), v.data()));
     };
-    // primRef values index devTris directly (the renderer reorders triangles; here there is no need).
-    cl::Buffer nodes = ro(b4.nodes), refs = ro(bin.primRefs), tb = ro(devTris), sb = ro(noSpheres),
+    // Leaf prim values index devTris directly (the renderer reorders triangles; here there is no need).
+    setLeafTriangles(b4, devTris, int(devTris.size()));
+    cl::Buffer nodes = ro(b4.nodes), leaves = ro(b4.leaves), tb = ro(devTris), sb = ro(noSpheres),
                pb = ro(noPlanes), rb = ro(rays);
     cl::Buffer hb = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(dev::Hit) * numRays));
     dev::SceneParams sp{};
     sp.numTriangles = int(tris.size());  // no spheres, no planes
     std::vector<int> queueLength{numRays};  // the kernel reads the queue length on the device
     cl::Buffer cb = ro(queueLength);
-    closest.set("queueCount", cb).set("scene", sp).set("nodes", nodes).set("primRefs", refs).set("tris", tb);
+    closest.set("queueCount", cb).set("scene", sp).set("nodes", nodes).set("leaves", leaves).set("tris", tb);
     closest.set("spheres", sb).set("planes", pb).set("rays", rb).set("hits", hb);
     CL_CPP(dc.queue().enqueueNDRangeKernel(closest.ready(), cl::NullRange, cl::NDRange(roundUp(size_t(numRays), 64)),
                                            cl::NDRange(64)));
@@ -350,4 +358,147 @@ TEST_CASE("BVH4 traversal stack: the host bound holds, and the kernel with exact
     }
     CHECK(hitRays > numRays / 2);  // of the 3/4 compared
     CHECK(devMismatch == 0);
+}
+
+namespace {
+
+// Closest hits and shadow results of the device kernels (intersect.cl) on a BVH over tris built with
+// leaves of at most maxLeaf primitives (so leaves of several Bvh4Leaf blocks when maxLeaf > 4), compared
+// with brute force over the host's watertight test. Returns the number of mismatches; *hitsOut: rays hit.
+int deviceVsBruteForce(const std::vector<Tri>& tris, const std::vector<Vec3>& org, const std::vector<Vec3>& dir,
+                       int maxLeaf, int* hitsOut) {
+    BvhBuildOptions o;
+    o.maxLeafSize = maxLeaf;
+    o.traversalCost = 8;  // leaves as full as maxLeaf allows: every lane of a block, several blocks
+    Bvh bin = buildBvh(triBoxes(tris), o);
+    Bvh4 b4 = collapseBvh4(bin);
+    // Full blocks (all four lanes used) in every non-trivial case.
+    if (tris.size() > 64) CHECK(double(tris.size()) / double(b4.leaves.size()) > 3.0);
+    std::vector<dev::Triangle> devTris;
+    for (const Tri& t : tris)
+        devTris.push_back({{t[0].x, t[0].y, t[0].z, 0}, {t[1].x, t[1].y, t[1].z, 0}, {t[2].x, t[2].y, t[2].z, 0}});
+    setLeafTriangles(b4, devTris, int(devTris.size()));
+    if (devTris.empty()) devTris.push_back(dev::Triangle{});  // no zero-size buffers
+    if (b4.leaves.empty()) b4.leaves.push_back(dev::Bvh4Leaf{});
+    const int n = int(org.size());
+    std::vector<dev::Ray> rays(static_cast<size_t>(n));
+    std::vector<dev::ShadowRay> shadows(static_cast<size_t>(n));
+    for (int i = 0; i < n; ++i) {
+        rays[size_t(i)] = {{org[i].x, org[i].y, org[i].z, 0}, {dir[i].x, dir[i].y, dir[i].z, INFINITY}};
+        shadows[size_t(i)] = {{org[i].x, org[i].y, org[i].z, INFINITY}, {dir[i].x, dir[i].y, dir[i].z, 0}, {1, 1, 1, 0}};
+    }
+    DeviceContext& dc = testContext();
+    static cl::Program program = buildProgramFromSources(dc, loadKernelSources(KernelProgram::Intersect), {});
+    KernelArgs closest(program, "intersect_closest"), shadow(program, "intersect_shadow");
+    cl::Context& ctx = dc.context();
+    auto ro = [&](auto& v) {
+        using T = typename std::decay_t<decltype(v)>::value_type;
+        return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), v.data()));
+    };
+    std::vector<dev::Sphere> noSpheres(1);
+    std::vector<dev::Plane> noPlanes(1);
+    std::vector<int> queueLength{n};
+    cl::Buffer nodes = ro(b4.nodes), leaves = ro(b4.leaves), tb = ro(devTris), sb = ro(noSpheres), pb = ro(noPlanes),
+               rb = ro(rays), cb = ro(queueLength);
+    cl::Buffer hb = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(dev::Hit) * size_t(n)));
+    cl::Buffer shb = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, sizeof(dev::ShadowRay) * size_t(n),
+                                       shadows.data()));
+    dev::SceneParams sp{};
+    sp.numTriangles = int(tris.size());
+    for (KernelArgs* k : {&closest, &shadow})
+        k->set("queueCount", cb).set("scene", sp).set("nodes", nodes).set("leaves", leaves).set("tris", tb)
+            .set("spheres", sb).set("planes", pb);
+    closest.set("rays", rb).set("hits", hb);
+    shadow.set("raysPerPath", 1).set("shadows", shb);
+    const cl::NDRange global(roundUp(size_t(n), 64)), local(64);
+    CL_CPP(dc.queue().enqueueNDRangeKernel(closest.ready(), cl::NullRange, global, local));
+    CL_CPP(dc.queue().enqueueNDRangeKernel(shadow.ready(), cl::NullRange, global, local));
+    std::vector<dev::Hit> hits(static_cast<size_t>(n));
+    CL_CPP(dc.queue().enqueueReadBuffer(hb, CL_TRUE, 0, sizeof(dev::Hit) * hits.size(), hits.data()));
+    CL_CPP(dc.queue().enqueueReadBuffer(shb, CL_TRUE, 0, sizeof(dev::ShadowRay) * shadows.size(), shadows.data()));
+    int mismatch = 0, hitRays = 0;
+    for (int i = 0; i < n; ++i) {
+        int best = -1;
+        float tBest = INFINITY;
+        for (size_t k = 0; k < tris.size(); ++k) {
+            float tt, b1, b2;
+            if (intersectTriangleWatertight(org[i], dir[i], tris[k][0], tris[k][1], tris[k][2], tBest, tt, b1, b2)) {
+                tBest = tt;
+                best = int(k);
+            }
+        }
+        const dev::Hit& h = hits[size_t(i)];
+        const bool occluded = shadows[size_t(i)].contribution.x == 0;
+        mismatch += ((h.prim < 0) != (best < 0)) || (best >= 0 && std::fabs(h.t - tBest) > 1e-6f * tBest) ||
+                    (occluded != (best >= 0));
+        hitRays += best >= 0;
+    }
+    *hitsOut = hitRays;
+    return mismatch;
+}
+
+}  // namespace
+
+TEST_CASE("BVH4 leaf blocks on the device: empty, one triangle, coplanar grid, huge coordinates",
+          "[bvh4][cl]") {
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<float> unit(-1, 1);
+    std::vector<Vec3> org, dir;
+    auto raysAt = [&](float scale, float height) {  // down at the z = 0 plane, some slanted, some grazing
+        org.clear();
+        dir.clear();
+        for (int i = 0; i < 3000; ++i) {
+            org.push_back(Vec3(unit(rng) * scale, unit(rng) * scale, height));
+            Vec3 d = i % 3 == 0 ? Vec3(0, 0, -1) : Vec3(unit(rng), unit(rng), -1.0f - 0.5f * unit(rng));
+            if (i % 50 == 0) d = Vec3(unit(rng), unit(rng), 0);  // parallel to the plane: never a hit
+            dir.push_back(normalize(d));
+        }
+    };
+    int hits = 0;
+    SECTION("empty scene: every ray misses") {
+        raysAt(1, 1);
+        CHECK(deviceVsBruteForce({}, org, dir, 4, &hits) == 0);
+        CHECK(hits == 0);
+    }
+    SECTION("one triangle") {
+        raysAt(1, 1);
+        std::vector<Tri> one{{Vec3(-0.5f, -0.5f, 0), Vec3(0.5f, -0.5f, 0), Vec3(0, 0.5f, 0)}};
+        CHECK(deviceVsBruteForce(one, org, dir, 4, &hits) == 0);
+        CHECK(hits > 100);
+    }
+    // A 32 x 32 grid of squares, two triangles each, all in z = 0: rays aimed at shared edges and
+    // vertices must neither slip through nor disagree; leaves of 4 (one block), 7 and 15 (several).
+    std::vector<Tri> grid;
+    for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 32; ++x) {
+            Vec3 a(x / 16.f - 1, y / 16.f - 1, 0), b = a + Vec3(1 / 16.f, 0, 0), c = a + Vec3(0, 1 / 16.f, 0),
+                 d = a + Vec3(1 / 16.f, 1 / 16.f, 0);
+            grid.push_back({a, b, d});
+            grid.push_back({a, d, c});
+        }
+    SECTION("coplanar grid") {
+        raysAt(0.9f, 1);
+        for (int i = 0; i < 300; ++i) {  // exactly through grid vertices and edges
+            org.push_back(Vec3(std::round(unit(rng) * 14) / 16.f, (i % 2 ? std::round(unit(rng) * 14) : unit(rng) * 14) / 16.f, 1));
+            dir.push_back(Vec3(0, 0, -1));
+        }
+        for (int leaf : {4, 7, 15}) {
+            INFO("maxLeafSize " << leaf);
+            CHECK(deviceVsBruteForce(grid, org, dir, leaf, &hits) == 0);
+            CHECK(hits > int(org.size()) / 2);
+        }
+    }
+    SECTION("huge coordinates") {
+        // At 1e12 the rays hit; at 1e18 the test's T (a product of three coordinate differences)
+        // overflows to inf and every hit is refused, by both the host and the device: agreement only.
+        for (float scale : {1e12f, 1e18f}) {
+            std::vector<Tri> huge = grid;
+            for (Tri& t : huge)
+                for (Vec3& v : t) v = v * scale;
+            raysAt(0.9f * scale, scale);
+            INFO("scale " << scale);
+            CHECK(deviceVsBruteForce(huge, org, dir, 4, &hits) == 0);
+            if (scale < 1e15f) CHECK(hits > int(org.size()) / 2);
+        }
+    }
 }

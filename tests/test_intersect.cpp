@@ -115,8 +115,9 @@ void compareWithHost(const cl::Program& program, const RandomScene& s, bool time
         using T = typename std::decay_t<decltype(v)>::value_type;
         return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), const_cast<T*>(v.data())));
     };
-    std::vector<dev::Bvh4Node> nodes4 = collapseBvh4(s.bvh).nodes;
-    cl::Buffer nodes = ro(nodes4), refs = ro(s.bvh.primRefs), tris = ro(s.tris), sph = ro(s.spheres);
+    Bvh4 b4 = collapseBvh4(s.bvh);
+    setLeafTriangles(b4, s.tris, numTris);
+    cl::Buffer nodes = ro(b4.nodes), leaves = ro(b4.leaves), tris = ro(s.tris), sph = ro(s.spheres);
     cl::Buffer rayBuf = ro(rays);
     cl::Buffer hitBuf = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(dev::Hit) * numRays));
     cl::Buffer shadowBuf = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR,
@@ -136,7 +137,7 @@ void compareWithHost(const cl::Program& program, const RandomScene& s, bool time
     cl::Buffer countBuf = ro(queueLength);
     shadow.set("raysPerPath", 1);
     for (KernelArgs* k : {&closest, &shadow})
-        k->set("queueCount", countBuf).set("scene", sp).set("nodes", nodes).set("primRefs", refs).set("tris", tris)
+        k->set("queueCount", countBuf).set("scene", sp).set("nodes", nodes).set("leaves", leaves).set("tris", tris)
             .set("spheres", sph).set("planes", planeBuf);
     closest.set("rays", rayBuf).set("hits", hitBuf);
     shadow.set("shadows", shadowBuf);

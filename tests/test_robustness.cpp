@@ -112,8 +112,10 @@ std::vector<dev::Hit> deviceClosest(const std::vector<dev::Triangle>& trisIn, co
         using T = typename std::decay_t<decltype(v)>::value_type;
         return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), (void*)v.data()));
     };
-    std::vector<dev::Bvh4Node> nodes4 = collapseBvh4(bvh).nodes;
-    cl::Buffer nodes = ro(nodes4), refs = ro(bvh.primRefs), tb = ro(tris), sb = ro(sph), rb = ro(rays);
+    Bvh4 b4 = collapseBvh4(bvh);
+    setLeafTriangles(b4, trisIn, int(trisIn.size()));
+    if (b4.leaves.empty()) b4.leaves.push_back(dev::Bvh4Leaf{});  // no zero-size buffers
+    cl::Buffer nodes = ro(b4.nodes), leaves = ro(b4.leaves), tb = ro(tris), sb = ro(sph), rb = ro(rays);
     const int n = int(rays.size());
     cl::Buffer hb = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(dev::Hit) * rays.size()));
     KernelArgs& k = intersectProgram().closest;
@@ -124,7 +126,7 @@ std::vector<dev::Hit> deviceClosest(const std::vector<dev::Triangle>& trisIn, co
     sp.numSpheres = int(sphIn.size());  // no planes
     std::vector<int> queueLength{n};  // the kernel reads the queue length on the device
     cl::Buffer cb = ro(queueLength);
-    k.set("queueCount", cb).set("scene", sp).set("nodes", nodes).set("primRefs", refs).set("tris", tb).set("spheres", sb);
+    k.set("queueCount", cb).set("scene", sp).set("nodes", nodes).set("leaves", leaves).set("tris", tb).set("spheres", sb);
     k.set("planes", pb).set("rays", rb).set("hits", hb);
     CL_CPP(dc.queue().enqueueNDRangeKernel(k.ready(), cl::NullRange, cl::NDRange(roundUp(size_t(n), 64)), cl::NDRange(64)));
     std::vector<dev::Hit> hits(rays.size());

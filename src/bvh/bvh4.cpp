@@ -19,7 +19,21 @@ double halfArea(const BvhNode& n) {
 struct Collapser {
     const Bvh& bin;
     std::vector<dev::Bvh4Node>& out;
+    std::vector<dev::Bvh4Leaf>& leaves;
     int depth = 0;
+
+    // Appends the blocks of binary leaf c (its primRefs, four to a block); returns the first block.
+    int emitLeaf(const BvhNode& c) {
+        const int firstBlock = int(leaves.size());
+        for (int k = 0; k < c.count; k += 4) {
+            dev::Bvh4Leaf block{};
+            int* prim = &block.prim.x;
+            for (int i = 0; i < 4; ++i)
+                prim[i] = k + i < c.count ? bin.primRefs[size_t(c.first + k + i)] : CLRT_INVALID;
+            leaves.push_back(block);
+        }
+        return firstBlock;
+    }
 
     // Writes the 4-wide node for binary node b and its subtree; returns {index, stack need}.
     // Stack need of a subtree: the most entries its traversal pushes, from an empty stack (a node
@@ -75,7 +89,7 @@ struct Collapser {
                 if (c.first > CLRT_BVH4_MAX_PRIMS - c.count)
                     throw std::runtime_error("scene has more than " + std::to_string(CLRT_BVH4_MAX_PRIMS) +
                                              " primitives (the BVH's limit)");
-                child[i] = c.first;
+                child[i] = emitLeaf(c);
                 count[i] = c.count;
             } else {
                 auto sub = emit(lanes[i], level + 1);
@@ -104,13 +118,29 @@ Bvh4 collapseBvh4(const Bvh& bvh) {
         return r;
     }
     r.nodes.reserve(bvh.nodes.size() / 2 + 1);
-    Collapser c{bvh, r.nodes};
+    Collapser c{bvh, r.nodes, r.leaves};
     r.maxStack = c.emit(0, 1).second;
     r.depth = c.depth;
     if (r.maxStack > CLRT_BVH4_STACK_SIZE)
         throw std::logic_error("collapseBvh4: traversal stack need " + std::to_string(r.maxStack) +
                                " exceeds CLRT_BVH4_STACK_SIZE");
     return r;
+}
+
+void setLeafTriangles(Bvh4& b4, const std::vector<dev::Triangle>& tris, int numTriangles) {
+    for (dev::Bvh4Leaf& block : b4.leaves) {
+        const int* prim = &block.prim.x;
+        for (int i = 0; i < 4; ++i) {
+            if (prim[i] < 0 || prim[i] >= numTriangles) continue;
+            const dev::Triangle& t = tris[size_t(prim[i])];
+            const dev::float4* v[3] = {&t.v0, &t.v1, &t.v2};
+            for (int k = 0; k < 3; ++k) {
+                (&block.vertex[3 * k + 0].x)[i] = v[k]->x;
+                (&block.vertex[3 * k + 1].x)[i] = v[k]->y;
+                (&block.vertex[3 * k + 2].x)[i] = v[k]->z;
+            }
+        }
+    }
 }
 
 }  // namespace clrt

@@ -1,7 +1,9 @@
 // Collapse of the binary SAH tree (bvh.h) into the 4-wide nodes the device traverses
 // (dev::Bvh4Node in shared/device_types.h): each 4-wide node takes a binary node's children and keeps
 // opening its largest-area interior child until it has four (Wald et al. 2008, "Getting rid of
-// packets"; Embree's BVH4 is built the same way). Leaves and primRefs are the binary tree's own.
+// packets"; Embree's BVH4 is built the same way). A leaf's primitives (the binary tree's own leaves,
+// in primRefs order) are copied into blocks of four (dev::Bvh4Leaf) with their triangles' vertices
+// as struct of arrays, so the device tests a leaf's triangles four at a time.
 #pragma once
 #include <vector>
 
@@ -12,12 +14,18 @@ namespace clrt {
 
 struct Bvh4 {
     std::vector<dev::Bvh4Node> nodes;  // nodes[0] is the root; never empty
+    std::vector<dev::Bvh4Leaf> leaves;  // the leaves' primitives, four to a block (vertices: setLeafTriangles)
     int maxStack = 0;  // most entries the device's near-first traversal can have on its stack
     int depth = 0;     // node levels on the longest root-to-leaf path
 };
 
 // Always succeeds for a tree from buildBvh (maxStack <= CLRT_BVH4_STACK_SIZE); throws
 // std::logic_error for a hand-made tree that breaks that bound.
+// Leaf lanes point at blocks of `leaves` whose prim holds the binary tree's primRefs (in leaf order);
+// their vertices are zero until setLeafTriangles.
 Bvh4 collapseBvh4(const Bvh& bvh);
+
+// Copies each triangle lane's world-space vertices (prim < numTriangles) from tris into its block.
+void setLeafTriangles(Bvh4& b4, const std::vector<dev::Triangle>& tris, int numTriangles);
 
 }  // namespace clrt

@@ -33,7 +33,6 @@ std::vector<std::string> FeatureSet::defines() const {
     add(normalMaps, "CLRT_HAS_NORMAL_MAP");
     add(bumpMaps, "CLRT_HAS_BUMP_MAP");
     add(spheres, "CLRT_HAS_SPHERES");
-    add(primRefsIdentity, "CLRT_PRIMREFS_IDENTITY");
     add(motionBlur, "CLRT_HAS_MOTION_BLUR");
     add(pathTracing, "CLRT_HAS_PATH_TRACING");
     // Rounded up to a multiple of 8 so that scenes of similar depth share a cached program.

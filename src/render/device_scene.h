@@ -23,7 +23,6 @@ struct FeatureSet {
     bool normalMaps = false;  // a shape uses a replace_normal texture
     bool bumpMaps = false;    // a shape uses a bump_normal texture
     bool spheres = false;
-    bool primRefsIdentity = false;  // primRefs[i] == i (triangles only, stored in leaf order)
     bool motionBlur = false;        // a mesh, triangle or sphere has a MotionBlur translation
     bool pathTracing = false;       // a camera has <Renderer>PathTracing (cl_kernels/path.cl)
     int bvhStack = 0;  // traversal stack entries the scene's BVH needs (0: the header's default)

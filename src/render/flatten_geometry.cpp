@@ -189,14 +189,17 @@ void flattenMeshes(const Scene& scene, const std::vector<MeshJob>& meshJobs, Dev
     ds.skippedTriangles += nanSkipped;
 }
 
-// The BVH over `boxes` (triangles, then spheres), collapsed to 4-wide nodes; the triangles are then
-// stored in leaf order so a leaf's triangles are contiguous in memory.
+// The BVH over `boxes` (triangles, then spheres); the triangles are stored in leaf order so a leaf's
+// triangles are contiguous in memory, then the tree is collapsed to 4-wide nodes with the leaves'
+// triangles copied into their struct-of-arrays blocks.
 void buildDeviceBvh(const std::vector<Aabb>& boxes, DeviceScene& ds) {
     auto tb = std::chrono::steady_clock::now();
-    ds.bvh = buildBvh(boxes);
-    ds.bvh4 = collapseBvh4(ds.bvh);
-    ds.features.bvhStack = std::max(1, ds.bvh4.maxStack);
-    ds.bvhSeconds = secondsSince(tb);
+    // The device tests a leaf's triangles four at a time (Bvh4Leaf), so a leaf of up to four costs
+    // about what one triangle test did: a node is costed as two triangle tests, which gives fuller
+    // leaves (Audi TT: 2.1 -> 3.0 primitives per block) and fewer nodes (86k -> 61k).
+    BvhBuildOptions opts;
+    opts.traversalCost = 2;
+    ds.bvh = buildBvh(boxes, opts);
     const int numTris = int(ds.triangles.size());
     std::vector<dev::Triangle> tris(ds.triangles.size());
     std::vector<dev::TriangleShading> shading(ds.triangleShading.size());
@@ -209,10 +212,10 @@ void buildDeviceBvh(const std::vector<Aabb>& boxes, DeviceScene& ds) {
     }
     ds.triangles.swap(tris);
     ds.triangleShading.swap(shading);
-    // Without spheres every reference is now its own position: the kernels can skip primRefs.
-    bool identity = true;
-    for (size_t i = 0; i < ds.bvh.primRefs.size() && identity; ++i) identity = ds.bvh.primRefs[i] == int(i);
-    ds.features.primRefsIdentity = identity;
+    ds.bvh4 = collapseBvh4(ds.bvh);
+    setLeafTriangles(ds.bvh4, ds.triangles, numTris);
+    ds.features.bvhStack = std::max(1, ds.bvh4.maxStack);
+    ds.bvhSeconds = secondsSince(tb);
 }
 
 }  // namespace

@@ -42,7 +42,7 @@ struct Renderer::Impl {
     FusedPath fused;  // the fused CPU path (fused_renderer.h), bound to the same scene buffers
     // Every kernel argument, each named as the kernel parameter it is bound to (src/shared/kernel_params.h):
     // bindAll() binds each kernel's whole parameter list from these members, by name.
-    cl::Buffer nodes, primRefs, tris, triShading, spheres, planes, materials, textureSets, textures, images, texels, lights, envDist, lightData;
+    cl::Buffer nodes, leaves, tris, triShading, spheres, planes, materials, textureSets, textures, images, texels, lights, envDist, lightData;
     // Queue buffers (sized per render).
     size_t queueCapacity = 0, shadowCapacity = 0;
     cl::Buffer paths, rays, hits, points, pathRadiance, nextPaths, nextRays, childValid, shadows;
@@ -81,7 +81,7 @@ struct Renderer::Impl {
         nextCount = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(int)));
         fused = FusedPath(ctx, program);
         nodes = uploadBuffer(ctx, ds.bvh4.nodes);
-        primRefs = uploadBuffer(ctx, ds.bvh.primRefs);
+        leaves = uploadBuffer(ctx, ds.bvh4.leaves);
         tris = uploadBuffer(ctx, ds.triangles);
         triShading = uploadBuffer(ctx, ds.triangleShading);
         spheres = uploadBuffer(ctx, ds.spheres);

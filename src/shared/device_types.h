@@ -101,13 +101,14 @@ enum TmoKind { CLRT_TMO_TABLE(CLRT_ENUM_CONSTANT_) };
 #define CLRT_FUSED_MAX_LEVELS 32
 #define CLRT_FUSED_STACK_SIZE 24
 
-/* A leaf enters the traversal stack as one int, ~(first << 4 | count). */
+/* A leaf enters the traversal stack as one int, ~(firstLeafBlock << 4 | count). */
 #define CLRT_BVH4_MAX_LEAF 15
 #define CLRT_BVH4_MAX_PRIMS (1 << 27)
 
 /* A 4-wide BVH node, the device's BVH. Lane i of every vector belongs to child i (struct of arrays,
  * so the four slab tests of a node are four-wide vector operations):
- *   count[i] > 0                    leaf: primRefs [child[i], child[i] + count[i])
+ *   count[i] > 0                    leaf: its count[i] primitives are in the Bvh4Leaf blocks
+ *                                   child[i] .. child[i] + (count[i] + 3) / 4 - 1, four to a block
  *   count[i] == 0, child[i] >= 0    interior: child[i] is the index of the child node
  *   child[i] == CLRT_INVALID        empty lane: bounds min = +inf, max = -inf, never hit
  * nodes[0] is the root. */
@@ -116,6 +117,17 @@ typedef struct Bvh4Node {
     int4 child;
     int4 count;
 } Bvh4Node;
+
+/* Up to four primitives of one BVH leaf, with their triangles' world-space vertices as struct of
+ * arrays, so the leaf's triangle tests are four-wide vector operations. vertex[3 * k + axis], lane i:
+ * coordinate `axis` (0 x, 1 y, 2 z) of vertex k of the block's i-th triangle (the same values as
+ * Triangle v0, v1, v2 at index prim[i]). prim[i]: the primitive reference (a triangle index into tris,
+ * or numTriangles + a sphere index), CLRT_INVALID past the leaf's last primitive; a sphere's lane
+ * and an empty lane have zero vertices. */
+typedef struct Bvh4Leaf {
+    float4 vertex[9];
+    int4 prim;
+} Bvh4Leaf;
 
 /* A world-space triangle. Vertex data for shading lives in TriangleShading at the same index.
  * v0.w, v1.w, v2.w: the x, y, z of its MotionBlur translation (0 when static; read only under

@@ -17,7 +17,7 @@
 
 /* What the intersection kernels traverse. */
 #define CLRT_PARAMS_GEOMETRY(P)                                                                    \
-    P(IN, Bvh4Node, nodes) P(IN, int, primRefs) P(IN, Triangle, tris) P(IN, Sphere, spheres)       \
+    P(IN, Bvh4Node, nodes) P(IN, Bvh4Leaf, leaves) P(IN, Triangle, tris) P(IN, Sphere, spheres)    \
     P(IN, Plane, planes)
 
 /* The surfaces as shading sees them (a hit's position, normals, uv, material). */
