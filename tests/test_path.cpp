@@ -68,6 +68,8 @@ TEST_CASE("Path tracing: <Renderer> and <RendererParams> set the camera's path m
         return loadScene(writeText(tmp.file("a.xml"), rendererScene(xml))).cameras.at(0).pathMode;
     };
     CHECK(mode("") == 0);
+    CHECK(mode("<Renderer>DirectLighting</Renderer>") == 0);  // the course's (2021) name for the default
+    CHECK(mode("<Renderer>DirectLighting</Renderer><RendererParams> </RendererParams>") == 0);
     CHECK(mode("<Renderer>PathTracing</Renderer>") == CLRT_PATH_ON);
     CHECK(mode("<Renderer>PathTracing</Renderer><RendererParams></RendererParams>") == CLRT_PATH_ON);
     CHECK(mode("<Renderer>PathTracing</Renderer><RendererParams>NextEventEstimation ImportanceSampling "
@@ -88,7 +90,11 @@ TEST_CASE("Path tracing: bad <Renderer> input is one error naming file, line and
     TempDir tmp;
     std::string e = loadError(writeText(tmp.file("r.xml"), rendererScene("<Renderer>RayTracing</Renderer>")));
     CHECK(e.find("r.xml:1:") != std::string::npos);
-    CHECK(e.find("unknown renderer 'RayTracing' (PathTracing)") != std::string::npos);
+    CHECK(e.find("unknown renderer 'RayTracing' (PathTracing, DirectLighting)") != std::string::npos);
+    e = loadError(writeText(tmp.file("d.xml"), rendererScene("<Renderer>DirectLighting</Renderer>"
+                                                              "<RendererParams>NextEventEstimation</RendererParams>")));
+    CHECK(e.find("d.xml:1:") != std::string::npos);
+    CHECK(e.find("DirectLighting takes none") != std::string::npos);
     e = loadError(writeText(tmp.file("p.xml"), rendererScene("<Renderer>PathTracing</Renderer>"
                                                               "<RendererParams>NEE</RendererParams>")));
     CHECK(e.find("p.xml:1:") != std::string::npos);

@@ -4,7 +4,7 @@
 //          Cameras Lights Materials Transformations VertexData TexCoordData Textures Objects
 //   Camera (type=lookAt|simple, handedness=left|right): Position Gaze GazePoint Up NearPlane
 //          NearDistance FovY ImageResolution ImageName NumSamples FocusDistance ApertureSize Tonemap
-//          Renderer (PathTracing) RendererParams
+//          Renderer (PathTracing, DirectLighting) RendererParams
 //          (TMO TMOOptions Saturation Gamma Extension)
 //   Lights: AmbientLight PointLight AreaLight DirectionalLight SpotLight SphericalDirectionalLight
 //   BRDFs (hw6): OriginalPhong OriginalBlinnPhong ModifiedPhong ModifiedBlinnPhong (normalized)
@@ -581,7 +581,7 @@ struct Walker {
         scene.cameras.push_back(cam);
     }
     // <Renderer>PathTracing</Renderer> and its optional <RendererParams> (course hw6): the CLRT_PATH_*
-    // bits, or 0 without <Renderer> (classic ray tracing). Empty or missing params: uniform sampling.
+    // bits, or 0 without <Renderer> or with <Renderer>DirectLighting</Renderer> (classic ray tracing). Empty or missing params: uniform sampling.
     // MultipleImportanceSampling is clrt's own option (README "Path tracing").
     int readRenderer(const SceneNode& n, const std::string& who) {
         auto rNode = n.child("Renderer");
@@ -591,7 +591,12 @@ struct Walker {
             return 0;
         }
         std::string r = trim(rNode->text());
-        if (r != "PathTracing") fail(*rNode, who + ": unknown renderer '" + r + "' (PathTracing)");
+        if (r == "DirectLighting") {  // the course's name (2021 text) for the default, classic ray tracer
+            if (pNode && !trim(pNode->text()).empty())
+                fail(*pNode, who + ": <RendererParams> needs <Renderer>PathTracing</Renderer> (DirectLighting takes none)");
+            return 0;
+        }
+        if (r != "PathTracing") fail(*rNode, who + ": unknown renderer '" + r + "' (PathTracing, DirectLighting)");
         int mode = CLRT_PATH_ON;
         if (!pNode) return mode;
         std::istringstream in(pNode->text());
