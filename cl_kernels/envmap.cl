@@ -86,8 +86,13 @@ inline float3 EnvMap_Lookup(const __global float4* texels, ImageInfo img, int ma
     float dx = px - fx, dy = py - fy;
     int x0 = (int)fx, y0 = (int)fy, x1 = x0 + 1, y1 = y0 + 1;
     if (mapping == ENV_LATLONG) {
-        x0 %= w; if (x0 < 0) x0 += w;
-        x1 %= w; if (x1 < 0) x1 += w;
+        if (x0 >= -1 && x0 < w) { /* u in [0, 1]: one wrap step; the integer division (%) was a long stall on the address */
+            if (x0 < 0) x0 = w - 1;
+            if (x1 >= w) x1 = 0;
+        } else {
+            x0 %= w; if (x0 < 0) x0 += w;
+            x1 %= w; if (x1 < 0) x1 += w;
+        }
     } else {
         x0 = clamp(x0, 0, w - 1); x1 = clamp(x1, 0, w - 1);
     }

@@ -146,46 +146,46 @@ inline float Mis_Power(float nP, float p, float nQ, float q) {
     return 1.0f / (1.0f + r * r);
 }
 
-/* One sample of multi-sample MIS for an environment light: from the map's importance distribution
- * (fromMap = 1, expected count 1 per shading point) or the cosine lobe around n (0, expected count
- * cosShare: drawn at a fraction cosShare of the shading points), uniforms u. Returns L(wi)·w/(count·p), w the
- * power-heuristic weight against the other strategy, and the direction in *wi (n when none was drawn). */
-inline float3 EnvLight_MisSample(const __global Light* light, const __global float* d, ImageInfo img, float3 n,
-                                 int fromMap, float cosShare, float2 u, const __global float4* texels, float3* wi) {
-    float3 w = n;
-    float2 uv;
-    float pImp = 0.0f;
-    *wi = n;
-    if (fromMap) {
-        if (!EnvDist_SampleUv(d, u.x, u.y, &w, &pImp, &uv)) return (float3)(0.0f);
-    } else {
-        w = EnvSample_Cosine(n, (float2)(fmin(u.x, CLRT_ONE_MINUS_EPS), u.y));
-        uv = EnvMap_DirToUv(light->mapping, w);
-        pImp = EnvDist_PdfUv(d, uv);
-    }
-    *wi = w;
-    float pCos = fmax(dot(w, n), 0.0f) * CLRT_INV_PI;
-    float p = fromMap ? pImp : pCos, q = fromMap ? pCos : pImp;
-    float nP = fromMap ? 1.0f : cosShare, nQ = fromMap ? cosShare : 1.0f;
+/* One sample's value under multi-sample MIS: L·w/(nP·p), w the power-heuristic weight of a sample of
+ * density p drawn nP times per shading point against the other strategy's density q drawn nQ times;
+ * 0 where p is not a positive finite density. */
+inline float3 EnvLight_MisValue(float3 l, float nP, float p, float nQ, float q) {
     if (!(p > 0.0f) || !isfinite(p)) return (float3)(0.0f);
-    float3 l = EnvMap_Lookup(texels, img, light->mapping, uv.x, uv.y) * light->radiance.xyz;
     return finiteOrZero(l * (Mis_Power(nP, p, nQ, q) / (nP * p)));
 }
 
 /* Multi-sample MIS for an environment light: one sample from the map's importance distribution (uniforms
  * uLight; direction *wiL, value *eL) at every shading point, and one from the cosine lobe around n (uBsdf;
  * *wiB, *eB) where withCosine is set, which the caller sets at a fraction cosShare of the shading points
- * (1: all; ½: every other sample of a pixel). Then eL + eB (each times its sample's Blinn-Phong term) is
- * an unbiased estimate of what Light_Sample's E estimates. Shadow rays go to infinity. */
+ * (1: all; ½: every other sample of a pixel), expected counts 1 and cosShare. Then eL + eB (each times its
+ * sample's Blinn-Phong term) is an unbiased estimate of what Light_Sample's E estimates. Shadow rays go
+ * to infinity; a direction not drawn is n, with value 0. Both directions are found first, then the map
+ * is read for both (the two bilinear lookups and the cosine direction's pdf): the reads miss the cache
+ * (an 8 MB map, random directions), and issued together their misses overlap (README "Where the time
+ * goes"). */
 inline void EnvLight_SampleMis(const __global Light* light, float3 n, float2 uLight, float2 uBsdf, float cosShare,
                                int withCosine, const __global ImageInfo* images, const __global float4* texels,
                                const __global float* envDist, float3* wiL, float3* eL, float3* wiB, float3* eB) {
     const __global float* d = envDist + light->distribution;
     const ImageInfo img = images[light->image];
-    *eL = EnvLight_MisSample(light, d, img, n, 1, cosShare, uLight, texels, wiL);
-    *eB = (float3)(0.0f);
-    *wiB = n;
-    if (withCosine) *eB = EnvLight_MisSample(light, d, img, n, 0, cosShare, uBsdf, texels, wiB);
+    const int mapping = light->mapping;
+    float3 wL = n, wB = n, lL = (float3)(0.0f), lB = (float3)(0.0f);
+    float pB = 0.0f; /* the map's pdf of the cosine direction */
+    if (withCosine) {
+        wB = EnvSample_Cosine(n, (float2)(fmin(uBsdf.x, CLRT_ONE_MINUS_EPS), uBsdf.y));
+        float2 uvB = EnvMap_DirToUv(mapping, wB);
+        lB = EnvMap_Lookup(texels, img, mapping, uvB.x, uvB.y) * light->radiance.xyz;
+        pB = EnvDist_PdfUv(d, uvB);
+    }
+    float2 uvL = (float2)(0.0f);
+    float pL = 0.0f;
+    const int okL = EnvDist_SampleUv(d, uLight.x, uLight.y, &wL, &pL, &uvL);
+    if (okL) lL = EnvMap_Lookup(texels, img, mapping, uvL.x, uvL.y) * light->radiance.xyz;
+    else wL = n;
+    *wiL = wL;
+    *wiB = wB;
+    *eL = okL ? EnvLight_MisValue(lL, 1.0f, pL, cosShare, fmax(dot(wL, n), 0.0f) * CLRT_INV_PI) : (float3)(0.0f);
+    *eB = withCosine ? EnvLight_MisValue(lB, cosShare, fmax(dot(wB, n), 0.0f) * CLRT_INV_PI, 1.0f, pB) : (float3)(0.0f);
 }
 
 /* The dispatcher. p: the shading point, n: its shading normal (environment samplers), u: two uniform

@@ -315,15 +315,17 @@ __kernel void env_test(const __global float* dist, const __global float4* texels
     float4 a = in[i];
     float3 d; float pdf;
     int ok = EnvDist_Sample(dist, a.x, a.y, &d, &pdf);
-    out[4 * i] = (float4)(d, ok ? pdf : -1.0f);
+    out[5 * i] = (float4)(d, ok ? pdf : -1.0f);
     float3 q = normalize((float3)(a.z, a.w, a.x - 0.5f));
-    out[4 * i + 1] = (float4)(EnvMap_Radiance(texels, img, mapping, (float3)(1.0f), q),
+    out[5 * i + 1] = (float4)(EnvMap_Radiance(texels, img, mapping, (float3)(1.0f), q),
                             EnvDist_PdfUv(dist, EnvMap_DirToUv(mapping, q)));
     float2 uv = EnvMap_DirToUv(mapping, q);
     float3 back;
     int okb = EnvMap_UvToDir(mapping, uv.x, uv.y, &back);
-    out[4 * i + 2] = (float4)(uv, okb ? EnvMap_UvToSolidAngle(mapping, uv.x, uv.y) : -1.0f, 0.0f);
-    out[4 * i + 3] = (float4)(back, 0.0f);
+    out[5 * i + 2] = (float4)(uv, okb ? EnvMap_UvToSolidAngle(mapping, uv.x, uv.y) : -1.0f, 0.0f);
+    out[5 * i + 3] = (float4)(back, 0.0f);
+    /* u outside [0, 1] too (the lookup's general wrap), v in [0, 1) */
+    out[5 * i + 4] = (float4)(EnvMap_Lookup(texels, img, mapping, 1.75f * a.z + 0.5f, a.x), 0.0f);
 }
 )CLC";
     DeviceContext& dc = testContext();
@@ -337,7 +339,7 @@ __kernel void env_test(const __global float* dist, const __global float4* texels
         const int n = 20000;
         std::mt19937 rng(11);
         std::uniform_real_distribution<float> uni(0.0f, 0.99999994f), sym(-1.0f, 1.0f);
-        std::vector<dev::float4> in(n), out(4 * size_t(n));
+        std::vector<dev::float4> in(n), out(5 * size_t(n));
         for (auto& a : in) a = {uni(rng), uni(rng), sym(rng), sym(rng)};
         cl::Context& ctx = dc.context();
         auto ro = [&](const void* p, size_t bytes) {
@@ -353,12 +355,12 @@ __kernel void env_test(const __global float* dist, const __global float4* texels
         k.setArg(4, inBuf); k.setArg(5, outBuf); k.setArg(6, n);
         CL_CPP(dc.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(roundUp(n, 64)), cl::NDRange(64)));
         CL_CPP(dc.queue().enqueueReadBuffer(outBuf, CL_TRUE, 0, out.size() * sizeof(dev::float4), out.data()));
-        int sampleBad = 0, okMismatch = 0, radBad = 0, pdfBad = 0, uvBad = 0;
+        int sampleBad = 0, okMismatch = 0, radBad = 0, pdfBad = 0, uvBad = 0, wrapBad = 0;
         for (int i = 0; i < n; ++i) {
             Vec3 w;
             float pdf;
             bool ok = m.dist.sample(in[i].x, in[i].y, w, pdf);
-            const dev::float4& o = out[4 * i];
+            const dev::float4& o = out[5 * i];
             if (ok != (o.w >= 0)) { ++okMismatch; continue; }
             if (ok && (angleBetween(w, Vec3(o.x, o.y, o.z)) > 1e-4f || std::fabs(o.w - pdf) > 1e-3f * pdf)) {
                 if (++sampleBad <= 3)
@@ -370,19 +372,24 @@ __kernel void env_test(const __global float* dist, const __global float4* texels
             float u, v;
             envDirToUv(mapping, q, u, v);
             L = envLookup(m.view, u, v);
-            const dev::float4& r = out[4 * i + 1];
+            const dev::float4& r = out[5 * i + 1];
             float scale = std::max(1e-3f, std::max(L.x, std::max(L.y, L.z)));
             if (std::fabs(r.x - L.x) > 1e-3f * scale || std::fabs(r.y - L.y) > 1e-3f * scale ||
                 std::fabs(r.z - L.z) > 1e-3f * scale)
                 ++radBad;
             float pq = m.dist.pdf(q);
             if (std::fabs(r.w - pq) > 1e-3f * pq + 1e-6f) ++pdfBad;
-            const dev::float4& uv = out[4 * i + 2];
+            const dev::float4& uv = out[5 * i + 2];
             float du = std::fabs(uv.x - u);
             if (mapping == dev::ENV_LATLONG) du = std::min(du, 1.0f - du);
             if (du > 1e-4f || std::fabs(uv.y - v) > 1e-4f) ++uvBad;
             if (std::fabs(uv.z - envUvToSolidAngle(mapping, u, v)) > 1e-3f * envUvToSolidAngle(mapping, u, v)) ++uvBad;
-            if (angleBetween(Vec3(out[4 * i + 3].x, out[4 * i + 3].y, out[4 * i + 3].z), q) > 2e-3f) ++uvBad;
+            if (angleBetween(Vec3(out[5 * i + 3].x, out[5 * i + 3].y, out[5 * i + 3].z), q) > 2e-3f) ++uvBad;
+            const Vec3 Lw = envLookup(m.view, 1.75f * in[i].z + 0.5f, in[i].x);  // wraps (lat-long) or clamps (probe)
+            const dev::float4& lw = out[5 * i + 4];
+            float sw = std::max(1e-3f, std::max(Lw.x, std::max(Lw.y, Lw.z)));
+            if (std::fabs(lw.x - Lw.x) > 1e-3f * sw || std::fabs(lw.y - Lw.y) > 1e-3f * sw || std::fabs(lw.z - Lw.z) > 1e-3f * sw)
+                ++wrapBad;
         }
         // A few may land in the neighbouring texel (ulp differences of acos/atan2 between libm and PoCL).
         CHECK(okMismatch <= n / 2000);
@@ -390,6 +397,7 @@ __kernel void env_test(const __global float* dist, const __global float4* texels
         CHECK(radBad <= n / 1000);
         CHECK(pdfBad <= n / 1000);
         CHECK(uvBad <= n / 1000);
+        CHECK(wrapBad <= n / 1000);  // the host's % wrap, for any u (a wrong texel would miss on most)
     }
 }
 
