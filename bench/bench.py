@@ -458,6 +458,8 @@ def main():
     ap.add_argument("--spp", default="", help="comma list: only these spp points of each scene (default: all)")
     ap.add_argument("--pipelines", default="", help="comma list of clrt --pipeline values (fused, wavefront), each run "
                     "as its own variant (strategy label 'mis+fused'), interleaved run by run; default: clrt's own choice")
+    ap.add_argument("--path-only", action="store_true", help="only the path-traced scenes (bench/bench_path.py)")
+    ap.add_argument("--no-path", action="store_true", help="skip the path-traced scenes")
     ap.add_argument("--replot", metavar="DIR", help="only redraw the plots of DIR (a results folder) from its CSVs")
     a = ap.parse_args()
     if a.replot:
@@ -478,6 +480,9 @@ def main():
         log("bench: this clrt has no --env-sampling option; env scenes run with its default sampler only")
         strategies = ["default"]
     clrt = Clrt(exe, a.device, env_flag or "--env-sampling")
+    if a.path_only:  # issue 16's strategies on the path-traced scenes alone
+        import bench_path
+        return bench_path.main_path_only(sys.modules[__name__], clrt, a)
     mi, mi_version = (None, "--no-mitsuba") if a.no_mitsuba else load_mitsuba(os.cpu_count() or 2)
     if mi is None:
         log("bench: Mitsuba 3 not available (%s): the comparison with Mitsuba is skipped" % mi_version)
@@ -751,6 +756,9 @@ def main():
         rep += ["## Intersection: clrt kernels vs Embree 3 (ray_bench)", "",
                 md_table(rb_rows, ["scene", "rays", "count", "clrt_mrays", "embree_mrays", "ratio", "hit_agree", "prim_agree"],
                          {"clrt_mrays": "%.2f", "embree_mrays": "%.2f", "ratio": "%.2f"}), ""]
+    if not a.no_path:  # issue 16: the path-traced scenes, every strategy (bench/bench_path.py)
+        import bench_path
+        rep += bench_path.run(sys.modules[__name__], clrt, a, out, tmp)
     open(os.path.join(out, "report.md"), "w").write("\n".join(rep) + "\n")
     print("\n".join(rep))
     shutil.rmtree(tmp, ignore_errors=True)

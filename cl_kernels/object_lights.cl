@@ -34,6 +34,19 @@ inline int MeshLight_PickTriangle(const __global float4* tri, int n, float u, fl
     return lo;
 }
 
+/* How far the shadow ray towards q (on a light triangle, reached at cosθ_L over distance d) may go:
+ * short of q by Ray_OffsetOrigin's offset off the surface, measured along the ray (offset / cosθ_L).
+ * A ray that meets the light's triangle at a grazing angle lies within rounding distance of its plane
+ * over a length that grows as 1/cosθ_L, so a fixed fraction of d (AimShadow's 1e-5) lets the triangle
+ * occlude its own sample: inside a closed LightMesh 0.04% of the light samples (the points on the
+ * neighbouring triangles, nearly in the shading point's tangent plane) were lost that way (README,
+ * "Path tracing"). At most half of d is cut. */
+inline float MeshLight_ShadowLength(float d, float3 q, float cosLight) {
+    float m = fmax(fmax(fabs(q.x), fabs(q.y)), fabs(q.z));
+    float offset = fmax(CLRT_OFFSET_ULPS * FLT_EPSILON * m, 1.0f / 65536.0f);
+    return fmax(d - offset / cosLight, 0.5f * d);
+}
+
 inline float3 MeshLight_Sample(const __global Light* light, const __global float4* data, float3 p, float2 u,
                                float3* wi, float* dist) {
     if (light->objCount <= 0 || !(light->area > 0.0f)) return (float3)(0.0f);
@@ -52,6 +65,7 @@ inline float3 MeshLight_Sample(const __global Light* light, const __global float
     float3 nL = normalize(cross(v1 - v0, v2 - v0));
     float cosLight = dot(nL, -*wi);
     if (!(cosLight > 0.0f)) return (float3)(0.0f); /* one-sided */
+    *dist = MeshLight_ShadowLength(*dist, q, cosLight);
     return light->radiance.xyz * (light->area * cosLight / d2);
 }
 

@@ -3,7 +3,9 @@
 view (back wall, floor, left/right walls, ceiling without the light, the two spheres) for linear EXRs
 of any square size (regions are given in the reference's 512² pixels and scaled), issue 16's
 Russian-roulette comparison. Also the median (robust against the references' heavy tails).
-Usage: build/venv/bin/python scripts/path_regions.py A.exr [B.exr ...]"""
+Usage: build/venv/bin/python scripts/path_regions.py A.exr [B.exr ...]
+       build/venv/bin/python scripts/path_regions.py --table NAME CLRT_RR.exr CLRT_D40.exr REF_RR.exr REF_D3.exr
+         (one block of docs/path_rr_regions.txt: the means side by side, and the ratio REF_RR / CLRT_RR)"""
 import sys
 import os
 
@@ -27,7 +29,18 @@ def region_means(img):
     return out
 
 
+def table(name, paths):
+    ms = [region_means(exr_stats.load(p)) for p in paths]
+    print(name)
+    for k in ms[0]:
+        cols = " | ".join("%.3f %.3f %.3f" % tuple(m[k][0]) for m in ms)
+        ratio = ms[2][k][0] / np.maximum(ms[0][k][0], 1e-9)
+        print("  %-7s | %s | ref/clrt %.2f %.2f %.2f" % ((k, cols) + tuple(ratio)))
+
+
 def main(paths):
+    if paths and paths[0] == "--table":
+        return table(paths[1], paths[2:6])
     for p in paths:
         m = region_means(exr_stats.load(p))
         print(os.path.basename(os.path.dirname(p)) + "/" + os.path.basename(p))

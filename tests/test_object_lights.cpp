@@ -8,6 +8,8 @@
 // [shared][hw6]) the course's diffuse_area cornell box at reduced spp against its reference.
 #include <catch.hpp>
 
+#include <cfloat>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -152,6 +154,11 @@ Sample hostSample(const HostLight& h, D3 p, double u1, double u2) {
         s.wi = (1.0 / s.dist) * d;
         double cosL = -dot(unit(cross(v[1] - v[0], v[2] - v[0])), s.wi);
         if (cosL > 0) s.e = (h.area * cosL / (s.dist * s.dist)) * h.radiance;
+        if (cosL > 0) {  // the shadow ray's length (MeshLight_ShadowLength): short of q by offset / cosθ_L
+            double m = std::max({std::fabs(q.x), std::fabs(q.y), std::fabs(q.z)});
+            double offset = std::max(16.0 * FLT_EPSILON * m, 1.0 / 65536.0);
+            s.dist = std::max(s.dist - offset / cosL, 0.5 * s.dist);
+        }
         return s;
     }
     D3 axis = h.center - p;
