@@ -8,11 +8,11 @@ variance of one render, after BLOCK×BLOCK block means, averaged over the pairs;
 reference reduced to the same blocks (a fixed denominator: b's own noise in it would bias the estimate
 at low spp). For an unbiased estimator of finite variance it falls as 1/spp: the slope of log relMSE
 against log spp is fitted by least squares and must lie within 10% of -1.
---variant lowered: the scene with its LightMesh moved 0.05 down, off the ceiling (the NEE check: the
+--variant lowered [--gap G]: the scene with its LightMesh moved G (default 0.05) down, off the ceiling (the NEE check: the
 course's area sampling of a light that touches the ceiling has infinite variance, see README).
 Writes docs/path_convergence.png (log-log plot) and prints one line per camera.
 Usage: build/venv/bin/python scripts/path_convergence.py [--size 64] [--block 4] [--repeats 2]
-       [--spp 4,16,64,256] [--device cpu] [--clrt build/clrt] [--only MIS,NEE] [--variant lowered]"""
+       [--spp 4,16,64,256] [--device cpu] [--clrt build/clrt] [--only MIS,NEE] [--variant lowered [--gap 0.05]]"""
 import argparse
 import os
 import subprocess
@@ -50,7 +50,8 @@ def main():
     ap.add_argument("--plot", default=os.path.join(ROOT, "docs", "path_convergence.png"))
     ap.add_argument("--block", type=int, default=4)
     ap.add_argument("--repeats", type=int, default=2)
-    ap.add_argument("--variant", default="", help="'lowered': the LightMesh 0.05 below the ceiling")
+    ap.add_argument("--variant", default="", help="'lowered': the LightMesh --gap below the ceiling")
+    ap.add_argument("--gap", type=float, default=0.05, help="how far --variant lowered moves the light box down")
     args = ap.parse_args()
     spps = [int(s) for s in args.spp.split(",")]
     results = []
@@ -59,9 +60,12 @@ def main():
     mis_scene = os.path.join(args.out, "path_diffuse_mis.xml")
     with open(SCENE) as f:
         text = f.read()
-    if args.variant == "lowered":  # the light box's z = 1.16 / 1.28 vertices, 0.05 down
-        text = text.replace("0.25     1.16002", "0.25     1.11002").replace("0.25     1.28002", "0.25     1.23002")
-        text = text.replace("-0.25     1.16002", "-0.25     1.11002").replace("-0.25     1.28002", "-0.25     1.23002")
+    if args.variant == "lowered":  # the light box's z = 1.16 / 1.28 vertices, --gap down
+        lo, hi = "%.5f" % (1.16002 - args.gap), "%.5f" % (1.28002 - args.gap)
+        # "0.25     z" also matches the "-0.25     z" vertices: the box's eight corners, all moved
+        if text.count("0.25     1.16002") != 4 or text.count("0.25     1.28002") != 4:
+            sys.exit("path_convergence: the light box's eight vertices were not found in " + SCENE)
+        text = text.replace("0.25     1.16002", "0.25     " + lo).replace("0.25     1.28002", "0.25     " + hi)
     base_scene = os.path.join(args.out, "path_diffuse_variant.xml")
     with open(base_scene, "w") as f:
         f.write(text)
@@ -101,7 +105,7 @@ def main():
         ax.set_xlabel("samples per pixel")
         ax.set_ylabel("relMSE of one render (two independent renders / 2)")
         ax.set_title("clrt path tracing, cornellbox_jaroslav_path_diffuse%s, %d² (%dx%d blocks, %d pairs)"
-                     % (" (light lowered)" if args.variant else "", args.size, args.block, args.block, args.repeats), fontsize=9)
+                     % (" (light lowered %.2f)" % args.gap if args.variant else "", args.size, args.block, args.block, args.repeats), fontsize=9)
         ax.legend(fontsize=7)
         fig.tight_layout()
         fig.savefig(args.plot, dpi=110)
