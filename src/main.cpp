@@ -542,9 +542,12 @@ double depthRate(const std::vector<DeviceWork>& work, int bin, bool shadow) {
 }
 
 // The `stats:` line's rays per depth: secondary rays of bounces 1, 2, >= 3 and shadow rays cast from
-// vertices at depth 0 (camera hits), 1, 2, >= 3 (README "Using it").
+// vertices at depth 0 (camera hits), 1, 2, >= 3 (README "Using it"); left out when a device rendered
+// with the fused path, whose one kernel traces every depth (--pipeline wavefront splits them).
 std::string depthStats(const std::vector<DeviceWork>& work) {
     static_assert(RenderCounters::kDepthBins == 4, "update the key names");
+    for (const DeviceWork& w : work)
+        if (w.counters.fused) return "";
     char buf[256];
     std::snprintf(buf, sizeof buf,
                   " secondary_mrays_d1=%.2f secondary_mrays_d2=%.2f secondary_mrays_d3plus=%.2f shadow_mrays_d0=%.2f"

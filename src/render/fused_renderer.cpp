@@ -90,6 +90,7 @@ int FusedPath::renderTile(cl::CommandQueue& q, bool profiling, size_t tileFirst,
     size_t doneBatches = 0;
     std::vector<cl::Event> events;
     const cl_uint zero[4] = {0, 0, 0, 0};
+    counters.fused = true;
     k_.set("lightSlots", plan.lightSlots).set("rayCounts", rayCounts_);
     for (int sample = 0; sample < spp;) {
         if (sample > 0 && stopped()) {

@@ -49,6 +49,7 @@ struct RenderCounters {
     uint64_t extendRays[kDepthBins] = {}, shadowRaysAt[kDepthBins] = {};
     double extendSeconds[kDepthBins] = {}, shadowSeconds[kDepthBins] = {};
     bool profiled = false;
+    bool fused = false;  // the fused path traced them: its one kernel has no per-depth split
     int stoppedAtSample = -1;  // >= 0: RenderSettings::stop ended the render early; the fewest samples
                                // any pixel got (tiles in progress finish their current pass, >= 1)
 };
