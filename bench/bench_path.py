@@ -17,8 +17,10 @@ render time and relMSE over --runs seeds; efficiency = 1/(relMSE x render s).
 
 Writes into the results folder: path.csv (one row per scene, strategy, spp), path_runs.csv, path_<scene>.png
 (left: relMSE against render time, one curve per strategy, RR dashed, the reference's noise floor grey;
-right: efficiency against spp) and returns the report's lines (the efficiency table, the best strategy
-per spp in bold)."""
+middle: convergence, relMSE less the reference's own against spp, with a 1/spp guide; right: efficiency
+against spp) and returns the report's lines (the efficiency table, the best strategy per spp in bold,
+and each strategy's convergence slope: the least-squares slope of log(relMSE - reference relMSE) against
+log spp, -1 for an unbiased estimator of finite variance)."""
 import os
 import re
 
@@ -61,11 +63,21 @@ def make_scene(sc, params, tmpdir, label):
     return out
 
 
+def convergence_slope(rs, floor):
+    """Slope of log(relMSE - floor) against log spp over a strategy's rows (floor: the reference's own
+    relMSE, which every comparison against it contains); None with fewer than two usable points."""
+    pts = [(r["spp"], r["relmse"] - floor) for r in rs if r["relmse"] - floor > 0]
+    if len(pts) < 2:
+        return None
+    x, y = np.log([p[0] for p in pts]), np.log([p[1] for p in pts])
+    return float(np.polyfit(x, y, 1)[0])
+
+
 def plot(name, rows, floor, path):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(1, 2, figsize=(13, 4.8))
+    fig, ax = plt.subplots(1, 3, figsize=(19, 4.8))
     colours = dict(zip([n for n, _ in BASE], plt.rcParams["axes.prop_cycle"].by_key()["color"]))
     for label, _ in STRATEGIES:
         rs = sorted((r for r in rows if r["strategy"] == label), key=lambda r: r["spp"])
@@ -77,8 +89,13 @@ def plot(name, rows, floor, path):
         e = np.array([r["relmse"] for r in rs])
         eerr = np.array([[r["relmse"] - r["relmse_min"] for r in rs], [r["relmse_max"] - r["relmse"] for r in rs]])
         ax[0].errorbar(t, e, yerr=eerr, capsize=2, **kw)
-        ax[1].plot([r["spp"] for r in rs], [r["efficiency"] for r in rs], **kw)
+        spps = [r["spp"] for r in rs]
+        ax[1].plot(spps, np.maximum(e - floor, 1e-12), **kw)
+        ax[2].plot(spps, [r["efficiency"] for r in rs], **kw)
     ax[0].axhline(floor, ls=":", color="gray", lw=1, label="reference noise floor")
+    spps = sorted({r["spp"] for r in rows})
+    top = max(r["relmse"] - floor for r in rows if r["spp"] == spps[0])
+    ax[1].plot(spps, [top * spps[0] / x for x in spps], "k:", lw=1, label="1/spp")
     for a in ax:
         a.set_xscale("log")
         a.set_yscale("log")
@@ -87,7 +104,9 @@ def plot(name, rows, floor, path):
     ax[0].set_xlabel("render time [s] (median; points: spp %s)" % "/".join(str(s) for s in sorted({r["spp"] for r in rows})))
     ax[0].set_ylabel("relMSE against the MIS reference (median; bars: min-max)")
     ax[1].set_xlabel("spp")
-    ax[1].set_ylabel("efficiency 1/(relMSE x render s)")
+    ax[1].set_ylabel("relMSE - reference relMSE (convergence; dotted: 1/spp)")
+    ax[2].set_xlabel("spp")
+    ax[2].set_ylabel("efficiency 1/(relMSE x render s)")
     fig.suptitle("%s: error against time per path-tracing strategy (dashed: with Russian roulette)" % name)
     fig.tight_layout()
     fig.savefig(path, dpi=100)
@@ -140,7 +159,8 @@ def run(B, clrt, a, out, tmp):
         # the table: one row per strategy, efficiency per spp, the best per spp in bold
         table = []
         for label, params in STRATEGIES:
-            t = dict(strategy=label, params=params or "(none)")
+            slope = convergence_slope([x for x in scene_rows if x["strategy"] == label], meta["relmse"])
+            t = dict(strategy=label, params=params or "(none)", slope="%.2f" % slope if slope is not None else "-")
             for spp in spps:
                 r = next(x for x in scene_rows if x["strategy"] == label and x["spp"] == spp)
                 best = max(x["efficiency"] for x in scene_rows if x["spp"] == spp)
@@ -150,9 +170,10 @@ def run(B, clrt, a, out, tmp):
         top = max((x for x in scene_rows if x["spp"] == spps[-1]), key=lambda x: x["efficiency"])
         rep += ["### %s (%dx%d; reference MIS %d spp, its relMSE %.3g)" % (sc["name"], sc["res"][0], sc["res"][1],
                                                                          meta["spp"], meta["relmse"]), "",
-                B.md_table(table, ["strategy", "params"] + ["spp %d" % s for s in spps]), "",
+                B.md_table(table, ["strategy", "params"] + ["spp %d" % s for s in spps] + ["slope"]), "",
                 "Cells: efficiency 1/(relMSE x render s) (render s, relMSE), medians of %d runs; bold: the most "
-                "efficient strategy at that spp. Most efficient at %d spp: **%s**. Non-finite pixels in all renders: %d."
+                "efficient strategy at that spp; slope: of log(relMSE - reference relMSE) against log spp (-1: "
+                "converging as 1/spp). Most efficient at %d spp: **%s**. Non-finite pixels in all renders: %d."
                 % (a.runs, spps[-1], top["strategy"], sum(x["nonfinite"] for x in scene_rows)),
                 "Plot: path_%s.png." % sc["name"], ""]
     rep.insert(2, "Scenes, strategies and reference: bench/bench_path.py. %.0f s." % (time.perf_counter() - t0))
