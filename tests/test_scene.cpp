@@ -524,16 +524,52 @@ TEST_CASE("scene: textures", "[scene]") {
     CHECK(s.shapes.at(0).textureIndices == std::vector<int>{4, 0});
 }
 
-TEST_CASE("scene: binaryFile vertex data (raw little-endian float32)", "[scene]") {
-    float v[9] = {0, 0, 0, 2, 0, 0, 0, 3, 0};
-    std::string bytes(reinterpret_cast<const char*>(v), sizeof v);  // x86/ARM hosts are little-endian
-    writeText("verts.bin", bytes);
-    std::string xml = "<Scene><Materials><Material id=\"1\"/></Materials><VertexData binaryFile=\"verts.bin\"/>"
-                      "<Objects><Triangle id=\"1\"><Material>1</Material><Indices>1 2 3</Indices></Triangle>"
-                      "</Objects></Scene>";
+namespace {
+// A binaryFile as the course's hw6 text defines it: an int32 count of records, then the records
+// (x86/ARM hosts are little-endian, as the format is).
+template <class T>
+std::string countedBinary(int32_t count, const std::vector<T>& values) {
+    std::string bytes(reinterpret_cast<const char*>(&count), 4);
+    bytes.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T));
+    return bytes;
+}
+}  // namespace
+
+TEST_CASE("scene: binaryFile vertex, texture-coordinate and face data start with their count", "[scene]") {
+    writeText("verts.bin", countedBinary<float>(4, {0, 0, 0, 2, 0, 0, 0, 3, 0, 2, 3, 0}));
+    writeText("uvs.bin", countedBinary<float>(4, {0, 0, 1, 0, 0, 1, 1, 1}));
+    writeText("faces.bin", countedBinary<int32_t>(2, {0, 1, 2, 1, 3, 2}));  // zero-based below
+    std::string xml = "<Scene><ZeroBasedIndexing>true</ZeroBasedIndexing><Materials><Material id=\"1\"/></Materials>"
+                      "<VertexData binaryFile=\"verts.bin\"/><TexCoordData binaryFile=\"uvs.bin\"/>"
+                      "<Objects><Mesh id=\"1\"><Material>1</Material><Faces binaryFile=\"faces.bin\"/></Mesh>"
+                      "<Triangle id=\"2\"><Material>1</Material><Indices>1 2 3</Indices></Triangle></Objects></Scene>";
     Scene s = load("binary.xml", xml);
-    CHECK(s.meshes.at(0).positions.at(1) == Vec3(2, 0, 0));
-    CHECK(s.meshes.at(0).positions.at(2) == Vec3(0, 3, 0));
+    REQUIRE(s.shapes.size() == 2);
+    const MeshData& m = s.meshes.at(size_t(s.shapes[0].meshIndex));
+    REQUIRE(m.indices.size() == 6);
+    CHECK(m.positions.at(size_t(m.indices[1])) == Vec3(2, 0, 0));
+    CHECK(m.positions.at(size_t(m.indices[2])) == Vec3(0, 3, 0));
+    CHECK(m.positions.at(size_t(m.indices[4])) == Vec3(2, 3, 0));
+    REQUIRE(m.uvs.size() == m.positions.size());
+    CHECK(m.uvs.at(size_t(m.indices[4])).x == 1.0f);
+    CHECK(m.uvs.at(size_t(m.indices[4])).y == 1.0f);
+    const MeshData& t = s.meshes.at(size_t(s.shapes[1].meshIndex));
+    CHECK(t.positions.at(size_t(t.indices[2])) == Vec3(2, 3, 0));  // zero-based: index 3 is the fourth vertex
+
+    // A count that does not match the size, a negative count, no count at all: one error at the element.
+    writeText("short.bin", countedBinary<float>(5, {0, 0, 0, 2, 0, 0, 0, 3, 0, 2, 3, 0}));
+    std::string bad = "<Scene>\n<VertexData binaryFile=\"short.bin\"/></Scene>";
+    expectErrorAt("binary_short.xml", bad, "<VertexData", "declares 5 vertices (64 bytes with its count) but has 52 bytes");
+    writeText("raw.bin", std::string(reinterpret_cast<const char*>(std::vector<float>{1, 2, 3}.data()), 12));
+    expectErrorAt("binary_raw.xml", "<Scene>\n<VertexData binaryFile=\"raw.bin\"/></Scene>", "<VertexData", "declares");
+    writeText("neg.bin", countedBinary<int32_t>(-1, {}));
+    expectErrorAt("binary_neg.xml",
+                  "<Scene><Materials><Material id=\"1\"/></Materials><VertexData>0 0 0</VertexData>\n<Objects><Mesh id=\"1\"><Material>1</Material>\n"
+                  "<Faces binaryFile=\"neg.bin\"/></Mesh></Objects></Scene>",
+                  "<Faces", "declares -1 faces");
+    writeText("empty.bin", "");
+    expectErrorAt("binary_empty.xml", "<Scene>\n<TexCoordData binaryFile=\"empty.bin\"/></Scene>", "<TexCoordData",
+                  "has no count");
 }
 
 TEST_CASE("scene: PLY faces relative to the scene file", "[scene][ply]") {

@@ -21,8 +21,9 @@
 //          + Radiance), LightSphere (as Sphere + Radiance): a shape and a light each.
 //          Mesh, MeshInstance, Triangle and Sphere take MotionBlur (a translation over the shutter); object
 //          lights do not (their sampling data are the rest position).
-// VertexData/TexCoordData may carry a binaryFile attribute instead of text: raw little-endian float32
-// values (no count prefix; no shared scene uses it). Faces binaryFile: raw little-endian int32.
+// VertexData/TexCoordData/Faces may carry a binaryFile attribute instead of text (course hw6 text): a
+// little-endian int32 count (vertices, texture coordinates, faces), then the float32 x y z / u v or
+// int32 index triples; the size must match the count (no shared scene uses it).
 // Errors: clrt::Error "<location>: <what>", location from SceneNode::location(). Every number must be
 // finite and within float range (1e39 is an error, not an infinity), every integer within int range;
 // values derived from them (degamma'd colours, camera frame) are checked to stay finite.
@@ -288,17 +289,32 @@ struct Walker {
     }
 
     // ---- Vertex data -------------------------------------------------------------------------
-    std::vector<double> floatData(const SceneNode& n) {
+    // A binaryFile (course hw6 text): a little-endian int32 count of records (vertices, texture
+    // coordinates or faces), then exactly that many records of `perRecord` little-endian 4-byte words.
+    // Returns the words after the count; the size must match the count.
+    std::vector<uint32_t> binaryWords(const SceneNode& n, const std::string& file, const char* records, size_t perRecord) {
+        auto bytes = readBinary(n, resolve(file));
+        auto word = [&](size_t i) {
+            return uint32_t(bytes[4 * i]) | uint32_t(bytes[4 * i + 1]) << 8 | uint32_t(bytes[4 * i + 2]) << 16 |
+                   uint32_t(bytes[4 * i + 3]) << 24;
+        };
+        if (bytes.size() < 4) fail(n, describe(n) + ": binaryFile '" + file + "' has no count (it starts with an int32 count of " + records + ")");
+        const int32_t count = int32_t(word(0));
+        const uint64_t expected = 4 + uint64_t(count < 0 ? 0 : count) * perRecord * 4;
+        if (count < 0 || expected != bytes.size())
+            fail(n, describe(n) + ": binaryFile '" + file + "' declares " + std::to_string(count) + " " + records + " (" +
+                        std::to_string(expected) + " bytes with its count) but has " + std::to_string(bytes.size()) + " bytes");
+        std::vector<uint32_t> out(bytes.size() / 4 - 1);
+        for (size_t i = 0; i < out.size(); ++i) out[i] = word(i + 1);
+        return out;
+    }
+    std::vector<double> floatData(const SceneNode& n, const char* records, size_t perRecord) {
         if (auto bf = n.attribute("binaryFile")) {
-            auto bytes = readBinary(n, resolve(*bf));
-            if (bytes.size() % 4 != 0)
-                fail(n, describe(n) + ": binaryFile '" + *bf + "' size is not a multiple of 4 bytes");
-            std::vector<double> out(bytes.size() / 4);
+            auto words = binaryWords(n, *bf, records, perRecord);
+            std::vector<double> out(words.size());
             for (size_t i = 0; i < out.size(); ++i) {
-                uint32_t u = uint32_t(bytes[4 * i]) | uint32_t(bytes[4 * i + 1]) << 8 |
-                             uint32_t(bytes[4 * i + 2]) << 16 | uint32_t(bytes[4 * i + 3]) << 24;
                 float f;
-                std::memcpy(&f, &u, 4);
+                std::memcpy(&f, &words[i], 4);
                 if (!std::isfinite(f)) fail(n, describe(n) + ": binaryFile '" + *bf + "' holds a non-finite value");
                 out[i] = f;
             }
@@ -307,13 +323,13 @@ struct Walker {
         return numbers(n);
     }
     void readVertexData(const SceneNode& n) {
-        auto v = floatData(n);
+        auto v = floatData(n, "vertices", 3);
         if (v.size() % 3 != 0)
             fail(n, "<VertexData> has " + std::to_string(v.size()) + " values, not a multiple of 3");
         for (size_t i = 0; i < v.size(); i += 3) vertices.emplace_back(float(v[i]), float(v[i + 1]), float(v[i + 2]));
     }
     void readTexCoordData(const SceneNode& n) {
-        auto v = floatData(n);
+        auto v = floatData(n, "texture coordinates", 2);
         if (v.size() % 2 != 0)
             fail(n, "<TexCoordData> has " + std::to_string(v.size()) + " values, not a multiple of 2");
         for (size_t i = 0; i < v.size(); i += 2) texcoords.push_back(Vec2{float(v[i]), float(v[i + 1])});
@@ -807,16 +823,8 @@ struct Walker {
 
     std::vector<int32_t> faceData(const SceneNode& faces) {
         if (auto bf = faces.attribute("binaryFile")) {
-            auto bytes = readBinary(faces, resolve(*bf));
-            if (bytes.size() % 4 != 0)
-                fail(faces, "<Faces>: binaryFile '" + *bf + "' size is not a multiple of 4 bytes");
-            std::vector<int32_t> out(bytes.size() / 4);
-            for (size_t i = 0; i < out.size(); ++i) {
-                uint32_t u = uint32_t(bytes[4 * i]) | uint32_t(bytes[4 * i + 1]) << 8 |
-                             uint32_t(bytes[4 * i + 2]) << 16 | uint32_t(bytes[4 * i + 3]) << 24;
-                out[i] = int32_t(u);
-            }
-            return out;
+            auto words = binaryWords(faces, *bf, "faces", 3);
+            return std::vector<int32_t>(words.begin(), words.end());
         }
         auto v = integers(faces);
         return std::vector<int32_t>(v.begin(), v.end());
