@@ -172,6 +172,21 @@ Trace4 traverse4(const Bvh& bin, const Bvh4& b4, const std::vector<Tri>& tris, V
 
 // A stack of big triangles, each twice the size of the one below, all over the z axis: a ray from
 // near the origin going up passes through every box, so the traversal pushes at every level.
+// The closest triangle along (o, d) by testing every one (the reference the traversals are held to);
+// -1 when none is hit, its distance in *tBest (INFINITY then).
+int bruteClosest(const std::vector<Tri>& tris, Vec3 o, Vec3 d, float* tBest) {
+    int best = -1;
+    *tBest = INFINITY;
+    for (size_t k = 0; k < tris.size(); ++k) {
+        float tt, b1, b2;
+        if (intersectTriangleWatertight(o, d, tris[k][0], tris[k][1], tris[k][2], *tBest, tt, b1, b2)) {
+            *tBest = tt;
+            best = int(k);
+        }
+    }
+    return best;
+}
+
 std::vector<Tri> towerScene(int levels) {
     std::vector<Tri> tris;
     for (int i = -levels / 2; i < levels - levels / 2; ++i) {
@@ -296,16 +311,8 @@ TEST_CASE("BVH4 traversal stack: the host bound holds, and the kernel with exact
         rays[size_t(i)] = {{org[i].x, org[i].y, org[i].z, 0}, {dir[i].x, dir[i].y, dir[i].z, INFINITY}};
         Trace4 t = traverse4(bin, b4, tris, org[i], dir[i], INFINITY);
         maxSp = std::max(maxSp, t.maxSp);
-        // Brute force.
-        int best = -1;
-        float tBest = INFINITY;
-        for (size_t k = 0; k < tris.size(); ++k) {
-            float tt, b1, b2;
-            if (intersectTriangleWatertight(org[i], dir[i], tris[k][0], tris[k][1], tris[k][2], tBest, tt, b1, b2)) {
-                tBest = tt;
-                best = int(k);
-            }
-        }
+        float tBest;
+        const int best = bruteClosest(tris, org[i], dir[i], &tBest);
         // Compared by distance: from 1e6 away, tiny triangles of the tower tie at one float t.
         hostMismatch += ((t.prim < 0) != (best < 0)) || (best >= 0 && t.t != tBest);
     }
@@ -418,15 +425,8 @@ int deviceVsBruteForce(const std::vector<Tri>& tris, const std::vector<Vec3>& or
     CL_CPP(dc.queue().enqueueReadBuffer(shb, CL_TRUE, 0, sizeof(dev::ShadowRay) * shadows.size(), shadows.data()));
     int mismatch = 0, hitRays = 0;
     for (int i = 0; i < n; ++i) {
-        int best = -1;
-        float tBest = INFINITY;
-        for (size_t k = 0; k < tris.size(); ++k) {
-            float tt, b1, b2;
-            if (intersectTriangleWatertight(org[i], dir[i], tris[k][0], tris[k][1], tris[k][2], tBest, tt, b1, b2)) {
-                tBest = tt;
-                best = int(k);
-            }
-        }
+        float tBest;
+        const int best = bruteClosest(tris, org[i], dir[i], &tBest);
         const dev::Hit& h = hits[size_t(i)];
         const bool occluded = shadows[size_t(i)].contribution.x == 0;
         mismatch += ((h.prim < 0) != (best < 0)) || (best >= 0 && std::fabs(h.t - tBest) > 1e-6f * tBest) ||
