@@ -17,16 +17,40 @@ inline float3 Camera_Direction(CameraParams cam, float px, float py) {
     return uc * cam.u.xyz + vc * cam.v.xyz - cam.nearDistance * cam.w.xyz;
 }
 
-/* The camera ray and path of sample `sample` of pixel `pixel`. */
-inline void Camera_Generate(CameraParams cam, SceneParams scene, int pixel, int sample, PathState* path, Ray* ray) {
-    int x = pixel % cam.width, y = pixel / cam.width;
+/* A camera sample's stratum: the cell (sx, sy) of the strataX × strataY grid that sample `sample` of a
+ * pixel jitters in (sample % cells, row-major); Camera_StratumNext steps to the next sample's, so a loop
+ * over consecutive samples needs no integer division (the fused kernel; the same cells as the formula). */
+typedef struct { int sx, sy; } CameraStratum;
+
+inline CameraStratum Camera_StratumOf(CameraParams cam, int sample) {
+    CameraStratum c = {0, 0};
+    if (cam.spp > 1) {
+        int cell = sample % (cam.strataX * cam.strataY);
+        c.sx = cell % cam.strataX;
+        c.sy = cell / cam.strataX;
+    }
+    return c;
+}
+
+inline CameraStratum Camera_StratumNext(CameraParams cam, CameraStratum c) {
+    if (++c.sx == cam.strataX) {
+        c.sx = 0;
+        if (++c.sy == cam.strataY) c.sy = 0;
+    }
+    return c;
+}
+
+/* The camera ray and path of sample `sample` of pixel `pixel` = y·width + x, in stratum c
+ * (Camera_StratumOf(cam, sample)). always_inline: in the fused kernel's sample loop the per-pixel part of
+ * the random key and the pixel's coordinates are then computed once per pixel (the compiler hoists them). */
+__attribute__((always_inline)) inline void Camera_GenerateAt(CameraParams cam, SceneParams scene, int pixel, int x,
+                                                             int y, int sample, CameraStratum c, PathState* path,
+                                                             Ray* ray) {
     RngKey key = Rng_Key(scene.seed, pixel, sample, 1u);
     float jx = 0.5f, jy = 0.5f;
     if (cam.spp > 1) {
-        int cell = sample % (cam.strataX * cam.strataY);
-        int sx = cell % cam.strataX, sy = cell / cam.strataX;
-        jx = ((float)sx + Rng_Uniform(key, 0)) / (float)cam.strataX;
-        jy = ((float)sy + Rng_Uniform(key, 1)) / (float)cam.strataY;
+        jx = ((float)c.sx + Rng_Uniform(key, 0)) / (float)cam.strataX;
+        jy = ((float)c.sy + Rng_Uniform(key, 1)) / (float)cam.strataY;
     }
     float3 dir = Camera_Direction(cam, (float)x + jx, (float)y + jy);
     float3 org = cam.position.xyz;
@@ -54,6 +78,12 @@ inline void Camera_Generate(CameraParams cam, SceneParams scene, int pixel, int 
     p.depth = 0;
     p.pathId = 1u;
     *path = p;
+}
+
+/* The camera ray and path of sample `sample` of pixel `pixel`. */
+inline void Camera_Generate(CameraParams cam, SceneParams scene, int pixel, int sample, PathState* path, Ray* ray) {
+    Camera_GenerateAt(cam, scene, pixel, pixel % cam.width, pixel / cam.width, sample, Camera_StratumOf(cam, sample),
+                      path, ray);
 }
 
 /* Parameters: src/shared/kernel_params.h. */
