@@ -444,6 +444,18 @@ __kernel void half_lookup(const __global float4* texels, ImageInfo a, ImageInfo 
     out[2 * i] = (float4)(EnvMap_Lookup(texels, a, mapping, uv[i].x, uv[i].y), 0.0f);
     out[2 * i + 1] = (float4)(EnvMap_Lookup(texels, b, mapping, uv[i].x, uv[i].y), 0.0f);
 }
+/* Env_HalfRgb (the nvptx fallback) against vload_half4: half i in every channel, i < 0x7c00 and its negative */
+__kernel void half_decode(__global int* bad) {
+    uint i = get_global_id(0);
+    if (i >= 0x7c00u) return;
+    uint hs[2] = {i, i | 0x8000u};
+    for (int k = 0; k < 2; ++k) {
+        ushort q[4] = {(ushort)hs[k], (ushort)hs[k], (ushort)hs[k], 0};
+        float3 ref = vload_half4(0, (const half*)q).xyz;
+        float3 got = Env_HalfRgb((uint2)(hs[k] | (hs[k] << 16), hs[k]));
+        if (any(as_uint3(ref) != as_uint3(got))) atomic_inc(bad);
+    }
+}
 )CLC";
     DeviceContext& dc = testContext();
     auto sources = loadKernelSources({"envmap.cl"});
@@ -477,6 +489,13 @@ __kernel void half_lookup(const __global float4* texels, ImageInfo a, ImageInfo 
         CHECK(differ == 0);
         CHECK(nonzero > n / 2);  // the lookups read the map (not all zero)
     }
+    cl::Kernel dk = CL_CPP(cl::Kernel(program, "half_decode"));
+    int zero = 0, bad = -1;
+    cl::Buffer badBuf = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, sizeof(int), &zero));
+    dk.setArg(0, badBuf);
+    CL_CPP(dc.queue().enqueueNDRangeKernel(dk, cl::NullRange, cl::NDRange(0x7c00), cl::NDRange(64)));
+    CL_CPP(dc.queue().enqueueReadBuffer(badBuf, CL_TRUE, 0, sizeof(int), &bad));
+    CHECK(bad == 0);  // Env_HalfRgb: every finite half, both signs, bit for bit
 }
 
 TEST_CASE("spot, directional, area and environment Light_Sample kernels match host references", "[lights][cl]") {
