@@ -112,6 +112,12 @@ inline ImageRGB quantize(const ImageRGB& img, bool floorInstead = false) {
     return q;
 }
 
+// The --device option for the test device (CLRT_TEST_DEVICE; default: the CPU device), with its space.
+inline std::string deviceArg() {
+    const char* d = std::getenv("CLRT_TEST_DEVICE");
+    return std::string(" --device '") + (d && *d ? d : "cpu") + "'";
+}
+
 // Runs the clrt binary with arguments; returns the exit code; output goes to `logFile`.
 inline int runClrt(const std::string& args, const std::string& logFile) {
     std::string cmd = std::string(CLRT_BINARY) + " " + args + " >" + logFile + " 2>&1";

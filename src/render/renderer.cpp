@@ -280,6 +280,7 @@ static BatchPlan planBatches(const DeviceScene& ds, size_t numPixels, const Rend
     const size_t batchPaths = plan.batch * size_t(plan.group);
     plan.bounces = ds.features.bounces() || sp.pathMode != 0;
     sp.seed = settings.seed;
+    sp.sampler = settings.stratified ? CLRT_SAMPLER_STRATIFIED : CLRT_SAMPLER_INDEPENDENT;
     // Path tracing with Russian roulette has no depth cap (the course's references show none): the
     // roulette ends paths, kMaxRecursionDepth is the backstop.
     if (sp.pathMode & CLRT_PATH_RR) sp.maxDepth = kMaxRecursionDepth;
