@@ -1,7 +1,7 @@
 // The stratified sampler (cl_kernels/common.cl, Rng_Stratified2D; CLRT_SAMPLER_STRATIFIED): a host
 // replica checked bit for bit against the device, then on the replica: the samples of a pixel form
 // (0,m,2)-nets (one point in every elementary interval), each point alone is uniform over pixels (χ²),
-// and two dimension pairs of one pixel are independent (χ² of their joint strata). Then renders: the
+// and two dimension pairs of one pixel are independent (the correlation of their coordinates). Then renders: the
 // sampler changes noise, not expectation (a furnace), and `--sampler` reaches the kernels.
 #include <catch.hpp>
 
