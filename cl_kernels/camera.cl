@@ -1,7 +1,9 @@
 /* camera.cl — camera ray generation for samples [firstSample, firstSample + samples) of a range of
  * pixels, pixel-major (the samples of one pixel are adjacent). One sample per pixel: the
- * pixel centre (as the course does); more: stratified jitter over a strataX × strataY grid (box
- * filter). ApertureSize > 0: thin lens focused at FocusDistance, square aperture as in the course. */
+ * pixel centre (as the course does); more: jitter over the pixel (box filter), from the stratified
+ * sampler (CLRT_SAMPLER_STRATIFIED: a scrambled (0,2)-net per pixel), else independent uniforms.
+ * ApertureSize > 0: thin lens focused at FocusDistance, square aperture as in the course (its 2D sample
+ * stratified likewise). */
 #ifndef CLRT_CAMERA_CL
 #define CLRT_CAMERA_CL
 
@@ -17,40 +19,21 @@ inline float3 Camera_Direction(CameraParams cam, float px, float py) {
     return uc * cam.u.xyz + vc * cam.v.xyz - cam.nearDistance * cam.w.xyz;
 }
 
-/* A camera sample's stratum: the cell (sx, sy) of the strataX × strataY grid that sample `sample` of a
- * pixel jitters in (sample % cells, row-major); Camera_StratumNext steps to the next sample's, so a loop
- * over consecutive samples needs no integer division (the fused kernel; the same cells as the formula). */
-typedef struct { int sx, sy; } CameraStratum;
-
-inline CameraStratum Camera_StratumOf(CameraParams cam, int sample) {
-    CameraStratum c = {0, 0};
-    if (cam.spp > 1) {
-        int cell = sample % (cam.strataX * cam.strataY);
-        c.sx = cell % cam.strataX;
-        c.sy = cell / cam.strataX;
-    }
-    return c;
-}
-
-inline CameraStratum Camera_StratumNext(CameraParams cam, CameraStratum c) {
-    if (++c.sx == cam.strataX) {
-        c.sx = 0;
-        if (++c.sy == cam.strataY) c.sy = 0;
-    }
-    return c;
-}
-
-/* The camera ray and path of sample `sample` of pixel `pixel` = y·width + x, in stratum c
- * (Camera_StratumOf(cam, sample)). always_inline: in the fused kernel's sample loop the per-pixel part of
- * the random key and the pixel's coordinates are then computed once per pixel (the compiler hoists them). */
+/* The camera ray and path of sample `sample` of pixel `pixel` = y·width + x. always_inline: in the fused
+ * kernel's sample loop the per-pixel part of the random key is then computed once per pixel (the
+ * compiler hoists it), and the pixel's coordinates come from the caller (no division per sample). */
 __attribute__((always_inline)) inline void Camera_GenerateAt(CameraParams cam, SceneParams scene, int pixel, int x,
-                                                             int y, int sample, CameraStratum c, PathState* path,
-                                                             Ray* ray) {
+                                                             int y, int sample, PathState* path, Ray* ray) {
     RngKey key = Rng_Key(scene.seed, pixel, sample, 1u);
     float jx = 0.5f, jy = 0.5f;
-    if (cam.spp > 1) {
-        jx = ((float)c.sx + Rng_Uniform(key, 0)) / (float)cam.strataX;
-        jy = ((float)c.sy + Rng_Uniform(key, 1)) / (float)cam.strataY;
+    if (cam.spp > 1 && scene.sampler == CLRT_SAMPLER_STRATIFIED) {
+        /* the pixel's samples spread over a (0,2)-net: stratified in x and y alone too (common.cl) */
+        const float2 j = Rng_Stratified2D(scene.seed, pixel, sample, 1u, 0u);
+        jx = j.x;
+        jy = j.y;
+    } else if (cam.spp > 1) {
+        jx = Rng_Uniform(key, 0);
+        jy = Rng_Uniform(key, 1);
     }
     float3 dir = Camera_Direction(cam, (float)x + jx, (float)y + jy);
     float3 org = cam.position.xyz;
@@ -58,8 +41,10 @@ __attribute__((always_inline)) inline void Camera_GenerateAt(CameraParams cam, S
         float3 dn = normalize(dir);
         float tFocus = cam.focusDistance / dot(dn, -cam.w.xyz);
         float3 focus = org + tFocus * dn;
-        float a = (Rng_Uniform(key, 2) - 0.5f) * cam.apertureSize;
-        float b = (Rng_Uniform(key, 3) - 0.5f) * cam.apertureSize;
+        const float2 ab = scene.sampler == CLRT_SAMPLER_STRATIFIED ? Rng_Stratified2D(scene.seed, pixel, sample, 1u, 2u)
+                                                                  : (float2)(Rng_Uniform(key, 2), Rng_Uniform(key, 3));
+        float a = (ab.x - 0.5f) * cam.apertureSize;
+        float b = (ab.y - 0.5f) * cam.apertureSize;
         org = org + a * cam.u.xyz + b * cam.v.xyz;
         dir = focus - org;
     }
@@ -82,8 +67,7 @@ __attribute__((always_inline)) inline void Camera_GenerateAt(CameraParams cam, S
 
 /* The camera ray and path of sample `sample` of pixel `pixel`. */
 inline void Camera_Generate(CameraParams cam, SceneParams scene, int pixel, int sample, PathState* path, Ray* ray) {
-    Camera_GenerateAt(cam, scene, pixel, pixel % cam.width, pixel / cam.width, sample, Camera_StratumOf(cam, sample),
-                      path, ray);
+    Camera_GenerateAt(cam, scene, pixel, pixel % cam.width, pixel / cam.width, sample, path, ray);
 }
 
 /* Parameters: src/shared/kernel_params.h. */

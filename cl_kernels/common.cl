@@ -53,7 +53,7 @@ inline float Rng_Uniform(RngKey k, uint dim) {
  * dimension), Owen-scrambled, where idx is s shuffled by an Owen scramble of its bits (Burley 2020,
  * "Practical Hash-based Owen Scrambling", JCGT 9(4)). The shuffle and both scrambles are hashed from
  * (seed, pixel, path id, dimension pair) — not from s — so every pixel and every pair of dimensions
- * has its own randomisation ("padding": pairs are independent of each other and of the camera's strata)
+ * has its own randomisation ("padding": pairs are independent of each other, the camera jitter included)
  * while the samples of one pixel share it: any 2^m consecutive samples from a multiple of 2^m form a
  * (0,m,2)-net, one point in each elementary interval of area 2^-m. Each point alone is uniform, so
  * every estimate stays unbiased. Host replica: tests/test_sampler.cpp. */

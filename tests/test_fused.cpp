@@ -5,8 +5,7 @@
 // (per-depth sums and the explicit stack) and without, several samples per group, textures, bump maps,
 // planes, depth of field, motion blur, path tracing with and without Russian roulette; and the same
 // ray counts. Also: determinism, the pipeline choice (auto: fused on CPU devices, wavefront on GPUs;
-// fallback to the wavefront beyond the kernel's private arrays) and `clrt render --pipeline`; the
-// camera strata stepped per sample (Camera_StratumNext) against the host's sample % cells.
+// fallback to the wavefront beyond the kernel's private arrays) and `clrt render --pipeline`.
 // Sizes are reduced (at most 96 pixels a side, 1-8 spp) to keep the suite fast.
 #include <catch.hpp>
 
@@ -14,8 +13,6 @@
 #include <filesystem>
 #include <string>
 
-#include "cl/check.h"
-#include "cl/program.h"
 #include "render/device_scene.h"
 #include "render/fused_renderer.h"
 #include "render/renderer.h"
@@ -197,44 +194,4 @@ TEST_CASE("clrt render --pipeline: -v names the pipeline, a bad value is a usage
     CHECK(bad.rc == 1);
     CHECK(bad.errorLines == 1);
     CHECK(bad.errorLine.find("--pipeline: expected fused, wavefront or auto, got 'gpu'") != std::string::npos);
-}
-
-TEST_CASE("camera strata stepped sample by sample are the cells of sample % (strataX * strataY)", "[fused][cl]") {
-    const char* src = R"CLC(
-__kernel void stratum_test(CameraParams cam, int s0, int count, __global int4* out) {
-    if (get_global_id(0) != 0) return;
-    CameraStratum c = Camera_StratumOf(cam, s0);
-    for (int k = 0; k < count; ++k, c = Camera_StratumNext(cam, c)) {
-        CameraStratum d = Camera_StratumOf(cam, s0 + k);
-        out[k] = (int4)(c.sx, c.sy, d.sx, d.sy);
-    }
-}
-)CLC";
-    DeviceContext& dc = testContext();
-    auto sources = loadKernelSources({"camera.cl"});
-    sources.push_back({"stratum_test.cl", src});
-    cl::Program program = buildProgramFromSources(dc, sources, {});
-    cl::Kernel k = CL_CPP(cl::Kernel(program, "stratum_test"));
-    const int count = 250;
-    cl::Buffer outBuf = CL_CPP(cl::Buffer(dc.context(), CL_MEM_WRITE_ONLY, count * 4 * sizeof(int)));
-    struct Grid { int spp; bool stratified; };
-    for (Grid g : {Grid{1, true}, Grid{8, true}, Grid{100, true}, Grid{7, true}, Grid{9, false}, Grid{12, true}}) {
-        dev::CameraParams cam{};
-        setSamplesPerPixel(cam, g.spp);
-        if (!g.stratified) cam.strataX = cam.strataY = 1;  // as the renderer sets it
-        for (int s0 : {0, 3, 13, 99}) {
-            INFO("spp " << g.spp << " strata " << cam.strataX << "x" << cam.strataY << " from sample " << s0);
-            k.setArg(0, sizeof(cam), &cam); k.setArg(1, s0); k.setArg(2, count); k.setArg(3, outBuf);
-            CL_CPP(dc.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(1), cl::NDRange(1)));
-            std::vector<int> out(size_t(count) * 4);
-            CL_CPP(dc.queue().enqueueReadBuffer(outBuf, CL_TRUE, 0, out.size() * sizeof(int), out.data()));
-            int bad = 0;
-            for (int i = 0; i < count; ++i) {
-                const int cell = cam.spp > 1 ? (s0 + i) % (cam.strataX * cam.strataY) : 0;
-                const int sx = cell % cam.strataX, sy = cell / cam.strataX;
-                bad += out[4 * i] != sx || out[4 * i + 1] != sy || out[4 * i + 2] != sx || out[4 * i + 3] != sy;
-            }
-            CHECK(bad == 0);
-        }
-    }
 }

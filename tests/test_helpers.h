@@ -81,12 +81,14 @@ struct TempDir {
 };
 
 // Flattens `scene` and renders `cam` at `spp` samples with `seed` on the test device.
-inline ImageRGB renderCamera(const Scene& scene, const Camera& cam, int spp = 1, uint32_t seed = 0) {
+// stratified = false: --sampler independent (to compare noise with references rendered so).
+inline ImageRGB renderCamera(const Scene& scene, const Camera& cam, int spp = 1, uint32_t seed = 0, bool stratified = true) {
     DeviceScene ds = flattenScene(scene);
     Renderer r(testContext(), ds);
     RenderSettings rs;
     rs.spp = spp;
     rs.seed = seed;
+    rs.stratified = stratified;
     RenderCounters c;
     return r.render(cam, rs, c);
 }

@@ -74,9 +74,9 @@ bool packHalf4Exact(const dev::float4* src, size_t n, std::vector<dev::float4>& 
 // The texels of device image `image` as float4 (half4 images unpacked: the values the device reads).
 std::vector<dev::float4> imageTexels(const DeviceScene& ds, int image);
 
-// Camera frame and image plane for the kernels; strata chosen for numSamples.
+// Camera frame and image plane for the kernels, and numSamples.
 dev::CameraParams makeCameraParams(const Camera& cam);
-// Sets spp (at least 1) and the stratification grid strataX × strataY = spp.
+// Sets spp (at least 1).
 void setSamplesPerPixel(dev::CameraParams& c, int spp);
 
 inline dev::float4 toFloat4(const Vec3& v, float w = 0) { return {v.x, v.y, v.z, w}; }

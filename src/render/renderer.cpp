@@ -424,7 +424,6 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     // The loader and the command line already cap both (with a warning); this is the backstop for
     // scenes built in code.
     setSamplesPerPixel(cp, std::min(settings.spp, kMaxSamplesPerPixel));
-    if (!settings.stratified) cp.strataX = cp.strataY = 1;
     const size_t numPixels = size_t(cam.width) * cam.height;
     const size_t imageBytes = numPixels * sizeof(dev::float4);
     checkImageFits(m.dc.info(), cam);

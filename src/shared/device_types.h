@@ -277,8 +277,7 @@ typedef struct CameraParams {
     int width;
     int height;
     int spp;
-    int strataX;           /* stratified jitter grid: strataX * strataY = spp when spp is a product */
-    int strataY;
+    int cameraPad[2];      /* explicit padding to the float4 alignment */
 } CameraParams;
 
 /* Per-scene constants passed to every kernel. */
