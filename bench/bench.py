@@ -55,6 +55,8 @@ FEATURE_SCENES = ["cube_point", "veachAjar", "tt_pisa_courtyard"]
 RAY_BENCH_SCENES = ["cube_point", "veachAjar", "tt_pisa_courtyard"]
 ALL_STRATEGIES = ["uniform", "cosine", "importance", "mis"]
 REF_SEEDS = (1000001, 1000002)
+CLRT_SAMPLERS = ("stratified", "independent")  # clrt render --sampler
+MITSUBA_SAMPLERS = ("independent", "stratified", "multijitter", "ldsampler", "orthogonal")
 EPS_REL = 1e-2
 
 
@@ -141,9 +143,10 @@ class Clrt:
         cmd = [self.exe, "render", scene, "-o", out, "--spp", str(spp), "--seed", str(seed)]
         if self.device:
             cmd += ["--device", self.device]
-        strategy, _, pipeline = (strategy or "").partition("+")  # "mis+fused": --pipeline fused
-        if pipeline:
-            cmd += ["--pipeline", pipeline]
+        # "mis+fused+independent": --env-sampling mis --pipeline fused --sampler independent
+        strategy, *extra = (strategy or "").split("+")
+        for x in extra:
+            cmd += ["--sampler" if x in CLRT_SAMPLERS else "--pipeline", x]
         if strategy and strategy != "default":
             cmd += [self.env_flag, strategy]
         if all_features:
@@ -241,21 +244,26 @@ class Mitsuba:
     """Renders a converted scene (bench/to_mitsuba.py): surfaces (timed) + the camera-visible
     environment (rendered once at high spp, added to every image: noise-free but for pixel edges)."""
 
-    def __init__(self, mi, scene_path, spp_list):
+    def __init__(self, mi, scene_path, spp_list, samplers=("independent",)):
         import to_mitsuba
         self.mi = mi
         surf, bg, self.warnings = to_mitsuba.scene_dicts(scene_path, 1, warn=log)
-        self.scene = mi.load_dict(to_mitsuba.materialize(surf, mi))
+        self.scene = mi.load_dict(to_mitsuba.materialize(surf, mi))  # independent sampler: the references
+        self.scenes = {}  # the timed renders, one scene per sampler (the sensor's sampler)
+        for smp in samplers:
+            surf["sensor"]["sampler"] = dict(surf["sensor"]["sampler"], type=smp)
+            self.scenes[smp] = mi.load_dict(to_mitsuba.materialize(surf, mi))
         self.bg_scene = mi.load_dict(to_mitsuba.materialize(bg, mi)) if bg else None
         self.bg = 0.0
 
     def _render(self, scene, spp, seed):
         return np.array(self.mi.render(scene, spp=spp, seed=seed), dtype=np.float64)[..., :3]
 
-    def render(self, spp, seed):
-        """(seconds, image): the timed surface render plus the background."""
+    def render(self, spp, seed, sampler="independent"):
+        """(seconds, image): the timed surface render (with `sampler`) plus the background."""
+        scene = self.scenes.get(sampler, self.scene)
         t0 = time.perf_counter()
-        img = self._render(self.scene, spp, seed)
+        img = self._render(scene, spp, seed)
         return time.perf_counter() - t0, img + self.bg
 
     def render_high(self, spp, seed0, scene=None):
@@ -288,7 +296,7 @@ class Mitsuba:
 def mitsuba_setup(mi, sc, scene_path, hdr, clrt_ref, a):
     """The converted scene and its reference; checks that the two renderers agree (reference means)."""
     white = 1.0 if hdr else 255.0
-    ms = Mitsuba(mi, scene_path, sc["spp"])
+    ms = Mitsuba(mi, scene_path, sc["spp"], a.mi_samplers)
     ma, mb = ms.reference(sc["name"], scene_hash(scene_path), sc["ref_spp"], a.refs, a.refresh_refs)
     ms.ref = 0.5 * (ma + mb)
     ms.floor = float(np.mean((ma - mb) ** 2 / (ms.ref ** 2 + EPS_REL * white * white)) / 4.0)
@@ -302,13 +310,14 @@ def mitsuba_setup(mi, sc, scene_path, hdr, clrt_ref, a):
     return ms
 
 
-def mitsuba_rows(ms, sc, spp, ts, es, clrt_rows, clrt_runs, a):
-    """Rows comparing Mitsuba's runs (times ts, relMSEs es) at spp with each clrt variant's (strategy label)."""
+def mitsuba_rows(ms, sc, spp, ts, es, clrt_rows, clrt_runs, a, mi_sampler="independent"):
+    """Rows comparing Mitsuba's runs with `mi_sampler` (times ts, relMSEs es) at spp with each clrt variant's
+    (strategy label)."""
     rows = []
     for crow in sorted((r for r in clrt_rows if r["spp"] == spp), key=lambda r: (not r["strategy"].startswith("mis"), r["strategy"])):
         if not crow["strategy"].startswith("mis") and any(r["strategy"].startswith("mis") for r in clrt_rows):
             continue  # the comparison is with clrt's MIS (Mitsuba's path integrator uses MIS)
-        row = dict(scene=sc["name"], spp=spp, runs=a.runs, mitsuba_s=med(ts), mitsuba_s_min=min(ts), mitsuba_s_max=max(ts),
+        row = dict(scene=sc["name"], spp=spp, runs=a.runs, mitsuba_sampler=mi_sampler, mitsuba_s=med(ts), mitsuba_s_min=min(ts), mitsuba_s_max=max(ts),
                    mitsuba_relmse=med(es), mitsuba_relmse_min=min(es), mitsuba_relmse_max=max(es),
                    mitsuba_ref_relmse=ms.floor, mean_ratio_r=ms.ratio[0], mean_ratio_g=ms.ratio[1], mean_ratio_b=ms.ratio[2],
                    refs_relmse=ms.cross, agree=int(ms.agree), warnings=len(ms.warnings))
@@ -327,8 +336,8 @@ def mitsuba_rows(ms, sc, spp, ts, es, clrt_rows, clrt_runs, a):
         if tpairs:
             row["time_factor_min"], row["time_factor_max"] = min(tpairs), max(tpairs)
         rows.append(row)
-        log("  mitsuba    spp %4d: render %.3fs [%.3f-%.3f]  relMSE %.4g [%.4g-%.4g]  clrt %s/mitsuba efficiency %.3f" % (
-            spp, row["mitsuba_s"], min(ts), max(ts), row["mitsuba_relmse"], min(es), max(es), crow["strategy"],
+        log("  mitsuba %s spp %4d: render %.3fs [%.3f-%.3f]  relMSE %.4g [%.4g-%.4g]  clrt %s/mitsuba efficiency %.3f" % (
+            mi_sampler, spp, row["mitsuba_s"], min(ts), max(ts), row["mitsuba_relmse"], min(es), max(es), crow["strategy"],
             row["eff_ratio"]))
     return rows
 
@@ -458,6 +467,12 @@ def main():
     ap.add_argument("--spp", default="", help="comma list: only these spp points of each scene (default: all)")
     ap.add_argument("--pipelines", default="", help="comma list of clrt --pipeline values (fused, wavefront), each run "
                     "as its own variant (strategy label 'mis+fused'), interleaved run by run; default: clrt's own choice")
+    ap.add_argument("--samplers", default="", help="comma list of clrt --sampler values (stratified, independent), each "
+                    "run as its own variant (label 'mis+fused+independent'; the default sampler adds nothing); default: "
+                    "clrt's own (stratified)")
+    ap.add_argument("--mitsuba-samplers", default="independent,multijitter", help="comma list of Mitsuba samplers, "
+                    "each compared with every clrt variant (default independent,multijitter: Mitsuba's default and its "
+                    "least noisy at 16 and 64 spp on these scenes)")
     ap.add_argument("--path-only", action="store_true", help="only the path-traced scenes (bench/bench_path.py)")
     ap.add_argument("--no-path", action="store_true", help="skip the path-traced scenes")
     ap.add_argument("--replot", metavar="DIR", help="only redraw the plots of DIR (a results folder) from its CSVs")
@@ -496,6 +511,16 @@ def main():
         log("bench: this clrt has no --pipeline option; --pipelines ignored")
         pipelines = []
 
+    samplers = [x for x in a.samplers.split(",") if x]
+    if any(x not in CLRT_SAMPLERS for x in samplers):
+        sys.exit("bench: --samplers: expected a comma list of %s" % ", ".join(CLRT_SAMPLERS))
+    if samplers and "--sampler" not in help_text:
+        log("bench: this clrt has no --sampler option; --samplers ignored")
+        samplers = []
+    a.mi_samplers = [x for x in a.mitsuba_samplers.split(",") if x]
+    if any(x not in MITSUBA_SAMPLERS for x in a.mi_samplers) or not a.mi_samplers:
+        sys.exit("bench: --mitsuba-samplers: expected a comma list of %s" % ", ".join(MITSUBA_SAMPLERS))
+
     wanted = set(filter(None, a.scenes.split(",")))
     scenes = [s for s in SCENES if (not wanted or s["name"] in wanted) and (not a.mitsuba_only or s.get("mitsuba"))]
     missing = [s["name"] for s in scenes if not os.path.exists(s["path"])]
@@ -526,6 +551,8 @@ def main():
         ref_strategy = ("mis" if "mis" in strats else strats[-1]) if sc.get("env") else "default"
         if pipelines:
             strats = ["%s+%s" % (st, p) for st in strats for p in pipelines]
+        if samplers:  # the default (stratified) adds no label part
+            strats = [st if smp == "stratified" else "%s+%s" % (st, smp) for st in strats for smp in samplers]
         log("%s (%dx%d, %s)" % (sc["name"], sc["res"][0], sc["res"][1], "HDR" if hdr else "LDR"))
         ref, meta = reference(clrt, sc, scene_path, ref_strategy, a.refs, hdr, a.refresh_refs)
         ref_rows.append(dict(scene=sc["name"], ref_spp=meta["spp"], ref_strategy=meta["strategy"], ref_seeds="%d+%d" % tuple(meta["seeds"]),
@@ -542,8 +569,9 @@ def main():
         for spp in spps:
             by_strat = {strat: [] for strat in strats}
             if ms is not None:
-                ms.render(spp, 0)  # warm-up: Dr.Jit compiles (and caches) the kernel for this size
-            mts, mes = [], []
+                for smp in a.mi_samplers:
+                    ms.render(spp, 0, smp)  # warm-up: Dr.Jit compiles (and caches) the kernel for this size
+            mts, mes = {smp: [] for smp in a.mi_samplers}, {smp: [] for smp in a.mi_samplers}
             for run in range(a.runs):
                 for strat in strats:
                     st, img, _ = clrt.render(scene_path, spp, run + 1, strat)
@@ -554,9 +582,10 @@ def main():
                     runs_rows.append(r)
                     by_strat[strat].append(r)
                 if ms is not None:
-                    t, img = ms.render(spp, run + 1)
-                    mts.append(t)
-                    mes.append(rel_mse(img, ms.ref, 1.0 if hdr else 255.0))
+                    for smp in a.mi_samplers:
+                        t, img = ms.render(spp, run + 1, smp)
+                        mts[smp].append(t)
+                        mes[smp].append(rel_mse(img, ms.ref, 1.0 if hdr else 255.0))
             spp_rows = []
             for strat in strats:
                 rs = by_strat[strat]
@@ -577,8 +606,9 @@ def main():
                     strat, spp, row["render_s"], row["render_s_min"], row["render_s_max"], row["relmse"],
                     row["relmse_min"], row["relmse_max"], row["flip"]))
             if ms is not None:
-                mi_rows += mitsuba_rows(ms, sc, spp, mts, mes, spp_rows,
-                                        [r for r in runs_rows if r["scene"] == sc["name"]], a)
+                for smp in a.mi_samplers:
+                    mi_rows += mitsuba_rows(ms, sc, spp, mts[smp], mes[smp], spp_rows,
+                                            [r for r in runs_rows if r["scene"] == sc["name"]], a, smp)
         summary += scene_rows
         plot_scene(sc["name"], scene_rows, {ref_strategy: meta}, os.path.join(out, sc["name"] + ".png"))
     t_bench = time.perf_counter() - t_start
@@ -703,29 +733,32 @@ def main():
             r["time_fmt"] = "%.2f [%.2f-%.2f]" % (r["time_factor"], r.get("time_factor_min", float("nan")),
                                                   r.get("time_factor_max", float("nan")))
         rep += ["Mitsuba %s, variant llvm_ad_rgb, %d threads, path integrator max_depth 2 (direct light), box filter, "
-                "independent sampler; scene converted by bench/to_mitsuba.py (emitters x pi for the course's diffuse "
+                "the sampler of the mitsuba_sampler column (its references: independent); clrt's strategy label says its "
+                "--pipeline and, when not its default stratified sampler, its --sampler; scene converted by bench/to_mitsuba.py (emitters x pi for the course's diffuse "
                 "convention, the camera-visible environment added from one high-spp render). Each renderer's error is "
                 "against its own reference of the same spp as clrt's (two independent halves). efficiency ratio = "
                 "clrt / Mitsuba = time factor (Mitsuba s / clrt s) x noise factor (Mitsuba relMSE / clrt relMSE); "
                 "[min-max] over the run pairs of equal seed number. means = Mitsuba/clrt reference mean per channel; "
                 "refs relMSE = between the two references (both noise floors plus any bias)."
                 % (mi_version, os.cpu_count() or 2), "",
-                md_table(mi_rows, ["scene", "spp", "clrt_strategy", "clrt_fmt", "mi_fmt", "time_fmt", "noise_factor",
+                md_table(mi_rows, ["scene", "spp", "clrt_strategy", "mitsuba_sampler", "clrt_fmt", "mi_fmt", "time_fmt", "noise_factor",
                                    "ratio_fmt", "means_fmt", "refs_relmse", "agree"],
                          {"time_factor": "%.2f", "noise_factor": "%.2f", "refs_relmse": "%.3g"}), "",
                 "Columns: clrt s / relMSE (medians); Mitsuba s / relMSE median [min-max]; agree: means within 1%.", ""]
         write_csv(os.path.join(out, "mitsuba.csv"), mi_rows,
-                  ["scene", "spp", "runs", "clrt_strategy", "clrt_s", "clrt_relmse", "clrt_eff", "mitsuba_s", "mitsuba_s_min",
+                  ["scene", "spp", "runs", "clrt_strategy", "mitsuba_sampler", "clrt_s", "clrt_relmse", "clrt_eff", "mitsuba_s", "mitsuba_s_min",
                    "mitsuba_s_max", "mitsuba_relmse", "mitsuba_relmse_min", "mitsuba_relmse_max", "mitsuba_eff",
                    "mitsuba_ref_relmse", "eff_ratio", "eff_ratio_min", "eff_ratio_max", "time_factor", "noise_factor",
                    "mean_ratio_r", "mean_ratio_g", "mean_ratio_b", "refs_relmse", "agree", "warnings"])
     # ---- fused against wavefront (clrt --pipeline), when both ran
     pipe_rows = []
     for r in summary:
-        st, _, pipe = r["strategy"].partition("+")
-        if pipe != "fused":
+        parts = r["strategy"].split("+")
+        if "fused" not in parts:
             continue
-        w = next((x for x in summary if x["scene"] == r["scene"] and x["spp"] == r["spp"] and x["strategy"] == st + "+wavefront"), None)
+        st = "+".join(x for x in parts if x != "fused")
+        wlabel = "+".join("wavefront" if x == "fused" else x for x in parts)
+        w = next((x for x in summary if x["scene"] == r["scene"] and x["spp"] == r["spp"] and x["strategy"] == wlabel), None)
         if w is None:
             continue
         fr = [x for x in runs_rows if x["scene"] == r["scene"] and x["spp"] == r["spp"] and x["strategy"] == r["strategy"]]

@@ -1,7 +1,9 @@
 /* camera.cl — camera ray generation for samples [firstSample, firstSample + samples) of a range of
  * pixels, pixel-major (the samples of one pixel are adjacent). One sample per pixel: the
- * pixel centre (as the course does); more: stratified jitter over a strataX × strataY grid (box
- * filter). ApertureSize > 0: thin lens focused at FocusDistance, square aperture as in the course. */
+ * pixel centre (as the course does); more: jitter over the pixel (box filter), from the stratified
+ * sampler (CLRT_SAMPLER_STRATIFIED: a scrambled (0,2)-net per pixel), else independent uniforms.
+ * ApertureSize > 0: thin lens focused at FocusDistance, square aperture as in the course (its 2D sample
+ * stratified likewise). */
 #ifndef CLRT_CAMERA_CL
 #define CLRT_CAMERA_CL
 
@@ -22,11 +24,14 @@ inline void Camera_Generate(CameraParams cam, SceneParams scene, int pixel, int 
     int x = pixel % cam.width, y = pixel / cam.width;
     RngKey key = Rng_Key(scene.seed, pixel, sample, 1u);
     float jx = 0.5f, jy = 0.5f;
-    if (cam.spp > 1) {
-        int cell = sample % (cam.strataX * cam.strataY);
-        int sx = cell % cam.strataX, sy = cell / cam.strataX;
-        jx = ((float)sx + Rng_Uniform(key, 0)) / (float)cam.strataX;
-        jy = ((float)sy + Rng_Uniform(key, 1)) / (float)cam.strataY;
+    if (cam.spp > 1 && scene.sampler == CLRT_SAMPLER_STRATIFIED) {
+        /* the pixel's samples spread over a (0,2)-net: stratified in x and y alone too (common.cl) */
+        const float2 j = Rng_Stratified2D(scene.seed, pixel, sample, 1u, 0u);
+        jx = j.x;
+        jy = j.y;
+    } else if (cam.spp > 1) {
+        jx = Rng_Uniform(key, 0);
+        jy = Rng_Uniform(key, 1);
     }
     float3 dir = Camera_Direction(cam, (float)x + jx, (float)y + jy);
     float3 org = cam.position.xyz;
@@ -34,8 +39,10 @@ inline void Camera_Generate(CameraParams cam, SceneParams scene, int pixel, int 
         float3 dn = normalize(dir);
         float tFocus = cam.focusDistance / dot(dn, -cam.w.xyz);
         float3 focus = org + tFocus * dn;
-        float a = (Rng_Uniform(key, 2) - 0.5f) * cam.apertureSize;
-        float b = (Rng_Uniform(key, 3) - 0.5f) * cam.apertureSize;
+        const float2 ab = scene.sampler == CLRT_SAMPLER_STRATIFIED ? Rng_Stratified2D(scene.seed, pixel, sample, 1u, 2u)
+                                                                  : (float2)(Rng_Uniform(key, 2), Rng_Uniform(key, 3));
+        float a = (ab.x - 0.5f) * cam.apertureSize;
+        float b = (ab.y - 0.5f) * cam.apertureSize;
         org = org + a * cam.u.xyz + b * cam.v.xyz;
         dir = focus - org;
     }

@@ -48,6 +48,68 @@ inline float Rng_Uniform(RngKey k, uint dim) {
     return (float)(h >> 8) * (1.0f / 16777216.0f);
 }
 
+/* ---- Stratified 2D samples (CLRT_SAMPLER_STRATIFIED) --------------------------------------------
+ * Sample s of a pixel takes point idx of the (0,2)-sequence (radical inverse, Sobol's second
+ * dimension), Owen-scrambled, where idx is s shuffled by an Owen scramble of its bits (Burley 2020,
+ * "Practical Hash-based Owen Scrambling", JCGT 9(4)). The shuffle and both scrambles are hashed from
+ * (seed, pixel, path id, dimension pair) — not from s — so every pixel and every pair of dimensions
+ * has its own randomisation ("padding": pairs are independent of each other, the camera jitter included)
+ * while the samples of one pixel share it: any 2^m consecutive samples from a multiple of 2^m form a
+ * (0,m,2)-net, one point in each elementary interval of area 2^-m. Each point alone is uniform, so
+ * every estimate stays unbiased. Host replica: tests/test_sampler.cpp. */
+
+inline uint Bits_Reverse(uint v) {
+    v = ((v >> 1) & 0x55555555u) | ((v & 0x55555555u) << 1);
+    v = ((v >> 2) & 0x33333333u) | ((v & 0x33333333u) << 2);
+    v = ((v >> 4) & 0x0f0f0f0fu) | ((v & 0x0f0f0f0fu) << 4);
+    v = ((v >> 8) & 0x00ff00ffu) | ((v & 0x00ff00ffu) << 8);
+    return (v >> 16) | (v << 16);
+}
+
+/* Laine and Karras' hash: each output bit depends on that bit and the ones below it only, so on
+ * bit-reversed digits it is a nested uniform (Owen) scramble. Constants from Burley 2020. */
+inline uint Bits_LaineKarras(uint x, uint seed) {
+    x += seed;
+    x ^= x * 0x6c50b47cu;
+    x ^= x * 0xb82f1e52u;
+    x ^= x * 0xc7afe638u;
+    x ^= x * 0x8d22f6e6u;
+    return x;
+}
+
+/* Sobol's second dimension of index i, bit-reversed: the XOR of rows k of Pascal's triangle mod 2
+ * over the set bits k of i, i.e. bit j is the parity of i's set bits k with j ⊆ k (a superset
+ * transform in five steps). */
+inline uint Sobol_Dim1Reversed(uint i) {
+    i ^= (i >> 1) & 0x55555555u;
+    i ^= (i >> 2) & 0x33333333u;
+    i ^= (i >> 4) & 0x0f0f0f0fu;
+    i ^= (i >> 8) & 0x00ff00ffu;
+    i ^= (i >> 16) & 0x0000ffffu;
+    return i;
+}
+
+/* The point of sample `sample` for dimensions (dim, dim + 1) of path pathId of pixel `pixel`. */
+inline float2 Rng_Stratified2D(uint seed, int pixel, int sample, uint pathId, uint dim) {
+    uint h = Rng_Hash(seed ^ 0x3c6ef372u);
+    h = Rng_Hash(h ^ (uint)pixel);
+    h = Rng_Hash(h ^ pathId * 0xc2b2ae35u);
+    const uint sIdx = Rng_Hash(h ^ Rng_Hash(dim + 0x68e31da4u));
+    const uint sX = Rng_Hash(sIdx ^ 0xa54ff53au), sY = Rng_Hash(sIdx ^ 0x510e527fu);
+    const uint idx = Bits_Reverse(Bits_LaineKarras(Bits_Reverse((uint)sample), sIdx));
+    const uint x = Bits_Reverse(Bits_LaineKarras(idx, sX));  /* radical inverse of idx, scrambled */
+    const uint y = Bits_Reverse(Bits_LaineKarras(Sobol_Dim1Reversed(idx), sY));
+    return (float2)((float)(x >> 8), (float)(y >> 8)) * (1.0f / 16777216.0f);
+}
+
+/* The 2D sample of dimensions (dim, dim + 1) at a shading point of `path`: stratified over the pixel's
+ * samples or independent, by scene.sampler. key = Rng_Key(scene.seed, path.pixel, path.sample, path.pathId). */
+inline float2 Sampler_2D(SceneParams scene, PathState path, RngKey key, uint dim) {
+    if (scene.sampler == CLRT_SAMPLER_STRATIFIED)
+        return Rng_Stratified2D(scene.seed, path.pixel, path.sample, path.pathId, dim);
+    return (float2)(Rng_Uniform(key, dim), Rng_Uniform(key, dim + 1u));
+}
+
 /* ---- Motion blur ------------------------------------------------------------------------------
  * The shutter time of a camera sample, uniform in [0, 1) (the course draws one per primary ray):
  * a function of (seed, pixel, sample) alone, in a stream of its own (path id 0, which no path has),

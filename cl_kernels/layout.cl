@@ -44,14 +44,13 @@
     S(CameraParams) M(CameraParams, position) M(CameraParams, u) M(CameraParams, v)               \
         M(CameraParams, w) M(CameraParams, nearPlane) M(CameraParams, nearDistance)               \
         M(CameraParams, focusDistance) M(CameraParams, apertureSize) M(CameraParams, width)       \
-        M(CameraParams, height) M(CameraParams, spp) M(CameraParams, strataX)                     \
-        M(CameraParams, strataY)                                                                  \
+        M(CameraParams, height) M(CameraParams, spp) M(CameraParams, cameraPad)                   \
     S(SceneParams) M(SceneParams, background) M(SceneParams, ambient)                             \
         M(SceneParams, numTriangles) M(SceneParams, numSpheres) M(SceneParams, numLights)         \
         M(SceneParams, maxDepth) M(SceneParams, backgroundTexture) M(SceneParams, envLight)       \
         M(SceneParams, seed) M(SceneParams, splitDepth) M(SceneParams, envScale)                  \
         M(SceneParams, envImage) M(SceneParams, envMapping) M(SceneParams, numPlanes)               \
-        M(SceneParams, pathMode)                                                                   \
+        M(SceneParams, pathMode) M(SceneParams, sampler) M(SceneParams, samplerPad)                                      \
     S(Ray) M(Ray, origin) M(Ray, direction)                                                       \
     S(Hit) M(Hit, t) M(Hit, prim) M(Hit, u) M(Hit, v)                                             \
     S(PathState) M(PathState, throughput) M(PathState, pixel) M(PathState, sample)                \

@@ -231,7 +231,7 @@ inline void Path_ShadeHit(SceneParams scene, PathState path, Material m, float3 
         if (!Path_SpecularBounce(m, wo, ns, ng, pWorld, t, inside, Rng_Uniform(key, dim + 2u), &weight, &org, &dir)) return;
         weight /= pSpecular;
     } else {
-        float2 u = (float2)(Rng_Uniform(key, dim + 5u), Rng_Uniform(key, dim + 6u));
+        float2 u = Sampler_2D(scene, path, key, dim + 5u);
         float3 fCos = Path_SampleBounce(sp, materials, mode, u, &dir, &pdf);
         weight = fCos / (pdf * (1.0f - pSpecular));
         org = Ray_OffsetOrigin(pWorld, ng);

@@ -439,13 +439,13 @@ inline void Light_ShadowRays(SceneParams scene, PathState path, ShadingPoint sp,
                              const __global float* envDist, const __global float4* lightData, ShadowRay* sr,
                              ShadowRay* sr2) {
     uint dim = 4u + 32u * (uint)path.depth + 8u + 2u * (uint)l;
-    float2 u = (float2)(Rng_Uniform(key, dim), Rng_Uniform(key, dim + 1));
+    float2 u = Sampler_2D(scene, path, key, dim);
     float3 wi;
     float dist;
 #ifdef CLRT_HAS_ENV_LIGHT
     if (lightSlots == 2 && EnvLight_UsesMis(&lights[l])) {
         /* the cosine sample's uniforms: the same dimensions, offset by 2^15 */
-        float2 u2 = (float2)(Rng_Uniform(key, dim + 0x8000u), Rng_Uniform(key, dim + 0x8001u));
+        float2 u2 = Sampler_2D(scene, path, key, dim + 0x8000u);
         /* With a share of ½: the cosine sample at every other sample of a pixel (parity offset per
          * pixel and light), stratified; with 1 (the default): always. */
         int withCos = CLRT_ENV_MIS_COSINE_SHARE >= 1.0f ||

@@ -81,6 +81,9 @@ const char* kRenderHelp =
     "                        (default: the first GPU, else the CPU device)\n"
     "  --spp N               samples per pixel (1 to 1048576), overriding each camera's NumSamples\n"
     "  --seed N              random seed (default 0); the same seed gives the same image\n"
+    "  --sampler S           stratified (default): camera jitter, light and BSDF samples stratified\n"
+    "                        over a pixel's samples (scrambled (0,2)-sequence); independent: every\n"
+    "                        number drawn independently (the noise of a plain Monte Carlo renderer)\n"
     "  --target-error X      render in passes until the estimated relMSE of the image is <= X (> 0):\n"
     "                        even and odd passes form two independent half-images, and their\n"
     "                        difference estimates the error (relative to 1, or to 255 for .png\n"
@@ -126,6 +129,7 @@ struct Args {
     int spp = 0, width = 0, height = 0;  // width/height: --resolution (0: the camera's own)
     uint32_t seed = 0;
     bool verbose = false, help = false, truncatePng = false, exrHalf = false, allFeatures = false;
+    bool independent = false;  // --sampler independent (RenderSettings::stratified = false)
     std::string envSampling;  // --env-sampling: overrides every environment light's sampler
     StopRule stop;            // --target-error, --time-limit (render/progressive.h)
     Pipeline pipeline = Pipeline::Auto;  // --pipeline
@@ -168,6 +172,12 @@ Args parseRenderArgs(int argc, char** argv, int start) {
         else if (s == "--device") a.device = value();
         else if (s == "--spp") a.spp = parseInt(s, value(), 1, kMaxSamplesPerPixel);
         else if (s == "--seed") a.seed = uint32_t(parseInt(s, value(), 0, 2147483647));
+        else if (s == "--sampler") {
+            const std::string v = value();
+            if (v != "stratified" && v != "independent")
+                throw Error("--sampler: expected stratified or independent, got '" + v + "'", ExitCode::Usage);
+            a.independent = v == "independent";
+        }
         else if (s == "--camera") a.cameraId = value();
         else if (s == "--target-error") a.stop.targetError = parseNumber(s, value(), 0, true);
         else if (s == "--time-limit") a.stop.timeLimit = parseNumber(s, value(), 0, false);
@@ -327,7 +337,13 @@ ImageRGB renderCameraProgressive(const Args& a, const Camera& cam, const RenderS
     rule.maxSpp = a.spp > 0 ? a.spp : kMaxSamplesPerPixel;
     rule.white = lowerExtension(cam.imageName) == ".png" ? 255.0 : 1.0;
     const PassRenderer pass = [&](int first, int count, int& reached) {
-        return renderPass(cam, rs, renderers, work, first, count, reached);
+        // The two halves must be independent estimates, but the stratified sampler correlates the samples
+        // of a pixel (it spreads them over one net): so pass k renders pass k / 2 of its half k % 2, the
+        // odd half under a seed of its own. Each half is then a progressive stratified render.
+        const int k = first / count;
+        RenderSettings hs = rs;
+        if (k & 1) hs.seed = rs.seed ^ 0x2545f491u;
+        return renderPass(cam, hs, renderers, work, (k >> 1) * count, count, reached);
     };
     int pairs = 0;
     const auto onPair = [&](const ProgressiveResult& r) {
@@ -365,6 +381,7 @@ int renderAndWriteCamera(const Args& a, const Camera& cam, int camIndex, std::ve
     RenderSettings rs;
     rs.spp = a.spp > 0 ? a.spp : cam.numSamples;
     rs.seed = a.seed;
+    rs.stratified = !a.independent;
     rs.stop = &stopRequested();
     rs.pipeline = a.pipeline;
     for (DeviceWork& w : work) w.counters.stoppedAtSample = -1;
@@ -604,6 +621,7 @@ std::vector<PlannedOutput> plannedOutputs(const Args& a, const Scene& scene, con
 // (the camera size, spp and seed are part of it elsewhere).
 std::string pixelOptions(const Args& a) {
     return "env=" + a.envSampling + ";all-features=" + std::to_string(a.allFeatures) +
+           ";sampler=" + (a.independent ? "independent" : "stratified") +
            ";resolution=" + std::to_string(a.width) + "x" + std::to_string(a.height) +
            ";tile=" + std::to_string(a.dist.tilePixels);
 }

@@ -39,11 +39,6 @@ namespace {
 
 using Result = CliResult;
 
-// The --device of the test device (CLRT_TEST_DEVICE; default: the CPU device).
-std::string deviceArgs() {
-    const char* d = std::getenv("CLRT_TEST_DEVICE");
-    return std::string(" --device '") + (d && *d ? d : "cpu") + "'";
-}
 
 // `env... clrt args` through the shell; stdout and stderr together.
 Result run(const TempDir& d, const std::string& args, const std::string& env = "") {
@@ -223,7 +218,7 @@ TEST_CASE("cli output: accepted names, upper-case extensions, and a final symlin
     fs::create_symlink(d.path / "elsewhere" / "victim.png", d.path / "out" / "shot.png");
     const std::string f = d.file("s.xml");
     writeFileBytes(f, sceneXml(camera(1, "shot.png") + camera(2, "UPPER.EXR", tonemap(""))));
-    Result r = run(d, "render " + f + " -o " + d.file("out") + deviceArgs());
+    Result r = run(d, "render " + f + " -o " + d.file("out") + deviceArg());
     INFO(r.log);
     REQUIRE(r.rc == 0);
     CHECK(readFileBytes(d.file("elsewhere/victim.png")) == "not to be touched");
@@ -243,7 +238,7 @@ TEST_CASE("cli output: clrt tonemap never overwrites its input and checks its ou
     writePngClamped(d.file("x.png"), img);
     const auto before = snapshot(d.path);
     auto refused = [&](const std::string& args, int rc, std::initializer_list<std::string> needles) {
-        Result r = run(d, "tonemap " + args + deviceArgs());
+        Result r = run(d, "tonemap " + args + deviceArg());
         INFO(r.log);
         CHECK(r.rc == rc);
         CHECK(r.errorLines == 1);
@@ -259,7 +254,7 @@ TEST_CASE("cli output: clrt tonemap never overwrites its input and checks its ou
     refused(d.file("a.exr") + " -o " + d.file("o/"), 2, {"not a plain file name"});
     refused(d.file("a.exr") + " -o " + d.file("nodir/b.png"), 4, {"nodir", "does not exist"});
     // And a good one writes exactly its output.
-    Result ok = run(d, "tonemap " + d.file("a.exr") + " -o " + d.file("o/b.png") + deviceArgs());
+    Result ok = run(d, "tonemap " + d.file("a.exr") + " -o " + d.file("o/b.png") + deviceArg());
     INFO(ok.log);
     CHECK(ok.rc == 0);
     CHECK(readImage(d.file("o/b.png")).width == 8);
@@ -272,17 +267,17 @@ TEST_CASE("cli output: an output directory that cannot be written is reported be
     const std::string f = d.file("s.xml");
     writeFileBytes(f, sceneXml(camera(1, "out.exr", tonemap(""))));
     fs::create_directories(d.path / "out" / "out.png");  // the tone-mapped PNG's name is taken by a directory
-    expectRefused(run(d, "render " + f + " -o " + d.file("out") + deviceArgs()), 4, {"out.png", "a directory has its name"});
+    expectRefused(run(d, "render " + f + " -o " + d.file("out") + deviceArg()), 4, {"out.png", "a directory has its name"});
     CHECK(!fs::exists(d.path / "out" / "out.exr"));
     // As root, permissions do not stop a write: /proc/self is a directory no one can create files in.
     if (!fs::is_directory("/proc/self")) {
         WARN("no /proc: skipped");
         return;
     }
-    Result r = run(d, "render " + f + " -o /proc/self --spp 1048576" + deviceArgs());
+    Result r = run(d, "render " + f + " -o /proc/self --spp 1048576" + deviceArg());
     expectRefused(r, 4, {"/proc/self", "output directory is not writable"});
     CHECK(r.log.find("stats:") == std::string::npos);
-    Result t = run(d, "tonemap " + f + " -o /proc/self/x.png" + deviceArgs());  // before the input is read
+    Result t = run(d, "tonemap " + f + " -o /proc/self/x.png" + deviceArg());  // before the input is read
     INFO(t.log);
     CHECK(t.rc == 4);
     CHECK(t.errorLines == 1);

@@ -81,12 +81,14 @@ struct TempDir {
 };
 
 // Flattens `scene` and renders `cam` at `spp` samples with `seed` on the test device.
-inline ImageRGB renderCamera(const Scene& scene, const Camera& cam, int spp = 1, uint32_t seed = 0) {
+// stratified = false: --sampler independent (to compare noise with references rendered so).
+inline ImageRGB renderCamera(const Scene& scene, const Camera& cam, int spp = 1, uint32_t seed = 0, bool stratified = true) {
     DeviceScene ds = flattenScene(scene);
     Renderer r(testContext(), ds);
     RenderSettings rs;
     rs.spp = spp;
     rs.seed = seed;
+    rs.stratified = stratified;
     RenderCounters c;
     return r.render(cam, rs, c);
 }
@@ -110,6 +112,12 @@ inline ImageRGB quantize(const ImageRGB& img, bool floorInstead = false) {
         v = floorInstead ? std::floor(c) : std::round(c);
     }
     return q;
+}
+
+// The --device option for the test device (CLRT_TEST_DEVICE; default: the CPU device), with its space.
+inline std::string deviceArg() {
+    const char* d = std::getenv("CLRT_TEST_DEVICE");
+    return std::string(" --device '") + (d && *d ? d : "cpu") + "'";
 }
 
 // Runs the clrt binary with arguments; returns the exit code; output goes to `logFile`.

@@ -73,11 +73,6 @@ std::string pathScene(const std::string& imageName) {
            "<Mesh id=\"2\"><Material>1</Material><Faces>2 4 3 2 5 4</Faces></Mesh></Objects></Scene>\n";
 }
 
-std::string deviceArg() {
-    const char* dev = std::getenv("CLRT_TEST_DEVICE");
-    return std::string(" --device ") + (dev && *dev ? dev : "cpu");
-}
-
 }  // namespace
 
 TEST_CASE("halvesRelativeMse estimates the relMSE of the mean of two independent halves", "[progressive]") {
@@ -174,14 +169,14 @@ TEST_CASE("clrt render --target-error / --time-limit: stops, prints and records 
     SECTION("--target-error: estimate <= X, deterministic spp in the header") {
         std::string spp;
         for (int run = 0; run < 2; ++run) {
-            const int rc = runClrt(base + " --target-error 5e-5", d.file("log"));
+            const int rc = runClrt(base + " --target-error 1e-5", d.file("log"));
             const std::string log = readFileBytes(d.file("log"));
             INFO(log);
             REQUIRE(rc == 0);
             const std::string exr = d.file("img.exr");
             CHECK(exrAttr(exr, "stopReason") == "target error");
-            CHECK(std::stod(exrAttr(exr, "relMseEstimate")) <= 5e-5);
-            CHECK(exrAttr(exr, "targetError") == "5e-05");
+            CHECK(std::stod(exrAttr(exr, "relMseEstimate")) <= 1e-5);
+            CHECK(exrAttr(exr, "targetError") == "1e-05");
             const int passSpp = std::stoi(exrAttr(exr, "passSamples"));
             CHECK(passSpp == passSamples(384, kMaxSamplesPerPixel));  // 24x16 pixels: 171
             CHECK(std::stoi(exrAttr(exr, "spp")) % (2 * passSpp) == 0);

@@ -58,12 +58,6 @@ dev::CameraParams makeCameraParams(const Camera& cam) {
 
 void setSamplesPerPixel(dev::CameraParams& c, int spp) {
     c.spp = std::max(1, spp);
-    // Strata: the largest divisor of spp not above sqrt(spp), so 100 -> 10x10, 7 -> 1x7.
-    int sx = 1;
-    for (int d = 1; d * d <= c.spp; ++d)
-        if (c.spp % d == 0) sx = d;
-    c.strataX = c.spp / sx;
-    c.strataY = sx;
 }
 
 // The driver: one function per domain (flatten.h), in an order that fixes where images enter the

@@ -67,9 +67,9 @@ struct DeviceScene {
 
 DeviceScene flattenScene(const Scene& scene);
 
-// Camera frame and image plane for the kernels; strata chosen for numSamples.
+// Camera frame and image plane for the kernels, and numSamples.
 dev::CameraParams makeCameraParams(const Camera& cam);
-// Sets spp (at least 1) and the stratification grid strataX × strataY = spp.
+// Sets spp (at least 1).
 void setSamplesPerPixel(dev::CameraParams& c, int spp);
 
 inline dev::float4 toFloat4(const Vec3& v, float w = 0) { return {v.x, v.y, v.z, w}; }

@@ -280,6 +280,7 @@ static BatchPlan planBatches(const DeviceScene& ds, size_t numPixels, const Rend
     const size_t batchPaths = plan.batch * size_t(plan.group);
     plan.bounces = ds.features.bounces() || sp.pathMode != 0;
     sp.seed = settings.seed;
+    sp.sampler = settings.stratified ? CLRT_SAMPLER_STRATIFIED : CLRT_SAMPLER_INDEPENDENT;
     // Path tracing with Russian roulette has no depth cap (the course's references show none): the
     // roulette ends paths, kMaxRecursionDepth is the backstop.
     if (sp.pathMode & CLRT_PATH_RR) sp.maxDepth = kMaxRecursionDepth;
@@ -423,7 +424,6 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     // The loader and the command line already cap both (with a warning); this is the backstop for
     // scenes built in code.
     setSamplesPerPixel(cp, std::min(settings.spp, kMaxSamplesPerPixel));
-    if (!settings.stratified) cp.strataX = cp.strataY = 1;
     const size_t numPixels = size_t(cam.width) * cam.height;
     const size_t imageBytes = numPixels * sizeof(dev::float4);
     checkImageFits(m.dc.info(), cam);

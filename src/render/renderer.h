@@ -62,8 +62,10 @@ struct RenderSettings {
     uint32_t seed = 0;
     size_t maxBatchPixels = 1u << 18;  // camera paths per batch (pixels x samples of each)
     int splitDepthOverride = -1;       // >= 0: force the dielectric split depth
-    bool stratified = true;            // false: independent uniform jitter per sample (strata 1x1),
-                                       // the noise of renderers that jitter so (tests/test_brdf.cpp)
+    bool stratified = true;            // true: camera jitter, lens, light and BSDF 2D samples stratified
+                                       // over a pixel's samples (CLRT_SAMPLER_STRATIFIED, common.cl);
+                                       // false: every number independent, the noise of renderers that
+                                       // sample so (tests/test_brdf.cpp); clrt render --sampler
     const std::atomic<bool>* stop = nullptr;  // set (from any thread): end after the current sample pass
     Pipeline pipeline = Pipeline::Auto;
 };

@@ -273,8 +273,7 @@ typedef struct CameraParams {
     int width;
     int height;
     int spp;
-    int strataX;           /* stratified jitter grid: strataX * strataY = spp when spp is a product */
-    int strataY;
+    int cameraPad[2];      /* explicit padding to the float4 alignment */
 } CameraParams;
 
 /* Per-scene constants passed to every kernel. */
@@ -294,7 +293,13 @@ typedef struct SceneParams {
     int envMapping;        /* its EnvMappingKind */
     int numPlanes;         /* infinite planes (see Plane) */
     int pathMode;          /* 0: classic recursive ray tracing; else CLRT_PATH_* bits (cl_kernels/path.cl) */
+    int sampler;           /* CLRT_SAMPLER_*: how light and BSDF samples are drawn (cl_kernels/common.cl) */
+    int samplerPad[3];     /* explicit padding to the float4 alignment */
 } SceneParams;
+
+/* SceneParams.sampler (set per render from RenderSettings::stratified, clrt render --sampler). */
+#define CLRT_SAMPLER_INDEPENDENT 0 /* every number an independent uniform (Rng_Uniform) */
+#define CLRT_SAMPLER_STRATIFIED 1  /* light and BSDF 2D samples stratified over a pixel's samples */
 
 /* SceneParams.pathMode: the camera's <Renderer>PathTracing and its <RendererParams> (set per render). */
 #define CLRT_PATH_ON 1          /* <Renderer>PathTracing</Renderer> */
