@@ -7,12 +7,15 @@
 // Embree's single-ray API (rtcIntersect1 / rtcOccluded1) on N threads, and prints Mrays/s, the ratio
 // clrt/Embree, and how often the two agree on hit/miss (and on the primitive hit).
 //
-// usage: ray_bench SCENE [--runs 5] [--device SPEC] [--threads 2] [--dump FILE]
+// usage: ray_bench SCENE [--runs 5] [--device SPEC] [--threads 2] [--dump FILE] [--embree-config STR]
 //   --threads T: Embree's thread count, and the whole process (so the OpenCL runtime's workers too) is
 //   pinned to the first T CPUs it may run on; PoCL is also told T workers (POCL_MAX_PTHREAD_COUNT,
 //   unless already set). Without --threads, Embree gets 2 threads and nothing is pinned.
 //   --dump FILE: also writes clrt's closest hits (t, prim, u, v of every camera and diffuse ray) and
 //   shadow results, as raw bytes, so that two kernel versions can be compared hit by hit (cmp).
+//   --embree-config STR: appended to Embree's device configuration, e.g. "verbose=2": Embree then prints
+//   the BVH and intersector it picked (on this machine BVH8<triangle4>, BVH8Triangle4Intersector1Moeller)
+//   and its tree's statistics (nodes, fill, SAH cost).
 #include <embree3/rtcore.h>
 #include <sched.h>
 
@@ -83,7 +86,7 @@ int main(int argc, char** argv) {
             std::fprintf(stderr, "usage: ray_bench SCENE [--runs N] [--device SPEC] [--threads T]\n");
             return 1;
         }
-        std::string scenePath = argv[1], deviceSpec = "cpu", dumpPath;
+        std::string scenePath = argv[1], deviceSpec = "cpu", dumpPath, embreeConfig;
         int runs = 5, threads = 2;
         bool threadsGiven = false;
         for (int i = 2; i + 1 < argc; i += 2) {
@@ -92,6 +95,7 @@ int main(int argc, char** argv) {
             else if (o == "--device") deviceSpec = argv[i + 1];
             else if (o == "--threads") threads = std::max(1, std::atoi(argv[i + 1])), threadsGiven = true;
             else if (o == "--dump") dumpPath = argv[i + 1];
+            else if (o == "--embree-config") embreeConfig = argv[i + 1];
         }
         if (threadsGiven) pinToCpus(threads);
         FILE* dump = dumpPath.empty() ? nullptr : std::fopen(dumpPath.c_str(), "wb");
@@ -102,7 +106,7 @@ int main(int argc, char** argv) {
         if (ds.params.numSpheres > 0) std::fprintf(stderr, "note: spheres are ignored by this benchmark\n");
 
         // ---- Embree scene: the same world-space triangles.
-        RTCDevice edev = rtcNewDevice(("threads=" + std::to_string(threads)).c_str());
+        RTCDevice edev = rtcNewDevice(("threads=" + std::to_string(threads) + (embreeConfig.empty() ? "" : "," + embreeConfig)).c_str());
         RTCScene escene = rtcNewScene(edev);
         RTCGeometry geom = rtcNewGeometry(edev, RTC_GEOMETRY_TYPE_TRIANGLE);
         float* vb = (float*)rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),

@@ -369,18 +369,13 @@ TEST_CASE("BVH4 traversal stack: the host bound holds, and the kernel with exact
 
 namespace {
 
-// Closest hits and shadow results of the device kernels (intersect.cl) on a BVH over tris built with
-// leaves of at most maxLeaf primitives (so leaves of several Bvh4Leaf blocks when maxLeaf > 4), compared
-// with brute force over the host's watertight test. Returns the number of mismatches; *hitsOut: rays hit.
-int deviceVsBruteForce(const std::vector<Tri>& tris, const std::vector<Vec3>& org, const std::vector<Vec3>& dir,
-                       int maxLeaf, int* hitsOut) {
-    BvhBuildOptions o;
-    o.maxLeafSize = maxLeaf;
-    o.traversalCost = 8;  // leaves as full as maxLeaf allows: every lane of a block, several blocks
-    Bvh bin = buildBvh(triBoxes(tris), o);
-    Bvh4 b4 = collapseBvh4(bin);
-    // Full blocks (all four lanes used) in every non-trivial case.
-    if (tris.size() > 64) CHECK(double(tris.size()) / double(b4.leaves.size()) > 3.0);
+// The device kernels' (intersect.cl) closest hits and shadow results (occluded: 1) for rays (org, dir)
+// on the tree b4 over tris (its leaf blocks filled here).
+struct DeviceTrace {
+    std::vector<dev::Hit> hits;
+    std::vector<int> occluded;
+};
+DeviceTrace traceOnDevice(Bvh4 b4, const std::vector<Tri>& tris, const std::vector<Vec3>& org, const std::vector<Vec3>& dir) {
     std::vector<dev::Triangle> devTris;
     for (const Tri& t : tris)
         devTris.push_back({{t[0].x, t[0].y, t[0].z, 0}, {t[1].x, t[1].y, t[1].z, 0}, {t[2].x, t[2].y, t[2].z, 0}});
@@ -420,15 +415,34 @@ int deviceVsBruteForce(const std::vector<Tri>& tris, const std::vector<Vec3>& or
     const cl::NDRange global(roundUp(size_t(n), 64)), local(64);
     CL_CPP(dc.queue().enqueueNDRangeKernel(closest.ready(), cl::NullRange, global, local));
     CL_CPP(dc.queue().enqueueNDRangeKernel(shadow.ready(), cl::NullRange, global, local));
-    std::vector<dev::Hit> hits(static_cast<size_t>(n));
-    CL_CPP(dc.queue().enqueueReadBuffer(hb, CL_TRUE, 0, sizeof(dev::Hit) * hits.size(), hits.data()));
+    DeviceTrace r;
+    r.hits.resize(static_cast<size_t>(n));
+    CL_CPP(dc.queue().enqueueReadBuffer(hb, CL_TRUE, 0, sizeof(dev::Hit) * r.hits.size(), r.hits.data()));
     CL_CPP(dc.queue().enqueueReadBuffer(shb, CL_TRUE, 0, sizeof(dev::ShadowRay) * shadows.size(), shadows.data()));
+    for (const dev::ShadowRay& s : shadows) r.occluded.push_back(s.contribution.x == 0);
+    return r;
+}
+
+// Closest hits and shadow results of the device kernels (intersect.cl) on a BVH over tris built with
+// leaves of at most maxLeaf primitives (so leaves of several Bvh4Leaf blocks when maxLeaf > 4), compared
+// with brute force over the host's watertight test. Returns the number of mismatches; *hitsOut: rays hit.
+int deviceVsBruteForce(const std::vector<Tri>& tris, const std::vector<Vec3>& org, const std::vector<Vec3>& dir,
+                       int maxLeaf, int* hitsOut) {
+    BvhBuildOptions o;
+    o.maxLeafSize = maxLeaf;
+    o.traversalCost = 8;  // leaves as full as maxLeaf allows: every lane of a block, several blocks
+    Bvh bin = buildBvh(triBoxes(tris), o);
+    Bvh4 b4 = collapseBvh4(bin);
+    // Nearly full blocks (all four lanes used in most) in every non-trivial case with leaves of 4 or more.
+    if (maxLeaf >= 4 && tris.size() > 64) CHECK(double(tris.size()) / double(b4.leaves.size()) > 2.9);
+    const DeviceTrace dt = traceOnDevice(b4, tris, org, dir);
+    const int n = int(org.size());
     int mismatch = 0, hitRays = 0;
     for (int i = 0; i < n; ++i) {
         float tBest;
         const int best = bruteClosest(tris, org[i], dir[i], &tBest);
-        const dev::Hit& h = hits[size_t(i)];
-        const bool occluded = shadows[size_t(i)].contribution.x == 0;
+        const dev::Hit& h = dt.hits[size_t(i)];
+        const bool occluded = dt.occluded[size_t(i)];
         mismatch += ((h.prim < 0) != (best < 0)) || (best >= 0 && std::fabs(h.t - tBest) > 1e-6f * tBest) ||
                     (occluded != (best >= 0));
         hitRays += best >= 0;
@@ -499,6 +513,99 @@ TEST_CASE("BVH4 leaf blocks on the device: empty, one triangle, coplanar grid, h
             INFO("scale " << scale);
             CHECK(deviceVsBruteForce(huge, org, dir, 4, &hits) == 0);
             if (scale < 1e15f) CHECK(hits > int(org.size()) / 2);
+        }
+    }
+}
+
+// The traversal's node paths on inputs that stress them, against brute force: nodes with every child
+// hit (sorted pushes for closest hits, lane-order pushes for any hit; leaves of 1 make deep trees of
+// full nodes), and rays lying exactly in the planes of box faces (0 * inf = NaN in the slab test, which
+// must leave the slab unbounded, so no box in whose face a ray lies is culled).
+TEST_CASE("BVH4 traversal on the device: a triangle soup with full nodes, rays in box faces", "[bvh4][cl]") {
+    std::mt19937 rng(29);
+    std::uniform_real_distribution<float> unit(-1, 1);
+    int hits = 0;
+    SECTION("triangle soup: overlapping boxes, many hit children per node") {
+        std::vector<Tri> soup;
+        for (int i = 0; i < 3000; ++i) {
+            const Vec3 c(unit(rng) * 4, unit(rng) * 4, unit(rng) * 4);
+            Tri t;
+            for (Vec3& v : t) v = c + Vec3(unit(rng), unit(rng), unit(rng)) * 0.6f;
+            soup.push_back(t);
+        }
+        std::vector<Vec3> org, dir;
+        for (int i = 0; i < 3000; ++i) {  // from inside the soup, and from outside aimed at it
+            const Vec3 o = Vec3(unit(rng), unit(rng), unit(rng)) * (i % 2 ? 3.f : 20.f);
+            org.push_back(o);
+            dir.push_back(normalize(i % 2 ? Vec3(unit(rng), unit(rng), unit(rng)) : Vec3(unit(rng), unit(rng), unit(rng)) - o));
+        }
+        for (int leaf : {1, 4, 15}) {
+            INFO("maxLeafSize " << leaf);
+            CHECK(deviceVsBruteForce(soup, org, dir, leaf, &hits) == 0);
+            CHECK(hits > int(org.size()) / 2);
+        }
+    }
+    SECTION("rays in the planes of box faces and along box edges") {
+        // A ray lying in a face plane of a box (a zero direction component, the origin's component on
+        // the face: 0 * inf = NaN in the slab test) can meet what the box holds only on the boundary of
+        // a triangle, where the reference's edge ownership and the kernel's inclusive test differ on a
+        // mesh's outline. So the kernel is held to itself: the same tree with every box unbounded (no
+        // culling: every leaf tested) must give the same closest distance and shadow result.
+        // Closed unit cubes (12 triangles each) at even lattice points, some left out: every box face
+        // lies on an integer plane; rays along an axis with the other two coordinates integers (along
+        // cube edges, through corners) or one of them k + 1/2 (across faces, in face planes).
+        std::vector<Tri> cubes;
+        for (int z = 0; z < 4; ++z)
+            for (int y = 0; y < 4; ++y)
+                for (int x = 0; x < 4; ++x) {
+                    if ((x + y + z) % 3 == 0) continue;
+                    const Vec3 p(float(2 * x), float(2 * y), float(2 * z));
+                    const Vec3 v[8] = {p, p + Vec3(1, 0, 0), p + Vec3(0, 1, 0), p + Vec3(1, 1, 0),
+                                       p + Vec3(0, 0, 1), p + Vec3(1, 0, 1), p + Vec3(0, 1, 1), p + Vec3(1, 1, 1)};
+                    const int face[6][4] = {{0, 1, 3, 2}, {4, 6, 7, 5}, {0, 4, 5, 1}, {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 5, 7, 3}};
+                    for (const auto& q : face) {
+                        cubes.push_back({v[q[0]], v[q[1]], v[q[2]]});
+                        cubes.push_back({v[q[0]], v[q[2]], v[q[3]]});
+                    }
+                }
+        std::vector<Vec3> org, dir;
+        std::uniform_int_distribution<int> cell(0, 8), axis(0, 2), coin(0, 1);
+        for (int i = 0; i < 3000; ++i) {
+            const int a = axis(rng), u = (a + 1) % 3, v = (a + 2) % 3;
+            Vec3 o, d(0, 0, 0);
+            o[u] = float(cell(rng)) + (i % 3 == 1 ? 0.5f : 0.f);
+            o[v] = float(cell(rng)) + (i % 3 == 2 ? 0.5f : 0.f);
+            const bool outside = i % 2;
+            o[a] = outside ? -3.f : float(cell(rng)) + 0.25f;  // outside every box, or anywhere along the axis
+            d[a] = outside || coin(rng) ? 1.f : -1.f;
+            org.push_back(o);
+            dir.push_back(d);
+        }
+        for (int leaf : {1, 4}) {
+            INFO("maxLeafSize " << leaf);
+            BvhBuildOptions o;
+            o.maxLeafSize = leaf;
+            Bvh4 b4 = collapseBvh4(buildBvh(triBoxes(cubes), o));
+            Bvh4 open = b4;
+            for (dev::Bvh4Node& nd : open.nodes)
+                for (int i = 0; i < 4; ++i) {
+                    if ((&nd.child.x)[i] == CLRT_INVALID) continue;
+                    for (dev::float4* lo : {&nd.minX, &nd.minY, &nd.minZ}) (&lo->x)[i] = -INFINITY;
+                    for (dev::float4* hi : {&nd.maxX, &nd.maxY, &nd.maxZ}) (&hi->x)[i] = INFINITY;
+                }
+            const DeviceTrace culled = traceOnDevice(b4, cubes, org, dir), all = traceOnDevice(open, cubes, org, dir);
+            int differ = 0, hit = 0, inFace = 0;
+            for (size_t i = 0; i < org.size(); ++i) {
+                const dev::Hit &h = culled.hits[i], &g = all.hits[i];
+                differ += ((h.prim < 0) != (g.prim < 0)) || (g.prim >= 0 && h.t != g.t) || culled.occluded[i] != all.occluded[i];
+                hit += g.prim >= 0;
+                bool inPlane = false;  // a zero direction component with an integer origin component
+                for (int a = 0; a < 3; ++a) inPlane = inPlane || (dir[i][a] == 0 && org[i][a] == std::floor(org[i][a]));
+                inFace += g.prim >= 0 && inPlane;
+            }
+            CHECK(differ == 0);
+            CHECK(hit > int(org.size()) / 4);
+            CHECK(inFace > int(org.size()) / 8);  // rays in box faces that hit something
         }
     }
 }
