@@ -19,9 +19,11 @@ inline float3 Camera_Direction(CameraParams cam, float px, float py) {
     return uc * cam.u.xyz + vc * cam.v.xyz - cam.nearDistance * cam.w.xyz;
 }
 
-/* The camera ray and path of sample `sample` of pixel `pixel`. */
-inline void Camera_Generate(CameraParams cam, SceneParams scene, int pixel, int sample, PathState* path, Ray* ray) {
-    int x = pixel % cam.width, y = pixel / cam.width;
+/* The camera ray and path of sample `sample` of pixel `pixel` = y·width + x. always_inline: in the fused
+ * kernel's sample loop the per-pixel part of the random key is then computed once per pixel (the
+ * compiler hoists it), and the pixel's coordinates come from the caller (no division per sample). */
+__attribute__((always_inline)) inline void Camera_GenerateAt(CameraParams cam, SceneParams scene, int pixel, int x,
+                                                             int y, int sample, PathState* path, Ray* ray) {
     RngKey key = Rng_Key(scene.seed, pixel, sample, 1u);
     float jx = 0.5f, jy = 0.5f;
     if (cam.spp > 1 && scene.sampler == CLRT_SAMPLER_STRATIFIED) {
@@ -61,6 +63,11 @@ inline void Camera_Generate(CameraParams cam, SceneParams scene, int pixel, int 
     p.depth = 0;
     p.pathId = 1u;
     *path = p;
+}
+
+/* The camera ray and path of sample `sample` of pixel `pixel`. */
+inline void Camera_Generate(CameraParams cam, SceneParams scene, int pixel, int sample, PathState* path, Ray* ray) {
+    Camera_GenerateAt(cam, scene, pixel, pixel % cam.width, pixel / cam.width, sample, path, ray);
 }
 
 /* Parameters: src/shared/kernel_params.h. */

@@ -82,13 +82,19 @@ __kernel void render_fused(CLRT_KERNEL_PARAMS(render_fused)) {
     float3 levelSum[CLRT_FUSED_MAX_LEVELS];
     float4 acc = image[pixel];
     uint secondary = 0;
+    const int px = pixel % cam.width, py = pixel / cam.width;
     for (int pass = 0; pass < passes; ++pass) {
         for (int d = 0; d < levels; ++d) levelSum[d] = (float3)(0.0f);
         const int s0 = firstSample + pass * samples;
+        PathState nextPath;
+        Ray nextRay;
+        Camera_GenerateAt(cam, scene, pixel, px, py, s0, &nextPath, &nextRay);
         for (int s = s0; s < s0 + samples; ++s) {
-            PathState path;
-            Ray ray;
-            Camera_Generate(cam, scene, pixel, s, &path, &ray);
+            PathState path = nextPath;
+            Ray ray = nextRay;
+            /* The next sample's camera ray first: independent of this sample, its divisions and square root
+             * overlap this sample's traversal (a long dependent chain otherwise paid in full per sample). */
+            if (s + 1 < s0 + samples) Camera_GenerateAt(cam, scene, pixel, px, py, s + 1, &nextPath, &nextRay);
 #ifdef CLRT_FUSED_BOUNCES
             FusedEntry stack[CLRT_FUSED_STACK_SIZE];
             int top = 0;

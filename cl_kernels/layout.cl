@@ -36,7 +36,7 @@
         M(TextureMap, normalizer) M(TextureMap, bumpFactor) M(TextureMap, scale)                  \
         M(TextureMap, offset) M(TextureMap, noiseScale) M(TextureMap, noiseAbs)                   \
         M(TextureMap, pad0) M(TextureMap, pad1)                                                   \
-    S(ImageInfo) M(ImageInfo, offset) M(ImageInfo, width) M(ImageInfo, height) M(ImageInfo, pad0) \
+    S(ImageInfo) M(ImageInfo, offset) M(ImageInfo, width) M(ImageInfo, height) M(ImageInfo, format) \
     S(Light) M(Light, position) M(Light, direction) M(Light, radiance) M(Light, edgeU)            \
         M(Light, edgeV) M(Light, cosCoverageHalf) M(Light, cosFalloffHalf) M(Light, area)         \
         M(Light, kind) M(Light, image) M(Light, mapping) M(Light, sampler) M(Light, distribution)  \

@@ -1,15 +1,20 @@
 // Light tests: environment maps (mappings and their round trips at poles and seam; the importance
 // distribution's pdf integrating to one over the sphere, chi-square of its samples, pdf from
 // evaluation = pdf from sampling, on real maps incl. sunset.exr and on 1x1 maps; the device sampling
-// and lookup functions against these host references on PoCL), the white furnace per sampler and
+// and lookup functions against these host references on PoCL; half4 texels: packed only when exact,
+// looked up bit for bit as their float4 image), the white furnace per sampler and
 // mapping (a kd = 0.5 sphere under radiance 1 shows π/2), spot/directional/area/environment
 // Light_Sample kernels against host reference evaluations at random points, and (tagged [.slow],
 // run by scripts/env_sampling_compare.sh) the relMSE of each env sampler on sunset.exr.
 #include <catch.hpp>
 
+#include <Imath/half.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
+#include <limits>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -401,6 +406,98 @@ __kernel void env_test(const __global float* dist, const __global float4* texels
     }
 }
 
+TEST_CASE("half4 environment texels: packed only when exact, and the device lookup reads the same values", "[lights][env][cl]") {
+    // Host: packHalf4Exact keeps every value (imageTexels unpacks it bit for bit) or refuses.
+    std::mt19937 rng(5);
+    std::uniform_int_distribution<int> bits(0, 0x7bff);  // finite non-negative halves, subnormals and 0 included
+    const int w = 37, h = 19;                            // odd: the last float4 holds one texel
+    std::vector<dev::float4> tex(size_t(w) * h);
+    auto halfValue = [&]() { half v; v.setBits(uint16_t(bits(rng))); return float(v); };
+    for (auto& t : tex) t = {halfValue(), halfValue(), halfValue(), 0.0f};
+    tex[3].y = -0.0f;
+    tex[4].z = 65504.0f;  // the largest half
+    std::vector<dev::float4> packed;
+    REQUIRE(packHalf4Exact(tex.data(), tex.size(), packed));
+    CHECK(packed.size() == (tex.size() + 1) / 2);
+    DeviceScene ds;
+    ds.texels = tex;
+    ds.texels.insert(ds.texels.end(), packed.begin(), packed.end());
+    ds.images = {dev::ImageInfo{0, w, h, dev::TEXELS_FLOAT4}, dev::ImageInfo{int(tex.size()), w, h, dev::TEXELS_HALF4}};
+    const std::vector<dev::float4> back = imageTexels(ds, 1);
+    REQUIRE(back.size() == tex.size());
+    CHECK(std::memcmp(back.data(), tex.data(), tex.size() * sizeof(dev::float4)) == 0);
+    for (float bad : {0.1f, 65520.0f, 1e-8f, std::numeric_limits<float>::infinity(), std::nanf("")}) {
+        std::vector<dev::float4> one = tex;
+        one[7].x = bad;
+        std::vector<dev::float4> none;
+        CHECK_FALSE(packHalf4Exact(one.data(), one.size(), none));
+        CHECK(none.empty());
+    }
+
+    // Device: EnvMap_Lookup of the half4 copy equals the float4 image's, bit for bit (both mappings, u
+    // and v inside and outside [0, 1]).
+    const char* src = R"CLC(
+__kernel void half_lookup(const __global float4* texels, ImageInfo a, ImageInfo b, int mapping,
+                          const __global float2* uv, __global float4* out, int n) {
+    int i = get_global_id(0);
+    if (i >= n) return;
+    out[2 * i] = (float4)(EnvMap_Lookup(texels, a, mapping, uv[i].x, uv[i].y), 0.0f);
+    out[2 * i + 1] = (float4)(EnvMap_Lookup(texels, b, mapping, uv[i].x, uv[i].y), 0.0f);
+}
+/* Env_HalfRgb (the nvptx fallback) against vload_half4: half i in every channel, i < 0x7c00 and its negative */
+__kernel void half_decode(__global int* bad) {
+    uint i = get_global_id(0);
+    if (i >= 0x7c00u) return;
+    uint hs[2] = {i, i | 0x8000u};
+    for (int k = 0; k < 2; ++k) {
+        ushort q[4] = {(ushort)hs[k], (ushort)hs[k], (ushort)hs[k], 0};
+        float3 ref = vload_half4(0, (const half*)q).xyz;
+        float3 got = Env_HalfRgb((uint2)(hs[k] | (hs[k] << 16), hs[k]));
+        if (any(as_uint3(ref) != as_uint3(got))) atomic_inc(bad);
+    }
+}
+)CLC";
+    DeviceContext& dc = testContext();
+    auto sources = loadKernelSources({"envmap.cl"});
+    sources.push_back({"half_lookup.cl", src});
+    cl::Program program = buildProgramFromSources(dc, sources, {});
+    cl::Kernel k = CL_CPP(cl::Kernel(program, "half_lookup"));
+    const int n = 4096;
+    std::uniform_real_distribution<float> uni(-0.25f, 1.25f);
+    std::vector<dev::float2> uv(n);
+    for (auto& q : uv) q = {uni(rng), uni(rng)};
+    cl::Context& ctx = dc.context();
+    auto ro = [&](const void* p, size_t bytes) {
+        return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, bytes, const_cast<void*>(p)));
+    };
+    cl::Buffer texBuf = ro(ds.texels.data(), ds.texels.size() * sizeof(dev::float4));
+    cl::Buffer uvBuf = ro(uv.data(), uv.size() * sizeof(dev::float2));
+    cl::Buffer outBuf = CL_CPP(cl::Buffer(ctx, CL_MEM_WRITE_ONLY, 2 * size_t(n) * sizeof(dev::float4)));
+    for (int mapping : {int(dev::ENV_LATLONG), int(dev::ENV_PROBE)}) {
+        INFO("mapping " << mapping);
+        std::vector<dev::float4> out(2 * size_t(n));
+        k.setArg(0, texBuf); k.setArg(1, sizeof(dev::ImageInfo), &ds.images[0]);
+        k.setArg(2, sizeof(dev::ImageInfo), &ds.images[1]); k.setArg(3, mapping);
+        k.setArg(4, uvBuf); k.setArg(5, outBuf); k.setArg(6, n);
+        CL_CPP(dc.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(roundUp(n, 64)), cl::NDRange(64)));
+        CL_CPP(dc.queue().enqueueReadBuffer(outBuf, CL_TRUE, 0, out.size() * sizeof(dev::float4), out.data()));
+        int differ = 0, nonzero = 0;
+        for (int i = 0; i < n; ++i) {
+            differ += std::memcmp(&out[2 * i], &out[2 * i + 1], 3 * sizeof(float)) != 0;
+            nonzero += out[2 * i].x != 0.0f;
+        }
+        CHECK(differ == 0);
+        CHECK(nonzero > n / 2);  // the lookups read the map (not all zero)
+    }
+    cl::Kernel dk = CL_CPP(cl::Kernel(program, "half_decode"));
+    int zero = 0, bad = -1;
+    cl::Buffer badBuf = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, sizeof(int), &zero));
+    dk.setArg(0, badBuf);
+    CL_CPP(dc.queue().enqueueNDRangeKernel(dk, cl::NullRange, cl::NDRange(0x7c00), cl::NDRange(64)));
+    CL_CPP(dc.queue().enqueueReadBuffer(badBuf, CL_TRUE, 0, sizeof(int), &bad));
+    CHECK(bad == 0);  // Env_HalfRgb: every finite half, both signs, bit for bit
+}
+
 TEST_CASE("spot, directional, area and environment Light_Sample kernels match host references", "[lights][cl]") {
     // Lights come from a scene file, so the loader and flattenScene branches are exercised too.
     TempDir tmp;
@@ -491,7 +588,7 @@ __kernel void light_test(const __global Light* lights, int numLights, const __gl
     // Host references in double precision, written from SCENE_FORMAT.md (not from the kernels).
     const dev::ImageInfo& envImg = ds.images[ds.lights[3].image];
     HostMap env;
-    env.texels.assign(ds.texels.begin() + envImg.offset, ds.texels.begin() + envImg.offset + envImg.width * envImg.height);
+    env.texels = imageTexels(ds, ds.lights[3].image);  // half4 (exact) in the atlas: unpacked
     env.view = EnvMapView{env.texels.data(), envImg.width, envImg.height, dev::ENV_LATLONG};
     env.dist = buildEnvDistribution(env.view);
     int bad[4] = {0, 0, 0, 0}, spotPartial = 0, spotZero = 0, areaLit = 0;
@@ -758,7 +855,7 @@ __kernel void mis_test(const __global Light* lights, const __global float4* nrm,
         CL_CPP(dc.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(roundUp(n, 64)), cl::NDRange(64)));
         CL_CPP(dc.queue().enqueueReadBuffer(ob, CL_TRUE, 0, out.size() * sizeof(dev::float4), out.data()));
         const dev::ImageInfo& img = ds.images[ds.lights[0].image];
-        std::vector<dev::float4> tex(ds.texels.begin() + img.offset, ds.texels.begin() + img.offset + img.width * img.height);
+        std::vector<dev::float4> tex = imageTexels(ds, ds.lights[0].image);
         EnvMapView view{tex.data(), img.width, img.height, dev::ENV_LATLONG};
         for (int j = 0; j < 6; ++j) {
             Vec3 nn = normalize(normals[j]);

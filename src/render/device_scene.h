@@ -67,6 +67,13 @@ struct DeviceScene {
 
 DeviceScene flattenScene(const Scene& scene);
 
+// Half4 texels (ImageInfo.format TEXELS_HALF4): the n texels src[0..n) packed two to a float4, each
+// channel (alpha included) a half of the same value; false, and nothing written, unless every value is
+// a half exactly (a finite float with at most 11 significant bits in the half's range, or 0).
+bool packHalf4Exact(const dev::float4* src, size_t n, std::vector<dev::float4>& packed);
+// The texels of device image `image` as float4 (half4 images unpacked: the values the device reads).
+std::vector<dev::float4> imageTexels(const DeviceScene& ds, int image);
+
 // Camera frame and image plane for the kernels, and numSamples.
 dev::CameraParams makeCameraParams(const Camera& cam);
 // Sets spp (at least 1).

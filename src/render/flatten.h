@@ -18,18 +18,26 @@ namespace clrt {
 double secondsSince(std::chrono::steady_clock::time_point t0);
 
 // The texel atlas: each scene image that is used is read once, on first use, into ds.texels (float4
-// texels) with its ImageInfo in ds.images.
+// texels) with its ImageInfo in ds.images; environment maps may add a half4 copy (useEnvironment).
 class ImageAtlas {
 public:
     ImageAtlas(const Scene& scene, DeviceScene& ds) : scene_(scene), ds_(ds) {}
     int use(int sceneImage);  // the device image index of scene image `sceneImage`
+    // The device image an environment map is read from: a half4 copy of use(sceneImage) when every
+    // value is a half exactly (the same lookups, half the cache footprint), else use(sceneImage).
+    int useEnvironment(int sceneImage);
     bool isHdr(int deviceImage) const { return hdr_.at(size_t(deviceImage)); }
 
 private:
     const Scene& scene_;
     DeviceScene& ds_;
     std::map<int, int> slot_;  // scene image index -> device image index
-    std::vector<bool> hdr_;    // per device image
+    std::map<int, int> envSlot_;  // scene image index -> device image of useEnvironment
+    std::vector<bool> hdr_;    // per device image (other images, e.g. flattenTextures' dummy, may follow)
+    void setHdr(int deviceImage, bool hdr) {
+        if (hdr_.size() <= size_t(deviceImage)) hdr_.resize(size_t(deviceImage) + 1, false);
+        hdr_[size_t(deviceImage)] = hdr;
+    }
 };
 
 void flattenMaterials(const Scene& scene, DeviceScene& ds);

@@ -11,10 +11,11 @@ void flattenEnvironmentLight(const Scene& scene, const Light& l, int lightIndex,
                              ImageAtlas& atlas) {
     d.radiance = {1, 1, 1, 0};
     d.direction = {0, 1, 0, 0};
-    d.image = atlas.use(l.imageIndex);
+    const int full = atlas.use(l.imageIndex);  // float4: what the distribution is built from
+    d.image = atlas.useEnvironment(l.imageIndex);  // what the device reads (half4 where exact)
     d.mapping = l.mapping;
     d.sampler = l.sampler;
-    const dev::ImageInfo& info = ds.images[d.image];
+    const dev::ImageInfo& info = ds.images[size_t(full)];
     EnvMapView view{&ds.texels[info.offset], info.width, info.height, d.mapping};
     auto te = std::chrono::steady_clock::now();
     EnvDistribution dist = buildEnvDistribution(view);

@@ -1,5 +1,10 @@
-// flatten_textures.cpp — the texel atlas, texture maps and per-shape texture sets (see flatten.h).
+// flatten_textures.cpp — the texel atlas (with the half4 copies of environment maps whose values are all
+// halves), texture maps and per-shape texture sets (see flatten.h).
+#include <cmath>
 #include <cstdint>
+#include <cstring>
+
+#include <Imath/half.h>
 
 #include "image/image.h"
 #include "render/flatten.h"
@@ -26,8 +31,62 @@ int ImageAtlas::use(int sceneImage) {
     for (size_t p = 0; p < n; ++p) dst[p] = {src[p * 3], src[p * 3 + 1], src[p * 3 + 2], 0};
     int slot = int(ds_.images.size());
     ds_.images.push_back(info);
-    hdr_.push_back(img.isHdr);
+    setHdr(slot, img.isHdr);
     slot_[sceneImage] = slot;
+    return slot;
+}
+
+bool packHalf4Exact(const dev::float4* src, size_t n, std::vector<dev::float4>& packed) {
+    std::vector<uint16_t> bits(((n + 1) / 2) * 8, 0);
+    for (size_t p = 0; p < n; ++p) {
+        const float c[4] = {src[p].x, src[p].y, src[p].z, src[p].w};
+        for (int k = 0; k < 4; ++k) {
+            if (!std::isfinite(c[k])) return false;
+            const half h(c[k]);
+            const float back = float(h);
+            if (std::memcmp(&c[k], &back, sizeof(float)) != 0) return false;  // -0 stays -0
+            bits[p * 4 + k] = h.bits();
+        }
+    }
+    packed.resize(bits.size() / 8);
+    std::memcpy(packed.data(), bits.data(), bits.size() * sizeof(uint16_t));
+    return true;
+}
+
+std::vector<dev::float4> imageTexels(const DeviceScene& ds, int image) {
+    const dev::ImageInfo& info = ds.images.at(size_t(image));
+    const size_t n = size_t(info.width) * info.height;
+    if (info.format != dev::TEXELS_HALF4)
+        return std::vector<dev::float4>(ds.texels.begin() + info.offset, ds.texels.begin() + info.offset + n);
+    std::vector<uint16_t> bits(n * 4);
+    std::memcpy(bits.data(), ds.texels.data() + info.offset, bits.size() * sizeof(uint16_t));
+    std::vector<dev::float4> out(n);
+    for (size_t p = 0; p < n; ++p) {
+        half c[4];
+        for (int k = 0; k < 4; ++k) c[k].setBits(bits[p * 4 + k]);
+        out[p] = {float(c[0]), float(c[1]), float(c[2]), float(c[3])};
+    }
+    return out;
+}
+
+int ImageAtlas::useEnvironment(int sceneImage) {
+    auto it = envSlot_.find(sceneImage);
+    if (it != envSlot_.end()) return it->second;
+    const int full = use(sceneImage);
+    const dev::ImageInfo info = ds_.images[size_t(full)];
+    std::vector<dev::float4> packed;
+    int slot = full;
+    if (packHalf4Exact(ds_.texels.data() + info.offset, size_t(info.width) * info.height, packed) &&
+        ds_.texels.size() + packed.size() <= size_t(INT32_MAX)) {
+        dev::ImageInfo h = info;
+        h.offset = int(ds_.texels.size());
+        h.format = dev::TEXELS_HALF4;
+        ds_.texels.insert(ds_.texels.end(), packed.begin(), packed.end());
+        slot = int(ds_.images.size());
+        ds_.images.push_back(h);
+        setHdr(slot, isHdr(full));
+    }
+    envSlot_[sceneImage] = slot;
     return slot;
 }
 

@@ -61,6 +61,8 @@ struct alignas(8) float2 { float x, y; };
     N(DECAL_BUMP_NORMAL, "bump_normal") N(DECAL_REPLACE_ALL, "replace_all")
 /* The device filters trilinear textures bilinearly (no mip-maps). */
 #define CLRT_INTERP_TABLE(N) N(INTERP_NEAREST, "nearest") N(INTERP_BILINEAR, "bilinear") N(INTERP_TRILINEAR, "trilinear")
+/* How an image's texels are stored (ImageInfo.format); only environment maps are ever half4 (envmap.cl). */
+#define CLRT_TEXEL_FORMAT_TABLE(N) N(TEXELS_FLOAT4, "float4") N(TEXELS_HALF4, "half4")
 /* Tone-mapping operators (Tonemap blocks, clrt tonemap --tmo, TonemapParams.op). */
 #define CLRT_TMO_TABLE(N) N(TMO_PHOTOGRAPHIC, "photographic") N(TMO_ACES, "aces") N(TMO_FILMIC, "filmic")
 
@@ -74,6 +76,7 @@ enum TextureKind { CLRT_TEXTURE_TABLE(CLRT_ENUM_CONSTANT_) };
 enum DecalKind { CLRT_DECAL_TABLE(CLRT_ENUM_CONSTANT_) };
 enum InterpKind { CLRT_INTERP_TABLE(CLRT_ENUM_CONSTANT_) };
 enum TmoKind { CLRT_TMO_TABLE(CLRT_ENUM_CONSTANT_) };
+enum TexelFormat { CLRT_TEXEL_FORMAT_TABLE(CLRT_ENUM_CONSTANT_) };
 #undef CLRT_ENUM_CONSTANT_
 
 /* Primitive references in BVH leaves: index < numTriangles is a triangle, else sphere (index - numTriangles). */
@@ -228,12 +231,13 @@ typedef struct TextureMap {
     int pad0, pad1;
 } TextureMap;
 
-/* An image in the texel atlas (float4 texels, row-major, row 0 at the top). */
+/* An image in the texel atlas (row-major, row 0 at the top): float4 texels, or (environment maps whose
+ * every value is a half exactly, flatten_textures.cpp) half4 texels packed two to an atlas float4. */
 typedef struct ImageInfo {
-    int offset;         /* first texel in the atlas */
+    int offset;         /* first atlas float4 of the image */
     int width;
     int height;
-    int pad0;
+    int format;         /* TexelFormat */
 } ImageInfo;
 
 typedef struct Light {
