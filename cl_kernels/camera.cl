@@ -28,7 +28,7 @@ __attribute__((always_inline)) inline void Camera_GenerateAt(CameraParams cam, S
     float jx = 0.5f, jy = 0.5f;
     if (cam.spp > 1 && scene.sampler == CLRT_SAMPLER_STRATIFIED) {
         /* the pixel's samples spread over a (0,2)-net: stratified in x and y alone too (common.cl) */
-        const float2 j = Rng_Stratified2D(scene.seed, pixel, sample, 1u, 0u);
+        const float2 j = Rng_Stratified2D(key, sample, 0u);
         jx = j.x;
         jy = j.y;
     } else if (cam.spp > 1) {
@@ -41,7 +41,7 @@ __attribute__((always_inline)) inline void Camera_GenerateAt(CameraParams cam, S
         float3 dn = normalize(dir);
         float tFocus = cam.focusDistance / dot(dn, -cam.w.xyz);
         float3 focus = org + tFocus * dn;
-        const float2 ab = scene.sampler == CLRT_SAMPLER_STRATIFIED ? Rng_Stratified2D(scene.seed, pixel, sample, 1u, 2u)
+        const float2 ab = scene.sampler == CLRT_SAMPLER_STRATIFIED ? Rng_Stratified2D(key, sample, 2u)
                                                                   : (float2)(Rng_Uniform(key, 2), Rng_Uniform(key, 3));
         float a = (ab.x - 0.5f) * cam.apertureSize;
         float b = (ab.y - 0.5f) * cam.apertureSize;

@@ -30,12 +30,15 @@ inline uint Rng_Hash(uint v) {
     return (word >> 22u) ^ word;
 }
 
-typedef struct { uint key; } RngKey;
+/* key: the stream of (seed, pixel, sample, path id), for Rng_Uniform; strat: of (seed, pixel, path id)
+ * alone, shared by the pixel's samples, for Rng_Stratified2D. */
+typedef struct { uint key; uint strat; } RngKey;
 
 inline RngKey Rng_Key(uint seed, int pixel, int sample, uint pathId) {
     RngKey k;
     uint h = Rng_Hash(seed ^ 0x9e3779b9u);
     h = Rng_Hash(h ^ (uint)pixel);
+    k.strat = Rng_Hash(h ^ pathId * 0x27d4eb2fu);
     h = Rng_Hash(h ^ (uint)sample * 0x85ebca6bu);
     h = Rng_Hash(h ^ pathId * 0xc2b2ae35u);
     k.key = h;
@@ -89,12 +92,10 @@ inline uint Sobol_Dim1Reversed(uint i) {
     return i;
 }
 
-/* The point of sample `sample` for dimensions (dim, dim + 1) of path pathId of pixel `pixel`. */
-inline float2 Rng_Stratified2D(uint seed, int pixel, int sample, uint pathId, uint dim) {
-    uint h = Rng_Hash(seed ^ 0x3c6ef372u);
-    h = Rng_Hash(h ^ (uint)pixel);
-    h = Rng_Hash(h ^ pathId * 0xc2b2ae35u);
-    const uint sIdx = Rng_Hash(h ^ Rng_Hash(dim + 0x68e31da4u));
+/* The point of sample `sample` for dimensions (dim, dim + 1) of the path whose key is k
+ * (Rng_Key(seed, pixel, sample, pathId): its strat part, hashed once per path). */
+inline float2 Rng_Stratified2D(RngKey k, int sample, uint dim) {
+    const uint sIdx = Rng_Hash(k.strat ^ dim * 0x9e3779b1u);
     const uint sX = Rng_Hash(sIdx ^ 0xa54ff53au), sY = Rng_Hash(sIdx ^ 0x510e527fu);
     const uint idx = Bits_Reverse(Bits_LaineKarras(Bits_Reverse((uint)sample), sIdx));
     const uint x = Bits_Reverse(Bits_LaineKarras(idx, sX));  /* radical inverse of idx, scrambled */
@@ -106,7 +107,7 @@ inline float2 Rng_Stratified2D(uint seed, int pixel, int sample, uint pathId, ui
  * samples or independent, by scene.sampler. key = Rng_Key(scene.seed, path.pixel, path.sample, path.pathId). */
 inline float2 Sampler_2D(SceneParams scene, PathState path, RngKey key, uint dim) {
     if (scene.sampler == CLRT_SAMPLER_STRATIFIED)
-        return Rng_Stratified2D(scene.seed, path.pixel, path.sample, path.pathId, dim);
+        return Rng_Stratified2D(key, path.sample, dim);
     return (float2)(Rng_Uniform(key, dim), Rng_Uniform(key, dim + 1u));
 }
 

@@ -59,12 +59,12 @@ struct Point { uint32_t x, y; };
 // shortcuts (its superset transform for Sobol's dimension, its single reversals).
 // shuffleDim: take the index shuffle of another dimension pair (only the tests' no-padding variant).
 Point stratified2D(uint32_t seed, int pixel, int sample, uint32_t pathId, uint32_t dim, const uint32_t* shuffleDim = nullptr) {
-    uint32_t h = hashPcg(seed ^ 0x3c6ef372u);
+    uint32_t h = hashPcg(seed ^ 0x9e3779b9u);  // Rng_Key's strat
     h = hashPcg(h ^ uint32_t(pixel));
-    h = hashPcg(h ^ pathId * 0xc2b2ae35u);
-    const uint32_t sIdx = hashPcg(h ^ hashPcg(dim + 0x68e31da4u));
+    h = hashPcg(h ^ pathId * 0x27d4eb2fu);
+    const uint32_t sIdx = hashPcg(h ^ dim * 0x9e3779b1u);
     const uint32_t sX = hashPcg(sIdx ^ 0xa54ff53au), sY = hashPcg(sIdx ^ 0x510e527fu);
-    const uint32_t idx = owen(uint32_t(sample), shuffleDim ? hashPcg(h ^ hashPcg(*shuffleDim + 0x68e31da4u)) : sIdx);
+    const uint32_t idx = owen(uint32_t(sample), shuffleDim ? hashPcg(h ^ *shuffleDim * 0x9e3779b1u) : sIdx);
     return {owen(reverseBits(idx), sX), owen(sobol1(idx), sY)};
 }
 float toFloat(uint32_t v) { return float(v >> 8) * (1.0f / 16777216.0f); }
@@ -114,7 +114,7 @@ TEST_CASE("stratified sampler: the device's Rng_Stratified2D equals the host rep
     const char* src = R"CLC(
 __kernel void strat_test(const __global int4* in, __global float2* out, uint seed, int n) {
     int i = get_global_id(0);
-    if (i < n) out[i] = Rng_Stratified2D(seed, in[i].x, in[i].y, (uint)in[i].z, (uint)in[i].w);
+    if (i < n) out[i] = Rng_Stratified2D(Rng_Key(seed, in[i].x, in[i].y, (uint)in[i].z), in[i].y, (uint)in[i].w);
 }
 )CLC";
     DeviceContext& dc = testContext();
