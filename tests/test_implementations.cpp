@@ -82,8 +82,11 @@ std::string render(const std::string& scene, const std::string& args, const std:
 
 // Tolerance of PoCL vs Intel's runtime, measured over the variant list at 64x48, 2 spp, seed 7 (see
 // README "OpenCL implementations"): per image relMSE and fraction of pixels differing by more than
-// one 8-bit step (HDR: 1e-3 relative).
-constexpr double kMaxRelMse = 1e-6, kMaxDiffering = 0.005;
+// one 8-bit step (HDR: 1e-3 relative). The relMSE allows a sample or two whose path diverged (a shadow
+// or hit decision at its threshold flipped by rounding: hw4/bump_mapping_transformed under the
+// stratified sampler, one pixel 26.5 vs 30.0, relMSE 2.1e-6 of the 8-bit image); a miscompile shows
+// as 1e-3 and more (issue 17: 0.0092).
+constexpr double kMaxRelMse = 1e-5, kMaxDiffering = 0.005;
 // Issue 17: Intel's implicit vectoriser miscompiled shade_hits (cl_kernels/shade.cl, vec_type_hint) and
 // rendered classic/veachAjar's glass teapot wrong whenever texture code was compiled in, also with
 // --all-features. The variant list has veachAjar with its own feature set; this adds the other
