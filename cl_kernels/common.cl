@@ -61,12 +61,16 @@ inline float Rng_Uniform(RngKey k, uint dim) {
  * (0,m,2)-net, one point in each elementary interval of area 2^-m. Each point alone is uniform, so
  * every estimate stays unbiased. Host replica: tests/test_sampler.cpp. */
 
+/* Bit reversal by a table of reversed bytes. Not the shift-and-mask network: LLVM turns that into
+ * llvm.bitreverse.i32, which Oclgrind cannot run ("Undefined external function"). */
+#define CLRT_REV2_(n) n, n + 2 * 64, n + 1 * 64, n + 3 * 64
+#define CLRT_REV4_(n) CLRT_REV2_(n), CLRT_REV2_(n + 2 * 16), CLRT_REV2_(n + 1 * 16), CLRT_REV2_(n + 3 * 16)
+#define CLRT_REV6_(n) CLRT_REV4_(n), CLRT_REV4_(n + 2 * 4), CLRT_REV4_(n + 1 * 4), CLRT_REV4_(n + 3 * 4)
+__constant uchar kBitsReversedByte[256] = {CLRT_REV6_(0), CLRT_REV6_(2), CLRT_REV6_(1), CLRT_REV6_(3)};
+
 inline uint Bits_Reverse(uint v) {
-    v = ((v >> 1) & 0x55555555u) | ((v & 0x55555555u) << 1);
-    v = ((v >> 2) & 0x33333333u) | ((v & 0x33333333u) << 2);
-    v = ((v >> 4) & 0x0f0f0f0fu) | ((v & 0x0f0f0f0fu) << 4);
-    v = ((v >> 8) & 0x00ff00ffu) | ((v & 0x00ff00ffu) << 8);
-    return (v >> 16) | (v << 16);
+    return ((uint)kBitsReversedByte[v & 0xffu] << 24) | ((uint)kBitsReversedByte[(v >> 8) & 0xffu] << 16) |
+           ((uint)kBitsReversedByte[(v >> 16) & 0xffu] << 8) | (uint)kBitsReversedByte[v >> 24];
 }
 
 /* Laine and Karras' hash: each output bit depends on that bit and the ones below it only, so on
