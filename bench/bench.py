@@ -241,54 +241,49 @@ def load_mitsuba(threads):
 
 
 class Mitsuba:
-    """Renders a converted scene (bench/to_mitsuba.py): surfaces (timed) + the camera-visible
-    environment (rendered once at high spp, added to every image: noise-free but for pixel edges)."""
+    """Renders a converted scene (bench/to_mitsuba.py): one render per image, the camera-visible
+    environment included, as clrt renders it."""
 
     def __init__(self, mi, scene_path, spp_list, samplers=("independent",)):
         import to_mitsuba
         self.mi = mi
-        surf, bg, self.warnings = to_mitsuba.scene_dicts(scene_path, 1, warn=log)
-        self.scene = mi.load_dict(to_mitsuba.materialize(surf, mi))  # independent sampler: the references
+        self.convention = to_mitsuba.CONVENTION
+        scene, self.warnings = to_mitsuba.scene_dict(scene_path, 1, warn=log)
+        self.scene = mi.load_dict(to_mitsuba.materialize(scene, mi))  # independent sampler: the references
         self.scenes = {}  # the timed renders, one scene per sampler (the sensor's sampler)
         for smp in samplers:
-            surf["sensor"]["sampler"] = dict(surf["sensor"]["sampler"], type=smp)
-            self.scenes[smp] = mi.load_dict(to_mitsuba.materialize(surf, mi))
-        self.bg_scene = mi.load_dict(to_mitsuba.materialize(bg, mi)) if bg else None
-        self.bg = 0.0
+            scene["sensor"]["sampler"] = dict(scene["sensor"]["sampler"], type=smp)
+            self.scenes[smp] = mi.load_dict(to_mitsuba.materialize(scene, mi))
 
     def _render(self, scene, spp, seed):
         return np.array(self.mi.render(scene, spp=spp, seed=seed), dtype=np.float64)[..., :3]
 
     def render(self, spp, seed, sampler="independent"):
-        """(seconds, image): the timed surface render (with `sampler`) plus the background."""
+        """(seconds, image): the timed render with `sampler`."""
         scene = self.scenes.get(sampler, self.scene)
         t0 = time.perf_counter()
         img = self._render(scene, spp, seed)
-        return time.perf_counter() - t0, img + self.bg
+        return time.perf_counter() - t0, img
 
-    def render_high(self, spp, seed0, scene=None):
-        scene = scene or self.scene
+    def render_high(self, spp, seed0):
         acc, k = 0.0, 0
         for k in range(max(1, spp // MITSUBA_PASS_SPP)):
-            acc = acc + self._render(scene, min(spp, MITSUBA_PASS_SPP), seed0 + 7919 * k)
+            acc = acc + self._render(self.scene, min(spp, MITSUBA_PASS_SPP), seed0 + 7919 * k)
         return acc / (k + 1)
 
     def reference(self, name, key, ref_spp, cache_dir, refresh):
-        """Two independent halves (like clrt's), cached; the background at ref_spp first."""
-        d = os.path.join(cache_dir, "%s-mitsuba-%s-%d" % (name, key, ref_spp))
-        files = [os.path.join(d, f) for f in ("half_a.npy", "half_b.npy", "bg.npy")]
+        """Two independent halves (like clrt's), cached (the converter's CONVENTION in the name)."""
+        d = os.path.join(cache_dir, "%s-mitsuba%d-%s-%d" % (name, self.convention, key, ref_spp))
+        files = [os.path.join(d, f) for f in ("half_a.npy", "half_b.npy")]
         if not refresh and all(os.path.exists(f) for f in files):
-            a, b, self.bg = (np.load(f).astype(np.float64) for f in files)
+            a, b = (np.load(f).astype(np.float64) for f in files)
             log("  mitsuba reference %s (cached)" % os.path.basename(d))
             return a, b
         os.makedirs(d, exist_ok=True)
         log("  mitsuba reference: 2 x %d spp ..." % (ref_spp // 2))
-        self.bg = self.render_high(ref_spp, REF_SEEDS[0], self.bg_scene) if self.bg_scene else np.zeros(1)
-        if not self.bg_scene:
-            self.bg = 0.0
-        a = self.render_high(ref_spp // 2, REF_SEEDS[0]) + self.bg
-        b = self.render_high(ref_spp // 2, REF_SEEDS[1]) + self.bg
-        for f, v in zip(files, (a, b, np.asarray(self.bg, dtype=np.float64) + np.zeros_like(a))):
+        a = self.render_high(ref_spp // 2, REF_SEEDS[0])
+        b = self.render_high(ref_spp // 2, REF_SEEDS[1])
+        for f, v in zip(files, (a, b)):
             np.save(f, v.astype(np.float32))
         return a, b
 
@@ -734,8 +729,8 @@ def main():
                                                   r.get("time_factor_max", float("nan")))
         rep += ["Mitsuba %s, variant llvm_ad_rgb, %d threads, path integrator max_depth 2 (direct light), box filter, "
                 "the sampler of the mitsuba_sampler column (its references: independent); clrt's strategy label says its "
-                "--pipeline and, when not its default stratified sampler, its --sampler; scene converted by bench/to_mitsuba.py (emitters x pi for the course's diffuse "
-                "convention, the camera-visible environment added from one high-spp render). Each renderer's error is "
+                "--pipeline and, when not its default stratified sampler, its --sampler; scene converted by bench/to_mitsuba.py (diffuse reflectance x pi for the course's "
+                "convention; one render per image, the environment seen by the camera included, as in clrt's). Each renderer's error is "
                 "against its own reference of the same spp as clrt's (two independent halves). efficiency ratio = "
                 "clrt / Mitsuba = time factor (Mitsuba s / clrt s) x noise factor (Mitsuba relMSE / clrt relMSE); "
                 "[min-max] over the run pairs of equal seed number. means = Mitsuba/clrt reference mean per channel; "

@@ -9,12 +9,14 @@ and probe maps resampled to lat-long). Drops, with a warning each: specular/mirr
 terms, textures, spot and ambient lights, MeshInstance, LightMesh/LightSphere, degamma, thin lens.
 
 Conventions (measured against clrt, see README "Benchmark"):
-- Radiance: the course's shading model has no 1/π in the diffuse term (L = kd·cosθ·E), Mitsuba's
-  Lambertian BRDF is kd/π and refuses kd > 1. So every emitter is scaled by π for the surfaces, and the
-  camera is made blind to emitters (path integrator, hide_emitters): Mitsuba's image is then the course's
-  for every pixel that sees a surface and 0 where the camera sees the environment. `background_dict`
-  gives the second half: the environment seen by the camera at scale 1 (path, max_depth 1), which is
-  noise-free but for pixel edges; the benchmark renders it once at high spp and adds it.
+- Radiance: the course's shading model has no 1/π in the diffuse term (L = kd·cosθ·E); Mitsuba's
+  Lambertian BRDF is ρ/π. So every diffuse reflectance is converted to ρ = π·kd and the emitters keep
+  their values: one Mitsuba render is the course's image, the environment seen by the camera included
+  (the same work per sample as clrt's). Mitsuba refuses an `rgb` reflectance above 1, so a ρ above 1
+  (any kd > 1/π) is a 1×1 raw `bitmap` texture instead (nearest lookup), written beside the PLY files.
+  (Until 2026-11-30 the emitters were scaled by π, the camera was blind to them and the camera-visible
+  environment was rendered once at high spp and added: that kept the background's work and noise out
+  of Mitsuba's timed render. CONVENTION numbers the versions, for the benchmark's reference cache.)
 - Direct lighting only (clrt's renderer has no diffuse inter-reflection): path max_depth 2.
 - Environment orientation: clrt's lat-long u = (1 + atan2(dx, −dz)/π)/2 puts −z at u = ½; Mitsuba's
   envmap puts −z at u = 0, so the map is turned 180° about y.
@@ -28,6 +30,8 @@ import tempfile
 import xml.etree.ElementTree as ET
 
 import numpy as np
+
+CONVENTION = 2  # see "Radiance" above; part of the benchmark's cache key for Mitsuba references
 
 
 def _nums(el, default=None):
@@ -137,12 +141,22 @@ class Converter:
                 self.warn("material %s: degamma ignored" % mid)
             if mat.get("BRDF"):
                 self.warn("material %s: BRDF %s replaced by Lambert" % (mid, mat.get("BRDF")))
-        if max(kd) > 1.0:
-            self.warn("material %s: DiffuseReflectance > 1 clamped to 1 (Mitsuba refuses it)" % mid)
-            kd = [min(1.0, x) for x in kd]
-        b = {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": kd}}}
+        rho = [math.pi * x for x in kd]  # the course's kd·cosθ·E = Mitsuba's (ρ/π)·cosθ·E
+        if max(rho) <= 1.0:
+            refl = {"type": "rgb", "value": rho}
+        else:  # Mitsuba's rgb reflectance refuses values above 1; a raw bitmap takes them
+            refl = {"type": "bitmap", "filename": self._constant_exr("kd_" + mid, rho), "raw": True,
+                    "filter_type": "nearest"}
+        b = {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": refl}}
         self.materials[mid] = b
         return b
+
+    def _constant_exr(self, name, rgb):
+        """A 1x1 float EXR of the value rgb (a texture that Mitsuba does not clamp)."""
+        import OpenEXR as E
+        path = os.path.join(self.tmp, name + ".exr")
+        E.File({"compression": E.ZIP_COMPRESSION}, {"RGB": np.array([[rgb]], dtype=np.float32)}).write(path)
+        return path
 
     # ------------------------------------------------------------------------------------- geometry
     def _write_ply(self, name, pos, faces, normals=None):
@@ -256,17 +270,17 @@ class Converter:
                 return path
         return None
 
-    def emitters(self, scale):
+    def emitters(self):
         out = {}
         lights = self.root.find("Lights")
         for el in (lights if lights is not None else []):
             lid = el.get("id", "0")
             if el.tag == "PointLight":
                 out["point_" + lid] = {"type": "point", "position": _nums(el.find("Position")),
-                                       "intensity": {"type": "rgb", "value": [scale * x for x in _nums(el.find("Intensity"))]}}
+                                       "intensity": {"type": "rgb", "value": _nums(el.find("Intensity"))}}
             elif el.tag == "DirectionalLight":
                 out["dir_" + lid] = {"type": "directional", "direction": _nums(el.find("Direction")),
-                                     "irradiance": {"type": "rgb", "value": [scale * x for x in _nums(el.find("Radiance"))]}}
+                                     "irradiance": {"type": "rgb", "value": _nums(el.find("Radiance"))}}
             elif el.tag == "AreaLight":
                 p, n, size = np.array(_nums(el.find("Position"))), np.array(_nums(el.find("Normal"))), float(el.find("Size").text)
                 n = n / np.linalg.norm(n)
@@ -275,13 +289,13 @@ class Converter:
                 b = np.cross(n, a)
                 m = np.eye(4)
                 m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = a * size / 2, b * size / 2, n, p
-                self.warn("AreaLight %s: a rectangle in Mitsuba (it occludes; clrt's does not)" % lid)
+                self.warn("AreaLight %s: a rectangle in Mitsuba (it occludes and the camera sees it; clrt's does neither)" % lid)
                 out["area_" + lid] = {"type": "rectangle", "to_world": m.tolist(),
                                       "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0, 0.0, 0.0]}},
-                                      "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [scale * x for x in _nums(el.find("Radiance"))]}}}
+                                      "emitter": {"type": "area", "radiance": {"type": "rgb", "value": _nums(el.find("Radiance"))}}}
             elif el.tag == "SphericalDirectionalLight":
                 path = self.env()
-                out["env_" + lid] = {"type": "envmap", "filename": path, "scale": scale,
+                out["env_" + lid] = {"type": "envmap", "filename": path,
                                      "to_world": [[-1, 0, 0, 0], [0, 1, 0, 0], [0, 0, -1, 0], [0, 0, 0, 1]]}
             elif el.tag == "AmbientLight":
                 if max(_nums(el, [0])) > 0:
@@ -332,23 +346,14 @@ def _look_at(origin, target, up):
     return m.tolist()
 
 
-def scene_dicts(path, spp, res=None, warn=None):
-    """(surfaces, background, warnings): two Mitsuba scene dicts whose images add up to the course's
-    image of the scene's first camera (see the module's comment)."""
+def scene_dict(path, spp, res=None, warn=None):
+    """(scene, warnings): the Mitsuba scene dict whose image is the course's image of the scene's first
+    camera (see the module's comment)."""
     c = Converter(path, warn)
-    shapes = c.shapes()
-    sensor = c.sensor(spp, res)
-    surf = {"type": "scene", "integrator": {"type": "path", "max_depth": 2, "hide_emitters": True}, "sensor": sensor}
-    surf.update(shapes)
-    surf.update(c.emitters(math.pi))
-    env = c.env()
-    bg = None
-    if env:
-        bg = {"type": "scene", "integrator": {"type": "path", "max_depth": 1}, "sensor": dict(sensor)}
-        bg.update(shapes)
-        bg["env"] = {"type": "envmap", "filename": env, "scale": 1.0,
-                     "to_world": [[-1, 0, 0, 0], [0, 1, 0, 0], [0, 0, -1, 0], [0, 0, 0, 1]]}
-    return surf, bg, c.warnings
+    scene = {"type": "scene", "integrator": {"type": "path", "max_depth": 2}, "sensor": c.sensor(spp, res)}
+    scene.update(c.shapes())
+    scene.update(c.emitters())
+    return scene, c.warnings
 
 
 def materialize(d, mi):
@@ -368,5 +373,5 @@ def materialize(d, mi):
 
 if __name__ == "__main__":
     import pprint
-    s, b, w = scene_dicts(sys.argv[1], 4, warn=lambda m: print(m, file=sys.stderr))
+    s, w = scene_dict(sys.argv[1], 4, warn=lambda m: print(m, file=sys.stderr))
     pprint.pprint({k: v for k, v in s.items() if not k.startswith(("mesh_", "triangle_"))})
