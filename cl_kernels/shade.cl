@@ -272,11 +272,8 @@ inline void Shade_ClassicChildren(SceneParams scene, PathState path, Material m,
 
 /* Shading of one path's hit h along ray (the whole of shade_hits for one path; the fused kernel calls
  * it too): the ShadingPoint for light sampling, the radiance that needs no shadow ray (ambient,
- * background or environment on a miss, object-light emission, replace_all) and the children.
- * always_inline (with Light_ShadowRays): Intel's OpenCL CPU runtime otherwise calls both out of line
- * from render_fused, with their by-value scene structs, when its vectoriser is on (its default): the
- * fused kernel took 2.1x as long (sphere 64 spp 0.35 s against 0.17 s; TT 3.1 against 1.5 s). */
-inline __attribute__((always_inline)) void Shade_Hit(SceneParams scene, CameraParams cam, PathState path, Ray ray, Hit h,
+ * background or environment on a miss, object-light emission, replace_all) and the children. */
+inline void Shade_Hit(SceneParams scene, CameraParams cam, PathState path, Ray ray, Hit h,
                       const __global Triangle* tris, const __global TriangleShading* triShading,
                       const __global Sphere* spheres, const __global Plane* planes, const __global Material* materials,
                       const __global TextureSet* textureSets, const __global TextureMap* textures,
@@ -435,8 +432,8 @@ inline ShadowRay Shadow_Make(ShadingPoint sp, const __global Material* materials
 
 /* The shadow rays of light l for a path at shading point sp (sp.position.w > 0): *sr, and under
  * multi-sample MIS of an environment light (lightSlots 2) the cosine sample's *sr2; a slot a light
- * does not use keeps `none` (zero contribution: not traced). Always inlined: see Shade_Hit. */
-inline __attribute__((always_inline)) void Light_ShadowRays(SceneParams scene, PathState path, ShadingPoint sp, int l, int lightSlots, RngKey key,
+ * does not use keeps `none` (zero contribution: not traced). */
+inline void Light_ShadowRays(SceneParams scene, PathState path, ShadingPoint sp, int l, int lightSlots, RngKey key,
                              const __global Material* materials, const __global Light* lights,
                              const __global ImageInfo* images, const __global float4* texels,
                              const __global float* envDist, const __global float4* lightData, ShadowRay* sr,
