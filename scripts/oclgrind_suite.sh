@@ -66,14 +66,23 @@ for pass in $PASSES; do
   if [ "$pass" = uninit ]; then grep -qi "uninitiali" "$OUT/probe.$pass.oclgrind.log" ||
     fail "oclgrind did not report the probe's uninitialised value"; fi
 done
-runs=0; bad=0
+runs=0; bad=0; skipped=0
 
+# Scenes whose wavefront render is left out of the races pass (kept in the uninit pass, and fused in
+# both): oclgrind's race detector adds a cost per kernel launch that grows with the scene, and
+# veachAjar's wavefront render (382k triangles, depth 8) took 277 s of a 10.5-minute suite in the races
+# pass (uninit pass: 2.7 s; fused, races: 18 s). The wavefront kernels of its feature set are
+# race-checked in the two --all-features programs of kernel_variants.txt, a superset of its code.
+RACES_FUSED_ONLY=" classic/veachAjar.xml "
 n=0
 while read -r scene args; do
   case "$scene" in ''|\#*) continue ;; esac
   n=$((n + 1)); name=$(printf "%02d-%s" $n "$(basename "${scene%.*}")")
   for pass in $PASSES; do
     for pipe in wavefront fused; do
+      if [ "$pass" = races ] && [ "$pipe" = wavefront ] && [[ "$RACES_FUSED_ONLY" == *" $scene "* ]]; then
+        skipped=$((skipped + 1)); continue
+      fi
       check "$name-$pipe" "$pass" build/clrt render "$SCENES/$scene" --resolution 8x8 --spp 1 -o "$OUT/img" -v \
         --pipeline $pipe $args
       grep -q "(Oclgrind)" "$OUT/$name-$pipe.$pass.out" || { bad=$((bad + 1)); echo "oclgrind_suite: $name-$pipe did not run on Oclgrind"; }
@@ -94,6 +103,6 @@ done
 # The struct-layout kernel (cl_kernels/layout.cl) through its test.
 for pass in $PASSES; do check "layout" "$pass" build/clrt_tests "[layout]" --use-colour no; done
 
-echo "oclgrind_suite: $runs runs on oclgrind ($PASSES), $bad with reports or failures; logs in build/oclgrind"
+echo "oclgrind_suite: $runs runs on oclgrind ($PASSES), $bad with reports or failures, $skipped left out (RACES_FUSED_ONLY); logs in build/oclgrind"
 [ $bad -eq 0 ] || fail "$bad runs reported problems"
 echo "oclgrind_suite: ok"
