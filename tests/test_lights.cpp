@@ -59,6 +59,19 @@ ImageRGB constantImage(int w, int h, float value) {
     return img;
 }
 
+// A w×h map of odd sizes with dark texels (every 5th, and all of row 3 and column 4): rows and cells of zero
+// probability, and CDF searches over lengths that are not powers of two (the shared maps' are).
+ImageRGB patternImage(int w, int h) {
+    ImageRGB img = constantImage(w, h, 0.0f);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            for (int c = 0; c < 3; ++c) {
+                const bool dark = (x * 7 + y * 3) % 5 == 0 || y == 3 || x == 4;
+                img.pixels[(size_t(y) * w + x) * 3 + c] = dark ? 0.0f : 0.1f + float((x * 13 + y * 29 + c * 5) % 17);
+            }
+    return img;
+}
+
 // ∫ f(ω) dω over the sphere, by the midpoint rule on the six faces of a cube (M×M cells each): a
 // parameterisation independent of both env mappings.
 template <class F> double integrateSphere(F f, int M) {
@@ -94,6 +107,8 @@ std::vector<NamedMap> testMaps() {
     std::vector<NamedMap> maps;
     maps.push_back({"1x1 latlong", makeMap(constantImage(1, 1, 2.0f), dev::ENV_LATLONG)});
     maps.push_back({"1x1 probe", makeMap(constantImage(1, 1, 2.0f), dev::ENV_PROBE)});
+    maps.push_back({"37x19 latlong pattern", makeMap(patternImage(37, 19), dev::ENV_LATLONG)});
+    maps.push_back({"21x21 probe pattern", makeMap(patternImage(21, 21), dev::ENV_PROBE)});
     if (haveShared()) {
         std::string e = sharedDir() + "/envmaps/";
         maps.push_back({"sunset.exr", makeMap(readImage(e + "sunset.exr"), dev::ENV_LATLONG)});
