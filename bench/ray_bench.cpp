@@ -34,6 +34,7 @@
 #include "cl/devices.h"
 #include "cl/kernel_args.h"
 #include "cl/program.h"
+#include "cl/scene_buffers.h"
 #include "render/device_scene.h"
 #include "scene/scene_loader.h"
 #include "util/error.h"
@@ -171,9 +172,11 @@ int main(int argc, char** argv) {
             using T = typename std::decay_t<decltype(v)>::value_type;
             return CL_CPP(cl::Buffer(dc.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), v.data()));
         };
-        cl::Buffer nodes = upload(ds.bvh4.nodes), leaves = upload(ds.bvh4.leaves), tris = upload(ds.triangles),
-                   sph = upload(ds.spheres);
-        cl::Buffer planes = upload(ds.planes);
+        // The scene arrays as the renderer uploads them (huge-page host memory on CPU devices, cl/scene_buffers.h).
+        SceneBufferUploader sceneUpload(dc.context(), (di.type & CL_DEVICE_TYPE_CPU) != 0);
+        cl::Buffer nodes = sceneUpload.upload(ds.bvh4.nodes), leaves = sceneUpload.upload(ds.bvh4.leaves),
+                   tris = sceneUpload.upload(ds.triangles), sph = sceneUpload.upload(ds.spheres);
+        cl::Buffer planes = sceneUpload.upload(ds.planes);
         if (ds.params.numPlanes > 0) std::fprintf(stderr, "note: planes are ignored by this benchmark\n");
         dev::SceneParams sp = ds.params;
         sp.numPlanes = 0;  // planes left out (Embree has none)

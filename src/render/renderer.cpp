@@ -12,6 +12,7 @@
 
 #include "cl/check.h"
 #include "cl/kernel_args.h"
+#include "cl/scene_buffers.h"
 #include "render/queue_compact.h"
 #include "render/fused_renderer.h"
 #include "shared/kernel_params.h"
@@ -21,20 +22,12 @@ namespace clrt {
 
 struct BatchPlan;
 
-namespace {
-// A read-only copy of v. OpenCL has no zero-size buffers and refuses a null host pointer, so an empty
-// array (an empty BVH's primRefs) becomes one zero-filled element that the kernels never read.
-template <class T> cl::Buffer uploadBuffer(cl::Context& ctx, const std::vector<T>& v) {
-    const T zero{};
-    const T* src = v.empty() ? &zero : v.data();
-    return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * std::max<size_t>(v.size(), 1),
-                             const_cast<T*>(src)));
-}
-}  // namespace
-
 struct Renderer::Impl {
     DeviceContext& dc;
     const DeviceScene& ds;
+    // Owns the host memory of the scene buffers on CPU devices (cl/scene_buffers.h): declared before every
+    // buffer, so destroyed after them; ~Impl waits for the queue first.
+    SceneBufferUploader uploader;
     BuildInfo build;
     cl::Program program;
     KernelArgs kGenerate, kIntersect, kShadow, kShade, kLights, kGather, kAccumulate;
@@ -80,20 +73,28 @@ struct Renderer::Impl {
         queueCount = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(int)));
         nextCount = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(int)));
         fused = FusedPath(ctx, program);
-        nodes = uploadBuffer(ctx, ds.bvh4.nodes);
-        leaves = uploadBuffer(ctx, ds.bvh4.leaves);
-        tris = uploadBuffer(ctx, ds.triangles);
-        triShading = uploadBuffer(ctx, ds.triangleShading);
-        spheres = uploadBuffer(ctx, ds.spheres);
-        planes = uploadBuffer(ctx, ds.planes);
-        materials = uploadBuffer(ctx, ds.materials);
-        textureSets = uploadBuffer(ctx, ds.textureSets);
-        textures = uploadBuffer(ctx, ds.textures);
-        images = uploadBuffer(ctx, ds.images);
-        texels = uploadBuffer(ctx, ds.texels);
-        lights = uploadBuffer(ctx, ds.lights);
-        envDist = uploadBuffer(ctx, ds.envDistribution);
-        lightData = uploadBuffer(ctx, ds.lightData);
+        uploader = SceneBufferUploader(ctx, (dc.info().type & CL_DEVICE_TYPE_CPU) != 0);
+        nodes = uploader.upload(ds.bvh4.nodes);
+        leaves = uploader.upload(ds.bvh4.leaves);
+        tris = uploader.upload(ds.triangles);
+        triShading = uploader.upload(ds.triangleShading);
+        spheres = uploader.upload(ds.spheres);
+        planes = uploader.upload(ds.planes);
+        materials = uploader.upload(ds.materials);
+        textureSets = uploader.upload(ds.textureSets);
+        textures = uploader.upload(ds.textures);
+        images = uploader.upload(ds.images);
+        texels = uploader.upload(ds.texels);
+        lights = uploader.upload(ds.lights);
+        envDist = uploader.upload(ds.envDistribution);
+        lightData = uploader.upload(ds.lightData);
+    }
+
+    ~Impl() {
+        try {
+            dc.queue().finish();  // no command may still read the uploader's memory
+        } catch (...) {
+        }
     }
 
     void ensureQueues(size_t capacity, size_t shadowSlots) {

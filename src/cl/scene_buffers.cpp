@@ -1,0 +1,53 @@
+// scene_buffers.cpp — see scene_buffers.h.
+#include "cl/scene_buffers.h"
+
+#include <algorithm>
+#include <cstdlib>
+#include <cstring>
+#include <new>
+#include <string>
+
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
+
+#include "cl/check.h"
+
+namespace clrt {
+
+HugePageBlock::HugePageBlock(size_t bytes) {
+    size_ = (bytes + kPage - 1) / kPage * kPage;
+    if (size_ == 0) size_ = kPage;
+    if (posix_memalign(&data_, kPage, size_) != 0) throw std::bad_alloc();
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    // Before the first touch, so that the pages are allocated huge rather than collapsed later.
+    advised_ = madvise(data_, size_, MADV_HUGEPAGE) == 0;
+#endif
+}
+
+HugePageBlock::~HugePageBlock() { std::free(data_); }
+
+SceneBufferUploader::SceneBufferUploader(cl::Context ctx, bool cpuDevice) : ctx_(std::move(ctx)) {
+    const char* env = std::getenv("CLRT_HUGE_PAGES");
+    useHuge_ = cpuDevice && !(env && std::string(env) == "0");
+}
+
+cl::Buffer SceneBufferUploader::upload(const void* src, size_t bytes, size_t emptyBytes) {
+    if (bytes == 0) {
+        std::vector<unsigned char> zero(std::max<size_t>(emptyBytes, 16), 0);
+        return CL_CPP(cl::Buffer(ctx_, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, zero.size(), zero.data()));
+    }
+    if (useHuge_ && bytes >= kHugeMinBytes) {
+        auto block = std::make_unique<HugePageBlock>(bytes);
+        std::memcpy(block->data(), src, bytes);
+        std::memset(static_cast<unsigned char*>(block->data()) + bytes, 0, block->size() - bytes);
+        cl::Buffer b = CL_CPP(cl::Buffer(ctx_, CL_MEM_READ_ONLY | CL_MEM_USE_HOST_PTR, bytes, block->data()));
+        blocks_.push_back(std::move(block));
+        hugeBytes_ += bytes;
+        return b;
+    }
+    copiedBytes_ += bytes;
+    return CL_CPP(cl::Buffer(ctx_, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, bytes, const_cast<void*>(src)));
+}
+
+}  // namespace clrt
