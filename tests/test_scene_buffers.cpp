@@ -76,6 +76,7 @@ TEST_CASE("scene buffers: kernels read the host's arrays, huge-page or copied", 
         }
         CHECK(up.hugePages() == (cpuDevice && !(std::getenv("CLRT_HUGE_PAGES") && std::string(std::getenv("CLRT_HUGE_PAGES")) == "0")));
         CHECK(up.hugeBytes() == expectHuge);
+        CHECK((up.summary().find("huge pages off") == std::string::npos) == up.hugePages());
         CHECK(up.copiedBytes() == expectCopied);
         for (size_t i = 0; i < arrays.size(); ++i) {
             INFO(arrays[i].size() << " uints");

@@ -2,6 +2,7 @@
 #include "cl/scene_buffers.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <new>
@@ -48,6 +49,16 @@ cl::Buffer SceneBufferUploader::upload(const void* src, size_t bytes, size_t emp
     }
     copiedBytes_ += bytes;
     return CL_CPP(cl::Buffer(ctx_, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, bytes, const_cast<void*>(src)));
+}
+
+std::string SceneBufferUploader::summary() const {
+    char buf[160];
+    bool allAdvised = true;
+    for (const auto& b : blocks_) allAdvised = allAdvised && b->advised();
+    std::snprintf(buf, sizeof buf, "%.1f MB in huge-page host memory%s, %.1f MB copied%s", hugeBytes_ / 1e6,
+                  blocks_.empty() || allAdvised ? "" : " (madvise refused: 4 KiB pages)", copiedBytes_ / 1e6,
+                  useHuge_ ? "" : " (huge pages off: not a CPU device, or CLRT_HUGE_PAGES=0)");
+    return buf;
 }
 
 }  // namespace clrt

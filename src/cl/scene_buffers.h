@@ -13,6 +13,7 @@
 
 #include <cstddef>
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace clrt {
@@ -51,6 +52,8 @@ public:
         return upload(v.data(), sizeof(T) * v.size(), sizeof(T));
     }
 
+    // One line for -v: where the arrays went, e.g. "79.6 MB in huge-page host memory, 0.1 MB copied".
+    std::string summary() const;
     size_t hugeBytes() const { return hugeBytes_; }    // bytes uploaded into HugePageBlocks
     size_t copiedBytes() const { return copiedBytes_; }  // bytes uploaded as copied buffers
     bool hugePages() const { return useHuge_; }

@@ -88,6 +88,7 @@ struct Renderer::Impl {
         lights = uploader.upload(ds.lights);
         envDist = uploader.upload(ds.envDistribution);
         lightData = uploader.upload(ds.lightData);
+        if (verbose()) info("scene buffers on " + dc.info().name + ": " + uploader.summary());
     }
 
     ~Impl() {
