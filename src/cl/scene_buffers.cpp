@@ -41,7 +41,6 @@ cl::Buffer SceneBufferUploader::upload(const void* src, size_t bytes, size_t emp
     if (useHuge_ && bytes >= kHugeMinBytes) {
         auto block = std::make_unique<HugePageBlock>(bytes);
         std::memcpy(block->data(), src, bytes);
-        std::memset(static_cast<unsigned char*>(block->data()) + bytes, 0, block->size() - bytes);
         cl::Buffer b = CL_CPP(cl::Buffer(ctx_, CL_MEM_READ_ONLY | CL_MEM_USE_HOST_PTR, bytes, block->data()));
         blocks_.push_back(std::move(block));
         hugeBytes_ += bytes;

@@ -43,7 +43,6 @@ public:
     // cpuDevice: the device reads host memory (CL_DEVICE_TYPE_CPU). CLRT_HUGE_PAGES=0 turns the huge-page
     // path off (for measuring it).
     SceneBufferUploader(cl::Context ctx, bool cpuDevice);
-    SceneBufferUploader() = default;
 
     // A read-only buffer holding a copy of bytes at src. OpenCL has no zero-size buffers: bytes == 0 gives
     // emptyBytes (at least 16) zero bytes, one element of an empty array, which the kernels never read.

@@ -54,7 +54,8 @@ struct Renderer::Impl {
         raysPerPath = 0;
     int sampleBase = 0;  // RenderSettings::firstSample of the render in progress
 
-    Impl(DeviceContext& d, const DeviceScene& s) : dc(d), ds(s) {
+    Impl(DeviceContext& d, const DeviceScene& s)
+        : dc(d), ds(s), uploader(d.context(), (d.info().type & CL_DEVICE_TYPE_CPU) != 0) {
         cl_command_queue_properties qp = 0;
         CL_CHECK(clGetCommandQueueInfo(dc.queue()(), CL_QUEUE_PROPERTIES, sizeof qp, &qp, nullptr));
         profiling = (qp & CL_QUEUE_PROFILING_ENABLE) != 0;
@@ -73,7 +74,6 @@ struct Renderer::Impl {
         queueCount = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(int)));
         nextCount = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(int)));
         fused = FusedPath(ctx, program);
-        uploader = SceneBufferUploader(ctx, (dc.info().type & CL_DEVICE_TYPE_CPU) != 0);
         nodes = uploader.upload(ds.bvh4.nodes);
         leaves = uploader.upload(ds.bvh4.leaves);
         tris = uploader.upload(ds.triangles);
