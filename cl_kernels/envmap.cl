@@ -54,13 +54,13 @@ inline int EnvMap_UvToDir(int mapping, float u, float v, float3* d) {
         float r = sqrt(x * x + y * y);
         if (!(r <= 1.0f)) return 0;
         if (r <= 0.0f) { *d = (float3)(0.0f, 0.0f, -1.0f); return 1; }
-        float theta = CLRT_PI * r, st = sin(theta);
-        *d = (float3)(st * x / r, st * y / r, -cos(theta));
+        float ct, st = Math_SinCos(CLRT_PI * r, &ct);
+        *d = (float3)(st * x / r, st * y / r, -ct);
         return 1;
     }
-    float phi = CLRT_PI * (2.0f * u - 1.0f), theta = CLRT_PI * v;
-    float st = sin(theta);
-    *d = (float3)(st * sin(phi), cos(theta), -st * cos(phi));
+    float cp, sp = Math_SinCos(CLRT_PI * (2.0f * u - 1.0f), &cp);
+    float ct, st = Math_SinCos(CLRT_PI * v, &ct);
+    *d = (float3)(st * sp, ct, -st * cp);
     return 1;
 }
 
@@ -71,10 +71,10 @@ inline float EnvMap_UvToSolidAngle(int mapping, float u, float v) {
         float r = sqrt(x * x + y * y);
         if (!(r <= 1.0f)) return 0.0f;
         if (r < 1e-6f) return 1.0f / (4.0f * CLRT_PI * CLRT_PI);
-        float s = sin(CLRT_PI * r);
+        float c, s = Math_SinCos(CLRT_PI * r, &c);
         return s > 0.0f ? r / (4.0f * CLRT_PI * s) : 0.0f;
     }
-    float s = sin(CLRT_PI * v);
+    float c, s = Math_SinCos(CLRT_PI * v, &c);
     return s > 0.0f ? 1.0f / (2.0f * CLRT_PI * CLRT_PI * s) : 0.0f;
 }
 
@@ -157,14 +157,11 @@ inline int EnvDist_FindInterval(const __global float* cdf, int n, float x) {
     return lo;
 }
 
-/* pdf over solid angle of the unit direction with map coordinates uv (lat-long: uniform in solid angle within a cell; probe:
- * uniform in (u, v) over the cell's part inside the disc). */
-inline float EnvDist_PdfUv(const __global float* dist, float2 uv) {
-    int W = (int)dist[0], H = (int)dist[1], mapping = (int)dist[2];
-    int i = clamp((int)(uv.x * (float)W), 0, W - 1), j = clamp((int)(uv.y * (float)H), 0, H - 1);
-    const __global float* marg = dist + 4;
-    const __global float* cond = dist + 4 + H + 1 + j * (W + 1);
-    float p = (marg[j + 1] - marg[j]) * (cond[i + 1] - cond[i]);
+/* pdf over solid angle at map coordinates uv in cell (i, j) of `dist`, which was drawn with probability p
+ * (lat-long: uniform in solid angle within a cell; probe: uniform in (u, v) over the cell's part inside the
+ * disc). */
+inline float EnvDist_CellPdf(const __global float* dist, int i, int j, float p, float2 uv) {
+    const int W = (int)dist[0], H = (int)dist[1], mapping = (int)dist[2];
     if (mapping == ENV_LATLONG) {
         const __global float* z = dist + 4 + H + 1 + H * (W + 1) + W * H;
         float omega = 2.0f * CLRT_PI / (float)W * (z[j] - z[j + 1]);
@@ -174,24 +171,30 @@ inline float EnvDist_PdfUv(const __global float* dist, float2 uv) {
     return f > 0.0f ? p * (float)W * (float)H / f * EnvMap_UvToSolidAngle(mapping, uv.x, uv.y) : 0.0f;
 }
 
-/* Importance sample: returns 1 and the direction, its solid-angle pdf and its map coordinates (for
- * the radiance lookup, sparing the direction -> (u, v) round trip), or 0 (no direction). */
-inline int EnvDist_SampleUv(const __global float* dist, float u1, float u2, float3* dir, float* pdf, float2* uvOut) {
-    int W = (int)dist[0], H = (int)dist[1], mapping = (int)dist[2];
-    *pdf = 0.0f;
+/* pdf over solid angle of the unit direction with map coordinates uv. */
+inline float EnvDist_PdfUv(const __global float* dist, float2 uv) {
+    int W = (int)dist[0], H = (int)dist[1];
+    int i = clamp((int)(uv.x * (float)W), 0, W - 1), j = clamp((int)(uv.y * (float)H), 0, H - 1);
     const __global float* marg = dist + 4;
-    int j = EnvDist_FindInterval(marg, H, u2);
-    float dv = fmin((u2 - marg[j]) / (marg[j + 1] - marg[j]), CLRT_ONE_MINUS_EPS);
     const __global float* cond = dist + 4 + H + 1 + j * (W + 1);
-    int i = EnvDist_FindInterval(cond, W, u1);
-    float du = fmin((u1 - cond[i]) / (cond[i + 1] - cond[i]), CLRT_ONE_MINUS_EPS);
-    float p = (marg[j + 1] - marg[j]) * (cond[i + 1] - cond[i]);
+    return EnvDist_CellPdf(dist, i, j, (marg[j + 1] - marg[j]) * (cond[i + 1] - cond[i]), uv);
+}
+
+/* Within cell (i, j) of `dist`, drawn with probability p: the direction from the uniforms du, dv in [0, 1)
+ * (lat-long: u uniform, cos θ uniform between the row's bounds; probe: uniform in (u, v), retried inside
+ * the disc with uniforms derived from the sample's u1, u2), its solid-angle pdf and map coordinates;
+ * returns 0 where none. */
+inline int EnvDist_CellSample(const __global float* dist, int i, int j, float du, float dv, float p, float u1, float u2,
+                              float3* dir, float* pdf, float2* uvOut) {
+    const int W = (int)dist[0], H = (int)dist[1], mapping = (int)dist[2];
+    *pdf = 0.0f;
     if (mapping == ENV_LATLONG) { /* cos θ uniform between the row's bounds */
         const __global float* zr = dist + 4 + H + 1 + H * (W + 1) + W * H;
         float z = zr[j] - dv * (zr[j] - zr[j + 1]);
         float st = sqrt(fmax(0.0f, 1.0f - z * z));
         float phi = CLRT_PI * (2.0f * (((float)i + du) / (float)W) - 1.0f);
-        *dir = (float3)(st * sin(phi), z, -st * cos(phi));
+        float cphi, sphi = Math_SinCos(phi, &cphi);
+        *dir = (float3)(st * sphi, z, -st * cphi);
         *uvOut = (float2)(((float)i + du) / (float)W, acos(clamp(z, -1.0f, 1.0f)) * CLRT_INV_PI);
         float omega = 2.0f * CLRT_PI / (float)W * (zr[j] - zr[j + 1]);
         *pdf = omega > 0.0f ? p / omega : 0.0f;
@@ -218,9 +221,81 @@ inline int EnvDist_SampleUv(const __global float* dist, float u1, float u2, floa
     *pdf = pUv * EnvMap_UvToSolidAngle(mapping, u, v);
     return *pdf > 0.0f && isfinite(*pdf);
 }
+
+/* Importance sample: returns 1 and the direction, its solid-angle pdf and its map coordinates (for
+ * the radiance lookup, sparing the direction -> (u, v) round trip), or 0 (no direction). */
+inline int EnvDist_SampleUv(const __global float* dist, float u1, float u2, float3* dir, float* pdf, float2* uvOut) {
+    const int W = (int)dist[0], H = (int)dist[1];
+    const __global float* marg = dist + 4;
+    int j = EnvDist_FindInterval(marg, H, u2);
+    float dv = fmin((u2 - marg[j]) / (marg[j + 1] - marg[j]), CLRT_ONE_MINUS_EPS);
+    const __global float* cond = dist + 4 + H + 1 + j * (W + 1);
+    int i = EnvDist_FindInterval(cond, W, u1);
+    float du = fmin((u1 - cond[i]) / (cond[i + 1] - cond[i]), CLRT_ONE_MINUS_EPS);
+    float p = (marg[j + 1] - marg[j]) * (cond[i + 1] - cond[i]);
+    return EnvDist_CellSample(dist, i, j, du, dv, p, u1, u2, dir, pdf, uvOut);
+}
 inline int EnvDist_Sample(const __global float* dist, float u1, float u2, float3* dir, float* pdf) {
     float2 uv;
     return EnvDist_SampleUv(dist, u1, u2, dir, pdf, &uv);
+}
+
+/* ---- Cosine-weighted light sampling (the mis sampler; layout and rules: src/render/env_distribution.h,
+ * EnvCosineTable, whose sample and pdf mirror these) ---------------------------------------------------
+ * The bucket of (world) shading normal n in table `tab`: its cell of the octahedral k × k grid (y up), or
+ * -1 where n is 0 or not finite (the map's own distribution is used then). */
+inline int EnvCos_Bucket(const __global float* tab, float3 n) {
+    const float l1 = fabs(n.x) + fabs(n.y) + fabs(n.z);
+    if (!(l1 > 0.0f) || !isfinite(l1)) return -1;
+    const int k = (int)tab[0];
+    float a = n.x / l1, b = n.z / l1;
+    if (n.y < 0.0f) { /* the lower hemisphere, folded out to the square's corners */
+        const float a2 = (1.0f - fabs(b)) * (a < 0.0f ? -1.0f : 1.0f);
+        b = (1.0f - fabs(a)) * (b < 0.0f ? -1.0f : 1.0f);
+        a = a2;
+    }
+    const int i = clamp((int)((a + 1.0f) * 0.5f * (float)k), 0, k - 1);
+    const int j = clamp((int)((b + 1.0f) * 0.5f * (float)k), 0, k - 1);
+    return j * k + i;
+}
+
+/* The first texel of cell c of `cells` over `texels`, and the cell holding texel t. */
+inline int EnvCos_CellStart(int c, int texels, int cells) { return (int)(((long)c * texels) / cells); }
+inline int EnvCos_CellOf(int t, int texels, int cells) { return (int)(((long)(t + 1) * cells - 1) / texels); }
+
+/* Sample of bucket b: a cell by the bucket's CDFs, a texel of it by its share, then within the texel as the
+ * map's distribution `own` does (EnvDist_CellSample); returns 0 where none. */
+inline int EnvCos_SampleUv(const __global float* own, const __global float* tab, int b, float u1, float u2, float3* dir,
+                           float* pdf, float2* uvOut) {
+    const int W = (int)own[0], H = (int)own[1], Wc = (int)tab[1], Hc = (int)tab[2];
+    const __global float* marg = tab + 8 + b * (int)tab[3];
+    const int J = EnvDist_FindInterval(marg, Hc, u2);
+    const float dv = fmin((u2 - marg[J]) / (marg[J + 1] - marg[J]), CLRT_ONE_MINUS_EPS);
+    const __global float* cond = marg + Hc + 1 + J * (Wc + 1);
+    const int I = EnvDist_FindInterval(cond, Wc, u1);
+    const float du = fmin((u1 - cond[I]) / (cond[I + 1] - cond[I]), CLRT_ONE_MINUS_EPS);
+    const float pCell = (marg[J + 1] - marg[J]) * (cond[I + 1] - cond[I]);
+    const int x0 = EnvCos_CellStart(I, W, Wc), y0 = EnvCos_CellStart(J, H, Hc), y1 = EnvCos_CellStart(J + 1, H, Hc);
+    const int w = EnvCos_CellStart(I + 1, W, Wc) - x0, n = w * (y1 - y0);
+    const __global float* fine = tab + (int)tab[4] + y0 * W + x0 * (y1 - y0);
+    const int k = EnvDist_FindInterval(fine, n, du);
+    const float share = (k + 1 < n ? fine[k + 1] : 1.0f) - fine[k];
+    const float dt = fmin((du - fine[k]) / share, CLRT_ONE_MINUS_EPS);
+    return EnvDist_CellSample(own, x0 + k % w, y0 + k / w, dt, dv, pCell * share, u1, u2, dir, pdf, uvOut);
+}
+
+/* pdf over solid angle of bucket b at map coordinates uv. */
+inline float EnvCos_PdfUv(const __global float* own, const __global float* tab, int b, float2 uv) {
+    const int W = (int)own[0], H = (int)own[1], Wc = (int)tab[1], Hc = (int)tab[2];
+    const int x = clamp((int)(uv.x * (float)W), 0, W - 1), y = clamp((int)(uv.y * (float)H), 0, H - 1);
+    const int I = EnvCos_CellOf(x, W, Wc), J = EnvCos_CellOf(y, H, Hc);
+    const __global float* marg = tab + 8 + b * (int)tab[3];
+    const __global float* cond = marg + Hc + 1 + J * (Wc + 1);
+    const int x0 = EnvCos_CellStart(I, W, Wc), y0 = EnvCos_CellStart(J, H, Hc), y1 = EnvCos_CellStart(J + 1, H, Hc);
+    const int w = EnvCos_CellStart(I + 1, W, Wc) - x0, n = w * (y1 - y0), k = (y - y0) * w + (x - x0);
+    const __global float* fine = tab + (int)tab[4] + y0 * W + x0 * (y1 - y0);
+    const float share = (k + 1 < n ? fine[k + 1] : 1.0f) - fine[k];
+    return EnvDist_CellPdf(own, x, y, (marg[J + 1] - marg[J]) * (cond[I + 1] - cond[I]) * share, uv);
 }
 
 #endif /* CLRT_ENVMAP_CL */

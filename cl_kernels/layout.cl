@@ -40,7 +40,7 @@
     S(Light) M(Light, position) M(Light, direction) M(Light, radiance) M(Light, edgeU)            \
         M(Light, edgeV) M(Light, cosCoverageHalf) M(Light, cosFalloffHalf) M(Light, area)         \
         M(Light, kind) M(Light, image) M(Light, mapping) M(Light, sampler) M(Light, distribution)  \
-        M(Light, objFirst) M(Light, objCount) M(Light, objRadius) M(Light, objPad)                 \
+        M(Light, objFirst) M(Light, objCount) M(Light, objRadius) M(Light, envCosine)                 \
     S(CameraParams) M(CameraParams, position) M(CameraParams, u) M(CameraParams, v)               \
         M(CameraParams, w) M(CameraParams, nearPlane) M(CameraParams, nearDistance)               \
         M(CameraParams, focusDistance) M(CameraParams, apertureSize) M(CameraParams, width)       \

@@ -89,6 +89,32 @@ inline float3 EnvSample_Cosine(float3 n, float2 u) {
     return normalize(l.x * t + l.y * b + l.z * n);
 }
 
+/* The importance distribution an env light samples at a shading point: the map's (own), and under the mis
+ * sampler the cosine-weighted table (tab) with the bucket of the point's normal (envmap.cl, EnvCos_*; bucket
+ * -1: the map's). The importance sampler keeps the map's: the path tracer's MIS evaluates its pdf without a
+ * normal (path.cl, Path_EnvLightPdf). */
+typedef struct {
+    const __global float* own;
+    const __global float* tab;
+    int bucket;
+} EnvLightDist;
+
+inline EnvLightDist EnvLight_Distribution(const __global Light* light, const __global float* envDist, float3 n) {
+    EnvLightDist d;
+    d.own = envDist + (light->distribution == CLRT_INVALID ? 0 : light->distribution);
+    d.tab = envDist + (light->envCosine == CLRT_INVALID ? 0 : light->envCosine);
+    d.bucket = light->sampler == ENV_SAMPLE_MIS && light->envCosine != CLRT_INVALID ? EnvCos_Bucket(d.tab, n) : -1;
+    return d;
+}
+
+inline int EnvLightDist_SampleUv(EnvLightDist d, float u1, float u2, float3* dir, float* pdf, float2* uv) {
+    return d.bucket < 0 ? EnvDist_SampleUv(d.own, u1, u2, dir, pdf, uv) : EnvCos_SampleUv(d.own, d.tab, d.bucket, u1, u2, dir, pdf, uv);
+}
+
+inline float EnvLightDist_PdfUv(EnvLightDist d, float2 uv) {
+    return d.bucket < 0 ? EnvDist_PdfUv(d.own, uv) : EnvCos_PdfUv(d.own, d.tab, d.bucket, uv);
+}
+
 inline float3 EnvironmentLight_Sample(const __global Light* light, float3 n, float2 u, const __global ImageInfo* images,
                                       const __global float4* texels, const __global float* envDist, float3* wi,
                                       float* dist) {
@@ -96,7 +122,7 @@ inline float3 EnvironmentLight_Sample(const __global Light* light, float3 n, flo
     int sampler = light->sampler;
     if (light->distribution == CLRT_INVALID && (sampler == ENV_SAMPLE_IMPORTANCE || sampler == ENV_SAMPLE_MIS))
         sampler = ENV_SAMPLE_COSINE;
-    const __global float* d = envDist + (light->distribution == CLRT_INVALID ? 0 : light->distribution);
+    const EnvLightDist d = EnvLight_Distribution(light, envDist, n);
     const int mapping = light->mapping;
     float3 w = n;
     float pdf = 0.0f;
@@ -111,16 +137,16 @@ inline float3 EnvironmentLight_Sample(const __global Light* light, float3 n, flo
         pdf = fmax(dot(w, n), 0.0f) * CLRT_INV_PI;
         break;
     case ENV_SAMPLE_IMPORTANCE:
-        if (!EnvDist_SampleUv(d, u.x, u.y, &w, &pdf, &uv)) return (float3)(0.0f);
+        if (!EnvLightDist_SampleUv(d, u.x, u.y, &w, &pdf, &uv)) return (float3)(0.0f);
         break;
     default: { /* ENV_SAMPLE_MIS */
         float pImp;
         if (u.x < 0.5f) {
-            if (!EnvDist_SampleUv(d, 2.0f * u.x, u.y, &w, &pImp, &uv)) return (float3)(0.0f);
+            if (!EnvLightDist_SampleUv(d, 2.0f * u.x, u.y, &w, &pImp, &uv)) return (float3)(0.0f);
         } else {
             w = EnvSample_Cosine(n, (float2)(fmin(2.0f * u.x - 1.0f, CLRT_ONE_MINUS_EPS), u.y));
             uv = EnvMap_DirToUv(mapping, w); /* once, for the pdf and the lookup */
-            pImp = EnvDist_PdfUv(d, uv);
+            pImp = EnvLightDist_PdfUv(d, uv);
         }
         pdf = 0.5f * pImp + 0.5f * fmax(dot(w, n), 0.0f) * CLRT_INV_PI;
         break;
@@ -166,7 +192,7 @@ inline float3 EnvLight_MisValue(float3 l, float nP, float p, float nQ, float q) 
 inline void EnvLight_SampleMis(const __global Light* light, float3 n, float2 uLight, float2 uBsdf, float cosShare,
                                int withCosine, const __global ImageInfo* images, const __global float4* texels,
                                const __global float* envDist, float3* wiL, float3* eL, float3* wiB, float3* eB) {
-    const __global float* d = envDist + light->distribution;
+    const EnvLightDist d = EnvLight_Distribution(light, envDist, n);
     const ImageInfo img = images[light->image];
     const int mapping = light->mapping;
     float3 wL = n, wB = n, lL = (float3)(0.0f), lB = (float3)(0.0f);
@@ -175,11 +201,11 @@ inline void EnvLight_SampleMis(const __global Light* light, float3 n, float2 uLi
         wB = EnvSample_Cosine(n, (float2)(fmin(uBsdf.x, CLRT_ONE_MINUS_EPS), uBsdf.y));
         float2 uvB = EnvMap_DirToUv(mapping, wB);
         lB = EnvMap_Lookup(texels, img, mapping, uvB.x, uvB.y) * light->radiance.xyz;
-        pB = EnvDist_PdfUv(d, uvB);
+        pB = EnvLightDist_PdfUv(d, uvB);
     }
     float2 uvL = (float2)(0.0f);
     float pL = 0.0f;
-    const int okL = EnvDist_SampleUv(d, uLight.x, uLight.y, &wL, &pL, &uvL);
+    const int okL = EnvLightDist_SampleUv(d, uLight.x, uLight.y, &wL, &pL, &uvL);
     if (okL) lL = EnvMap_Lookup(texels, img, mapping, uvL.x, uvL.y) * light->radiance.xyz;
     else wL = n;
     *wiL = wL;

@@ -4,7 +4,10 @@
 // and lookup functions against these host references on PoCL; half4 texels: packed only when exact,
 // looked up bit for bit as their float4 image), the white furnace per sampler and
 // mapping (a kd = 0.5 sphere under radiance 1 shows π/2), spot/directional/area/environment
-// Light_Sample kernels against host reference evaluations at random points, and (tagged [.slow],
+// Light_Sample kernels against host reference evaluations at random points, the mis sampler's
+// cosine-weighted tables (each bucket's pdf integrating to one, chi-square, cells and buckets covering
+// texels and normals, the device's bucket, samples and pdfs against EnvCosineTable), Math_SinCos and
+// Env_Atan2 against libm, and (tagged [.slow],
 // run by scripts/env_sampling_compare.sh) the relMSE of each env sampler on sunset.exr.
 #include <catch.hpp>
 
@@ -802,6 +805,234 @@ __kernel void atan_test(const __global float2* in, __global float* out, int n) {
         if (d > 3e-7) CHECK(d <= 3e-7);
     }
     WARN("Env_Atan2: largest error " << worst << " rad over " << n << " pairs");
+}
+
+// Maps for the cosine tables: odd sizes (cells of one texel), a lat-long map larger than the coarse grid
+// (cells of 2 x 2 texels, and of 1-2 texels where the sizes do not divide), a probe map, and shared ones.
+std::vector<NamedMap> cosineTestMaps() {
+    std::vector<NamedMap> maps;
+    maps.push_back({"37x19 latlong pattern", makeMap(patternImage(37, 19), dev::ENV_LATLONG)});
+    maps.push_back({"256x128 latlong pattern", makeMap(patternImage(256, 128), dev::ENV_LATLONG)});
+    maps.push_back({"300x101 latlong pattern", makeMap(patternImage(300, 101), dev::ENV_LATLONG)});
+    maps.push_back({"21x21 probe pattern", makeMap(patternImage(21, 21), dev::ENV_PROBE)});
+    maps.push_back({"1x1 latlong", makeMap(constantImage(1, 1, 2.0f), dev::ENV_LATLONG)});
+    if (haveShared()) {
+        std::string e = sharedDir() + "/envmaps/";
+        maps.push_back({"sunrise.exr", makeMap(readImage(e + "sunrise.exr"), dev::ENV_LATLONG)});
+        maps.push_back({"courtyard_probe.exr", makeMap(readImage(e + "courtyard_probe.exr"), dev::ENV_PROBE)});
+    }
+    return maps;
+}
+
+const int kCosineTestBuckets[] = {0, 66, 77, 143, 30, 100};  // corners (downward), near the top, sides
+
+TEST_CASE("env cosine tables: each bucket's pdf integrates to one, samples follow it (chi-square), pdfs agree", "[lights][env]") {
+    for (const NamedMap& nm : cosineTestMaps()) {
+        const HostMap& m = nm.map;
+        const EnvCosineTable table(m.view, m.dist);
+        const int W = m.dist.width, H = m.dist.height;
+        for (int b : kCosineTestBuckets) {
+            INFO(nm.name << ", bucket " << b);
+            const int M = W * H == 1 ? 256 : (W > 300 ? 2048 : 1024);  // sunrise.exr: 1.012-1.015 at 1024 (its sun)
+            double integral = integrateSphere([&](const Vec3& w) { return double(table.pdf(b, w)); }, M);
+            CHECK(integral == Approx(1.0).epsilon(0.01));
+            const int BU = std::min(W, 32), BV = std::min(H, 16);
+            std::vector<double> expected(BU * BV, 0.0), observed(BU * BV, 0.0);
+            double mass = 0;
+            for (int y = 0; y < H; ++y)
+                for (int x = 0; x < W; ++x) {
+                    const double p = table.texelProbability(b, x, y);
+                    expected[(y * BV / H) * BU + x * BU / W] += p;
+                    mass += p;
+                }
+            CHECK(mass == Approx(1.0).epsilon(1e-4));
+            const int N = 200000;
+            std::mt19937 rng(23 + b);
+            std::uniform_real_distribution<float> uni(0.0f, 0.99999994f);
+            int failed = 0, pdfMismatch = 0;
+            for (int n = 0; n < N; ++n) {
+                Vec3 w;
+                float pdf;
+                if (!table.sample(b, uni(rng), uni(rng), w, pdf)) { ++failed; continue; }
+                float u, v;
+                envDirToUv(m.dist.mapping, w, u, v);
+                int bi = std::clamp(int(u * W), 0, W - 1) * BU / W, bj = std::clamp(int(v * H), 0, H - 1) * BV / H;
+                observed[bj * BU + bi] += 1;
+                if (!(std::fabs(table.pdf(b, w) - pdf) <= 1e-3f * pdf)) ++pdfMismatch;
+            }
+            CHECK(failed <= N / 10000);
+            CHECK(pdfMismatch <= N / 1000);
+            double chi2 = 0, pool = 0, poolObs = 0;
+            int dof = -1;
+            for (size_t k = 0; k < expected.size(); ++k) {
+                double e = expected[k] * (N - failed);
+                if (e < 5) { pool += e; poolObs += observed[k]; continue; }
+                chi2 += (observed[k] - e) * (observed[k] - e) / e;
+                ++dof;
+            }
+            if (pool >= 5) { chi2 += (poolObs - pool) * (poolObs - pool) / pool; ++dof; }
+            if (dof >= 1) CHECK(chi2 < chi2Critical(dof, 4.0));
+        }
+    }
+}
+
+TEST_CASE("env cosine tables: cells cover the texels, buckets cover the sphere of normals", "[lights][env]") {
+    for (int texels : {1, 19, 37, 64, 101, 300, 1000, 1024})
+        for (int cells : {1, 7, 64, 128}) {
+            if (cells > texels) continue;
+            INFO(texels << " texels, " << cells << " cells");
+            int prev = -1;
+            for (int t = 0; t < texels; ++t) {  // every texel in one cell, cells in order, none empty
+                const int c = envCosineCellOf(t, texels, cells);
+                REQUIRE((c == prev || c == prev + 1));
+                REQUIRE(int(int64_t(c) * texels / cells) <= t);
+                REQUIRE(t < int(int64_t(c + 1) * texels / cells));
+                prev = c;
+            }
+            CHECK(prev == cells - 1);
+        }
+    const int k = kEnvCosineBuckets;
+    for (int b = 0; b < k * k; ++b) {
+        INFO("bucket " << b);
+        CHECK(envCosineBucket(envCosineBucketNormal(b)) == b);  // each centre lies in its own cell
+    }
+    // Every normal lies within its bucket's radius of the bucket's centre (the tables' largest cosine).
+    std::mt19937 rng(2);
+    std::normal_distribution<float> g;
+    int outside = 0;
+    for (int i = 0; i < 200000; ++i) {
+        const Vec3 n = normalize(Vec3(g(rng), g(rng), g(rng)));
+        const int b = envCosineBucket(n);
+        if (std::acos(std::clamp(double(dot(n, envCosineBucketNormal(b))), -1.0, 1.0)) > envCosineBucketRadius(b)) ++outside;
+    }
+    CHECK(outside == 0);
+}
+
+TEST_CASE("env cosine tables: the device picks the host's bucket and samples and evaluates as the host", "[lights][env][cl]") {
+    const char* src = R"CLC(
+__kernel void cos_test(const __global float* own, const __global float* tab, const __global float4* in,
+                       __global float4* out, int n) {
+    int i = get_global_id(0);
+    if (i >= n) return;
+    const float4 a = in[i];
+    const float3 nrm = (float3)(a.z, a.w, a.x - 0.5f);
+    const int b = EnvCos_Bucket(tab, nrm);
+    float3 d = (float3)(0.0f);
+    float pdf = -1.0f;
+    float2 uv = (float2)(0.0f);
+    int ok = b >= 0 && EnvCos_SampleUv(own, tab, b, a.x, a.y, &d, &pdf, &uv);
+    out[3 * i] = (float4)(d, ok ? pdf : -1.0f);
+    out[3 * i + 1] = (float4)((float)b, b >= 0 ? EnvCos_PdfUv(own, tab, b, EnvMap_DirToUv((int)own[2], normalize(nrm))) : -1.0f,
+                              uv);
+    out[3 * i + 2] = (float4)(0.0f);
+}
+)CLC";
+    DeviceContext& dc = testContext();
+    auto sources = loadKernelSources({"envmap.cl"});
+    sources.push_back({"cos_test.cl", src});
+    cl::Program program = buildProgramFromSources(dc, sources, {});
+    cl::Kernel kern = CL_CPP(cl::Kernel(program, "cos_test"));
+    for (const NamedMap& nm : cosineTestMaps()) {
+        INFO(nm.name);
+        const HostMap& m = nm.map;
+        const EnvCosineTable table(m.view, m.dist);
+        std::vector<dev::float4> in;
+        std::mt19937 rng(31);
+        std::uniform_real_distribution<float> uni(0.0f, 0.99999994f), sym(-1.0f, 1.0f);
+        for (int i = 0; i < 20000; ++i) in.push_back({uni(rng), uni(rng), sym(rng), sym(rng)});
+        const float nan = std::numeric_limits<float>::quiet_NaN();
+        for (float a : {0.0f, -0.0f, 0.5f, 1e-30f, nan})  // axes, octant seams, degenerate normals
+            for (float b : {0.0f, -0.0f, 1.0f, -1.0f, 0.5f})
+                for (float c : {0.5f, 0.0f, 1.0f}) in.push_back({c, 0.25f, a, b});
+        const int n = int(in.size());
+        std::vector<dev::float4> out(3 * size_t(n));
+        cl::Context& ctx = dc.context();
+        auto ro = [&](const void* p, size_t bytes) {
+            return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, bytes, const_cast<void*>(p)));
+        };
+        cl::Buffer own = ro(m.dist.data.data(), m.dist.data.size() * sizeof(float));
+        cl::Buffer tab = ro(table.data().data(), table.data().size() * sizeof(float));
+        cl::Buffer inBuf = ro(in.data(), in.size() * sizeof(dev::float4));
+        cl::Buffer outBuf = CL_CPP(cl::Buffer(ctx, CL_MEM_WRITE_ONLY, out.size() * sizeof(dev::float4)));
+        kern.setArg(0, own); kern.setArg(1, tab); kern.setArg(2, inBuf); kern.setArg(3, outBuf); kern.setArg(4, n);
+        CL_CPP(dc.queue().enqueueNDRangeKernel(kern, cl::NullRange, cl::NDRange(roundUp(n, 64)), cl::NDRange(64)));
+        CL_CPP(dc.queue().enqueueReadBuffer(outBuf, CL_TRUE, 0, out.size() * sizeof(dev::float4), out.data()));
+        int bucketBad = 0, okMismatch = 0, sampleBad = 0, pdfBad = 0;
+        for (int i = 0; i < n; ++i) {
+            const Vec3 nrm(in[i].z, in[i].w, in[i].x - 0.5f);
+            const int b = envCosineBucket(nrm);
+            if (int(out[3 * i + 1].x) != b) {
+                if (bucketBad++ < 3) FAIL_CHECK("normal " << nrm.x << " " << nrm.y << " " << nrm.z << ": device bucket "
+                                                         << out[3 * i + 1].x << ", host " << b);
+                continue;
+            }
+            if (b < 0) continue;
+            Vec3 w;
+            float pdf;
+            const bool ok = table.sample(b, in[i].x, in[i].y, w, pdf);
+            const dev::float4& o = out[3 * i];
+            if (ok != (o.w >= 0)) { ++okMismatch; continue; }
+            if (ok && (angleBetween(w, Vec3(o.x, o.y, o.z)) > 1e-4f || std::fabs(o.w - pdf) > 1e-3f * pdf)) ++sampleBad;
+            const float pq = table.pdf(b, normalize(nrm));
+            if (std::fabs(out[3 * i + 1].y - pq) > 1e-3f * pq + 1e-6f) ++pdfBad;
+        }
+        CHECK(bucketBad == 0);
+        CHECK(okMismatch <= n / 2000);
+        CHECK(sampleBad <= n / 1000);  // a few land in the neighbouring texel (ulps of acos between libm and PoCL)
+        CHECK(pdfBad <= n / 1000);
+    }
+}
+
+TEST_CASE("Math_SinCos (the warps' and env mappings' sin and cos) is within 1e-7 and 2 ulp of sin and cos", "[lights][env][cl]") {
+    const char* src = R"CLC(
+__kernel void sincos_test(const __global float* in, __global float2* out, int n) {
+    int i = get_global_id(0);
+    if (i < n) {
+        float c, s = Math_SinCos(in[i], &c);
+        out[i] = (float2)(s, c);
+    }
+}
+)CLC";
+    DeviceContext& dc = testContext();
+    auto sources = loadKernelSources({"common.cl"});
+    sources.push_back({"sincos_test.cl", src});
+    cl::Program program = buildProgramFromSources(dc, sources, {});
+    cl::Kernel k = CL_CPP(cl::Kernel(program, "sincos_test"));
+    std::vector<float> in;
+    for (int i = -700000; i <= 700000; ++i) in.push_back(float(i) * 1e-5f);  // [-7, 7]: every warp's range
+    for (int q = -16; q <= 16; ++q)  // the quadrant boundaries and multiples of π/2, and their neighbours
+        for (float x : {float(q * kPiD / 4)}) {
+            in.push_back(x);
+            in.push_back(std::nextafter(x, 10.0f));
+            in.push_back(std::nextafter(x, -10.0f));
+        }
+    for (float x : {0.0f, -0.0f, 1e-30f, -1e-30f, 1e-7f, 100.0f, -1000.0f, 5000.0f}) in.push_back(x);
+    const int n = int(in.size());
+    std::vector<dev::float2> out(n);
+    cl::Context& ctx = dc.context();
+    cl::Buffer ib = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(float) * n, in.data()));
+    cl::Buffer ob = CL_CPP(cl::Buffer(ctx, CL_MEM_WRITE_ONLY, sizeof(dev::float2) * n));
+    k.setArg(0, ib); k.setArg(1, ob); k.setArg(2, n);
+    CL_CPP(dc.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(roundUp(n, 64)), cl::NDRange(64)));
+    CL_CPP(dc.queue().enqueueReadBuffer(ob, CL_TRUE, 0, sizeof(dev::float2) * n, out.data()));
+    double worstAbs = 0, worstUlp = 0;
+    int bad = 0;
+    for (int i = 0; i < n; ++i) {
+        const double x = in[i], got[2] = {out[i].x, out[i].y}, want[2] = {std::sin(x), std::cos(x)};
+        for (int j = 0; j < 2; ++j) {
+            const double d = std::fabs(got[j] - want[j]);
+            const float w = float(std::fabs(want[j]));
+            const double ulp = double(std::nextafter(w, 2.0f)) - double(w);
+            worstAbs = std::max(worstAbs, d);
+            if (std::fabs(want[j]) > 1e-3) worstUlp = std::max(worstUlp, d / ulp);
+            if (!(d <= 1e-7) || (std::fabs(want[j]) > 1e-3 && d > 2 * ulp)) {
+                if (bad++ < 5) FAIL_CHECK("x = " << in[i] << (j ? " cos " : " sin ") << got[j] << " vs " << want[j] << ": off by " << d);
+            }
+        }
+    }
+    CHECK(bad == 0);
+    WARN("Math_SinCos: largest error " << worstAbs << " absolute, " << worstUlp << " ulp where |value| > 1e-3, over "
+                                       << n << " arguments");
 }
 
 TEST_CASE("env multi-sample MIS (EnvLight_SampleMis) is unbiased: cos-weighted sum matches quadrature", "[lights][env][cl]") {

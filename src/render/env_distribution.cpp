@@ -176,12 +176,14 @@ static void writeTables(EnvDistribution& d, int W, int H, int mapping, const std
     for (size_t c = 0; c < size_t(W) * H; ++c) d.data[fracOff + c] = float(frac[c]);
 }
 
-EnvDistribution buildEnvDistribution(const EnvMapView& map) {
-    EnvDistribution d;
-    const int W = std::max(1, map.width), H = std::max(1, map.height);
-    d.width = W;
-    d.height = H;
-    d.mapping = map.mapping;
+// Per cell (i, j) of the map: the integral of the bilinear reconstruction's luminance per unit (u, v)
+// area, the cell's solid angle (the part inside the domain) and that part's share of its area.
+struct CellLuminance {
+    std::vector<double> lum, omega, frac;
+    double floorLum = 1.0;  // 1e-3 of the mean luminance (1 for a black map)
+};
+
+static CellLuminance cellLuminance(const EnvMapView& map, int W, int H) {
     const bool probe = map.mapping == dev::ENV_PROBE;
     auto lum = [&](int x, int y) {
         if (probe) x = std::clamp(x, 0, W - 1);
@@ -189,9 +191,11 @@ EnvDistribution buildEnvDistribution(const EnvMapView& map) {
         y = std::clamp(y, 0, H - 1);
         return map.texels ? lumOf(map.texels[size_t(y) * W + x]) : 1.0f;
     };
-    // Integral of the bilinear reconstruction's luminance over cell (i, j), per unit (u, v) area.
     const float k3[3] = {0.125f, 0.75f, 0.125f};
-    std::vector<double> cellLum(size_t(W) * H), omega(size_t(W) * H), frac(size_t(W) * H);
+    CellLuminance c;
+    c.lum.resize(size_t(W) * H);
+    c.omega.resize(size_t(W) * H);
+    c.frac.resize(size_t(W) * H);
     double lumSum = 0;
     size_t lumCount = 0;
     for (int j = 0; j < H; ++j)
@@ -199,32 +203,210 @@ EnvDistribution buildEnvDistribution(const EnvMapView& map) {
             double s = 0;
             for (int dy = -1; dy <= 1; ++dy)
                 for (int dx = -1; dx <= 1; ++dx) s += double(k3[dx + 1]) * k3[dy + 1] * lum(i + dx, j + dy);
-            size_t c = size_t(j) * W + i;
-            cellLum[c] = s;
-            // Solid angle of the cell (the part inside the domain) and that part's share of its area.
+            size_t k = size_t(j) * W + i;
+            c.lum[k] = s;
             if (!probe) {
-                omega[c] = 2.0 * M_PI / W * (std::cos(M_PI * j / H) - std::cos(M_PI * (j + 1) / H));
-                frac[c] = 1.0;
+                c.omega[k] = 2.0 * M_PI / W * (std::cos(M_PI * j / H) - std::cos(M_PI * (j + 1) / H));
+                c.frac[k] = 1.0;
             } else {
-                probeCell(i, j, W, H, omega[c], frac[c]);
+                probeCell(i, j, W, H, c.omega[k], c.frac[k]);
             }
-            if (omega[c] > 0) { lumSum += s; ++lumCount; }
+            if (c.omega[k] > 0) { lumSum += s; ++lumCount; }
         }
-    // A floor keeps every cell with solid angle sampled (bilinear footprints, MIS-free strategies).
-    double mean = lumCount ? lumSum / double(lumCount) : 0.0;
-    double floorLum = mean > 0 ? 1e-3 * mean : 1.0;
-    std::vector<double> weight(size_t(W) * H), rowSum(H, 0.0);
+    const double mean = lumCount ? lumSum / double(lumCount) : 0.0;
+    c.floorLum = mean > 0 ? 1e-3 * mean : 1.0;
+    return c;
+}
+
+// The tables from per-cell weights (0 where a cell has no solid angle).
+static EnvDistribution tablesFromWeights(int W, int H, int mapping, const std::vector<double>& weight,
+                                         const std::vector<double>& frac) {
+    EnvDistribution d;
+    d.width = W;
+    d.height = H;
+    d.mapping = mapping;
+    std::vector<double> rowSum(H, 0.0);
     double total = 0;
     for (int j = 0; j < H; ++j) {
-        for (int i = 0; i < W; ++i) {
-            size_t c = size_t(j) * W + i;
-            weight[c] = omega[c] > 0 ? (cellLum[c] + floorLum) * omega[c] : 0.0;
-            rowSum[j] += weight[c];
-        }
+        for (int i = 0; i < W; ++i) rowSum[j] += weight[size_t(j) * W + i];
         total += rowSum[j];
     }
-    writeTables(d, W, H, map.mapping, weight, rowSum, total, frac);
+    writeTables(d, W, H, mapping, weight, rowSum, total, frac);
     return d;
+}
+
+EnvDistribution buildEnvDistribution(const EnvMapView& map) {
+    const int W = std::max(1, map.width), H = std::max(1, map.height);
+    const CellLuminance c = cellLuminance(map, W, H);
+    // A floor keeps every cell with solid angle sampled (bilinear footprints, MIS-free strategies).
+    std::vector<double> weight(size_t(W) * H);
+    for (size_t k = 0; k < weight.size(); ++k) weight[k] = c.omega[k] > 0 ? (c.lum[k] + c.floorLum) * c.omega[k] : 0.0;
+    return tablesFromWeights(W, H, map.mapping, weight, c.frac);
+}
+
+// The unit direction at point (a, b) of the octahedral square [-1, 1]^2 (y up; |a| + |b| > 1: y < 0).
+static Vec3 octahedralDir(float a, float b) {
+    float y = 1.0f - std::fabs(a) - std::fabs(b), x = a, z = b;
+    if (y < 0.0f) {  // the lower hemisphere, folded out to the square's corners
+        x = (1.0f - std::fabs(b)) * (a < 0.0f ? -1.0f : 1.0f);
+        z = (1.0f - std::fabs(a)) * (b < 0.0f ? -1.0f : 1.0f);
+    }
+    return normalize(Vec3(x, y, z));
+}
+
+// The first texel of cell I of `cells` over `texels` texels (cells of floor-divided, near-equal widths).
+static int cellStart(int I, int texels, int cells) { return int(int64_t(I) * texels / cells); }
+
+Vec3 envCosineBucketNormal(int bucket) {
+    const int k = kEnvCosineBuckets;
+    return octahedralDir((float(bucket % k) + 0.5f) / float(k) * 2.0f - 1.0f, (float(bucket / k) + 0.5f) / float(k) * 2.0f - 1.0f);
+}
+
+int envCosineBucket(const Vec3& n) {
+    const int k = kEnvCosineBuckets;
+    const float l1 = std::fabs(n.x) + std::fabs(n.y) + std::fabs(n.z);
+    if (!(l1 > 0.0f) || !std::isfinite(l1)) return -1;
+    float a = n.x / l1, b = n.z / l1;
+    if (n.y < 0.0f) {
+        const float a2 = (1.0f - std::fabs(b)) * (a < 0.0f ? -1.0f : 1.0f);
+        b = (1.0f - std::fabs(a)) * (b < 0.0f ? -1.0f : 1.0f);
+        a = a2;
+    }
+    const int i = std::clamp(int((a + 1.0f) * 0.5f * float(k)), 0, k - 1);
+    const int j = std::clamp(int((b + 1.0f) * 0.5f * float(k)), 0, k - 1);
+    return j * k + i;
+}
+
+double envCosineBucketRadius(int bucket) {
+    const int k = kEnvCosineBuckets, bi = bucket % k, bj = bucket / k;
+    const Vec3 c = envCosineBucketNormal(bucket);
+    double r = 0;
+    for (int t = 0; t <= 32; ++t)  // the cell's farthest point lies on its border (octahedral cells are convex there)
+        for (int s = 0; s <= 32; s += (t == 0 || t == 32) ? 1 : 32) {
+            const Vec3 d = octahedralDir((bi + s / 32.0f) / float(k) * 2.0f - 1.0f, (bj + t / 32.0f) / float(k) * 2.0f - 1.0f);
+            r = std::max(r, std::acos(std::clamp(double(dot(c, d)), -1.0, 1.0)));
+        }
+    return r + 1e-3;  // and a margin for the sampled border's gaps
+}
+
+int envCosineCellOf(int texel, int texels, int cells) { return int((int64_t(texel + 1) * cells - 1) / texels); }
+
+EnvCosineTable::EnvCosineTable(const EnvMapView& map, const EnvDistribution& own) : own_(&own) {
+    const int W = own.width, H = own.height;
+    Wc_ = std::min(W, kEnvCosineCellsU);
+    Hc_ = std::min(H, kEnvCosineCellsV);
+    const int buckets = kEnvCosineBuckets * kEnvCosineBuckets;
+    stride_ = (Hc_ + 1) + Hc_ * (Wc_ + 1);
+    fine_ = kHeader + buckets * stride_;
+    data_.assign(size_t(fine_) + size_t(W) * H, 0.0f);
+    data_[0] = float(kEnvCosineBuckets);
+    data_[1] = float(Wc_);
+    data_[2] = float(Hc_);
+    data_[3] = float(stride_);
+    data_[4] = float(fine_);
+    // Each texel's weight as in the map's distribution (luminance + floor, times solid angle); each cell's sum.
+    const CellLuminance c = cellLuminance(map, W, H);
+    std::vector<double> cellSum(size_t(Wc_) * Hc_, 0.0);
+    std::vector<Vec3> centre(size_t(Wc_) * Hc_);
+    for (int J = 0; J < Hc_; ++J)
+        for (int I = 0; I < Wc_; ++I) {
+            const int x0 = cellStart(I, W, Wc_), x1 = cellStart(I + 1, W, Wc_);
+            const int y0 = cellStart(J, H, Hc_), y1 = cellStart(J + 1, H, Hc_), w = x1 - x0;
+            float* fine = &data_[size_t(fine_) + size_t(y0) * W + size_t(x0) * (y1 - y0)];
+            double sum = 0;
+            for (int y = y0; y < y1; ++y)
+                for (int x = x0; x < x1; ++x) {
+                    const size_t k = size_t(y) * W + x;
+                    sum += c.omega[k] > 0 ? (c.lum[k] + c.floorLum) * c.omega[k] : 0.0;
+                }
+            double cum = 0;  // exclusive cumulative shares, texels in row-major order within the cell
+            for (int y = y0; y < y1; ++y)
+                for (int x = x0; x < x1; ++x) {
+                    const size_t k = size_t(y) * W + x;
+                    fine[(y - y0) * w + (x - x0)] = sum > 0 ? float(cum / sum) : float((y - y0) * w + (x - x0)) / float(w * (y1 - y0));
+                    cum += c.omega[k] > 0 ? (c.lum[k] + c.floorLum) * c.omega[k] : 0.0;
+                }
+            cellSum[size_t(J) * Wc_ + I] = sum;
+            Vec3 d(0, 0, -1);  // the direction at the cell's centre (probe: outside the disc -> -z, weight 0 anyway)
+            envUvToDir(map.mapping, 0.5f * float(x0 + x1) / float(W), 0.5f * float(y0 + y1) / float(H), d);
+            centre[size_t(J) * Wc_ + I] = normalize(d);
+        }
+    // Per bucket: the cells' weights, their sums times the largest cosine any normal of the bucket sees.
+    for (int b = 0; b < buckets; ++b) {
+        const Vec3 n = envCosineBucketNormal(b);
+        const double radius = envCosineBucketRadius(b);
+        std::vector<double> weight(cellSum.size()), rowSum(Hc_, 0.0);
+        double total = 0;
+        for (int J = 0; J < Hc_; ++J) {
+            for (int I = 0; I < Wc_; ++I) {
+                const size_t k = size_t(J) * Wc_ + I;
+                const double theta = std::acos(std::clamp(double(dot(centre[k], n)), -1.0, 1.0));
+                const double cosMax = theta - radius < M_PI / 2 ? std::cos(std::max(0.0, theta - radius)) : 0.0;
+                weight[k] = cellSum[k] * (cosMax + kEnvCosineFloor);
+                rowSum[J] += weight[k];
+            }
+            total += rowSum[J];
+        }
+        float* marg = &data_[size_t(kHeader) + size_t(b) * stride_];
+        float* cond = marg + Hc_ + 1;
+        double cum = 0;
+        for (int J = 0; J < Hc_; ++J) {
+            marg[J] = float(cum / total);
+            cum += rowSum[J];
+            double rc = 0;
+            for (int I = 0; I < Wc_; ++I) {
+                cond[size_t(J) * (Wc_ + 1) + I] = rowSum[J] > 0 ? float(rc / rowSum[J]) : float(I) / float(Wc_);
+                rc += weight[size_t(J) * Wc_ + I];
+            }
+            cond[size_t(J) * (Wc_ + 1) + Wc_] = 1.0f;
+        }
+        marg[Hc_] = 1.0f;
+    }
+}
+
+// Cell (I, J) of bucket b: its probability; and the texel range it covers.
+float EnvCosineTable::cellProbability(int b, int I, int J) const {
+    const float* marg = &data_[size_t(kHeader) + size_t(b) * stride_];
+    const float* cond = marg + Hc_ + 1 + size_t(J) * (Wc_ + 1);
+    return (marg[J + 1] - marg[J]) * (cond[I + 1] - cond[I]);
+}
+
+bool EnvCosineTable::sample(int b, float u1, float u2, Vec3& dir, float& pdfSolidAngle) const {
+    if (b < 0) return own_->sample(u1, u2, dir, pdfSolidAngle);
+    const int W = own_->width, H = own_->height;
+    const float* marg = &data_[size_t(kHeader) + size_t(b) * stride_];
+    const int J = findInterval(marg, Hc_, u2);
+    const float dv = std::min((u2 - marg[J]) / (marg[J + 1] - marg[J]), kOneMinus);
+    const float* cond = marg + Hc_ + 1 + size_t(J) * (Wc_ + 1);
+    const int I = findInterval(cond, Wc_, u1);
+    const float du = std::min((u1 - cond[I]) / (cond[I + 1] - cond[I]), kOneMinus);
+    const float pCell = (marg[J + 1] - marg[J]) * (cond[I + 1] - cond[I]);
+    const int x0 = cellStart(I, W, Wc_), y0 = cellStart(J, H, Hc_), y1 = cellStart(J + 1, H, Hc_);
+    const int w = cellStart(I + 1, W, Wc_) - x0, n = w * (y1 - y0);
+    const float* fine = &data_[size_t(fine_) + size_t(y0) * W + size_t(x0) * (y1 - y0)];
+    const int k = findInterval(fine, n, du);
+    const float share = (k + 1 < n ? fine[k + 1] : 1.0f) - fine[k];
+    const float dt = std::min((du - fine[k]) / share, kOneMinus);
+    return own_->cellSample(x0 + k % w, y0 + k / w, dt, dv, pCell * share, u1, u2, dir, pdfSolidAngle);
+}
+
+float EnvCosineTable::pdf(int b, const Vec3& dir) const {
+    if (b < 0) return own_->pdf(dir);
+    const int W = own_->width, H = own_->height;
+    float u, v;
+    envDirToUv(own_->mapping, dir, u, v);
+    const int x = std::clamp(int(u * float(W)), 0, W - 1), y = std::clamp(int(v * float(H)), 0, H - 1);
+    return own_->cellPdf(x, y, texelProbability(b, x, y), u, v);
+}
+
+float EnvCosineTable::texelProbability(int b, int x, int y) const {
+    const int W = own_->width, H = own_->height;
+    const int I = envCosineCellOf(x, W, Wc_), J = envCosineCellOf(y, H, Hc_);
+    const int x0 = cellStart(I, W, Wc_), y0 = cellStart(J, H, Hc_), y1 = cellStart(J + 1, H, Hc_);
+    const int w = cellStart(I + 1, W, Wc_) - x0, n = w * (y1 - y0), k = (y - y0) * w + (x - x0);
+    const float* fine = &data_[size_t(fine_) + size_t(y0) * W + size_t(x0) * (y1 - y0)];
+    const float share = (k + 1 < n ? fine[k + 1] : 1.0f) - fine[k];
+    return cellProbability(b, I, J) * share;
 }
 
 float EnvDistribution::pdf(const Vec3& dir) const {
@@ -234,7 +416,11 @@ float EnvDistribution::pdf(const Vec3& dir) const {
     int i = std::clamp(int(u * float(W)), 0, W - 1), j = std::clamp(int(v * float(H)), 0, H - 1);
     const float* marg = &data[4];
     const float* cond = &data[4 + H + 1 + size_t(j) * (W + 1)];
-    float p = (marg[j + 1] - marg[j]) * (cond[i + 1] - cond[i]);
+    return cellPdf(i, j, (marg[j + 1] - marg[j]) * (cond[i + 1] - cond[i]), u, v);
+}
+
+float EnvDistribution::cellPdf(int i, int j, float p, float u, float v) const {
+    const int W = width, H = height;
     if (!probe()) {  // uniform in solid angle within the cell
         const float* z = &data[4 + H + 1 + size_t(H) * (W + 1) + size_t(W) * H];
         float omega = 2.0f * kPi / float(W) * (z[j] - z[j + 1]);
@@ -246,7 +432,6 @@ float EnvDistribution::pdf(const Vec3& dir) const {
 
 bool EnvDistribution::sample(float u1, float u2, Vec3& dir, float& pdfSolidAngle) const {
     const int W = width, H = height;
-    pdfSolidAngle = 0.0f;
     const float* marg = &data[4];
     int j = findInterval(marg, H, u2);
     float dv = std::min((u2 - marg[j]) / (marg[j + 1] - marg[j]), kOneMinus);
@@ -254,6 +439,13 @@ bool EnvDistribution::sample(float u1, float u2, Vec3& dir, float& pdfSolidAngle
     int i = findInterval(cond, W, u1);
     float du = std::min((u1 - cond[i]) / (cond[i + 1] - cond[i]), kOneMinus);
     float p = (marg[j + 1] - marg[j]) * (cond[i + 1] - cond[i]);
+    return cellSample(i, j, du, dv, p, u1, u2, dir, pdfSolidAngle);
+}
+
+bool EnvDistribution::cellSample(int i, int j, float du, float dv, float p, float u1, float u2, Vec3& dir,
+                                 float& pdfSolidAngle) const {
+    const int W = width, H = height;
+    pdfSolidAngle = 0.0f;
     if (!probe()) {  // uniform in solid angle within the cell: z = cos θ uniform between the row's bounds
         const float* zr = &data[4 + H + 1 + size_t(H) * (W + 1) + size_t(W) * H];
         float z = zr[j] - dv * (zr[j] - zr[j + 1]);

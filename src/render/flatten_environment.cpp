@@ -19,9 +19,14 @@ void flattenEnvironmentLight(const Scene& scene, const Light& l, int lightIndex,
     EnvMapView view{&ds.texels[info.offset], info.width, info.height, d.mapping};
     auto te = std::chrono::steady_clock::now();
     EnvDistribution dist = buildEnvDistribution(view);
-    ds.envDistSeconds += secondsSince(te);
     d.distribution = int(ds.envDistribution.size());
     ds.envDistribution.insert(ds.envDistribution.end(), dist.data.begin(), dist.data.end());
+    if (d.sampler == dev::ENV_SAMPLE_MIS) {  // light samples drawn by the shading normal's bucket
+        const EnvCosineTable table(view, dist);
+        d.envCosine = int(ds.envDistribution.size());
+        ds.envDistribution.insert(ds.envDistribution.end(), table.data().begin(), table.data().end());
+    }
+    ds.envDistSeconds += secondsSince(te);
     if (ds.params.envLight == CLRT_INVALID) {
         ds.params.envLight = lightIndex;
         ds.params.envScale = d.radiance;

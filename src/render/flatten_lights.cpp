@@ -78,6 +78,7 @@ void flattenLights(const Scene& scene, DeviceScene& ds, ImageAtlas& atlas) {
     ds.params.envLight = CLRT_INVALID;
     for (const Light& l : scene.lights) {
         dev::Light d{};
+        d.envCosine = CLRT_INVALID;
         d.position = toFloat4(l.position);
         d.radiance = toFloat4(l.intensity);
         d.direction = toFloat4(normalize(l.direction));

@@ -257,7 +257,8 @@ typedef struct Light {
     int objFirst;          /* LightMesh, LightSphere: first float4 of its data in lightData (see below) */
     int objCount;          /* LightMesh: number of triangles */
     float objRadius;       /* LightSphere: radius of the world-space bounding sphere around position */
-    int objPad;
+    int envCosine;         /* env, mis sampler: offset of its cosine-weighted distributions (env_distribution.h) in
+                            * the env distribution buffer, or CLRT_INVALID (every other light) */
 } Light;
 /* lightData (float4s) of the object lights, written by src/render/flatten_lights.cpp:
  *   LightMesh:   per triangle k, 3 float4s: world-space v0, v1, v2; v0.w = the area CDF up to and
