@@ -131,39 +131,18 @@ inline float Math_PowNonNegative(float x, float e) {
     return x > 0.0f ? exp2(e * log2(x)) : pow(x, e); /* pow for x = 0: 0^0 = 1, 0^e = 0 */
 }
 
-/* sin x (returned) and cos x (*cosOut) for the angles of warps and map directions (|x| < 6000; they
- * are within [-2π, 2π]): quadrant k = rint(2x/π), r = x − k·π/2 with π/2 split in three parts (the first
- * two of 12 bits, so k times each is exact: Cody and Waite), and Cephes' minimax polynomials for sin and
- * cos on [−π/4, π/4]. Within 1.6 ulp of the exact values wherever |sin|, |cos| > 1e-3 and 1e-7 absolute
- * (tests/test_lights.cpp). PoCL's sin and cos reduce every argument out of line (__pocl_argReductionS,
- * 4.5% of render_fused's time on the TT): this made the fused TT render 7% faster (README "Where the time
- * goes"). */
-inline float Math_SinCos(float x, float* cosOut) {
-    const float k = rint(x * 0.636619772f);
-    float r = x - k * 1.5703125f;
-    r -= k * 4.83751297e-4f;
-    r -= k * 7.54978995e-8f;
-    const float r2 = r * r;
-    const float s = r + r * r2 * (-1.6666654611e-1f + r2 * (8.3321608736e-3f + r2 * -1.9515295891e-4f));
-    const float c = 1.0f - 0.5f * r2 + r2 * r2 * (4.166664568298827e-2f + r2 * (-1.388731625493765e-3f + r2 * 2.443315711809948e-5f));
-    const int q = (int)k & 3;
-    const float sq = (q & 1) ? c : s, cq = (q & 1) ? s : c;
-    *cosOut = (q == 1 || q == 2) ? -cq : cq;
-    return (q & 2) ? -sq : sq;
-}
-
 /* ---- Warps ------------------------------------------------------------------------------------ */
 inline float3 Warp_CosineHemisphere(float u1, float u2) {
     float r = sqrt(u1);
-    float c, sn = Math_SinCos(2.0f * CLRT_PI * u2, &c);
-    return (float3)(r * c, r * sn, sqrt(fmax(0.0f, 1.0f - u1)));
+    float phi = 2.0f * CLRT_PI * u2;
+    return (float3)(r * cos(phi), r * sin(phi), sqrt(fmax(0.0f, 1.0f - u1)));
 }
 
 inline float3 Warp_UniformHemisphere(float u1, float u2) {
     float z = u1;
     float r = sqrt(fmax(0.0f, 1.0f - z * z));
-    float c, s = Math_SinCos(2.0f * CLRT_PI * u2, &c);
-    return (float3)(r * c, r * s, z);
+    float phi = 2.0f * CLRT_PI * u2;
+    return (float3)(r * cos(phi), r * sin(phi), z);
 }
 
 /* ---- Robust ray origins -----------------------------------------------------------------------

@@ -54,13 +54,13 @@ inline int EnvMap_UvToDir(int mapping, float u, float v, float3* d) {
         float r = sqrt(x * x + y * y);
         if (!(r <= 1.0f)) return 0;
         if (r <= 0.0f) { *d = (float3)(0.0f, 0.0f, -1.0f); return 1; }
-        float ct, st = Math_SinCos(CLRT_PI * r, &ct);
-        *d = (float3)(st * x / r, st * y / r, -ct);
+        float theta = CLRT_PI * r, st = sin(theta);
+        *d = (float3)(st * x / r, st * y / r, -cos(theta));
         return 1;
     }
-    float cp, sp = Math_SinCos(CLRT_PI * (2.0f * u - 1.0f), &cp);
-    float ct, st = Math_SinCos(CLRT_PI * v, &ct);
-    *d = (float3)(st * sp, ct, -st * cp);
+    float phi = CLRT_PI * (2.0f * u - 1.0f), theta = CLRT_PI * v;
+    float st = sin(theta);
+    *d = (float3)(st * sin(phi), cos(theta), -st * cos(phi));
     return 1;
 }
 
@@ -71,10 +71,10 @@ inline float EnvMap_UvToSolidAngle(int mapping, float u, float v) {
         float r = sqrt(x * x + y * y);
         if (!(r <= 1.0f)) return 0.0f;
         if (r < 1e-6f) return 1.0f / (4.0f * CLRT_PI * CLRT_PI);
-        float c, s = Math_SinCos(CLRT_PI * r, &c);
+        float s = sin(CLRT_PI * r);
         return s > 0.0f ? r / (4.0f * CLRT_PI * s) : 0.0f;
     }
-    float c, s = Math_SinCos(CLRT_PI * v, &c);
+    float s = sin(CLRT_PI * v);
     return s > 0.0f ? 1.0f / (2.0f * CLRT_PI * CLRT_PI * s) : 0.0f;
 }
 
@@ -193,8 +193,7 @@ inline int EnvDist_CellSample(const __global float* dist, int i, int j, float du
         float z = zr[j] - dv * (zr[j] - zr[j + 1]);
         float st = sqrt(fmax(0.0f, 1.0f - z * z));
         float phi = CLRT_PI * (2.0f * (((float)i + du) / (float)W) - 1.0f);
-        float cphi, sphi = Math_SinCos(phi, &cphi);
-        *dir = (float3)(st * sphi, z, -st * cphi);
+        *dir = (float3)(st * sin(phi), z, -st * cos(phi));
         *uvOut = (float2)(((float)i + du) / (float)W, acos(clamp(z, -1.0f, 1.0f)) * CLRT_INV_PI);
         float omega = 2.0f * CLRT_PI / (float)W * (zr[j] - zr[j + 1]);
         *pdf = omega > 0.0f ? p / omega : 0.0f;

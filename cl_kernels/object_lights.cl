@@ -98,14 +98,14 @@ inline float3 SphereLight_Sample(const __global Light* light, const __global flo
         float oneMinusCosMax = sin2Max / (1.0f + cosMax); /* 1 − cosθmax without cancellation */
         float oneMinusCos = u.x * oneMinusCosMax;
         float cosT = 1.0f - oneMinusCos, sinT = sqrt(fmax(0.0f, oneMinusCos * (2.0f - oneMinusCos)));
-        float cp, sp = Math_SinCos(2.0f * CLRT_PI * u.y, &cp);
+        float phi = 2.0f * CLRT_PI * u.y;
         float3 n = axis / sqrt(d2), t, b;
         makeBasis(n, &t, &b);
-        w = normalize(sinT * cp * t + sinT * sp * b + cosT * n);
+        w = normalize(sinT * cos(phi) * t + sinT * sin(phi) * b + cosT * n);
         invPdf = 2.0f * CLRT_PI * oneMinusCosMax;
     } else { /* inside the bounding sphere (an ellipsoid's): all directions */
-        float z = 1.0f - 2.0f * u.x, r = sqrt(fmax(0.0f, 1.0f - z * z)), cp, sp = Math_SinCos(2.0f * CLRT_PI * u.y, &cp);
-        w = (float3)(r * cp, r * sp, z);
+        float z = 1.0f - 2.0f * u.x, r = sqrt(fmax(0.0f, 1.0f - z * z)), phi = 2.0f * CLRT_PI * u.y;
+        w = (float3)(r * cos(phi), r * sin(phi), z);
         invPdf = 4.0f * CLRT_PI;
     }
     float t = SphereLight_Hit(data + light->objFirst, p, w);

@@ -48,8 +48,7 @@ inline TangentFrame Frame_Sphere(float3 nObj, float r, const __global float4* ob
     float phi = atan2(nObj.z, nObj.x);
     float sinTheta = sqrt(fmax(0.0f, 1.0f - nObj.y * nObj.y));
     float3 dpduObj = 2.0f * CLRT_PI * (float3)(q.z, 0.0f, -q.x);
-    float cp, sp = Math_SinCos(phi, &cp);
-    float3 dpdvObj = CLRT_PI * (float3)(q.y * cp, -r * sinTheta, q.y * sp);
+    float3 dpdvObj = CLRT_PI * (float3)(q.y * cos(phi), -r * sinTheta, q.y * sin(phi));
     TangentFrame f;
     f.dpdu = (float3)(dot(objectToWorld[0].xyz, dpduObj), dot(objectToWorld[1].xyz, dpduObj), dot(objectToWorld[2].xyz, dpduObj));
     f.dpdv = (float3)(dot(objectToWorld[0].xyz, dpdvObj), dot(objectToWorld[1].xyz, dpdvObj), dot(objectToWorld[2].xyz, dpdvObj));

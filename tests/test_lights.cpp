@@ -6,8 +6,8 @@
 // mapping (a kd = 0.5 sphere under radiance 1 shows π/2), spot/directional/area/environment
 // Light_Sample kernels against host reference evaluations at random points, the mis sampler's
 // cosine-weighted tables (each bucket's pdf integrating to one, chi-square, cells and buckets covering
-// texels and normals, the device's bucket, samples and pdfs against EnvCosineTable), Math_SinCos and
-// Env_Atan2 against libm, and (tagged [.slow],
+// texels and normals, the device's bucket, samples and pdfs against EnvCosineTable), Env_Atan2
+// against libm, and (tagged [.slow],
 // run by scripts/env_sampling_compare.sh) the relMSE of each env sampler on sunset.exr.
 #include <catch.hpp>
 
@@ -981,58 +981,6 @@ __kernel void cos_test(const __global float* own, const __global float* tab, con
         CHECK(sampleBad <= n / 1000);  // a few land in the neighbouring texel (ulps of acos between libm and PoCL)
         CHECK(pdfBad <= n / 1000);
     }
-}
-
-TEST_CASE("Math_SinCos (the warps' and env mappings' sin and cos) is within 1e-7 and 2 ulp of sin and cos", "[lights][env][cl]") {
-    const char* src = R"CLC(
-__kernel void sincos_test(const __global float* in, __global float2* out, int n) {
-    int i = get_global_id(0);
-    if (i < n) {
-        float c, s = Math_SinCos(in[i], &c);
-        out[i] = (float2)(s, c);
-    }
-}
-)CLC";
-    DeviceContext& dc = testContext();
-    auto sources = loadKernelSources({"common.cl"});
-    sources.push_back({"sincos_test.cl", src});
-    cl::Program program = buildProgramFromSources(dc, sources, {});
-    cl::Kernel k = CL_CPP(cl::Kernel(program, "sincos_test"));
-    std::vector<float> in;
-    for (int i = -700000; i <= 700000; ++i) in.push_back(float(i) * 1e-5f);  // [-7, 7]: every warp's range
-    for (int q = -16; q <= 16; ++q)  // the quadrant boundaries and multiples of π/2, and their neighbours
-        for (float x : {float(q * kPiD / 4)}) {
-            in.push_back(x);
-            in.push_back(std::nextafter(x, 10.0f));
-            in.push_back(std::nextafter(x, -10.0f));
-        }
-    for (float x : {0.0f, -0.0f, 1e-30f, -1e-30f, 1e-7f, 100.0f, -1000.0f, 5000.0f}) in.push_back(x);
-    const int n = int(in.size());
-    std::vector<dev::float2> out(n);
-    cl::Context& ctx = dc.context();
-    cl::Buffer ib = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(float) * n, in.data()));
-    cl::Buffer ob = CL_CPP(cl::Buffer(ctx, CL_MEM_WRITE_ONLY, sizeof(dev::float2) * n));
-    k.setArg(0, ib); k.setArg(1, ob); k.setArg(2, n);
-    CL_CPP(dc.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(roundUp(n, 64)), cl::NDRange(64)));
-    CL_CPP(dc.queue().enqueueReadBuffer(ob, CL_TRUE, 0, sizeof(dev::float2) * n, out.data()));
-    double worstAbs = 0, worstUlp = 0;
-    int bad = 0;
-    for (int i = 0; i < n; ++i) {
-        const double x = in[i], got[2] = {out[i].x, out[i].y}, want[2] = {std::sin(x), std::cos(x)};
-        for (int j = 0; j < 2; ++j) {
-            const double d = std::fabs(got[j] - want[j]);
-            const float w = float(std::fabs(want[j]));
-            const double ulp = double(std::nextafter(w, 2.0f)) - double(w);
-            worstAbs = std::max(worstAbs, d);
-            if (std::fabs(want[j]) > 1e-3) worstUlp = std::max(worstUlp, d / ulp);
-            if (!(d <= 1e-7) || (std::fabs(want[j]) > 1e-3 && d > 2 * ulp)) {
-                if (bad++ < 5) FAIL_CHECK("x = " << in[i] << (j ? " cos " : " sin ") << got[j] << " vs " << want[j] << ": off by " << d);
-            }
-        }
-    }
-    CHECK(bad == 0);
-    WARN("Math_SinCos: largest error " << worstAbs << " absolute, " << worstUlp << " ulp where |value| > 1e-3, over "
-                                       << n << " arguments");
 }
 
 TEST_CASE("env multi-sample MIS (EnvLight_SampleMis) is unbiased: cos-weighted sum matches quadrature", "[lights][env][cl]") {
