@@ -824,18 +824,25 @@ std::vector<NamedMap> cosineTestMaps() {
     return maps;
 }
 
-const int kCosineTestBuckets[] = {0, 66, 77, 143, 30, 100};  // corners (downward), near the top, sides
+// Buckets: a downward corner, near the top, a side (and, on the small maps, three more).
+const int kCosineTestBuckets[] = {0, 66, 30, 77, 143, 100};
 
-TEST_CASE("env cosine tables: each bucket's pdf integrates to one, samples follow it (chi-square), pdfs agree", "[lights][env]") {
+// Host only (tagged [env], not [lights]: the Intel pass of scripts/test_implementations.sh need not repeat it).
+TEST_CASE("env cosine tables: each bucket's pdf integrates to one, samples follow it (chi-square), pdfs agree", "[env]") {
     for (const NamedMap& nm : cosineTestMaps()) {
         const HostMap& m = nm.map;
         const EnvCosineTable table(m.view, m.dist);
         const int W = m.dist.width, H = m.dist.height;
-        for (int b : kCosineTestBuckets) {
+        const bool big = W > 300;  // the shared maps: 3 buckets, the quadrature fine enough for sunrise's sun
+        for (int bi = 0; bi < (big ? 3 : 6); ++bi) {
+            const int b = kCosineTestBuckets[bi];
             INFO(nm.name << ", bucket " << b);
-            const int M = W * H == 1 ? 256 : (W > 300 ? 2048 : 1024);  // sunrise.exr: 1.012-1.015 at 1024 (its sun)
-            double integral = integrateSphere([&](const Vec3& w) { return double(table.pdf(b, w)); }, M);
-            CHECK(integral == Approx(1.0).epsilon(0.01));
+            // sunrise.exr: 1.012-1.015 at M = 1024 (its sun); the pattern maps: within 1e-4 at 512
+            const int M = W * H == 1 ? 256 : (big ? 2048 : 512);
+            if (!big || bi == 1) {
+                double integral = integrateSphere([&](const Vec3& w) { return double(table.pdf(b, w)); }, M);
+                CHECK(integral == Approx(1.0).epsilon(0.01));
+            }
             const int BU = std::min(W, 32), BV = std::min(H, 16);
             std::vector<double> expected(BU * BV, 0.0), observed(BU * BV, 0.0);
             double mass = 0;
@@ -846,7 +853,7 @@ TEST_CASE("env cosine tables: each bucket's pdf integrates to one, samples follo
                     mass += p;
                 }
             CHECK(mass == Approx(1.0).epsilon(1e-4));
-            const int N = 200000;
+            const int N = 100000;
             std::mt19937 rng(23 + b);
             std::uniform_real_distribution<float> uni(0.0f, 0.99999994f);
             int failed = 0, pdfMismatch = 0;
@@ -876,7 +883,7 @@ TEST_CASE("env cosine tables: each bucket's pdf integrates to one, samples follo
     }
 }
 
-TEST_CASE("env cosine tables: cells cover the texels, buckets cover the sphere of normals", "[lights][env]") {
+TEST_CASE("env cosine tables: cells cover the texels, buckets cover the sphere of normals", "[env]") {
     for (int texels : {1, 19, 37, 64, 101, 300, 1000, 1024})
         for (int cells : {1, 7, 64, 128}) {
             if (cells > texels) continue;
