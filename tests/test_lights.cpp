@@ -831,7 +831,7 @@ const int kCosineTestBuckets[] = {0, 66, 30, 77, 143, 100};
 TEST_CASE("env cosine tables: each bucket's pdf integrates to one, samples follow it (chi-square), pdfs agree", "[env]") {
     for (const NamedMap& nm : cosineTestMaps()) {
         const HostMap& m = nm.map;
-        const EnvCosineTable table(m.view, m.dist);
+        const EnvCosineTable table(m.dist);
         const int W = m.dist.width, H = m.dist.height;
         const bool big = W > 300;  // the shared maps: 3 buckets, the quadrature fine enough for sunrise's sun
         for (int bi = 0; bi < (big ? 3 : 6); ++bi) {
@@ -942,7 +942,7 @@ __kernel void cos_test(const __global float* own, const __global float* tab, con
     for (const NamedMap& nm : cosineTestMaps()) {
         INFO(nm.name);
         const HostMap& m = nm.map;
-        const EnvCosineTable table(m.view, m.dist);
+        const EnvCosineTable table(m.dist);
         std::vector<dev::float4> in;
         std::mt19937 rng(31);
         std::uniform_real_distribution<float> uni(0.0f, 0.99999994f), sym(-1.0f, 1.0f);

@@ -176,14 +176,12 @@ static void writeTables(EnvDistribution& d, int W, int H, int mapping, const std
     for (size_t c = 0; c < size_t(W) * H; ++c) d.data[fracOff + c] = float(frac[c]);
 }
 
-// Per cell (i, j) of the map: the integral of the bilinear reconstruction's luminance per unit (u, v)
-// area, the cell's solid angle (the part inside the domain) and that part's share of its area.
-struct CellLuminance {
-    std::vector<double> lum, omega, frac;
-    double floorLum = 1.0;  // 1e-3 of the mean luminance (1 for a black map)
-};
-
-static CellLuminance cellLuminance(const EnvMapView& map, int W, int H) {
+EnvDistribution buildEnvDistribution(const EnvMapView& map) {
+    EnvDistribution d;
+    const int W = std::max(1, map.width), H = std::max(1, map.height);
+    d.width = W;
+    d.height = H;
+    d.mapping = map.mapping;
     const bool probe = map.mapping == dev::ENV_PROBE;
     auto lum = [&](int x, int y) {
         if (probe) x = std::clamp(x, 0, W - 1);
@@ -191,11 +189,9 @@ static CellLuminance cellLuminance(const EnvMapView& map, int W, int H) {
         y = std::clamp(y, 0, H - 1);
         return map.texels ? lumOf(map.texels[size_t(y) * W + x]) : 1.0f;
     };
+    // Integral of the bilinear reconstruction's luminance over cell (i, j), per unit (u, v) area.
     const float k3[3] = {0.125f, 0.75f, 0.125f};
-    CellLuminance c;
-    c.lum.resize(size_t(W) * H);
-    c.omega.resize(size_t(W) * H);
-    c.frac.resize(size_t(W) * H);
+    std::vector<double> cellLum(size_t(W) * H), omega(size_t(W) * H), frac(size_t(W) * H);
     double lumSum = 0;
     size_t lumCount = 0;
     for (int j = 0; j < H; ++j)
@@ -203,45 +199,32 @@ static CellLuminance cellLuminance(const EnvMapView& map, int W, int H) {
             double s = 0;
             for (int dy = -1; dy <= 1; ++dy)
                 for (int dx = -1; dx <= 1; ++dx) s += double(k3[dx + 1]) * k3[dy + 1] * lum(i + dx, j + dy);
-            size_t k = size_t(j) * W + i;
-            c.lum[k] = s;
+            size_t c = size_t(j) * W + i;
+            cellLum[c] = s;
+            // Solid angle of the cell (the part inside the domain) and that part's share of its area.
             if (!probe) {
-                c.omega[k] = 2.0 * M_PI / W * (std::cos(M_PI * j / H) - std::cos(M_PI * (j + 1) / H));
-                c.frac[k] = 1.0;
+                omega[c] = 2.0 * M_PI / W * (std::cos(M_PI * j / H) - std::cos(M_PI * (j + 1) / H));
+                frac[c] = 1.0;
             } else {
-                probeCell(i, j, W, H, c.omega[k], c.frac[k]);
+                probeCell(i, j, W, H, omega[c], frac[c]);
             }
-            if (c.omega[k] > 0) { lumSum += s; ++lumCount; }
+            if (omega[c] > 0) { lumSum += s; ++lumCount; }
         }
-    const double mean = lumCount ? lumSum / double(lumCount) : 0.0;
-    c.floorLum = mean > 0 ? 1e-3 * mean : 1.0;
-    return c;
-}
-
-// The tables from per-cell weights (0 where a cell has no solid angle).
-static EnvDistribution tablesFromWeights(int W, int H, int mapping, const std::vector<double>& weight,
-                                         const std::vector<double>& frac) {
-    EnvDistribution d;
-    d.width = W;
-    d.height = H;
-    d.mapping = mapping;
-    std::vector<double> rowSum(H, 0.0);
+    // A floor keeps every cell with solid angle sampled (bilinear footprints, MIS-free strategies).
+    double mean = lumCount ? lumSum / double(lumCount) : 0.0;
+    double floorLum = mean > 0 ? 1e-3 * mean : 1.0;
+    std::vector<double> weight(size_t(W) * H), rowSum(H, 0.0);
     double total = 0;
     for (int j = 0; j < H; ++j) {
-        for (int i = 0; i < W; ++i) rowSum[j] += weight[size_t(j) * W + i];
+        for (int i = 0; i < W; ++i) {
+            size_t c = size_t(j) * W + i;
+            weight[c] = omega[c] > 0 ? (cellLum[c] + floorLum) * omega[c] : 0.0;
+            rowSum[j] += weight[c];
+        }
         total += rowSum[j];
     }
-    writeTables(d, W, H, mapping, weight, rowSum, total, frac);
+    writeTables(d, W, H, map.mapping, weight, rowSum, total, frac);
     return d;
-}
-
-EnvDistribution buildEnvDistribution(const EnvMapView& map) {
-    const int W = std::max(1, map.width), H = std::max(1, map.height);
-    const CellLuminance c = cellLuminance(map, W, H);
-    // A floor keeps every cell with solid angle sampled (bilinear footprints, MIS-free strategies).
-    std::vector<double> weight(size_t(W) * H);
-    for (size_t k = 0; k < weight.size(); ++k) weight[k] = c.omega[k] > 0 ? (c.lum[k] + c.floorLum) * c.omega[k] : 0.0;
-    return tablesFromWeights(W, H, map.mapping, weight, c.frac);
 }
 
 // The unit direction at point (a, b) of the octahedral square [-1, 1]^2 (y up; |a| + |b| > 1: y < 0).
@@ -291,7 +274,7 @@ double envCosineBucketRadius(int bucket) {
 
 int envCosineCellOf(int texel, int texels, int cells) { return int((int64_t(texel + 1) * cells - 1) / texels); }
 
-EnvCosineTable::EnvCosineTable(const EnvMapView& map, const EnvDistribution& own) : own_(&own) {
+EnvCosineTable::EnvCosineTable(const EnvDistribution& own) : own_(&own) {
     const int W = own.width, H = own.height;
     Wc_ = std::min(W, kEnvCosineCellsU);
     Hc_ = std::min(H, kEnvCosineCellsV);
@@ -304,8 +287,13 @@ EnvCosineTable::EnvCosineTable(const EnvMapView& map, const EnvDistribution& own
     data_[2] = float(Hc_);
     data_[3] = float(stride_);
     data_[4] = float(fine_);
-    // Each texel's weight as in the map's distribution (luminance + floor, times solid angle); each cell's sum.
-    const CellLuminance c = cellLuminance(map, W, H);
+    // Each texel's probability under the map's own distribution (its weight: luminance + floor, times
+    // solid angle); each cell's sum, and the texels' exclusive cumulative shares within it.
+    const float* marg = &own.data[4];
+    auto texelMass = [&](int x, int y) {
+        const float* cond = &own.data[4 + H + 1 + size_t(y) * (W + 1)];
+        return double(marg[y + 1] - marg[y]) * double(cond[x + 1] - cond[x]);
+    };
     std::vector<double> cellSum(size_t(Wc_) * Hc_, 0.0);
     std::vector<Vec3> centre(size_t(Wc_) * Hc_);
     for (int J = 0; J < Hc_; ++J)
@@ -315,20 +303,16 @@ EnvCosineTable::EnvCosineTable(const EnvMapView& map, const EnvDistribution& own
             float* fine = &data_[size_t(fine_) + size_t(y0) * W + size_t(x0) * (y1 - y0)];
             double sum = 0;
             for (int y = y0; y < y1; ++y)
-                for (int x = x0; x < x1; ++x) {
-                    const size_t k = size_t(y) * W + x;
-                    sum += c.omega[k] > 0 ? (c.lum[k] + c.floorLum) * c.omega[k] : 0.0;
-                }
-            double cum = 0;  // exclusive cumulative shares, texels in row-major order within the cell
+                for (int x = x0; x < x1; ++x) sum += texelMass(x, y);
+            double cum = 0;  // texels in row-major order within the cell
             for (int y = y0; y < y1; ++y)
                 for (int x = x0; x < x1; ++x) {
-                    const size_t k = size_t(y) * W + x;
                     fine[(y - y0) * w + (x - x0)] = sum > 0 ? float(cum / sum) : float((y - y0) * w + (x - x0)) / float(w * (y1 - y0));
-                    cum += c.omega[k] > 0 ? (c.lum[k] + c.floorLum) * c.omega[k] : 0.0;
+                    cum += texelMass(x, y);
                 }
             cellSum[size_t(J) * Wc_ + I] = sum;
             Vec3 d(0, 0, -1);  // the direction at the cell's centre (probe: outside the disc -> -z, weight 0 anyway)
-            envUvToDir(map.mapping, 0.5f * float(x0 + x1) / float(W), 0.5f * float(y0 + y1) / float(H), d);
+            envUvToDir(own.mapping, 0.5f * float(x0 + x1) / float(W), 0.5f * float(y0 + y1) / float(H), d);
             centre[size_t(J) * Wc_ + I] = normalize(d);
         }
     // Per bucket: the cells' weights, their sums times the largest cosine any normal of the bucket sees.

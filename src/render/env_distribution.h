@@ -92,7 +92,7 @@ int envCosineCellOf(int texel, int texels, int cells);  // the cell that holds a
 class EnvCosineTable {
   public:
     static constexpr int kHeader = 8;
-    EnvCosineTable(const EnvMapView& map, const EnvDistribution& own);  // `own`: the map's, outlives this
+    explicit EnvCosineTable(const EnvDistribution& own);  // `own`: the map's, outlives this; its masses
     const std::vector<float>& data() const { return data_; }
     // Sample / pdf over solid angle for bucket b (b < 0: the map's own distribution), as the device does.
     bool sample(int b, float u1, float u2, Vec3& dir, float& pdfSolidAngle) const;

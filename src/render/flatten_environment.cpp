@@ -22,7 +22,7 @@ void flattenEnvironmentLight(const Scene& scene, const Light& l, int lightIndex,
     d.distribution = int(ds.envDistribution.size());
     ds.envDistribution.insert(ds.envDistribution.end(), dist.data.begin(), dist.data.end());
     if (d.sampler == dev::ENV_SAMPLE_MIS) {  // light samples drawn by the shading normal's bucket
-        const EnvCosineTable table(view, dist);
+        const EnvCosineTable table(dist);
         d.envCosine = int(ds.envDistribution.size());
         ds.envDistribution.insert(ds.envDistribution.end(), table.data().begin(), table.data().end());
     }
