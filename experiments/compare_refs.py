@@ -9,7 +9,7 @@ noise alone), their ratio (~1: no change in expectation; a bias adds to it), and
 of their means. Used for issue 18's sampler change (README, "Sampler"): OLD rendered with the
 independent sampler, NEW with the stratified one.
 
-usage: scripts/compare_refs.py OLD_REFS NEW_REFS        (numpy; e.g. build/bench-venv/bin/python)
+usage: experiments/compare_refs.py OLD_REFS NEW_REFS        (numpy; e.g. build/bench-venv/bin/python)
 """
 import os
 import sys

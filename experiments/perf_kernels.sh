@@ -5,10 +5,10 @@
 # EnvMap_Lookup, ...), so perf names the device functions that PoCL did not inline; the host's share
 # (parse, BVH build) is listed too. `perf annotate -i OUT/perf.data -s FUNCTION --stdio` then shows the
 # instructions (a load's consumer with most of a function's samples: a cache miss).
-# usage: scripts/perf_kernels.sh SCENE [SPP] [OUT] [-- extra clrt render options]
+# usage: experiments/perf_kernels.sh SCENE [SPP] [OUT] [-- extra clrt render options]
 #        SCENE: a scene file, or the name of a bench/bench.py scene (tt_diffuse, sphere_env_light_courtyard,
 #        ...: its copy at the bench's resolution is made in OUT/scene with build/bench-venv's python, as
-#        scripts/profile_stages.py does). Default SPP 32, OUT build/perf.
+#        experiments/profile_stages.py does). Default SPP 32, OUT build/perf.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scene=$1; spp=${2:-32}; out=${3:-build/perf}

@@ -2,7 +2,7 @@
 # relmse_vs_ref.py — relMSE of clrt renders against a bench reference (bench/results/refs/<scene>-.../
 # half_a.npy, half_b.npy), for kernel variants side by side, and a bias check. The same relMSE as
 # bench/bench.py (mean of (x - ref)^2 / (ref^2 + 0.01)). Usage (the bench venv):
-#   build/bench-venv/bin/python scripts/relmse_vs_ref.py SCENE REFDIR --spp 16 --seeds 3 [--kernels A,B]
+#   build/bench-venv/bin/python experiments/relmse_vs_ref.py SCENE REFDIR --spp 16 --seeds 3 [--kernels A,B]
 #       renders seeds 1..N with build/clrt (the fused pipeline); --kernels: CLRT_KERNEL_DIR values
 #       (directories holding cl_kernels/ and src/shared/ copies), one column each.
 #   ... --bias --spp 512: two renders (seeds 101, 102) averaged; prints relMSE against the reference and the

@@ -4,7 +4,7 @@ scripts/bench does: bench/bench.py's SCENES, resolution reduced unless --full) `
 the median device time per kernel stage, the sum of kernels and the render stage (wall time of the
 render on the host), for each clrt binary given (e.g. before and after a change).
 
-usage: build/bench-venv/bin/python scripts/profile_stages.py [--spp 16] [--runs 3] [--scenes tt_diffuse,sphere_env_light_courtyard]
+usage: build/bench-venv/bin/python experiments/profile_stages.py [--spp 16] [--runs 3] [--scenes tt_diffuse,sphere_env_light_courtyard]
        [--full] [--clrt build/clrt[,other/clrt]] [--env-sampling S] [--pipelines wavefront,fused]
        (with build/bench-venv/bin/python). Every (binary, pipeline) variant is run once per round, the
        rounds interleaved, so that the machine's drift hits them alike; stages with no time are left out.

@@ -7,7 +7,7 @@ waited for a tile id and took to send a tile, rank 0's time serving the others, 
 per-tile overhead (one process, --part 1/1 at several tile sizes). Checks that every run wrote the
 same image bytes. Standard library only.
 
-usage: python3 scripts/mpi_scaling.py [--runs 3] [--ranks 1,2] [--threads 1] [--scene scenes/demo.xml]
+usage: python3 experiments/mpi_scaling.py [--runs 3] [--ranks 1,2] [--threads 1] [--scene scenes/demo.xml]
                                       [--resolution 640x480] [--spp 16] [--device cpu]
 """
 import argparse

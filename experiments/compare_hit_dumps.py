@@ -12,7 +12,7 @@ renumbers them; the same triangle gives the same t, u, v). Counts:
           and the rest (a real difference);
   shadow, diffuse: rays that differ: those whose camera ray's hit moved (so the ray itself moved),
           ties (diffuse: same t, another u, v) and the rest (a real difference).
-usage: scripts/compare_hit_dumps.py OLD NEW CAMERA_RAYS   (standard library only)
+usage: experiments/compare_hit_dumps.py OLD NEW CAMERA_RAYS   (standard library only)
 """
 import struct
 import sys

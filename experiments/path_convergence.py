@@ -11,7 +11,7 @@ against log spp is fitted by least squares and must lie within 10% of -1.
 --variant lowered [--gap G]: the scene with its LightMesh moved G (default 0.05) down, off the ceiling (the NEE check: the
 course's area sampling of a light that touches the ceiling has infinite variance, see README).
 Writes docs/path_convergence.png (log-log plot) and prints one line per camera.
-Usage: build/venv/bin/python scripts/path_convergence.py [--size 64] [--block 4] [--repeats 2]
+Usage: build/venv/bin/python experiments/path_convergence.py [--size 64] [--block 4] [--repeats 2]
        [--spp 4,16,64,256] [--device cpu] [--clrt build/clrt] [--only MIS,NEE] [--variant lowered [--gap 0.05]]"""
 import argparse
 import os
@@ -20,8 +20,8 @@ import sys
 
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import exr_stats  # noqa: E402
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scripts"))
+import exr_stats  # noqa: E402  (scripts/exr_stats.py)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENE = os.path.join(ROOT, "..", "shared", "scenes", "hw6", "cornellbox_jaroslav_path_diffuse.xml")

@@ -6,7 +6,7 @@
 # E(n) = ∫ L(w) max(0, n.w) dw from N samples, over 300 repetitions: independent uniforms, and scipy's
 # scrambled Sobol points (a (0,2)-net), each through both warps. Reads an EXR lat-long map (W = 2H,
 # powers of two). Usage (the bench venv, which sees Debian packages, plus Debian python3-scipy):
-#   build/bench-venv/bin/python scripts/env_warp_sim.py ../shared/envmaps/courtyard.exr 16
+#   build/bench-venv/bin/python experiments/env_warp_sim.py ../shared/envmaps/courtyard.exr 16
 # Printed 2026-11-30 (courtyard, 16 samples): net variance quad/rowcol 1.20 (n = up), 0.52, 0.65, 0.50,
 # 0.53; at 64 samples 2.94 (up), 0.12, 0.36, 0.38, 0.54 (README "Tried for time per sample ...").
 import sys, numpy as np, OpenEXR, Imath

@@ -8,7 +8,7 @@ shadow kernel, which includes PoCL's compile of it), and prints per scene, threa
 of clrt Mrays/s (old, new), of new/old, and of clrt/Embree (each process times Embree on the same rays
 right after clrt, so that ratio is the less load-sensitive figure). Standard library only.
 
-usage: scripts/ray_bench_ab.py OLD_RAY_BENCH NEW_RAY_BENCH [--rounds 5] [--runs 3] [--threads 1,2] [--device cpu]
+usage: experiments/ray_bench_ab.py OLD_RAY_BENCH NEW_RAY_BENCH [--rounds 5] [--runs 3] [--threads 1,2] [--device cpu]
        [--scenes cube_point,veachAjar,tt]
 """
 import argparse

@@ -10,7 +10,7 @@
 #   centre+texel: the same with the cosine to the bucket's centre;
 #   centre coarse: the centre's cosine, uniform within cells of f x f texels (no texel step).
 # Prints, per variant, the variance ratio map/variant: min and median over the normals (> 1: better).
-# Usage (the bench venv): build/bench-venv/bin/python scripts/env_cosine_sim.py ../shared/envmaps/courtyard.exr
+# Usage (the bench venv): build/bench-venv/bin/python experiments/env_cosine_sim.py ../shared/envmaps/courtyard.exr
 # Printed 2026-11-30 for the 8 maps of ../shared/envmaps, min / median over the normals:
 #   cone+texel (k = 12, floor 0.01, cells of 8 x 8): courtyard 3.19/4.31, sunset 1.80/2.83, city 1.92/2.62,
 #     night 1.40/4.85, sunrise 1.41/2.25, interior 1.98/3.90, studio 1.79/7.18, forest 1.90/3.76;
