@@ -10,7 +10,7 @@ at low spp). For an unbiased estimator of finite variance it falls as 1/spp: the
 against log spp is fitted by least squares and must lie within 10% of -1.
 --variant lowered [--gap G]: the scene with its LightMesh moved G (default 0.05) down, off the ceiling (the NEE check: the
 course's area sampling of a light that touches the ceiling has infinite variance, see README).
-Writes docs/path_convergence.png (log-log plot) and prints one line per camera.
+Writes docs/studies/img/path_convergence.png (log-log plot) and prints one line per camera.
 Usage: build/venv/bin/python experiments/path_convergence.py [--size 64] [--block 4] [--repeats 2]
        [--spp 4,16,64,256] [--device cpu] [--clrt build/clrt] [--only MIS,NEE] [--variant lowered [--gap 0.05]]"""
 import argparse
@@ -47,7 +47,7 @@ def main():
     ap.add_argument("--clrt", default=os.path.join(ROOT, "build", "clrt"))
     ap.add_argument("--out", default=os.path.join(ROOT, "build", "path_convergence"))
     ap.add_argument("--only", default="", help="comma list of labels to run (default: all)")
-    ap.add_argument("--plot", default=os.path.join(ROOT, "docs", "path_convergence.png"))
+    ap.add_argument("--plot", default=os.path.join(ROOT, "docs", "studies", "img", "path_convergence.png"))
     ap.add_argument("--block", type=int, default=4)
     ap.add_argument("--repeats", type=int, default=2)
     ap.add_argument("--variant", default="", help="'lowered': the LightMesh --gap below the ceiling")
