@@ -6,7 +6,7 @@ independent high-spp reference (two halves, importance sampling), and prints rel
 ratio to the best single strategy at equal spp, and at equal time (relMSE x render s).
 
 usage: build/bench-venv/bin/python experiments/env_mis_compare.py [--spp 16] [--runs 3] [--ref-spp 1024]
-       [--maps courtyard,night,...] [--res 96x72] [--out docs/env_mis.md]
+       [--maps courtyard,night,...] [--res 96x72] [--out FILE.md]
 Needs build/clrt and numpy + OpenEXR (scripts/bench's venv has both).
 """
 import argparse
