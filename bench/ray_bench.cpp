@@ -35,7 +35,7 @@
 #include "cl/kernel_args.h"
 #include "cl/program.h"
 #include "cl/scene_buffers.h"
-#include "render/device_scene.h"
+#include "flatten/device_scene.h"
 #include "scene/scene_loader.h"
 #include "util/error.h"
 

@@ -1,6 +1,6 @@
 // output.cpp — camera outputs (.png / .exr + tone-mapped .png) (see output.h). Tone mapping runs on the OpenCL device through TonemapDevice while the EXR is
 // written on a second thread; all files of a camera are renamed into place together at the end.
-#include "render/output.h"
+#include "output/output.h"
 
 #include <cctype>
 #include <chrono>
@@ -13,7 +13,7 @@
 #include <thread>
 #include <utility>
 
-#include "render/tonemap_device.h"
+#include "output/tonemap_device.h"
 #include "util/error.h"
 
 namespace clrt {

@@ -1,11 +1,11 @@
 // Flattening of the scene model into device arrays (see device_scene.h): the driver flattenScene(),
 // whose parts live one domain per file (flatten.h); the feature set's -D flags; camera parameters.
-#include "render/device_scene.h"
+#include "flatten/device_scene.h"
 
 #include <algorithm>
 #include <chrono>
 
-#include "render/flatten.h"
+#include "flatten/flatten.h"
 #include "shared/type_tables.h"
 
 namespace clrt {

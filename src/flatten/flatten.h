@@ -11,7 +11,7 @@
 #include <map>
 #include <vector>
 
-#include "render/device_scene.h"
+#include "flatten/device_scene.h"
 
 namespace clrt {
 
