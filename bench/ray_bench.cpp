@@ -35,7 +35,7 @@
 #include "cl/kernel_args.h"
 #include "cl/program.h"
 #include "cl/scene_buffers.h"
-#include "render/device_scene.h"
+#include "flatten/device_scene.h"
 #include "scene/scene_loader.h"
 #include "util/error.h"
 
@@ -79,37 +79,39 @@ struct RaySet {
     std::vector<dev::Ray> rays;
 };
 
-}  // namespace
+double secondsSince(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
 
-int main(int argc, char** argv) {
-    try {
-        if (argc < 2) {
-            std::fprintf(stderr, "usage: ray_bench SCENE [--runs N] [--device SPEC] [--threads T]\n");
-            return 1;
-        }
-        std::string scenePath = argv[1], deviceSpec = "cpu", dumpPath, embreeConfig;
-        int runs = 5, threads = 2;
-        bool threadsGiven = false;
-        for (int i = 2; i + 1 < argc; i += 2) {
-            std::string o = argv[i];
-            if (o == "--runs") runs = std::max(1, std::atoi(argv[i + 1]));
-            else if (o == "--device") deviceSpec = argv[i + 1];
-            else if (o == "--threads") threads = std::max(1, std::atoi(argv[i + 1])), threadsGiven = true;
-            else if (o == "--dump") dumpPath = argv[i + 1];
-            else if (o == "--embree-config") embreeConfig = argv[i + 1];
-        }
-        if (threadsGiven) pinToCpus(threads);
-        FILE* dump = dumpPath.empty() ? nullptr : std::fopen(dumpPath.c_str(), "wb");
-        if (!dumpPath.empty() && !dump) throw Error("cannot write " + dumpPath);
-        Scene scene = loadScene(scenePath);
-        DeviceScene ds = flattenScene(scene);
+struct Options {
+    std::string scenePath, deviceSpec = "cpu", dumpPath, embreeConfig;
+    int runs = 5, threads = 2;
+    bool threadsGiven = false;
+};
+
+Options parseArgs(int argc, char** argv) {
+    Options o;
+    o.scenePath = argv[1];
+    for (int i = 2; i + 1 < argc; i += 2) {
+        std::string a = argv[i];
+        if (a == "--runs") o.runs = std::max(1, std::atoi(argv[i + 1]));
+        else if (a == "--device") o.deviceSpec = argv[i + 1];
+        else if (a == "--threads") o.threads = std::max(1, std::atoi(argv[i + 1])), o.threadsGiven = true;
+        else if (a == "--dump") o.dumpPath = argv[i + 1];
+        else if (a == "--embree-config") o.embreeConfig = argv[i + 1];
+    }
+    return o;
+}
+
+// Embree's side: the scene's world-space triangles in one Embree scene, traced with the single-ray
+// API on `threads` threads.
+class EmbreeTracer {
+public:
+    EmbreeTracer(const DeviceScene& ds, int threads, const std::string& config) : threads_(threads) {
         const int numTris = ds.params.numTriangles;
-        if (ds.params.numSpheres > 0) std::fprintf(stderr, "note: spheres are ignored by this benchmark\n");
-
-        // ---- Embree scene: the same world-space triangles.
-        RTCDevice edev = rtcNewDevice(("threads=" + std::to_string(threads) + (embreeConfig.empty() ? "" : "," + embreeConfig)).c_str());
-        RTCScene escene = rtcNewScene(edev);
-        RTCGeometry geom = rtcNewGeometry(edev, RTC_GEOMETRY_TYPE_TRIANGLE);
+        dev_ = rtcNewDevice(("threads=" + std::to_string(threads) + (config.empty() ? "" : "," + config)).c_str());
+        scene_ = rtcNewScene(dev_);
+        RTCGeometry geom = rtcNewGeometry(dev_, RTC_GEOMETRY_TYPE_TRIANGLE);
         float* vb = (float*)rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
                                                     size_t(numTris) * 3);
         unsigned* ib = (unsigned*)rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
@@ -125,191 +127,260 @@ int main(int argc, char** argv) {
             }
         }
         rtcCommitGeometry(geom);
-        rtcAttachGeometry(escene, geom);
+        rtcAttachGeometry(scene_, geom);
         rtcReleaseGeometry(geom);
         auto tb = std::chrono::steady_clock::now();
-        rtcCommitScene(escene);
-        double embreeBuild = std::chrono::duration<double>(std::chrono::steady_clock::now() - tb).count();
+        rtcCommitScene(scene_);
+        buildSeconds = secondsSince(tb);
+    }
+    ~EmbreeTracer() {
+        rtcReleaseScene(scene_);
+        rtcReleaseDevice(dev_);
+    }
+    EmbreeTracer(const EmbreeTracer&) = delete;
+    EmbreeTracer& operator=(const EmbreeTracer&) = delete;
 
-        auto traceEmbree = [&](const std::vector<dev::Ray>& rays, bool shadow, std::vector<int>& prim) {
-            prim.assign(rays.size(), -1);
-            std::atomic<size_t> next{0};
-            auto work = [&]() {
-                RTCIntersectContext ctx;
-                for (;;) {
-                    size_t b = next.fetch_add(1024);
-                    if (b >= rays.size()) break;
-                    size_t e = std::min(rays.size(), b + 1024);
-                    for (size_t i = b; i < e; ++i) {
-                        rtcInitIntersectContext(&ctx);
-                        const dev::Ray& r = rays[i];
-                        RTCRayHit rh;
-                        rh.ray.org_x = r.origin.x; rh.ray.org_y = r.origin.y; rh.ray.org_z = r.origin.z;
-                        rh.ray.dir_x = r.direction.x; rh.ray.dir_y = r.direction.y; rh.ray.dir_z = r.direction.z;
-                        rh.ray.tnear = 0; rh.ray.tfar = r.direction.w; rh.ray.mask = ~0u; rh.ray.flags = 0; rh.ray.time = 0;
-                        if (shadow) {
-                            rtcOccluded1(escene, &ctx, &rh.ray);
-                            prim[i] = rh.ray.tfar < 0 ? 1 : -1;
-                        } else {
-                            rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-                            rtcIntersect1(escene, &ctx, &rh);
-                            prim[i] = rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? -1 : int(rh.hit.primID);
-                        }
-                    }
-                }
-            };
-            std::vector<std::thread> ts;
-            for (int t = 0; t < threads; ++t) ts.emplace_back(work);
-            for (auto& t : ts) t.join();
+    // prim[i]: the primitive ray i hits (closest), or 1 if it is occluded (shadow); -1 for a miss.
+    void trace(const std::vector<dev::Ray>& rays, bool shadow, std::vector<int>& prim) const {
+        prim.assign(rays.size(), -1);
+        std::atomic<size_t> next{0};
+        auto work = [&]() {
+            for (;;) {
+                size_t b = next.fetch_add(1024);
+                if (b >= rays.size()) break;
+                size_t e = std::min(rays.size(), b + 1024);
+                for (size_t i = b; i < e; ++i) prim[i] = traceOne(rays[i], shadow);
+            }
         };
+        std::vector<std::thread> ts;
+        for (int t = 0; t < threads_; ++t) ts.emplace_back(work);
+        for (auto& t : ts) t.join();
+    }
 
-        // ---- clrt: intersection program and buffers.
-        DeviceInfo di = selectDevices(deviceSpec).front();
-        DeviceContext dc(di);
-        cl::Program prog = buildProgram(dc, KernelProgram::Intersect, ds.features.defines());
-        KernelArgs kClosest(prog, "intersect_closest"), kShadow(prog, "intersect_shadow");
-        auto upload = [&](auto& v) {
-            using T = typename std::decay_t<decltype(v)>::value_type;
-            return CL_CPP(cl::Buffer(dc.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), v.data()));
-        };
-        // The scene arrays as the renderer uploads them (huge-page host memory on CPU devices, cl/scene_buffers.h).
-        SceneBufferUploader sceneUpload(dc.context(), (di.type & CL_DEVICE_TYPE_CPU) != 0);
-        cl::Buffer nodes = sceneUpload.upload(ds.bvh4.nodes), leaves = sceneUpload.upload(ds.bvh4.leaves),
-                   tris = sceneUpload.upload(ds.triangles), sph = sceneUpload.upload(ds.spheres);
-        cl::Buffer planes = sceneUpload.upload(ds.planes);
+    double buildSeconds = 0;
+
+private:
+    int traceOne(const dev::Ray& r, bool shadow) const {
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        RTCRayHit rh;
+        rh.ray.org_x = r.origin.x; rh.ray.org_y = r.origin.y; rh.ray.org_z = r.origin.z;
+        rh.ray.dir_x = r.direction.x; rh.ray.dir_y = r.direction.y; rh.ray.dir_z = r.direction.z;
+        rh.ray.tnear = 0; rh.ray.tfar = r.direction.w; rh.ray.mask = ~0u; rh.ray.flags = 0; rh.ray.time = 0;
+        if (shadow) {
+            rtcOccluded1(scene_, &ctx, &rh.ray);
+            return rh.ray.tfar < 0 ? 1 : -1;
+        }
+        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(scene_, &ctx, &rh);
+        return rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? -1 : int(rh.hit.primID);
+    }
+
+    int threads_;
+    RTCDevice dev_;
+    RTCScene scene_;
+};
+
+// clrt's side: the intersection program and the scene arrays on one OpenCL device, planes left
+// out (Embree has none).
+class ClrtTracer {
+public:
+    ClrtTracer(const DeviceScene& ds, const std::string& deviceSpec, FILE* dump)
+        : di_(selectDevices(deviceSpec).front()), dc_(di_), dump_(dump),
+          // The scene arrays as the renderer uploads them (huge-page host memory on CPU devices,
+          // cl/scene_buffers.h); the uploader owns that memory, so it lives as long as the buffers.
+          sceneUpload_(dc_.context(), (di_.type & CL_DEVICE_TYPE_CPU) != 0) {
+        prog_ = buildProgram(dc_, KernelProgram::Intersect, ds.features.defines());
+        kClosest_ = KernelArgs(prog_, "intersect_closest");
+        kShadow_ = KernelArgs(prog_, "intersect_shadow");
+        // Kept as members: a kernel argument does not keep its buffer alive.
+        scene_ = {sceneUpload_.upload(ds.bvh4.nodes), sceneUpload_.upload(ds.bvh4.leaves),
+                  sceneUpload_.upload(ds.triangles), sceneUpload_.upload(ds.spheres)};
+        scene_.push_back(sceneUpload_.upload(ds.planes));
         if (ds.params.numPlanes > 0) std::fprintf(stderr, "note: planes are ignored by this benchmark\n");
         dev::SceneParams sp = ds.params;
         sp.numPlanes = 0;  // planes left out (Embree has none)
-        for (KernelArgs* k : {&kClosest, &kShadow})
-            k->set("scene", sp).set("nodes", nodes).set("leaves", leaves).set("tris", tris).set("spheres", sph)
-                .set("planes", planes);
-        auto traceClrt = [&](const std::vector<dev::Ray>& rays, bool shadow, std::vector<int>& prim) {
-            const int n = int(rays.size());
-            prim.assign(rays.size(), -1);
-            cl::CommandQueue& q = dc.queue();
-            const size_t local = std::getenv("CLRT_LOCAL_SIZE") ? size_t(std::atoi(std::getenv("CLRT_LOCAL_SIZE"))) : 64;
-            const size_t global = roundUp(rays.size(), local);
-            std::vector<int> queueLength{n};  // the kernels read the queue length on the device
-            cl::Buffer cb = upload(queueLength);
-            if (!shadow) {
-                cl::Buffer rb = upload(const_cast<std::vector<dev::Ray>&>(rays));
-                cl::Buffer hb = CL_CPP(cl::Buffer(dc.context(), CL_MEM_READ_WRITE, sizeof(dev::Hit) * rays.size()));
-                kClosest.set("rays", rb).set("hits", hb).set("queueCount", cb);
-                CL_CPP(q.finish());
-                auto t0 = std::chrono::steady_clock::now();
-                CL_CPP(q.enqueueNDRangeKernel(kClosest.ready(), cl::NullRange, cl::NDRange(global), cl::NDRange(local)));
-                CL_CPP(q.finish());
-                double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-                std::vector<dev::Hit> hits(rays.size());
-                CL_CPP(q.enqueueReadBuffer(hb, CL_TRUE, 0, sizeof(dev::Hit) * hits.size(), hits.data()));
-                for (size_t i = 0; i < hits.size(); ++i) prim[i] = hits[i].prim;
-                if (dump) std::fwrite(hits.data(), sizeof(dev::Hit), hits.size(), dump);
-                return s;
-            }
-            std::vector<dev::ShadowRay> sr(rays.size());
-            for (size_t i = 0; i < rays.size(); ++i) {
-                sr[i].origin = rays[i].origin;
-                sr[i].origin.w = rays[i].direction.w;
-                sr[i].direction = rays[i].direction;
-                sr[i].contribution = {1, 1, 1, 0};
-            }
-            cl::Buffer sb = upload(sr);
-            kShadow.set("shadows", sb).set("queueCount", cb).set("raysPerPath", 1);
-            CL_CPP(q.finish());
-            auto t0 = std::chrono::steady_clock::now();
-            CL_CPP(q.enqueueNDRangeKernel(kShadow.ready(), cl::NullRange, cl::NDRange(global), cl::NDRange(local)));
-            CL_CPP(q.finish());
-            double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-            CL_CPP(q.enqueueReadBuffer(sb, CL_TRUE, 0, sizeof(dev::ShadowRay) * sr.size(), sr.data()));
-            for (size_t i = 0; i < sr.size(); ++i) prim[i] = sr[i].contribution.x == 0 ? 1 : -1;
-            if (dump) std::fwrite(sr.data(), sizeof(dev::ShadowRay), sr.size(), dump);
-            return s;
-        };
+        for (KernelArgs* k : {&kClosest_, &kShadow_})
+            k->set("scene", sp).set("nodes", scene_[0]).set("leaves", scene_[1]).set("tris", scene_[2])
+                .set("spheres", scene_[3]).set("planes", scene_[4]);
+    }
+    const DeviceInfo& device() const { return di_; }
 
-        // ---- Rays.
-        const Camera& cam = scene.cameras.at(0);
-        dev::CameraParams cp = makeCameraParams(cam);
-        RaySet camera{"camera", {}};
-        for (int y = 0; y < cam.height; ++y)
-            for (int x = 0; x < cam.width; ++x) {
-                float su = (x + 0.5f) / cam.width, sv = (y + 0.5f) / cam.height;
-                float uc = cp.nearPlane.x + (cp.nearPlane.y - cp.nearPlane.x) * su;
-                float vc = cp.nearPlane.w - (cp.nearPlane.w - cp.nearPlane.z) * sv;
-                Vec3 d = normalize(cam.u * uc + cam.v * vc - cam.w * cam.nearDistance);
-                camera.rays.push_back({{cam.position.x, cam.position.y, cam.position.z, 0}, {d.x, d.y, d.z, INFINITY}});
-            }
-        std::vector<int> camPrim;
-        traceClrt(camera.rays, false, camPrim);  // also warms up the kernel
-        // Hit points -> shadow and diffuse rays.
-        Vec3 lightPos(0, 0, 0);
-        bool haveLight = false;
-        for (const dev::Light& l : ds.lights)
-            if (l.kind == dev::LIGHT_POINT || l.kind == dev::LIGHT_SPOT || l.kind == dev::LIGHT_AREA) {
-                lightPos = Vec3(l.position.x, l.position.y, l.position.z);
-                haveLight = true;
-                break;
-            }
-        Aabb world;
-        world.min = Vec3(ds.bvh.nodes[0].boundsMin.x, ds.bvh.nodes[0].boundsMin.y, ds.bvh.nodes[0].boundsMin.z);
-        world.max = Vec3(ds.bvh.nodes[0].boundsMax.x, ds.bvh.nodes[0].boundsMax.y, ds.bvh.nodes[0].boundsMax.z);
-        if (!haveLight) lightPos = Vec3(world.centroid().x, world.max.y + length(world.max - world.min), world.centroid().z);
-        RaySet shadow{"shadow", {}}, diffuse{"diffuse", {}};
-        std::mt19937 rng(7);
-        std::uniform_real_distribution<float> U(0, 1);
-        for (size_t i = 0; i < camera.rays.size(); ++i) {
-            int p = camPrim[i];
-            if (p < 0 || p >= numTris) continue;
-            const dev::Triangle& tr = ds.triangles[p];
-            Vec3 v0(tr.v0.x, tr.v0.y, tr.v0.z), v1(tr.v1.x, tr.v1.y, tr.v1.z), v2(tr.v2.x, tr.v2.y, tr.v2.z);
-            Vec3 o(camera.rays[i].origin.x, camera.rays[i].origin.y, camera.rays[i].origin.z);
-            Vec3 d(camera.rays[i].direction.x, camera.rays[i].direction.y, camera.rays[i].direction.z);
-            Vec3 n = normalize(cross(v1 - v0, v2 - v0));
-            if (dot(n, d) > 0) n = -n;
-            // Hit point: intersect the triangle's plane (good enough for generating rays).
-            float t = dot(v0 - o, n) / dot(d, n);
-            Vec3 ph = offsetOrigin(o + d * t, n);
-            Vec3 toL = lightPos - ph;
-            float dist = length(toL);
-            Vec3 l = toL / dist;
-            shadow.rays.push_back({{ph.x, ph.y, ph.z, 0}, {l.x, l.y, l.z, dist * 0.9999f}});
-            Vec3 a = std::fabs(n.x) > 0.9f ? Vec3(0, 1, 0) : Vec3(1, 0, 0);
-            Vec3 tu = normalize(cross(a, n)), tv = cross(n, tu);
-            float r1 = U(rng), r2 = U(rng), r = std::sqrt(r1), phi = 2 * float(M_PI) * r2;
-            Vec3 dd = normalize(tu * (r * std::cos(phi)) + tv * (r * std::sin(phi)) + n * std::sqrt(std::max(0.f, 1 - r1)));
-            diffuse.rays.push_back({{ph.x, ph.y, ph.z, 0}, {dd.x, dd.y, dd.z, INFINITY}});
+    // As EmbreeTracer::trace; returns the kernel's time (seconds). --dump: appends the results.
+    double trace(const std::vector<dev::Ray>& rays, bool shadow, std::vector<int>& prim) {
+        prim.assign(rays.size(), -1);
+        const size_t local = std::getenv("CLRT_LOCAL_SIZE") ? size_t(std::atoi(std::getenv("CLRT_LOCAL_SIZE"))) : 64;
+        const size_t global = roundUp(rays.size(), local);
+        std::vector<int> queueLength{int(rays.size())};  // the kernels read the queue length on the device
+        cl::Buffer cb = upload(queueLength);
+        return shadow ? traceShadow(rays, cb, global, local, prim) : traceClosest(rays, cb, global, local, prim);
+    }
+
+private:
+    template <class V> cl::Buffer upload(V& v) {
+        using T = typename V::value_type;
+        return CL_CPP(cl::Buffer(dc_.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), v.data()));
+    }
+    // Runs kernel k once over the global range; its time in seconds.
+    double timeKernel(KernelArgs& k, size_t global, size_t local) {
+        cl::CommandQueue& q = dc_.queue();
+        CL_CPP(q.finish());
+        auto t0 = std::chrono::steady_clock::now();
+        CL_CPP(q.enqueueNDRangeKernel(k.ready(), cl::NullRange, cl::NDRange(global), cl::NDRange(local)));
+        CL_CPP(q.finish());
+        return secondsSince(t0);
+    }
+    double traceClosest(const std::vector<dev::Ray>& rays, cl::Buffer& cb, size_t global, size_t local,
+                        std::vector<int>& prim) {
+        cl::Buffer rb = upload(const_cast<std::vector<dev::Ray>&>(rays));
+        cl::Buffer hb = CL_CPP(cl::Buffer(dc_.context(), CL_MEM_READ_WRITE, sizeof(dev::Hit) * rays.size()));
+        kClosest_.set("rays", rb).set("hits", hb).set("queueCount", cb);
+        double s = timeKernel(kClosest_, global, local);
+        std::vector<dev::Hit> hits(rays.size());
+        CL_CPP(dc_.queue().enqueueReadBuffer(hb, CL_TRUE, 0, sizeof(dev::Hit) * hits.size(), hits.data()));
+        for (size_t i = 0; i < hits.size(); ++i) prim[i] = hits[i].prim;
+        if (dump_) std::fwrite(hits.data(), sizeof(dev::Hit), hits.size(), dump_);
+        return s;
+    }
+    double traceShadow(const std::vector<dev::Ray>& rays, cl::Buffer& cb, size_t global, size_t local,
+                       std::vector<int>& prim) {
+        std::vector<dev::ShadowRay> sr(rays.size());
+        for (size_t i = 0; i < rays.size(); ++i) {
+            sr[i].origin = rays[i].origin;
+            sr[i].origin.w = rays[i].direction.w;
+            sr[i].direction = rays[i].direction;
+            sr[i].contribution = {1, 1, 1, 0};
         }
+        cl::Buffer sb = upload(sr);
+        kShadow_.set("shadows", sb).set("queueCount", cb).set("raysPerPath", 1);
+        double s = timeKernel(kShadow_, global, local);
+        CL_CPP(dc_.queue().enqueueReadBuffer(sb, CL_TRUE, 0, sizeof(dev::ShadowRay) * sr.size(), sr.data()));
+        for (size_t i = 0; i < sr.size(); ++i) prim[i] = sr[i].contribution.x == 0 ? 1 : -1;
+        if (dump_) std::fwrite(sr.data(), sizeof(dev::ShadowRay), sr.size(), dump_);
+        return s;
+    }
+
+    DeviceInfo di_;
+    DeviceContext dc_;
+    FILE* dump_;
+    SceneBufferUploader sceneUpload_;
+    std::vector<cl::Buffer> scene_;  // nodes, leaves, triangles, spheres, planes
+    cl::Program prog_;
+    KernelArgs kClosest_, kShadow_;
+};
+
+// One ray per pixel centre of `cam` (the camera kernel's formula).
+RaySet cameraRays(const Camera& cam) {
+    dev::CameraParams cp = makeCameraParams(cam);
+    RaySet camera{"camera", {}};
+    for (int y = 0; y < cam.height; ++y)
+        for (int x = 0; x < cam.width; ++x) {
+            float su = (x + 0.5f) / cam.width, sv = (y + 0.5f) / cam.height;
+            float uc = cp.nearPlane.x + (cp.nearPlane.y - cp.nearPlane.x) * su;
+            float vc = cp.nearPlane.w - (cp.nearPlane.w - cp.nearPlane.z) * sv;
+            Vec3 d = normalize(cam.u * uc + cam.v * vc - cam.w * cam.nearDistance);
+            camera.rays.push_back({{cam.position.x, cam.position.y, cam.position.z, 0}, {d.x, d.y, d.z, INFINITY}});
+        }
+    return camera;
+}
+
+// Where shadow rays go: the first point, spot or area light, else a point high above the scene.
+Vec3 shadowTarget(const DeviceScene& ds) {
+    for (const dev::Light& l : ds.lights)
+        if (l.kind == dev::LIGHT_POINT || l.kind == dev::LIGHT_SPOT || l.kind == dev::LIGHT_AREA)
+            return Vec3(l.position.x, l.position.y, l.position.z);
+    Aabb world;
+    world.min = Vec3(ds.bvh.nodes[0].boundsMin.x, ds.bvh.nodes[0].boundsMin.y, ds.bvh.nodes[0].boundsMin.z);
+    world.max = Vec3(ds.bvh.nodes[0].boundsMax.x, ds.bvh.nodes[0].boundsMax.y, ds.bvh.nodes[0].boundsMax.z);
+    return Vec3(world.centroid().x, world.max.y + length(world.max - world.min), world.centroid().z);
+}
+
+// From each camera-ray hit (camPrim: the triangle it hit): a shadow ray towards lightPos and a
+// cosine-distributed diffuse ray around the triangle's normal (fixed seed).
+void secondaryRays(const DeviceScene& ds, const RaySet& camera, const std::vector<int>& camPrim, Vec3 lightPos,
+                   RaySet& shadow, RaySet& diffuse) {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> U(0, 1);
+    for (size_t i = 0; i < camera.rays.size(); ++i) {
+        int p = camPrim[i];
+        if (p < 0 || p >= ds.params.numTriangles) continue;
+        const dev::Triangle& tr = ds.triangles[p];
+        Vec3 v0(tr.v0.x, tr.v0.y, tr.v0.z), v1(tr.v1.x, tr.v1.y, tr.v1.z), v2(tr.v2.x, tr.v2.y, tr.v2.z);
+        Vec3 o(camera.rays[i].origin.x, camera.rays[i].origin.y, camera.rays[i].origin.z);
+        Vec3 d(camera.rays[i].direction.x, camera.rays[i].direction.y, camera.rays[i].direction.z);
+        Vec3 n = normalize(cross(v1 - v0, v2 - v0));
+        if (dot(n, d) > 0) n = -n;
+        // Hit point: intersect the triangle's plane (good enough for generating rays).
+        float t = dot(v0 - o, n) / dot(d, n);
+        Vec3 ph = offsetOrigin(o + d * t, n);
+        Vec3 toL = lightPos - ph;
+        float dist = length(toL);
+        Vec3 l = toL / dist;
+        shadow.rays.push_back({{ph.x, ph.y, ph.z, 0}, {l.x, l.y, l.z, dist * 0.9999f}});
+        Vec3 a = std::fabs(n.x) > 0.9f ? Vec3(0, 1, 0) : Vec3(1, 0, 0);
+        Vec3 tu = normalize(cross(a, n)), tv = cross(n, tu);
+        float r1 = U(rng), r2 = U(rng), r = std::sqrt(r1), phi = 2 * float(M_PI) * r2;
+        Vec3 dd = normalize(tu * (r * std::cos(phi)) + tv * (r * std::sin(phi)) + n * std::sqrt(std::max(0.f, 1 - r1)));
+        diffuse.rays.push_back({{ph.x, ph.y, ph.z, 0}, {dd.x, dd.y, dd.z, INFINITY}});
+    }
+}
+
+// Traces `set` `runs` times on both sides and prints one table row: median Mrays/s, their ratio,
+// and how often the two agree on hit/miss and on the primitive hit.
+void compareRaySet(const RaySet& set, bool isShadow, int runs, ClrtTracer& clrt, const EmbreeTracer& embree) {
+    std::vector<double> tc, te;
+    std::vector<int> pc, pe;
+    for (int r = 0; r < runs; ++r) {
+        tc.push_back(clrt.trace(set.rays, isShadow, pc));
+        auto t0 = std::chrono::steady_clock::now();
+        embree.trace(set.rays, isShadow, pe);
+        te.push_back(secondsSince(t0));
+    }
+    size_t hitAgree = 0, primAgree = 0;
+    for (size_t i = 0; i < pc.size(); ++i) {
+        hitAgree += (pc[i] >= 0) == (pe[i] >= 0);
+        primAgree += pc[i] == pe[i];
+    }
+    double n = double(set.rays.size());
+    double mc = n / median(tc) * 1e-6, me = n / median(te) * 1e-6;
+    std::printf("%-8s %10zu %12.2f %12.2f %8.2f %9.3f%% %9.3f%%\n", set.name.c_str(), set.rays.size(), mc, me, mc / me,
+                100.0 * hitAgree / std::max(1.0, n), 100.0 * primAgree / std::max(1.0, n));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    try {
+        if (argc < 2) {
+            std::fprintf(stderr, "usage: ray_bench SCENE [--runs N] [--device SPEC] [--threads T]\n");
+            return 1;
+        }
+        const Options opt = parseArgs(argc, argv);
+        if (opt.threadsGiven) pinToCpus(opt.threads);
+        FILE* dump = opt.dumpPath.empty() ? nullptr : std::fopen(opt.dumpPath.c_str(), "wb");
+        if (!opt.dumpPath.empty() && !dump) throw Error("cannot write " + opt.dumpPath);
+        Scene scene = loadScene(opt.scenePath);
+        DeviceScene ds = flattenScene(scene);
+        if (ds.params.numSpheres > 0) std::fprintf(stderr, "note: spheres are ignored by this benchmark\n");
+        EmbreeTracer embree(ds, opt.threads, opt.embreeConfig);
+        ClrtTracer clrt(ds, opt.deviceSpec, dump);
+
+        RaySet camera = cameraRays(scene.cameras.at(0));
+        std::vector<int> camPrim;
+        clrt.trace(camera.rays, false, camPrim);  // also warms up the kernel
+        RaySet shadow{"shadow", {}}, diffuse{"diffuse", {}};
+        secondaryRays(ds, camera, camPrim, shadowTarget(ds), shadow, diffuse);
 
         std::printf("scene %s: %d triangles; clrt device: %s; Embree %d threads (BVH build %.3f s)%s\n",
-                    scenePath.c_str(), numTris, di.name.c_str(), threads, embreeBuild,
-                    threadsGiven ? "; process pinned to that many CPUs" : "");
+                    opt.scenePath.c_str(), ds.params.numTriangles, clrt.device().name.c_str(), opt.threads,
+                    embree.buildSeconds, opt.threadsGiven ? "; process pinned to that many CPUs" : "");
         std::printf("clrt BVH: %zu 4-wide nodes, %zu leaf blocks (%.2f primitives per block)\n", ds.bvh4.nodes.size(),
                     ds.bvh4.leaves.size(), double(ds.bvh.primRefs.size()) / double(std::max<size_t>(1, ds.bvh4.leaves.size())));
         std::printf("%-8s %10s %12s %12s %8s %10s %10s\n", "rays", "count", "clrt Mray/s", "embree Mray/s", "ratio",
                     "hit agree", "prim agree");
-        for (RaySet* set : {&camera, &shadow, &diffuse}) {
-            bool isShadow = set == &shadow;
-            std::vector<double> tc, te;
-            std::vector<int> pc, pe;
-            for (int r = 0; r < runs; ++r) {
-                tc.push_back(traceClrt(set->rays, isShadow, pc));
-                auto t0 = std::chrono::steady_clock::now();
-                traceEmbree(set->rays, isShadow, pe);
-                te.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-            }
-            size_t hitAgree = 0, primAgree = 0;
-            for (size_t i = 0; i < pc.size(); ++i) {
-                hitAgree += (pc[i] >= 0) == (pe[i] >= 0);
-                primAgree += pc[i] == pe[i];
-            }
-            double n = double(set->rays.size());
-            double mc = n / median(tc) * 1e-6, me = n / median(te) * 1e-6;
-            std::printf("%-8s %10zu %12.2f %12.2f %8.2f %9.3f%% %9.3f%%\n", set->name.c_str(), set->rays.size(), mc, me,
-                        mc / me, 100.0 * hitAgree / std::max(1.0, n), 100.0 * primAgree / std::max(1.0, n));
-        }
-        std::printf("(medians of %d runs)\n", runs);
+        for (const RaySet* set : {&camera, &shadow, &diffuse}) compareRaySet(*set, set == &shadow, opt.runs, clrt, embree);
+        std::printf("(medians of %d runs)\n", opt.runs);
         if (dump) std::fclose(dump);
-        rtcReleaseScene(escene);
-        rtcReleaseDevice(edev);
         return 0;
     } catch (const Error& e) {
         std::fprintf(stderr, "ray_bench: error: %s\n", e.what());

@@ -18,7 +18,7 @@
 #include "cl/check.h"
 #include "cl/program.h"
 #include "image/image.h"
-#include "render/device_scene.h"
+#include "flatten/device_scene.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
 #include "shared/type_tables.h"

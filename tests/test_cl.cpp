@@ -21,7 +21,7 @@
 #include "cl/kernel_args.h"
 #include "cl/layout_check.h"
 #include "cl/program.h"
-#include "render/device_scene.h"
+#include "flatten/device_scene.h"
 #include "shared/type_tables.h"
 #include "test_helpers.h"
 #include "util/error.h"

@@ -13,7 +13,7 @@
 #include <filesystem>
 #include <string>
 
-#include "render/device_scene.h"
+#include "flatten/device_scene.h"
 #include "render/fused_renderer.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"

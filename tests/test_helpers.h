@@ -10,8 +10,8 @@
 
 #include "cl/devices.h"
 #include "cl/program.h"
+#include "flatten/device_scene.h"
 #include "image/image.h"
-#include "render/device_scene.h"
 #include "render/renderer.h"
 #include "scene/scene.h"
 

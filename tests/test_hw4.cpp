@@ -10,7 +10,7 @@
 #include <random>
 
 #include "cl/check.h"
-#include "render/device_scene.h"
+#include "flatten/device_scene.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
 #include "test_helpers.h"

@@ -22,7 +22,7 @@
 #include <sstream>
 #include <unistd.h>
 
-#include "render/device_scene.h"
+#include "flatten/device_scene.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
 #include "test_helpers.h"

@@ -23,9 +23,9 @@
 #include <sstream>
 
 #include "cl/check.h"
+#include "flatten/device_scene.h"
+#include "flatten/env_distribution.h"
 #include "image/image_compare.h"
-#include "render/device_scene.h"
-#include "render/env_distribution.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
 #include "test_helpers.h"

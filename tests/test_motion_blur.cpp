@@ -10,7 +10,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "render/device_scene.h"
+#include "flatten/device_scene.h"
 #include "scene/scene_loader.h"
 #include "test_helpers.h"
 #include "util/error.h"

@@ -1,4 +1,4 @@
-// Object lights (LightMesh, LightSphere; cl_kernels/object_lights.cl, src/render/flatten_lights.cpp):
+// Object lights (LightMesh, LightSphere; cl_kernels/object_lights.cl, src/flatten/flatten_lights.cpp):
 // parsing and its errors; the device samplers (Light_Sample) against host references written here in
 // double precision from the scene model; per light shape, Mitsuba-style checks of the device's samples:
 // chi-square of the directions against the host pdf, the pdf integrating to one over the sphere of
@@ -18,8 +18,8 @@
 #include <sstream>
 
 #include "cl/check.h"
+#include "flatten/device_scene.h"
 #include "image/image_compare.h"
-#include "render/device_scene.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
 #include "test_helpers.h"

@@ -7,7 +7,7 @@
 
 #include <cstring>
 
-#include "render/device_scene.h"
+#include "flatten/device_scene.h"
 #include "scene/scene_loader.h"
 #include "test_helpers.h"
 

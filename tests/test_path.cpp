@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "image/image.h"
-#include "render/device_scene.h"
+#include "flatten/device_scene.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
 #include "image/image_compare.h"

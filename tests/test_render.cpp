@@ -5,7 +5,7 @@
 #include <cstring>
 #include <filesystem>
 
-#include "render/device_scene.h"
+#include "flatten/device_scene.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
 #include "test_helpers.h"

@@ -16,7 +16,7 @@
 #include "bvh/host_intersect.h"
 #include "cl/check.h"
 #include "cl/kernel_args.h"
-#include "render/device_scene.h"
+#include "flatten/device_scene.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
 #include "test_helpers.h"

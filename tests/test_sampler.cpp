@@ -13,9 +13,9 @@
 
 #include "cl/check.h"
 #include "cl/program.h"
+#include "flatten/device_scene.h"
 #include "image/image.h"
 #include "image/image_compare.h"
-#include "render/device_scene.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
 #include "test_helpers.h"

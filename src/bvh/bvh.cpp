@@ -23,70 +23,13 @@
 #include <system_error>
 #include <thread>
 
-#if defined(__SSE2__) || defined(_M_X64)
-#include <emmintrin.h>
-#define CLRT_BVH_SSE 1
-#endif
+#include "bvh/simd4.h"
 
 namespace clrt {
 namespace {
+using namespace simd4;
 
 constexpr int kMaxBins = 64;
-
-// ---- four floats (x, y, z and a fourth lane that only rides along): one SSE register where there
-// is SSE, else plain floats with the same results.
-#ifdef CLRT_BVH_SSE
-struct F4 {
-    __m128 v;
-};
-inline F4 f4(float x, float y, float z) { return {_mm_set_ps(0.f, z, y, x)}; }
-inline F4 f4(float s) { return {_mm_set_ps(0.f, s, s, s)}; }
-inline F4 load4(const float* p) { return {_mm_load_ps(p)}; }  // p 16-byte aligned
-inline F4 xyz(F4 a) { return {_mm_and_ps(a.v, _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1)))}; }  // w = 0
-inline F4 operator+(F4 a, F4 b) { return {_mm_add_ps(a.v, b.v)}; }
-inline F4 operator-(F4 a, F4 b) { return {_mm_sub_ps(a.v, b.v)}; }
-inline F4 operator*(F4 a, F4 b) { return {_mm_mul_ps(a.v, b.v)}; }
-inline F4 min4(F4 a, F4 b) { return {_mm_min_ps(a.v, b.v)}; }  // a < b ? a : b per lane
-inline F4 max4(F4 a, F4 b) { return {_mm_max_ps(a.v, b.v)}; }  // a > b ? a : b per lane
-inline void store(F4 a, float out[4]) { _mm_storeu_ps(out, a.v); }
-inline void truncate(F4 a, int out[4]) { _mm_storeu_si128((__m128i*)out, _mm_cvttps_epi32(a.v)); }
-// d = hi - lo in double (x, y, z); false if lo > hi on some axis.
-inline bool extent(F4 lo, F4 hi, double d[3]) {
-    if ((_mm_movemask_ps(_mm_cmple_ps(lo.v, hi.v)) & 7) != 7) return false;
-    __m128d xy = _mm_sub_pd(_mm_cvtps_pd(hi.v), _mm_cvtps_pd(lo.v));
-    __m128d z = _mm_sub_sd(_mm_cvtps_pd(_mm_movehl_ps(hi.v, hi.v)), _mm_cvtps_pd(_mm_movehl_ps(lo.v, lo.v)));
-    _mm_storeu_pd(d, xy);
-    _mm_store_sd(d + 2, z);
-    return true;
-}
-#else
-struct F4 {
-    float v[4];
-};
-inline F4 f4(float x, float y, float z) { return {{x, y, z, 0.f}}; }
-inline F4 f4(float s) { return {{s, s, s, 0.f}}; }
-inline F4 load4(const float* p) { return {{p[0], p[1], p[2], 0.f}}; }  // the fourth lane is never used
-inline F4 xyz(F4 a) { return {{a.v[0], a.v[1], a.v[2], 0.f}}; }
-template <class Op>
-inline F4 lanes(F4 a, F4 b, Op op) {
-    return {{op(a.v[0], b.v[0]), op(a.v[1], b.v[1]), op(a.v[2], b.v[2]), op(a.v[3], b.v[3])}};
-}
-inline F4 operator+(F4 a, F4 b) { return lanes(a, b, [](float x, float y) { return x + y; }); }
-inline F4 operator-(F4 a, F4 b) { return lanes(a, b, [](float x, float y) { return x - y; }); }
-inline F4 operator*(F4 a, F4 b) { return lanes(a, b, [](float x, float y) { return x * y; }); }
-inline F4 min4(F4 a, F4 b) { return lanes(a, b, [](float x, float y) { return x < y ? x : y; }); }
-inline F4 max4(F4 a, F4 b) { return lanes(a, b, [](float x, float y) { return x > y ? x : y; }); }
-inline void store(F4 a, float out[4]) { std::memcpy(out, a.v, sizeof a.v); }
-inline void truncate(F4 a, int out[4]) {  // as cvttps2dq: NaN and out of range give INT_MIN
-    for (int k = 0; k < 4; ++k) out[k] = std::fabs(a.v[k]) < 2147483648.f ? int(a.v[k]) : INT32_MIN;
-}
-inline bool extent(F4 lo, F4 hi, double d[3]) {
-    for (int k = 0; k < 3; ++k)
-        if (!(lo.v[k] <= hi.v[k])) return false;
-    for (int k = 0; k < 3; ++k) d[k] = double(hi.v[k]) - lo.v[k];
-    return true;
-}
-#endif
 
 // One primitive as the builder sees it: lo and hi load as one vector each, prim riding in the
 // fourth lane of lo (pad, in that of hi, stays 0).
@@ -187,6 +130,19 @@ public:
     }
 
 private:
+    // Bin of an item on each axis from c = lo + hi: int((c - lo) * scale) clamped to
+    // [0, bins - 1] (clamping before truncating gives the same; NaN lands in bin 0).
+    struct Binner {
+        F4 lo, scale, maxBin;
+        void binsOf(F4 c, int out[4]) const { truncate(min4(max4((c - lo) * scale, f4(0.f)), maxBin), out); }
+    };
+
+    // The best SAH split found so far: after bin `bin` on `axis` (-1: none), and its cost.
+    struct SplitChoice {
+        int axis = -1, bin = -1;
+        double cost = INFINITY;
+    };
+
     // Picks a split for node r; returns its axis, or -1 for a leaf. On a split, the items are
     // partitioned so that left and right are the children's ranges, boxes included.
     int split(const Range& r, int level, Range& left, Range& right) {
@@ -205,84 +161,101 @@ private:
             usable[a] = ext > 0 && std::isfinite(scale[a]);
         }
         const Binner binner{r.cbounds.lo, f4(scale[0], scale[1], scale[2]), f4(float(numBins_ - 1))};
-        int bestAxis = -1, bestBin = -1;
-        double bestCost = INFINITY;
-        if (n == 2) {
-            // Two items (over a third of the nodes): each usable axis where they fall in different
-            // bins offers the one split that parts them, at the same cost; the first such axis wins.
-            const ItemV v0(items_[r.begin]), v1(items_[r.begin + 1]);
-            int b0[4], b1[4];
-            binner.binsOf(v0.c, b0);
-            binner.binsOf(v1.c, b1);
-            for (int a = 0; a < 3 && bestAxis < 0; ++a) {
-                if (!usable[a] || b0[a] == b1[a]) continue;
-                Box x, y;
-                x.grow(v0.lo, v0.hi);
-                y.grow(v1.lo, v1.hi);
-                bestCost = x.metric(perimeter) + y.metric(perimeter);
-                bestAxis = a;
-                bestBin = std::min(b0[a], b1[a]);
-            }
-        } else if (usable[0] || usable[1] || usable[2]) {
-            for (int i = r.begin; i < r.end; ++i) {
-                ItemV v(items_[i]);
-                int b[4];
-                binner.binsOf(v.c, b);
-                for (int a = 0; a < 3; ++a) {  // unusable axes are binned too, and ignored
-                    bins_[a][b[a]].box.grow(v.lo, v.hi);
-                    bins_[a][b[a]].count++;
-                }
-            }
-            // Sweep: cost of splitting after bin i = sum of child metric * count. An empty bin
-            // changes neither side, so its split costs what the one before it does and never wins:
-            // only the nonempty bins are swept (a small node has few), and then emptied again.
-            for (int a = 0; a < 3; ++a) {
-                Bin* bins = bins_[a];
-                int used[kMaxBins], m = 0;  // the nonempty bins, in order
-                for (int i = 0; i < numBins_; i += 4) {  // by fours (bins past numBins_ stay empty)
-                    if ((bins[i].count | bins[i + 1].count | bins[i + 2].count | bins[i + 3].count) == 0)
-                        continue;
-                    for (int k = i; k < i + 4; ++k) {
-                        used[m] = k;
-                        m += bins[k].count != 0;
-                    }
-                }
-                double rightCost[kMaxBins];  // [k]: cost of bins used[k], used[k + 1], ...
-                Box acc;
-                int cnt = 0;
-                for (int k = m - 1; k > 0 && usable[a]; --k) {
-                    acc.grow(bins[used[k]].box);
-                    cnt += bins[used[k]].count;
-                    rightCost[k] = acc.metric(perimeter) * cnt;
-                }
-                acc = Box();
-                cnt = 0;
-                for (int k = 0; k < m - 1 && usable[a]; ++k) {
-                    acc.grow(bins[used[k]].box);
-                    cnt += bins[used[k]].count;
-                    double cost = acc.metric(perimeter) * cnt + rightCost[k + 1];
-                    if (cost < bestCost) { bestCost = cost; bestAxis = a; bestBin = used[k]; }
-                }
-                for (int k = 0; k < m; ++k) bins[used[k]] = Bin();
-            }
-        }
+        SplitChoice best;
+        if (n == 2)
+            best = splitOfTwo(r, binner, usable, perimeter);
+        else if (usable[0] || usable[1] || usable[2])
+            best = binnedSplit(r, binner, usable, perimeter);
 
         // ---- leaf or split?
         const double leafCost = nodeMetric * n;
-        const double splitCost = nodeMetric * opts_.traversalCost + bestCost;
-        if (n <= maxLeaf_ && !(bestAxis >= 0 && splitCost < leafCost)) return -1;
+        const double splitCost = nodeMetric * opts_.traversalCost + best.cost;
+        if (n <= maxLeaf_ && !(best.axis >= 0 && splitCost < leafCost)) return -1;
 
-        if (bestAxis >= 0) {
-            partition(r, binner, bestAxis, bestBin, left, right);
+        if (best.axis >= 0) {
+            partition(r, binner, best.axis, best.bin, left, right);
             int nl = left.end - left.begin, nr = right.end - right.begin;
             // Both children must still fit under the depth cap with median splits below them.
-            if (nl > 0 && nr > 0 && level + 1 + ceilLog2(std::max(nl, nr)) <= kMaxLevels) return bestAxis;
+            if (nl > 0 && nr > 0 && level + 1 + ceilLog2(std::max(nl, nr)) <= kMaxLevels) return best.axis;
         }
-        // ---- fallback: object median along the widest centroid axis (any order if all coincide)
+        return medianSplit(r, clo, chi, left, right);
+    }
+
+    // Two items (over a third of the nodes): each usable axis where they fall in different bins
+    // offers the one split that parts them, at the same cost; the first such axis wins.
+    SplitChoice splitOfTwo(const Range& r, const Binner& binner, const bool usable[3], bool perimeter) const {
+        SplitChoice best;
+        const ItemV v0(items_[r.begin]), v1(items_[r.begin + 1]);
+        int b0[4], b1[4];
+        binner.binsOf(v0.c, b0);
+        binner.binsOf(v1.c, b1);
+        for (int a = 0; a < 3 && best.axis < 0; ++a) {
+            if (!usable[a] || b0[a] == b1[a]) continue;
+            Box x, y;
+            x.grow(v0.lo, v0.hi);
+            y.grow(v1.lo, v1.hi);
+            best.cost = x.metric(perimeter) + y.metric(perimeter);
+            best.axis = a;
+            best.bin = std::min(b0[a], b1[a]);
+        }
+        return best;
+    }
+
+    // Bins r's items on all three axes (unusable axes are binned too, and ignored), then sweeps
+    // the usable ones for the cheapest split.
+    SplitChoice binnedSplit(const Range& r, const Binner& binner, const bool usable[3], bool perimeter) {
+        for (int i = r.begin; i < r.end; ++i) {
+            ItemV v(items_[i]);
+            int b[4];
+            binner.binsOf(v.c, b);
+            for (int a = 0; a < 3; ++a) {
+                bins_[a][b[a]].box.grow(v.lo, v.hi);
+                bins_[a][b[a]].count++;
+            }
+        }
+        SplitChoice best;
+        for (int a = 0; a < 3; ++a) sweepAxis(a, usable[a], perimeter, best);
+        return best;
+    }
+
+    // Sweep: cost of splitting after bin i = sum of child metric * count. An empty bin changes
+    // neither side, so its split costs what the one before it does and never wins: only the
+    // nonempty bins are swept (a small node has few), and then emptied again.
+    void sweepAxis(int a, bool usable, bool perimeter, SplitChoice& best) {
+        Bin* bins = bins_[a];
+        int used[kMaxBins], m = 0;  // the nonempty bins, in order
+        for (int i = 0; i < numBins_; i += 4) {  // by fours (bins past numBins_ stay empty)
+            if ((bins[i].count | bins[i + 1].count | bins[i + 2].count | bins[i + 3].count) == 0) continue;
+            for (int k = i; k < i + 4; ++k) {
+                used[m] = k;
+                m += bins[k].count != 0;
+            }
+        }
+        double rightCost[kMaxBins];  // [k]: cost of bins used[k], used[k + 1], ...
+        Box acc;
+        int cnt = 0;
+        for (int k = m - 1; k > 0 && usable; --k) {
+            acc.grow(bins[used[k]].box);
+            cnt += bins[used[k]].count;
+            rightCost[k] = acc.metric(perimeter) * cnt;
+        }
+        acc = Box();
+        cnt = 0;
+        for (int k = 0; k < m - 1 && usable; ++k) {
+            acc.grow(bins[used[k]].box);
+            cnt += bins[used[k]].count;
+            double cost = acc.metric(perimeter) * cnt + rightCost[k + 1];
+            if (cost < best.cost) { best.cost = cost; best.axis = a; best.bin = used[k]; }
+        }
+        for (int k = 0; k < m; ++k) bins[used[k]] = Bin();
+    }
+
+    // Fallback: object median along the widest centroid axis (any order if all coincide).
+    int medianSplit(const Range& r, const float clo[4], const float chi[4], Range& left, Range& right) {
         int a = 0;
         for (int k = 1; k < 3; ++k)
             if (chi[k] - clo[k] > chi[a] - clo[a]) a = k;
-        const int mid = r.begin + n / 2;
+        const int mid = r.begin + (r.end - r.begin) / 2;
         auto c2 = [a](const Item& it) { return it.lo[a] + it.hi[a]; };
         std::nth_element(items_ + r.begin, items_ + mid, items_ + r.end,
                          [&](const Item& x, const Item& y) { return c2(x) < c2(y); });
@@ -290,13 +263,6 @@ private:
         right = scan(items_, mid, r.end);
         return a;
     }
-
-    // Bin of an item on each axis from c = lo + hi: int((c - lo) * scale) clamped to
-    // [0, bins - 1] (clamping before truncating gives the same; NaN lands in bin 0).
-    struct Binner {
-        F4 lo, scale, maxBin;
-        void binsOf(F4 c, int out[4]) const { truncate(min4(max4((c - lo) * scale, f4(0.f)), maxBin), out); }
-    };
 
     // Partitions r's items in place so that those in bins <= bin on axis come first (in the same
     // order as std::partition), growing each side's bounds and centroid bounds as they are sorted.

@@ -17,7 +17,7 @@
 #include "cli/output_names.h"
 #include "dist/part_file.h"
 #include "dist/tiles.h"
-#include "render/output.h"
+#include "output/output.h"
 #include "util/error.h"
 
 namespace clrt {

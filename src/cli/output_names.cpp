@@ -7,7 +7,7 @@
 #include <map>
 
 #include "image/image.h"
-#include "render/output.h"
+#include "output/output.h"
 #include "util/error.h"
 
 namespace clrt {

@@ -1,3 +1,4 @@
+// src/cli/: the clrt commands and what they share (output-name checks, interrupts, clrt tonemap, clrt merge).
 // output_names.h — the checks every run makes on its output files before any work starts: each name
 // is a plain file name of the right image type, no two outputs of a run share a name, none of them
 // is (by filesystem identity) a file the run reads, and the output directory really accepts a new
@@ -7,12 +8,12 @@
 #include <string>
 #include <vector>
 
-#include "render/output.h"
+#include "output/output.h"
 #include "scene/scene.h"
 
 namespace clrt {
 
-// (plainNameProblem and lowerExtension, the name rules themselves, are in render/output.h.)
+// (plainNameProblem and lowerExtension, the name rules themselves, are in output/output.h.)
 
 // The directory exists, is a directory, and a file can be created in it (a temporary is created and
 // removed). Throws clrt::Error, ExitCode::Output, naming `dir`.

@@ -15,8 +15,8 @@
 #include "cl/devices.h"
 #include "cli/output_names.h"
 #include "image/image.h"
-#include "render/output.h"
-#include "render/tonemap_device.h"
+#include "output/output.h"
+#include "output/tonemap_device.h"
 #include "scene/scene_loader.h"
 #include "util/error.h"
 

@@ -1,5 +1,5 @@
 // tonemap_cmd.h — `clrt tonemap IN.exr [-o OUT.png] [options]`: its command-line parser and driver
-// (tone mapping itself is render/tonemap_device.h).
+// (tone mapping itself is output/tonemap_device.h).
 #pragma once
 
 namespace clrt {

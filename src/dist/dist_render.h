@@ -1,3 +1,5 @@
+// src/dist/: one image over MPI ranks, job-array parts (--part K/N, clrt merge), checkpoints.
+// Reads the scene's input files (to hash them), never the scene model itself.
 // One camera rendered as a set of tiles that may come from elsewhere: a part of a job array
 // (--part K/N), tiles already in a checkpoint (--checkpoint DIR), tiles rendered by other MPI ranks.
 // Rank 0 (or the only process) schedules the tiles that are still missing over its own devices and

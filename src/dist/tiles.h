@@ -1,5 +1,3 @@
-// src/dist/: one image over several processes (MPI ranks, job-array parts) and checkpoints of
-// finished tiles. Reads the scene's input files (to hash them), never the scene model itself.
 // Tiles of a distributed render: tile t is pixels [t * tilePixels, min(numPixels, (t + 1) * tilePixels))
 // in row-major order. The tile size is a function of the image size alone (or --tile-pixels), never of
 // the number of ranks or devices, so that checkpoints and parts made by differently sized jobs fit

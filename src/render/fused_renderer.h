@@ -11,7 +11,7 @@
 
 #include "cl/devices.h"
 #include "cl/kernel_args.h"
-#include "render/renderer.h"
+#include "render/render_types.h"
 #include "shared/device_types.h"
 
 namespace clrt {

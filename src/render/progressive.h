@@ -14,8 +14,8 @@
 #include <functional>
 #include <string>
 
+#include "flatten/device_scene.h"
 #include "image/image.h"
-#include "render/device_scene.h"
 
 namespace clrt {
 

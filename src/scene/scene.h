@@ -1,7 +1,7 @@
 // src/scene/: scene files to the scene model (XML and JSON nodes, one walker, PLY reader, transforms).
 // The scene model: what a CENG795 scene file says, resolved (ids -> indices, transformation strings
 // -> matrices, PLY files -> vertex arrays) but not yet flattened for the device. Produced by the scene
-// loader (scene_loader.h) from XML or JSON; consumed by render/flatten. Nothing here knows OpenCL (the enums are those of
+// loader (scene_loader.h) from XML or JSON; consumed by src/flatten/. Nothing here knows OpenCL (the enums are those of
 // shared/device_types.h, plain C shared with the kernels).
 //
 // Conventions: all indices are 0-based indices into the vectors of Scene; colours are linear

@@ -1,6 +1,6 @@
 // output.cpp — camera outputs (.png / .exr + tone-mapped .png) (see output.h). Tone mapping runs on the OpenCL device through TonemapDevice while the EXR is
 // written on a second thread; all files of a camera are renamed into place together at the end.
-#include "render/output.h"
+#include "output/output.h"
 
 #include <cctype>
 #include <chrono>
@@ -13,7 +13,7 @@
 #include <thread>
 #include <utility>
 
-#include "render/tonemap_device.h"
+#include "output/tonemap_device.h"
 #include "util/error.h"
 
 namespace clrt {
@@ -131,6 +131,81 @@ void commitOutputs(const std::vector<std::pair<std::string, std::string>>& commi
     }
 }
 
+// The final paths of the tone-mapped PNGs of an EXR output, each name checked to be a plain file name.
+std::vector<std::string> tonemapOutputPaths(const Camera& cam, const OutputOptions& opts) {
+    std::vector<std::string> pngPaths;
+    for (const std::string& name : tonemapPngPaths(cam.imageName, cam.tonemaps)) {
+        if (!plainNameProblem(name).empty()) throw Error(name + ": not a plain file name (Tonemap Extension)");
+        pngPaths.push_back((fs::path(opts.outDir) / name).string());
+    }
+    return pngPaths;
+}
+
+// A camera's EXR and tone-mapped PNGs, complete in their temporaries but not renamed into place.
+struct UncommittedOutputs {
+    std::string exrTmp;                // "" if the EXR failed
+    std::vector<std::string> pngTmps;  // of the PNGs written, in pngPaths order
+    std::exception_ptr error;          // the first failure: tone mapping, else the EXR, else a PNG
+};
+
+// The EXR does not depend on the tone mapping: it is written on its own thread (which compresses
+// its chunks on all cores, see writeExr) while this one tone-maps on the device and encodes the
+// PNGs. Every file goes to its temporary sibling first (the caller renames them when all are complete).
+UncommittedOutputs writeExrOutputsUncommitted(const Camera& cam, const ImageRGB& radiance, const OutputOptions& opts,
+                                              DeviceContext& dc, const std::string& exrPath,
+                                              const std::vector<std::string>& pngPaths) {
+    using Clock = std::chrono::steady_clock;
+    auto seconds = [](Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); };
+    auto t0 = Clock::now();
+    const std::function<void(const std::string&)> lap = [&](const std::string& what) {  // -v: where the output stage spends its time
+        auto t1 = Clock::now();
+        info("output: " + what + " " + std::to_string(seconds(t0, t1)) + " s");
+        t0 = t1;
+    };
+    const ExrWriteOptions eo = exrOptions(opts, dc);
+    UncommittedOutputs u;
+    std::exception_ptr exrError;
+    Clock::time_point exrStart = Clock::now(), exrEnd = exrStart;
+    std::thread exrThread([&] {
+        try {
+            u.exrTmp = writeExrUncommitted(exrPath, radiance, eo);
+        } catch (...) {
+            exrError = std::current_exception();
+        }
+        exrEnd = Clock::now();
+    });
+
+    try {
+        std::vector<std::vector<unsigned char>> pngs = tonemapCamera(cam, radiance, opts, dc, lap);
+        try {
+            for (size_t i = 0; i < pngs.size(); ++i)
+                u.pngTmps.push_back(writePng8Uncommitted(pngPaths[i], radiance.width, radiance.height, pngs[i]));
+            if (!pngs.empty()) lap("PNG");
+        } catch (...) {
+            exrThread.join();
+            u.error = exrError ? exrError : std::current_exception();
+        }
+    } catch (...) {
+        u.error = std::current_exception();
+    }
+    if (exrThread.joinable()) exrThread.join();
+    if (!u.error) u.error = exrError;
+    const double waited = seconds(t0, Clock::now());
+    if (!u.error)
+        info("output: EXR " + std::to_string(seconds(exrStart, exrEnd)) + " s (on its own thread; waited " +
+             std::to_string(waited) + " s for it)");
+    return u;
+}
+
+// Test hook (tests/test_cli_output.cpp): with CLRT_TEST_STALL_OUTPUT set, wait here, temporaries
+// complete but not renamed, until a signal ends the process; the test checks that none is left behind.
+void stallIfTestAsks() {
+    if (!std::getenv("CLRT_TEST_STALL_OUTPUT")) return;
+    std::fprintf(stderr, "output: stalled before the rename (CLRT_TEST_STALL_OUTPUT)\n");
+    std::fflush(stderr);
+    for (;;) std::this_thread::sleep_for(std::chrono::seconds(1));
+}
+
 }  // namespace
 
 std::vector<std::string> writeCameraOutputs(const Camera& cam, const ImageRGB& radiance, const OutputOptions& opts,
@@ -141,79 +216,23 @@ std::vector<std::string> writeCameraOutputs(const Camera& cam, const ImageRGB& r
     const std::string ext = lowerExtension(cam.imageName);
     if (!plainNameProblem(cam.imageName).empty() || (ext != ".png" && ext != ".exr"))
         throw Error(cam.imageName + ": not a plain .png or .exr file name");
-    const fs::path out = fs::path(opts.outDir) / cam.imageName;
+    const std::string out = (fs::path(opts.outDir) / cam.imageName).string();
     std::vector<std::string> written;
     if (ext == ".png") {
-        writePngClamped(out.string(), radiance, opts.truncatePng);
-        written.push_back(out.string());
+        writePngClamped(out, radiance, opts.truncatePng);
+        written.push_back(out);
         return written;
     }
-    std::vector<std::string> pngPaths;
-    for (const std::string& name : tonemapPngPaths(cam.imageName, cam.tonemaps)) {
-        if (!plainNameProblem(name).empty()) throw Error(name + ": not a plain file name (Tonemap Extension)");
-        pngPaths.push_back((fs::path(opts.outDir) / name).string());
-    }
-
-    // The EXR does not depend on the tone mapping: it is written on its own thread (which compresses
-    // its chunks on all cores, see writeExr) while this one tone-maps on the device and encodes the
-    // PNGs. Every file goes to its temporary sibling first and nothing is renamed into place before all
-    // of them are complete, so a device or write failure changes none of the outputs.
-    using Clock = std::chrono::steady_clock;
-    auto seconds = [](Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); };
-    auto t0 = Clock::now();
-    const std::function<void(const std::string&)> lap = [&](const std::string& what) {  // -v: where the output stage spends its time
-        auto t1 = Clock::now();
-        info("output: " + what + " " + std::to_string(seconds(t0, t1)) + " s");
-        t0 = t1;
-    };
-    const ExrWriteOptions eo = exrOptions(opts, dc);
-    const std::string exrPath = out.string();
-    std::string exrTmp;
-    std::exception_ptr exrError;
-    Clock::time_point exrStart = Clock::now(), exrEnd = exrStart;
-    std::thread exrThread([&] {
-        try {
-            exrTmp = writeExrUncommitted(exrPath, radiance, eo);
-        } catch (...) {
-            exrError = std::current_exception();
-        }
-        exrEnd = Clock::now();
-    });
-
-    std::exception_ptr error;  // the first failure: tone mapping, else the EXR, else a PNG
-    std::vector<std::string> pngTmps;
-    try {
-        std::vector<std::vector<unsigned char>> pngs = tonemapCamera(cam, radiance, opts, dc, lap);
-        try {
-            for (size_t i = 0; i < pngs.size(); ++i)
-                pngTmps.push_back(writePng8Uncommitted(pngPaths[i], radiance.width, radiance.height, pngs[i]));
-            if (!pngs.empty()) lap("PNG");
-        } catch (...) {
-            exrThread.join();
-            error = exrError ? exrError : std::current_exception();
-        }
-    } catch (...) {
-        error = std::current_exception();
-    }
-    if (exrThread.joinable()) exrThread.join();
-    if (!error) error = exrError;
-    const double waited = seconds(t0, Clock::now());
-    if (!error)
-        info("output: EXR " + std::to_string(seconds(exrStart, exrEnd)) + " s (on its own thread; waited " +
-             std::to_string(waited) + " s for it)");
-
-    if (!error && std::getenv("CLRT_TEST_STALL_OUTPUT")) {
-        // Test hook (tests/test_cli_output.cpp): wait here, temporaries complete but not renamed,
-        // until a signal ends the process; the test checks that none is left behind.
-        std::fprintf(stderr, "output: stalled before the rename (CLRT_TEST_STALL_OUTPUT)\n");
-        std::fflush(stderr);
-        for (;;) std::this_thread::sleep_for(std::chrono::seconds(1));
-    }
+    const std::vector<std::string> pngPaths = tonemapOutputPaths(cam, opts);
+    // Nothing is renamed into place before every file is complete, so a device or write failure
+    // changes none of the outputs.
+    const UncommittedOutputs u = writeExrOutputsUncommitted(cam, radiance, opts, dc, out, pngPaths);
+    if (!u.error) stallIfTestAsks();
     // Commit: EXR first, then the PNGs.
     std::vector<std::pair<std::string, std::string>> commits;  // (temporary, final path)
-    if (!exrTmp.empty()) commits.emplace_back(exrTmp, exrPath);
-    for (size_t i = 0; i < pngTmps.size(); ++i) commits.emplace_back(pngTmps[i], pngPaths[i]);
-    commitOutputs(commits, error, written);
+    if (!u.exrTmp.empty()) commits.emplace_back(u.exrTmp, out);
+    for (size_t i = 0; i < u.pngTmps.size(); ++i) commits.emplace_back(u.pngTmps[i], pngPaths[i]);
+    commitOutputs(commits, u.error, written);
     return written;
 }
 

@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "render/flatten.h"
+#include "flatten/flatten.h"
 #include "util/error.h"
 
 namespace clrt {

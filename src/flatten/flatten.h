@@ -1,4 +1,4 @@
-// flatten.h — the parts of flattenScene() (device_scene.cpp), one per domain and file:
+// flatten.h — the parts of flattenScene() (flatten_scene.cpp), one per domain and file:
 //   flatten_materials.cpp    materials
 //   flatten_textures.cpp     the texel atlas (ImageAtlas), texture maps, per-shape texture sets
 //   flatten_geometry.cpp     planes, spheres, meshes (on all hardware threads), the BVH, leaf order
@@ -11,7 +11,7 @@
 #include <map>
 #include <vector>
 
-#include "render/device_scene.h"
+#include "flatten/device_scene.h"
 
 namespace clrt {
 

@@ -1,18 +1,12 @@
-// Flattening of the scene model into device arrays (see device_scene.h): the driver flattenScene(),
-// whose parts live one domain per file (flatten.h); the feature set's -D flags; camera parameters.
-#include "render/device_scene.h"
+// The device scene's own functions (see device_scene.h): the feature set's -D flags and the camera
+// parameters. The flattening itself is flatten_scene.cpp (the driver) and flatten_*.cpp (its parts).
+#include "flatten/device_scene.h"
 
 #include <algorithm>
-#include <chrono>
 
-#include "render/flatten.h"
 #include "shared/type_tables.h"
 
 namespace clrt {
-
-double secondsSince(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 bool FeatureSet::bounces() const {
     for (const auto& row : materialTypes())
@@ -58,25 +52,6 @@ dev::CameraParams makeCameraParams(const Camera& cam) {
 
 void setSamplesPerPixel(dev::CameraParams& c, int spp) {
     c.spp = std::max(1, spp);
-}
-
-// The driver: one function per domain (flatten.h), in an order that fixes where images enter the
-// atlas (textures, then environment maps).
-DeviceScene flattenScene(const Scene& scene) {
-    auto t0 = std::chrono::steady_clock::now();
-    DeviceScene ds;
-    ImageAtlas atlas(scene, ds);
-    flattenMaterials(scene, ds);
-    flattenTextures(scene, ds, atlas);
-    flattenGeometry(scene, ds);
-    flattenLights(scene, ds, atlas);
-    dev::SceneParams& p = ds.params;
-    p.background = toFloat4(scene.backgroundColor);
-    p.ambient = toFloat4(scene.ambientLight);
-    p.maxDepth = std::max(0, scene.maxRecursionDepth);
-    for (const Camera& c : scene.cameras) ds.features.pathTracing = ds.features.pathTracing || c.pathMode != 0;
-    ds.flattenSeconds = secondsSince(t0) - ds.bvhSeconds;
-    return ds;
 }
 
 }  // namespace clrt

@@ -1,8 +1,9 @@
+// src/output/: a camera's output files (PNG; EXR + tone-mapped PNGs, committed together) and tone mapping on the OpenCL device.
 // output.h — writing a rendered camera image (the `clrt tonemap` command is in src/cli/).
 // An ImageName ending in .png is clamped and quantised (round, or floor with --ldr-quantize floor);
 // one ending in .exr is written as float (or half) RGB OpenEXR, ZIP-compressed, with header
 // attributes (renderer, spp, renderTime, device), and next to it one tone-mapped PNG per Tonemap block
-// of the camera, tone-mapped on the OpenCL device (render/tonemap_device.h) while the EXR is written on
+// of the camera, tone-mapped on the OpenCL device (output/tonemap_device.h) while the EXR is written on
 // a second thread. Every file is written to a temporary sibling; they are renamed into place only when
 // all of them are complete, so a tone-mapping or write failure changes none of them (only a failing
 // rename, after the others succeeded, can leave a partial set).

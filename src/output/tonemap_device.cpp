@@ -2,7 +2,7 @@
 // launches with a fixed work-group size of 64 (PoCL compiles once per local size), the double sum
 // of the per-work-item compensated partials, the radix select of the percentile luminance, and the
 // map kernels at kPixelsPerMapItem pixels per work-item.
-#include "render/tonemap_device.h"
+#include "output/tonemap_device.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,6 @@
 // flatten_materials.cpp — scene materials -> dev::Material (see flatten.h), with the parameters of
 // the BRDF each names (Scene::brdfs, from <BRDFs>) copied in.
-#include "render/flatten.h"
+#include "flatten/flatten.h"
 
 namespace clrt {
 

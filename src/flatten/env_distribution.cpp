@@ -1,7 +1,7 @@
 // Environment-map mappings, lookup and the importance distribution (see env_distribution.h). Every
 // function that has a device twin in cl_kernels/envmap.cl uses the same float operations in the same
 // order, so host and device agree to a few ulps.
-#include "render/env_distribution.h"
+#include "flatten/env_distribution.h"
 
 #include <algorithm>
 #include <cmath>

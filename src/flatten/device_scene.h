@@ -1,3 +1,4 @@
+// src/flatten/: scene model + BVH -> DeviceScene, the flat arrays the kernels read (materials, textures, geometry, lights, environment maps).
 // Flattening: Scene (the model) + BVH -> DeviceScene, the flat arrays of shared structs the kernels
 // read, plus the feature set of this scene (which -D flags its program needs). Images referenced by
 // textures and environment lights are loaded here into one float4 texel atlas.

@@ -12,7 +12,7 @@
 #include <system_error>
 #include <thread>
 
-#include "render/flatten.h"
+#include "flatten/flatten.h"
 #include "util/error.h"
 
 namespace clrt {

@@ -6,8 +6,8 @@
 
 #include <Imath/half.h>
 
+#include "flatten/flatten.h"
 #include "image/image.h"
-#include "render/flatten.h"
 #include "util/error.h"
 
 namespace clrt {

@@ -1,8 +1,8 @@
 // flatten_environment.cpp — environment (SphericalDirectionalLight) lights: the map in the texel
 // atlas, mapping and sampler, the importance distribution (env_distribution.h), and the radiance of
 // rays that miss (the first environment light's map); see flatten.h.
-#include "render/env_distribution.h"
-#include "render/flatten.h"
+#include "flatten/env_distribution.h"
+#include "flatten/flatten.h"
 #include "util/error.h"
 
 namespace clrt {

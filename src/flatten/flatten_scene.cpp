@@ -1,0 +1,35 @@
+// flatten_scene.cpp — flattenScene(), the driver of the flattening (see device_scene.h): the scene
+// model's materials, textures, geometry (with the BVH) and lights into one DeviceScene, by the parts
+// of flatten.h (one domain per flatten_*.cpp file), and the scene-wide parameters.
+#include <algorithm>
+#include <chrono>
+
+#include "flatten/device_scene.h"
+#include "flatten/flatten.h"
+
+namespace clrt {
+
+double secondsSince(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The driver: one function per domain (flatten.h), in an order that fixes where images enter the
+// atlas (textures, then environment maps).
+DeviceScene flattenScene(const Scene& scene) {
+    auto t0 = std::chrono::steady_clock::now();
+    DeviceScene ds;
+    ImageAtlas atlas(scene, ds);
+    flattenMaterials(scene, ds);
+    flattenTextures(scene, ds, atlas);
+    flattenGeometry(scene, ds);
+    flattenLights(scene, ds, atlas);
+    dev::SceneParams& p = ds.params;
+    p.background = toFloat4(scene.backgroundColor);
+    p.ambient = toFloat4(scene.ambientLight);
+    p.maxDepth = std::max(0, scene.maxRecursionDepth);
+    for (const Camera& c : scene.cameras) ds.features.pathTracing = ds.features.pathTracing || c.pathMode != 0;
+    ds.flattenSeconds = secondsSince(t0) - ds.bvhSeconds;
+    return ds;
+}
+
+}  // namespace clrt
