@@ -627,9 +627,9 @@ struct Walker {
         }
         return mode;
     }
-    Tonemap readTonemap(const SceneNode& n) {
+    TonemapSettings readTonemap(const SceneNode& n) {
         checkChildren(n, {"TMO", "TMOOptions", "Saturation", "Gamma", "Extension"});
-        Tonemap t;
+        TonemapSettings t;
         if (auto c = n.child("TMO")) {
             std::string v = lower(trim(c->text()));
             if (!lookupType(tonemapOperators(), v, t.op))
@@ -735,8 +735,8 @@ struct Walker {
             std::optional<std::string> sampler = l.attribute("sampler");
             if (!sampler)
                 if (auto c = l.child("Sampler")) sampler = c->text();
-            if (sampler && !lookupType(envSamplers(), lower(trim(*sampler)), light.sampler))
-                fail(l, describe(l) + ": unknown sampler '" + *sampler + "' (" + typeNames(envSamplers()) + ")");
+            if (sampler && !lookupType(envStrategies(), lower(trim(*sampler)), light.envStrategy))
+                fail(l, describe(l) + ": unknown sampler '" + *sampler + "' (" + typeNames(envStrategies()) + ")");
             break;
         }
         case dev::LIGHT_MESH:
