@@ -90,7 +90,8 @@ size_t parseChoiceArg(const std::string& flag, const std::string& v, std::initia
     throwExpected(flag, choiceList(choices), v);
 }
 
-std::pair<std::string, std::string> splitArg(const std::string& flag, const std::string& v, char sep, const char* form) {
+std::pair<std::string, std::string> splitArg(const std::string& flag, const std::string& v, char sep,
+                                             const char* form) {
     const size_t at = v.find(sep);
     if (at == std::string::npos) throwExpected(flag, form, v);
     return {v.substr(0, at), v.substr(at + 1)};

@@ -129,9 +129,9 @@ ImageRGB renderCameraProgressive(const RenderArgs& a, const Camera& cam, const R
     rule.maxSpp = a.spp > 0 ? a.spp : kMaxSamplesPerPixel;
     rule.white = lowerExtension(cam.imageName) == ".png" ? 255.0 : 1.0;
     const PassRenderer pass = [&](int first, int count, int& reached) {
-        // The two halves must be independent estimates, but the stratified pixel sampler correlates the samples
-        // of a pixel (it spreads them over one net): so pass k renders pass k / 2 of its half k % 2, the
-        // odd half under a seed of its own. Each half is then a progressive stratified render.
+        // The two halves must be independent estimates, but the stratified pixel sampler correlates the
+        // samples of a pixel (it spreads them over one net): so pass k renders pass k / 2 of its half k % 2,
+        // the odd half under a seed of its own. Each half is then a progressive stratified render.
         const int k = first / count;
         RenderSettings hs = rs;
         if (k & 1) hs.seed = rs.seed ^ 0x2545f491u;

@@ -112,7 +112,9 @@ RenderArgs parseRenderArgs(int argc, char** argv, int start) {
              if (!parseEnvStrategy(v, es)) throwExpected(f, "uniform, cosine, importance or mis", v);
              a.envStrategy = v;
          }},
-        {{"--ldr-quantize"}, true, [&](Str f, Str v) { a.truncatePng = parseChoiceArg(f, v, {"round", "floor"}) == 1; }},
+        {{"--ldr-quantize"}, true, [&](Str f, Str v) {
+             a.truncatePng = parseChoiceArg(f, v, {"round", "floor"}) == 1;
+         }},
     }, "render");
     return a;
 }

@@ -78,20 +78,21 @@ TonemapArgs parseTonemapArgs(int argc, char** argv) {
     TonemapArgs a;
     TonemapSettings& o = a.over;
     bool verboseFlag = false;
+    using Str = const std::string&;
     const std::vector<std::string> positional = parseArgs(argc, argv, 2, {
         flagOption({"-h", "--help"}, a.help),
         textOption({"-o", "--output"}, a.outPath),
-        {{"--tmo"}, true, [&](const std::string&, const std::string& v) { o.op = parseTmoKind(v); a.haveTmo = true; }},
+        {{"--tmo"}, true, [&](Str, Str v) { o.op = parseTmoKind(v); a.haveTmo = true; }},
         floatOption("--key", o.key, a.haveKey),
         floatOption("--burn", o.burnPercent, a.haveBurn),
         floatOption("--saturation", o.saturation, a.haveSat),
-        {{"--gamma"}, true, [&](const std::string& f, const std::string& v) {
+        {{"--gamma"}, true, [&](Str f, Str v) {
              o.srgb = lowerAscii(v) == "srgb";
              if (!o.srgb) o.gamma = parseFloatArg(f, v);
              a.haveGamma = true;
          }},
-        {{"--quantize"}, true, [&](const std::string& f, const std::string& v) { a.truncate = parseChoiceArg(f, v, {"round", "floor"}) == 1; }},
-        {{"--delta"}, true, [&](const std::string& f, const std::string& v) { o.delta = parseFloatArg(f, v); a.haveDelta = true; }},
+        {{"--quantize"}, true, [&](Str f, Str v) { a.truncate = parseChoiceArg(f, v, {"round", "floor"}) == 1; }},
+        {{"--delta"}, true, [&](Str f, Str v) { o.delta = parseFloatArg(f, v); a.haveDelta = true; }},
         textOption({"--scene"}, a.scenePath),
         textOption({"--camera"}, a.cameraId),
         textOption({"--device"}, a.deviceSpec),
