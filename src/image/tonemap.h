@@ -1,6 +1,7 @@
-// tonemap.h — tone-mapping operators on the host: the settings of one camera Tonemap block, the
-// plain C++ reference of every operator (Photographic = Reinhard et al. 2002 global, ACES =
-// Narkowicz's 2015 fit, Filmic = Hable's Uncharted 2 curve), and the per-image statistics they need.
+// tonemap.h — tone-mapping operators on the host (their settings: TonemapSettings, in
+// shared/tonemap_settings.h): the plain C++ reference of every operator (Photographic = Reinhard et
+// al. 2002 global, ACES = Narkowicz's 2015 fit, Filmic = Hable's Uncharted 2 curve), and the
+// per-image statistics they need.
 // The OpenCL kernels in cl_kernels/tonemap.cl implement the same formulas; tests compare the two.
 //
 // Conventions (chosen because they reproduce the course's reference PNGs, see README "Tone mapping"):

@@ -41,6 +41,7 @@ enum class PixelSampler { Independent = CLRT_PIXEL_SAMPLER_INDEPENDENT, Stratifi
 // "stratified", "independent" (the --sampler values); false for any other name.
 bool parsePixelSampler(const std::string& name, PixelSampler& out);
 const char* pixelSamplerName(PixelSampler s);
+
 const char* renderStageName(int stage);
 
 struct RenderCounters {
