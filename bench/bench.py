@@ -28,6 +28,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import types
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -371,6 +372,22 @@ def reference(clrt, sc, scene_path, strategy, cache_dir, hdr, refresh):
 
 
 # ---------------------------------------------------------------------------------------------- plots
+def plot_strategy(ax, strat, rs):
+    """One strategy's curves: relMSE and FLIP against render time, efficiency against spp."""
+    t = np.array([r["render_s"] for r in rs])
+    terr = np.array([[r["render_s"] - r["render_s_min"] for r in rs], [r["render_s_max"] - r["render_s"] for r in rs]])
+    e = np.array([r["relmse"] for r in rs])
+    eerr = np.array([[r["relmse"] - r["relmse_min"] for r in rs], [r["relmse_max"] - r["relmse"] for r in rs]])
+    ok = np.array([r["above_floor"] for r in rs], dtype=bool)
+    line = ax[0].errorbar(t[ok], e[ok], xerr=terr[:, ok], yerr=eerr[:, ok], marker="o", capsize=2, label=strat)
+    if (~ok).any():
+        ax[0].plot(t[~ok], e[~ok], "o", mfc="none", color=line[0].get_color())
+    for r in rs:
+        ax[0].annotate("%d" % r["spp"], (r["render_s"], r["relmse"]), fontsize=7, xytext=(3, 3), textcoords="offset points")
+    ax[1].plot(t, np.array([r["flip"] for r in rs]), marker="o", label=strat)
+    ax[2].plot([r["spp"] for r in rs], np.array([r["efficiency"] for r in rs]), marker="o", label=strat)
+
+
 def plot_scene(name, rows, meta_by_strategy, path):
     import matplotlib
     matplotlib.use("Agg")
@@ -378,21 +395,7 @@ def plot_scene(name, rows, meta_by_strategy, path):
     fig, ax = plt.subplots(1, 3, figsize=(15, 4.4))
     floor = min(m["relmse"] for m in meta_by_strategy.values())
     for strat in sorted({r["strategy"] for r in rows}):
-        rs = sorted((r for r in rows if r["strategy"] == strat), key=lambda r: r["spp"])
-        t = np.array([r["render_s"] for r in rs])
-        terr = np.array([[r["render_s"] - r["render_s_min"] for r in rs], [r["render_s_max"] - r["render_s"] for r in rs]])
-        e = np.array([r["relmse"] for r in rs])
-        eerr = np.array([[r["relmse"] - r["relmse_min"] for r in rs], [r["relmse_max"] - r["relmse"] for r in rs]])
-        ok = np.array([r["above_floor"] for r in rs], dtype=bool)
-        line = ax[0].errorbar(t[ok], e[ok], xerr=terr[:, ok], yerr=eerr[:, ok], marker="o", capsize=2, label=strat)
-        if (~ok).any():
-            ax[0].plot(t[~ok], e[~ok], "o", mfc="none", color=line[0].get_color())
-        for r in rs:
-            ax[0].annotate("%d" % r["spp"], (r["render_s"], r["relmse"]), fontsize=7, xytext=(3, 3), textcoords="offset points")
-        f = np.array([r["flip"] for r in rs])
-        ax[1].plot(t, f, marker="o", label=strat)
-        eff = np.array([r["efficiency"] for r in rs])
-        ax[2].plot([r["spp"] for r in rs], eff, marker="o", label=strat)
+        plot_strategy(ax, strat, sorted((r for r in rows if r["strategy"] == strat), key=lambda r: r["spp"]))
     ax[0].axhline(floor, ls="--", color="gray", lw=1, label="reference noise floor")
     for a in ax:
         a.set_xscale("log")
@@ -444,7 +447,7 @@ def slug(s):
 
 
 # ------------------------------------------------------------------------------------------------ main
-def main():
+def parse_args(argv=None):
     ap = argparse.ArgumentParser(description="speed against error benchmark (see bench/README.md)")
     ap.add_argument("--build", default=os.path.join(ROOT, "build"), help="build folder with clrt (and ray_bench)")
     ap.add_argument("--device", default="cpu", help="clrt --device SPEC (default cpu)")
@@ -471,12 +474,11 @@ def main():
     ap.add_argument("--path-only", action="store_true", help="only the path-traced scenes (bench/bench_path.py)")
     ap.add_argument("--no-path", action="store_true", help="skip the path-traced scenes")
     ap.add_argument("--replot", metavar="DIR", help="only redraw the plots of DIR (a results folder) from its CSVs")
-    a = ap.parse_args()
-    if a.replot:
-        return replot(a.replot)
-    if a.quick:
-        a.runs = 1
+    return ap.parse_args(argv)
 
+
+def clrt_setup(a):
+    """The clrt binary of --build and what it offers: (Clrt, its `render --help` text, env strategies)."""
     exe = os.path.join(a.build, "clrt")
     if not os.access(exe, os.X_OK):
         sys.exit("bench: %s not found (build it first, or run scripts/bench)" % exe)
@@ -489,125 +491,168 @@ def main():
     else:
         log("bench: this clrt has no --env-sampling option; env scenes run with its default sampler only")
         strategies = ["default"]
-    clrt = Clrt(exe, a.device, env_flag or "--env-sampling")
-    if a.path_only:  # issue 16's strategies on the path-traced scenes alone
-        import bench_path
-        return bench_path.main_path_only(sys.modules[__name__], clrt, a)
+    return Clrt(exe, a.device, env_flag or "--env-sampling"), help_text, strategies
+
+
+def mitsuba_module(a):
+    """(mitsuba module or None, its version or why not), said on stderr."""
     mi, mi_version = (None, "--no-mitsuba") if a.no_mitsuba else load_mitsuba(os.cpu_count() or 2)
     if mi is None:
         log("bench: Mitsuba 3 not available (%s): the comparison with Mitsuba is skipped" % mi_version)
     else:
         log("bench: Mitsuba %s (llvm_ad_rgb, %d threads) for the scenes it converts" % (mi_version, os.cpu_count() or 2))
+    return mi, mi_version
+
+
+def offered(values, flag, help_text):
+    """values, or none (said so) when this clrt has no such option."""
+    if values and flag not in help_text:
+        log("bench: this clrt has no %s option; %ss ignored" % (flag, flag))
+        return []
+    return values
+
+
+def comma_list(text, allowed, option):
+    """The comma list of an option, each value one of allowed (else exit with a usage message)."""
+    values = [x for x in text.split(",") if x]
+    if any(x not in allowed for x in values):
+        sys.exit("bench: %s: expected a comma list of %s" % (option, ", ".join(allowed)))
+    return values
+
+
+def variant_options(a, help_text, strategies):
+    """--mitsuba-only, --pipelines, --samplers and --mitsuba-samplers against what this clrt offers:
+    (strategies, pipelines, samplers); sets a.mi_samplers (and a.no_features/no_ray_bench for --mitsuba-only)."""
     if a.mitsuba_only:
         a.no_features = a.no_ray_bench = True
         strategies = [x for x in strategies if x == "mis"] or strategies[-1:]
-    pipelines = [p for p in a.pipelines.split(",") if p]
-    if pipelines and "--pipeline" not in help_text:
-        log("bench: this clrt has no --pipeline option; --pipelines ignored")
-        pipelines = []
-
-    samplers = [x for x in a.samplers.split(",") if x]
-    if any(x not in CLRT_SAMPLERS for x in samplers):
-        sys.exit("bench: --samplers: expected a comma list of %s" % ", ".join(CLRT_SAMPLERS))
-    if samplers and "--sampler" not in help_text:
-        log("bench: this clrt has no --sampler option; --samplers ignored")
-        samplers = []
-    a.mi_samplers = [x for x in a.mitsuba_samplers.split(",") if x]
-    if any(x not in MITSUBA_SAMPLERS for x in a.mi_samplers) or not a.mi_samplers:
+    pipelines = offered([p for p in a.pipelines.split(",") if p], "--pipeline", help_text)
+    samplers = offered(comma_list(a.samplers, CLRT_SAMPLERS, "--samplers"), "--sampler", help_text)
+    a.mi_samplers = comma_list(a.mitsuba_samplers, MITSUBA_SAMPLERS, "--mitsuba-samplers")
+    if not a.mi_samplers:
         sys.exit("bench: --mitsuba-samplers: expected a comma list of %s" % ", ".join(MITSUBA_SAMPLERS))
+    return strategies, pipelines, samplers
 
+
+def select_scenes(a):
+    """SCENES filtered by --scenes and --mitsuba-only, less those whose files are not present (said so)."""
     wanted = set(filter(None, a.scenes.split(",")))
     scenes = [s for s in SCENES if (not wanted or s["name"] in wanted) and (not a.mitsuba_only or s.get("mitsuba"))]
     missing = [s["name"] for s in scenes if not os.path.exists(s["path"])]
     if missing:
         log("bench: skipping scenes not present: " + ", ".join(missing))
-    scenes = [s for s in scenes if os.path.exists(s["path"])]
+    return [s for s in scenes if os.path.exists(s["path"])]
 
-    tmp = tempfile.mkdtemp(prefix="clrt-bench-scenes-")
-    prepared = {}
-    for sc in scenes:
-        prepared[sc["name"]] = prepare_scene(sc, tmp)
 
-    # Device name (for the folder) from a verbose warm-up run, which also fills the kernel cache.
-    first = prepared[scenes[0]["name"]][0]
-    _, _, err = clrt.render(first, 1, 0, verbose=True)
+def device_folder(clrt, scene_path, a):
+    """The device's name, from a verbose warm-up render of scene_path (which also fills the kernel cache), and
+    the results folder (--out, or bench/results/<device>); creates it and the reference cache folder."""
+    _, _, err = clrt.render(scene_path, 1, 0, verbose=True)
     m = re.search(r"device: \[\d+\] (.*?) \(", err)
     device_name = m.group(1).strip() if m else (a.device or "default")
     out = a.out or os.path.join(ROOT, "bench", "results", slug(device_name))
     os.makedirs(out, exist_ok=True)
     os.makedirs(a.refs, exist_ok=True)
-    log("bench: device '%s' -> %s; %d runs per point; strategies: %s" % (device_name, out, a.runs, ", ".join(strategies)))
+    return device_name, out
 
-    summary, runs_rows, ref_rows, mi_rows = [], [], [], []
-    t_start = time.perf_counter()
-    for sc in scenes:
-        scene_path, hdr = prepared[sc["name"]]
-        strats = strategies if sc.get("env") else ["default"]
-        ref_strategy = ("mis" if "mis" in strats else strats[-1]) if sc.get("env") else "default"
-        if pipelines:
-            strats = ["%s+%s" % (st, p) for st in strats for p in pipelines]
-        if samplers:  # the default (stratified) adds no label part
-            strats = [st if smp == "stratified" else "%s+%s" % (st, smp) for st in strats for smp in samplers]
-        log("%s (%dx%d, %s)" % (sc["name"], sc["res"][0], sc["res"][1], "HDR" if hdr else "LDR"))
-        ref, meta = reference(clrt, sc, scene_path, ref_strategy, a.refs, hdr, a.refresh_refs)
-        ref_rows.append(dict(scene=sc["name"], ref_spp=meta["spp"], ref_strategy=meta["strategy"], ref_seeds="%d+%d" % tuple(meta["seeds"]),
-                             ref_relmse=meta["relmse"], ref_rmse=meta["rmse"], ref_flip_halves=meta["flip_halves"],
-                             ref_seconds=meta["seconds"], hash=meta["hash"]))
-        scene_rows = []
-        spps = sc["spp"][:2] if a.quick else sc["spp"]
-        if a.spp:
-            spps = [x for x in spps if str(x) in a.spp.split(",")]
-        ms = mitsuba_setup(mi, sc, scene_path, hdr, ref, a) if mi is not None and sc.get("mitsuba") else None
+
+# ------------------------------------------------------------------------------------- one scene, one spp
+def scene_variants(sc, ctx):
+    """The variant labels a scene runs ('mis', 'mis+fused', 'mis+fused+independent', ...) and the strategy
+    of its reference."""
+    strats = ctx.strategies if sc.get("env") else ["default"]
+    ref_strategy = ("mis" if "mis" in strats else strats[-1]) if sc.get("env") else "default"
+    if ctx.pipelines:
+        strats = ["%s+%s" % (st, p) for st in strats for p in ctx.pipelines]
+    if ctx.samplers:  # the default (stratified) adds no label part
+        strats = [st if smp == "stratified" else "%s+%s" % (st, smp) for st in strats for smp in ctx.samplers]
+    return strats, ref_strategy
+
+
+def clrt_run(ctx, sc, scene_path, hdr, spp, seed, strat, ref):
+    """One clrt render and its error against ref; the run's row (also appended to ctx.runs_rows)."""
+    st, img, _ = ctx.clrt.render(scene_path, spp, seed, strat)
+    r = dict(scene=sc["name"], strategy=strat, spp=spp, seed=seed, **st)
+    r["relmse"] = rel_mse(img, ref, 1.0 if hdr else 255.0)
+    r["rmse"] = rmse(img, ref)
+    r["flip"] = flip(img, ref, hdr)
+    ctx.runs_rows.append(r)
+    return r
+
+
+def summary_row(sc, strat, spp, rs, meta):
+    """bench.csv's row of one variant at one spp from its runs rs: medians, spreads, efficiency, floor flag."""
+    row = dict(scene=sc["name"], strategy=strat, spp=spp, runs=len(rs), width=sc["res"][0], height=sc["res"][1])
+    for k in ("parse", "bvh", "build", "render", "output", "wall", "camera_mrays", "shadow_mrays",
+              "secondary_mrays", "relmse", "rmse", "flip"):
+        v = [r[k] for r in rs]
+        kk = k + "_s" if k in ("parse", "bvh", "build", "render", "output", "wall") else k
+        row[kk] = med(v)
+        row[kk + "_min"], row[kk + "_max"] = spread(v)
+    row["efficiency"] = 1.0 / (row["relmse"] * max(row["render_s"], 1e-9))
+    row["ref_spp"] = meta["spp"]
+    row["ref_relmse"] = meta["relmse"]
+    row["above_floor"] = int(row["relmse"] >= 2.0 * meta["relmse"])
+    log("  %-10s spp %4d: render %.3fs [%.3f-%.3f]  relMSE %.4g [%.4g-%.4g]  FLIP %.4f" % (
+        strat, spp, row["render_s"], row["render_s_min"], row["render_s_max"], row["relmse"],
+        row["relmse_min"], row["relmse_max"], row["flip"]))
+    return row
+
+
+def mitsuba_runs(ms, samplers, spp, seed, white, mts, mes):
+    """Mitsuba's render of one seed under each sampler: time into mts, relMSE into mes (per sampler)."""
+    for smp in samplers:
+        t, img = ms.render(spp, seed, smp)
+        mts[smp].append(t)
+        mes[smp].append(rel_mse(img, ms.ref, white))
+
+
+def run_point(ctx, sc, scene_path, hdr, spp, strats, ref, meta, ms):
+    """Every variant (and Mitsuba under each of its samplers) at one spp, --runs times; run k of each back to
+    back, so that the machine's drift hits all alike. Returns the variants' summary rows."""
+    a = ctx.a
+    by_strat = {strat: [] for strat in strats}
+    mts, mes = {smp: [] for smp in a.mi_samplers}, {smp: [] for smp in a.mi_samplers}
+    if ms is not None:
+        for smp in a.mi_samplers:
+            ms.render(spp, 0, smp)  # warm-up: Dr.Jit compiles (and caches) the kernel for this size
+    for run in range(a.runs):
         for strat in strats:
-            clrt.render(scene_path, 1, 0, strat)  # warm-up: kernel cache, file cache
-        # Run k of every variant (and of Mitsuba) back to back, so that the machine's drift hits all alike.
-        for spp in spps:
-            by_strat = {strat: [] for strat in strats}
-            if ms is not None:
-                for smp in a.mi_samplers:
-                    ms.render(spp, 0, smp)  # warm-up: Dr.Jit compiles (and caches) the kernel for this size
-            mts, mes = {smp: [] for smp in a.mi_samplers}, {smp: [] for smp in a.mi_samplers}
-            for run in range(a.runs):
-                for strat in strats:
-                    st, img, _ = clrt.render(scene_path, spp, run + 1, strat)
-                    r = dict(scene=sc["name"], strategy=strat, spp=spp, seed=run + 1, **st)
-                    r["relmse"] = rel_mse(img, ref, 1.0 if hdr else 255.0)
-                    r["rmse"] = rmse(img, ref)
-                    r["flip"] = flip(img, ref, hdr)
-                    runs_rows.append(r)
-                    by_strat[strat].append(r)
-                if ms is not None:
-                    for smp in a.mi_samplers:
-                        t, img = ms.render(spp, run + 1, smp)
-                        mts[smp].append(t)
-                        mes[smp].append(rel_mse(img, ms.ref, 1.0 if hdr else 255.0))
-            spp_rows = []
-            for strat in strats:
-                rs = by_strat[strat]
-                row = dict(scene=sc["name"], strategy=strat, spp=spp, runs=len(rs), width=sc["res"][0], height=sc["res"][1])
-                for k in ("parse", "bvh", "build", "render", "output", "wall", "camera_mrays", "shadow_mrays",
-                          "secondary_mrays", "relmse", "rmse", "flip"):
-                    v = [r[k] for r in rs]
-                    kk = k + "_s" if k in ("parse", "bvh", "build", "render", "output", "wall") else k
-                    row[kk] = med(v)
-                    row[kk + "_min"], row[kk + "_max"] = spread(v)
-                row["efficiency"] = 1.0 / (row["relmse"] * max(row["render_s"], 1e-9))
-                row["ref_spp"] = meta["spp"]
-                row["ref_relmse"] = meta["relmse"]
-                row["above_floor"] = int(row["relmse"] >= 2.0 * meta["relmse"])
-                scene_rows.append(row)
-                spp_rows.append(row)
-                log("  %-10s spp %4d: render %.3fs [%.3f-%.3f]  relMSE %.4g [%.4g-%.4g]  FLIP %.4f" % (
-                    strat, spp, row["render_s"], row["render_s_min"], row["render_s_max"], row["relmse"],
-                    row["relmse_min"], row["relmse_max"], row["flip"]))
-            if ms is not None:
-                for smp in a.mi_samplers:
-                    mi_rows += mitsuba_rows(ms, sc, spp, mts[smp], mes[smp], spp_rows,
-                                            [r for r in runs_rows if r["scene"] == sc["name"]], a, smp)
-        summary += scene_rows
-        plot_scene(sc["name"], scene_rows, {ref_strategy: meta}, os.path.join(out, sc["name"] + ".png"))
-    t_bench = time.perf_counter() - t_start
+            by_strat[strat].append(clrt_run(ctx, sc, scene_path, hdr, spp, run + 1, strat, ref))
+        if ms is not None:
+            mitsuba_runs(ms, a.mi_samplers, spp, run + 1, 1.0 if hdr else 255.0, mts, mes)
+    spp_rows = [summary_row(sc, strat, spp, by_strat[strat], meta) for strat in strats]
+    scene_runs = [r for r in ctx.runs_rows if r["scene"] == sc["name"]]
+    for smp in (a.mi_samplers if ms is not None else []):
+        ctx.mi_rows += mitsuba_rows(ms, sc, spp, mts[smp], mes[smp], spp_rows, scene_runs, a, smp)
+    return spp_rows
 
+
+def run_scene(ctx, sc, scene_path, hdr, out):
+    """One scene: its reference (refs.csv row), every variant at every spp, Mitsuba where it converts the
+    scene, and the scene's plot. Returns the scene's bench.csv rows."""
+    a, clrt = ctx.a, ctx.clrt
+    strats, ref_strategy = scene_variants(sc, ctx)
+    log("%s (%dx%d, %s)" % (sc["name"], sc["res"][0], sc["res"][1], "HDR" if hdr else "LDR"))
+    ref, meta = reference(clrt, sc, scene_path, ref_strategy, a.refs, hdr, a.refresh_refs)
+    ctx.ref_rows.append(dict(scene=sc["name"], ref_spp=meta["spp"], ref_strategy=meta["strategy"],
+                             ref_seeds="%d+%d" % tuple(meta["seeds"]), ref_relmse=meta["relmse"], ref_rmse=meta["rmse"],
+                             ref_flip_halves=meta["flip_halves"], ref_seconds=meta["seconds"], hash=meta["hash"]))
+    spps = sc["spp"][:2] if a.quick else sc["spp"]
+    if a.spp:
+        spps = [x for x in spps if str(x) in a.spp.split(",")]
+    ms = mitsuba_setup(ctx.mi, sc, scene_path, hdr, ref, a) if ctx.mi is not None and sc.get("mitsuba") else None
+    for strat in strats:
+        clrt.render(scene_path, 1, 0, strat)  # warm-up: kernel cache, file cache
+    scene_rows = []
+    for spp in spps:
+        scene_rows += run_point(ctx, sc, scene_path, hdr, spp, strats, ref, meta, ms)
+    plot_scene(sc["name"], scene_rows, {ref_strategy: meta}, os.path.join(out, sc["name"] + ".png"))
+    return scene_rows
+
+
+def write_run_csvs(out, summary, runs_rows, ref_rows):
+    """bench.csv, runs.csv and refs.csv."""
     cols = ["scene", "strategy", "spp", "runs", "width", "height"]
     for k in ("parse_s", "bvh_s", "build_s", "render_s", "output_s", "wall_s", "camera_mrays", "shadow_mrays",
               "secondary_mrays", "relmse", "rmse", "flip"):
@@ -619,80 +664,101 @@ def main():
                "shadow_mrays", "secondary_mrays", "relmse", "rmse", "flip"])
     write_csv(os.path.join(out, "refs.csv"), ref_rows, list(ref_rows[0].keys()) if ref_rows else ["scene"])
 
-    # ---- specialised build vs --all-features
-    feat_rows = []
-    if not a.no_features:
-        log("specialised vs --all-features")
-        fruns = max(a.runs, 5)
-        spp = FEATURE_SPP
-        for name in FEATURE_SCENES:
-            if name not in prepared:
-                continue
-            scene_path, _ = prepared[name]
-            res = {False: dict(cold=[], warm=[], render=[]), True: dict(cold=[], warm=[], render=[])}
-            # Cold/warm kernel build: fresh clrt and PoCL caches per run; the second run finds the binary.
-            for run in range(a.runs):
-                for allf in (False, True):
-                    cdir = tempfile.mkdtemp(prefix="clrt-bench-cache-")
-                    env = dict(os.environ, CLRT_CACHE_DIR=os.path.join(cdir, "clrt"), POCL_CACHE_DIR=os.path.join(cdir, "pocl"))
-                    st1, _, _ = clrt.render(scene_path, 1, 0, all_features=allf, env=env)
-                    st2, _, _ = clrt.render(scene_path, 1, 0, all_features=allf, env=env)
-                    res[allf]["cold"].append(st1["build"])
-                    res[allf]["warm"].append(st2["build"])
-                    shutil.rmtree(cdir, ignore_errors=True)
-            # Render time, the two variants interleaved so that drift of the machine hits both alike.
-            for allf in (False, True):
-                clrt.render(scene_path, 1, 0, all_features=allf)  # warm the default cache
-            for run in range(fruns):
-                for allf in (False, True):
-                    st, _, _ = clrt.render(scene_path, spp, run + 1, all_features=allf)
-                    res[allf]["render"].append(st["render"])
-            for allf in (False, True):
-                variant = "all-features" if allf else "specialised"
-                _, _, err = clrt.render(scene_path, 1, 0, all_features=allf, verbose=True)
-                fm = re.search(r"kernel flags:([^\n(]*)", err)
-                R, C, W = res[allf]["render"], res[allf]["cold"], res[allf]["warm"]
-                feat_rows.append(dict(scene=name, variant=variant, spp=spp, runs=fruns, build_runs=a.runs,
-                                      render_s=med(R), render_s_min=min(R), render_s_max=max(R),
-                                      build_cold_s=med(C), build_cold_s_min=min(C), build_cold_s_max=max(C),
-                                      build_warm_s=med(W), build_warm_s_min=min(W), build_warm_s_max=max(W),
-                                      flags=(fm.group(1).strip() if fm else "")))
-                log("  %-12s %-12s render %.3fs [%.3f-%.3f]  build cold %.2fs [%.2f-%.2f]  warm %.3fs" % (
-                    name, variant, med(R), min(R), max(R), med(C), min(C), max(C), med(W)))
-            s_, f_ = feat_rows[-2], feat_rows[-1]
-            s_["speedup"] = f_["render_s"] / s_["render_s"]
-            f_["speedup"] = 1.0
-        write_csv(os.path.join(out, "features.csv"), feat_rows,
-                  ["scene", "variant", "spp", "runs", "build_runs", "render_s", "render_s_min", "render_s_max", "speedup",
-                   "build_cold_s", "build_cold_s_min", "build_cold_s_max", "build_warm_s", "build_warm_s_min",
-                   "build_warm_s_max", "flags"])
 
-    # ---- ray_bench: clrt intersection kernels vs Embree
+# --------------------------------------------------------------------- specialised vs --all-features
+def feature_times(clrt, a, scene_path, spp, fruns):
+    """{all_features: {cold: [...], warm: [...], render: [...]}} for the specialised and --all-features builds."""
+    res = {False: dict(cold=[], warm=[], render=[]), True: dict(cold=[], warm=[], render=[])}
+    # Cold/warm kernel build: fresh clrt and PoCL caches per run; the second run finds the binary.
+    for run in range(a.runs):
+        for allf in (False, True):
+            cdir = tempfile.mkdtemp(prefix="clrt-bench-cache-")
+            env = dict(os.environ, CLRT_CACHE_DIR=os.path.join(cdir, "clrt"), POCL_CACHE_DIR=os.path.join(cdir, "pocl"))
+            st1, _, _ = clrt.render(scene_path, 1, 0, all_features=allf, env=env)
+            st2, _, _ = clrt.render(scene_path, 1, 0, all_features=allf, env=env)
+            res[allf]["cold"].append(st1["build"])
+            res[allf]["warm"].append(st2["build"])
+            shutil.rmtree(cdir, ignore_errors=True)
+    # Render time, the two variants interleaved so that drift of the machine hits both alike.
+    for allf in (False, True):
+        clrt.render(scene_path, 1, 0, all_features=allf)  # warm the default cache
+    for run in range(fruns):
+        for allf in (False, True):
+            st, _, _ = clrt.render(scene_path, spp, run + 1, all_features=allf)
+            res[allf]["render"].append(st["render"])
+    return res
+
+
+def feature_rows(clrt, a, name, scene_path):
+    """features.csv's two rows (specialised, all-features) of one scene."""
+    fruns, spp, rows = max(a.runs, 5), FEATURE_SPP, []
+    res = feature_times(clrt, a, scene_path, spp, fruns)
+    for allf in (False, True):
+        variant = "all-features" if allf else "specialised"
+        _, _, err = clrt.render(scene_path, 1, 0, all_features=allf, verbose=True)
+        fm = re.search(r"kernel flags:([^\n(]*)", err)
+        R, C, W = res[allf]["render"], res[allf]["cold"], res[allf]["warm"]
+        rows.append(dict(scene=name, variant=variant, spp=spp, runs=fruns, build_runs=a.runs,
+                         render_s=med(R), render_s_min=min(R), render_s_max=max(R),
+                         build_cold_s=med(C), build_cold_s_min=min(C), build_cold_s_max=max(C),
+                         build_warm_s=med(W), build_warm_s_min=min(W), build_warm_s_max=max(W),
+                         flags=(fm.group(1).strip() if fm else "")))
+        log("  %-12s %-12s render %.3fs [%.3f-%.3f]  build cold %.2fs [%.2f-%.2f]  warm %.3fs" % (
+            name, variant, med(R), min(R), max(R), med(C), min(C), max(C), med(W)))
+    rows[0]["speedup"] = rows[1]["render_s"] / rows[0]["render_s"]
+    rows[1]["speedup"] = 1.0
+    return rows
+
+
+def run_features(clrt, a, prepared, out):
+    """Specialised build against --all-features on FEATURE_SCENES; writes features.csv, returns its rows."""
+    log("specialised vs --all-features")
+    feat_rows = []
+    for name in FEATURE_SCENES:
+        if name in prepared:
+            feat_rows += feature_rows(clrt, a, name, prepared[name][0])
+    write_csv(os.path.join(out, "features.csv"), feat_rows,
+              ["scene", "variant", "spp", "runs", "build_runs", "render_s", "render_s_min", "render_s_max", "speedup",
+               "build_cold_s", "build_cold_s_min", "build_cold_s_max", "build_warm_s", "build_warm_s_min",
+               "build_warm_s_max", "flags"])
+    return feat_rows
+
+
+# ------------------------------------------------------------------------------------------ ray_bench
+def run_ray_bench(a, out):
+    """clrt's intersection kernels against Embree 3 (bench/ray_bench) on RAY_BENCH_SCENES, when built and not
+    --no-ray-bench; writes ray_bench.txt/csv. Returns (rows, the program's output)."""
     rb_rows, rb_text = [], ""
     rb = os.path.join(a.build, "ray_bench")
-    if not a.no_ray_bench and os.access(rb, os.X_OK):
-        log("ray_bench (clrt vs Embree)")
-        for name in RAY_BENCH_SCENES:
-            sc = next((s for s in SCENES if s["name"] == name), None)
-            if sc is None or not os.path.exists(sc["path"]):
-                continue
-            cmd = [rb, sc["path"], "--runs", str(max(a.runs, 3)), "--threads", str(os.cpu_count() or 2)]
-            if a.device:
-                cmd += ["--device", a.device]
-            p = subprocess.run(cmd, capture_output=True, text=True)
-            rb_text += "$ %s\n%s\n" % (" ".join(os.path.relpath(c, ROOT) if os.path.isabs(c) else c for c in cmd), p.stdout)
-            for line in p.stdout.splitlines():
-                f = line.split()
-                if len(f) == 7 and f[0] in ("camera", "shadow", "diffuse"):
-                    rb_rows.append(dict(scene=name, rays=f[0], count=int(f[1]), clrt_mrays=float(f[2]),
-                                        embree_mrays=float(f[3]), ratio=float(f[4]), hit_agree=f[5], prim_agree=f[6]))
-        open(os.path.join(out, "ray_bench.txt"), "w").write(rb_text)
-        write_csv(os.path.join(out, "ray_bench.csv"), rb_rows,
-                  ["scene", "rays", "count", "clrt_mrays", "embree_mrays", "ratio", "hit_agree", "prim_agree"])
-    elif not a.no_ray_bench:
+    if a.no_ray_bench:
+        return rb_rows, rb_text
+    if not os.access(rb, os.X_OK):
         log("bench: %s not built (needs libembree-dev); ray_bench skipped" % rb)
+        return rb_rows, rb_text
+    log("ray_bench (clrt vs Embree)")
+    for name in RAY_BENCH_SCENES:
+        sc = next((s for s in SCENES if s["name"] == name), None)
+        if sc is None or not os.path.exists(sc["path"]):
+            continue
+        cmd = [rb, sc["path"], "--runs", str(max(a.runs, 3)), "--threads", str(os.cpu_count() or 2)]
+        if a.device:
+            cmd += ["--device", a.device]
+        p = subprocess.run(cmd, capture_output=True, text=True)
+        rb_text += "$ %s\n%s\n" % (" ".join(os.path.relpath(c, ROOT) if os.path.isabs(c) else c for c in cmd), p.stdout)
+        for line in p.stdout.splitlines():
+            f = line.split()
+            if len(f) == 7 and f[0] in ("camera", "shadow", "diffuse"):
+                rb_rows.append(dict(scene=name, rays=f[0], count=int(f[1]), clrt_mrays=float(f[2]),
+                                    embree_mrays=float(f[3]), ratio=float(f[4]), hit_agree=f[5], prim_agree=f[6]))
+    open(os.path.join(out, "ray_bench.txt"), "w").write(rb_text)
+    write_csv(os.path.join(out, "ray_bench.csv"), rb_rows,
+              ["scene", "rays", "count", "clrt_mrays", "embree_mrays", "ratio", "hit_agree", "prim_agree"])
+    return rb_rows, rb_text
 
-    # ---- report
+
+# --------------------------------------------------------------------------------------------- report
+def report_errors(device_name, a, t_bench, ref_rows, summary):
+    """The report's title, its references and its error-against-time table."""
     rep = ["# clrt benchmark: %s" % device_name, "",
            "%s; clrt device `%s`; %d runs per point (seeds 1..%d), figures are medians, [min-max] the spread; "
            "benchmark part took %.0f s." % (time.strftime("%Y-%m-%d"), a.device, a.runs, a.runs, t_bench), "",
@@ -714,54 +780,77 @@ def main():
                         {"rmse": "%.3g", "flip": "%.4f", "efficiency": "%.3g"}))
     rep += ["", "Columns: render s median [min-max]; stages = parse / bvh / kernel build / output s (medians); Mrays/s = "
             "camera / shadow / secondary rays per render second; efficiency = 1/(relMSE x render s).", ""]
-    rep += ["## clrt against Mitsuba 3", ""]
+    return rep
+
+
+def format_mitsuba_row(r):
+    """The report's formatted columns of one Mitsuba comparison row."""
+    nan = float("nan")
+    r["clrt_fmt"] = "%.3f / %.3g" % (r.get("clrt_s", nan), r.get("clrt_relmse", nan))
+    r["mi_fmt"] = "%.3f [%.3f-%.3f] / %.3g [%.3g-%.3g]" % (r["mitsuba_s"], r["mitsuba_s_min"], r["mitsuba_s_max"],
+                                                         r["mitsuba_relmse"], r["mitsuba_relmse_min"], r["mitsuba_relmse_max"])
+    r["ratio_fmt"] = "%.2f [%.2f-%.2f]" % (r.get("eff_ratio", nan), r.get("eff_ratio_min", nan), r.get("eff_ratio_max", nan))
+    r["means_fmt"] = "%.4f %.4f %.4f" % (r["mean_ratio_r"], r["mean_ratio_g"], r["mean_ratio_b"])
+    r["time_fmt"] = "%.2f [%.2f-%.2f]" % (r["time_factor"], r.get("time_factor_min", nan), r.get("time_factor_max", nan))
+
+
+def report_mitsuba(mi, mi_version, mi_rows, out):
+    """The report's "clrt against Mitsuba 3" section; writes mitsuba.csv when there are rows."""
+    rep = ["## clrt against Mitsuba 3", ""]
     if mi is None:
-        rep += ["Mitsuba 3 was not available (%s): no comparison in this run." % mi_version, ""]
-    elif mi_rows:
-        for r in mi_rows:
-            r["clrt_fmt"] = "%.3f / %.3g" % (r.get("clrt_s", float("nan")), r.get("clrt_relmse", float("nan")))
-            r["mi_fmt"] = "%.3f [%.3f-%.3f] / %.3g [%.3g-%.3g]" % (r["mitsuba_s"], r["mitsuba_s_min"], r["mitsuba_s_max"],
-                                                                 r["mitsuba_relmse"], r["mitsuba_relmse_min"], r["mitsuba_relmse_max"])
-            r["ratio_fmt"] = "%.2f [%.2f-%.2f]" % (r.get("eff_ratio", float("nan")), r.get("eff_ratio_min", float("nan")),
-                                                   r.get("eff_ratio_max", float("nan")))
-            r["means_fmt"] = "%.4f %.4f %.4f" % (r["mean_ratio_r"], r["mean_ratio_g"], r["mean_ratio_b"])
-            r["time_fmt"] = "%.2f [%.2f-%.2f]" % (r["time_factor"], r.get("time_factor_min", float("nan")),
-                                                  r.get("time_factor_max", float("nan")))
-        rep += ["Mitsuba %s, variant llvm_ad_rgb, %d threads, path integrator max_depth 2 (direct light), box filter, "
-                "the sampler of the mitsuba_sampler column (its references: independent); clrt's strategy label says its "
-                "--pipeline and, when not its default stratified sampler, its --sampler; scene converted by bench/to_mitsuba.py (diffuse reflectance x pi for the course's "
-                "convention; one render per image, the environment seen by the camera included, as in clrt's). Each renderer's error is "
-                "against its own reference of the same spp as clrt's (two independent halves). efficiency ratio = "
-                "clrt / Mitsuba = time factor (Mitsuba s / clrt s) x noise factor (Mitsuba relMSE / clrt relMSE); "
-                "[min-max] over the run pairs of equal seed number. means = Mitsuba/clrt reference mean per channel; "
-                "refs relMSE = between the two references (both noise floors plus any bias)."
-                % (mi_version, os.cpu_count() or 2), "",
-                md_table(mi_rows, ["scene", "spp", "clrt_strategy", "mitsuba_sampler", "clrt_fmt", "mi_fmt", "time_fmt", "noise_factor",
-                                   "ratio_fmt", "means_fmt", "refs_relmse", "agree"],
-                         {"time_factor": "%.2f", "noise_factor": "%.2f", "refs_relmse": "%.3g"}), "",
-                "Columns: clrt s / relMSE (medians); Mitsuba s / relMSE median [min-max]; agree: means within 1%.", ""]
-        write_csv(os.path.join(out, "mitsuba.csv"), mi_rows,
-                  ["scene", "spp", "runs", "clrt_strategy", "mitsuba_sampler", "clrt_s", "clrt_relmse", "clrt_eff", "mitsuba_s", "mitsuba_s_min",
-                   "mitsuba_s_max", "mitsuba_relmse", "mitsuba_relmse_min", "mitsuba_relmse_max", "mitsuba_eff",
-                   "mitsuba_ref_relmse", "eff_ratio", "eff_ratio_min", "eff_ratio_max", "time_factor", "noise_factor",
-                   "mean_ratio_r", "mean_ratio_g", "mean_ratio_b", "refs_relmse", "agree", "warnings"])
-    # ---- fused against wavefront (clrt --pipeline), when both ran
-    pipe_rows = []
+        return rep + ["Mitsuba 3 was not available (%s): no comparison in this run." % mi_version, ""]
+    if not mi_rows:
+        return rep
+    for r in mi_rows:
+        format_mitsuba_row(r)
+    rep += ["Mitsuba %s, variant llvm_ad_rgb, %d threads, path integrator max_depth 2 (direct light), box filter, "
+            "the sampler of the mitsuba_sampler column (its references: independent); clrt's strategy label says its "
+            "--pipeline and, when not its default stratified sampler, its --sampler; scene converted by bench/to_mitsuba.py (diffuse reflectance x pi for the course's "
+            "convention; one render per image, the environment seen by the camera included, as in clrt's). Each renderer's error is "
+            "against its own reference of the same spp as clrt's (two independent halves). efficiency ratio = "
+            "clrt / Mitsuba = time factor (Mitsuba s / clrt s) x noise factor (Mitsuba relMSE / clrt relMSE); "
+            "[min-max] over the run pairs of equal seed number. means = Mitsuba/clrt reference mean per channel; "
+            "refs relMSE = between the two references (both noise floors plus any bias)."
+            % (mi_version, os.cpu_count() or 2), "",
+            md_table(mi_rows, ["scene", "spp", "clrt_strategy", "mitsuba_sampler", "clrt_fmt", "mi_fmt", "time_fmt", "noise_factor",
+                               "ratio_fmt", "means_fmt", "refs_relmse", "agree"],
+                     {"time_factor": "%.2f", "noise_factor": "%.2f", "refs_relmse": "%.3g"}), "",
+            "Columns: clrt s / relMSE (medians); Mitsuba s / relMSE median [min-max]; agree: means within 1%.", ""]
+    write_csv(os.path.join(out, "mitsuba.csv"), mi_rows,
+              ["scene", "spp", "runs", "clrt_strategy", "mitsuba_sampler", "clrt_s", "clrt_relmse", "clrt_eff", "mitsuba_s", "mitsuba_s_min",
+               "mitsuba_s_max", "mitsuba_relmse", "mitsuba_relmse_min", "mitsuba_relmse_max", "mitsuba_eff",
+               "mitsuba_ref_relmse", "eff_ratio", "eff_ratio_min", "eff_ratio_max", "time_factor", "noise_factor",
+               "mean_ratio_r", "mean_ratio_g", "mean_ratio_b", "refs_relmse", "agree", "warnings"])
+    return rep
+
+
+def point_of(rows, r, strategy):
+    """The rows of rows at r's scene and spp with the given strategy label."""
+    return [x for x in rows if (x["scene"], x["spp"], x["strategy"]) == (r["scene"], r["spp"], strategy)]
+
+
+def pipeline_rows(summary, runs_rows):
+    """Fused against wavefront (clrt --pipeline) where both variants of a point ran."""
+    rows = []
     for r in summary:
         parts = r["strategy"].split("+")
         if "fused" not in parts:
             continue
         st = "+".join(x for x in parts if x != "fused")
-        wlabel = "+".join("wavefront" if x == "fused" else x for x in parts)
-        w = next((x for x in summary if x["scene"] == r["scene"] and x["spp"] == r["spp"] and x["strategy"] == wlabel), None)
+        w = next(iter(point_of(summary, r, "+".join("wavefront" if x == "fused" else x for x in parts))), None)
         if w is None:
             continue
-        fr = [x for x in runs_rows if x["scene"] == r["scene"] and x["spp"] == r["spp"] and x["strategy"] == r["strategy"]]
-        wr = [x for x in runs_rows if x["scene"] == r["scene"] and x["spp"] == r["spp"] and x["strategy"] == w["strategy"]]
+        fr, wr = point_of(runs_rows, r, r["strategy"]), point_of(runs_rows, r, w["strategy"])
         pairs = [b["render"] / f["render"] for f, b in zip(fr, wr)]
-        pipe_rows.append(dict(scene=r["scene"], strategy=st, spp=r["spp"], fused_s=r["render_s"], wavefront_s=w["render_s"],
-                              speedup="%.2f [%.2f-%.2f]" % (w["render_s"] / r["render_s"], min(pairs), max(pairs)),
-                              relmse_same="yes" if r["relmse"] == w["relmse"] else "NO (%.4g vs %.4g)" % (r["relmse"], w["relmse"])))
+        rows.append(dict(scene=r["scene"], strategy=st, spp=r["spp"], fused_s=r["render_s"], wavefront_s=w["render_s"],
+                         speedup="%.2f [%.2f-%.2f]" % (w["render_s"] / r["render_s"], min(pairs), max(pairs)),
+                         relmse_same="yes" if r["relmse"] == w["relmse"] else "NO (%.4g vs %.4g)" % (r["relmse"], w["relmse"])))
+    return rows
+
+
+def report_rest(summary, runs_rows, feat_rows, rb_rows, rb_text):
+    """The report's sections after Mitsuba: fused against wavefront, --all-features, ray_bench."""
+    rep, pipe_rows = [], pipeline_rows(summary, runs_rows)
     if pipe_rows:
         rep += ["## Fused against wavefront (clrt --pipeline)", "",
                 "Render s medians of the interleaved runs; speedup = wavefront s / fused s, [min-max] over the run pairs "
@@ -784,6 +873,40 @@ def main():
         rep += ["## Intersection: clrt kernels vs Embree 3 (ray_bench)", "",
                 md_table(rb_rows, ["scene", "rays", "count", "clrt_mrays", "embree_mrays", "ratio", "hit_agree", "prim_agree"],
                          {"clrt_mrays": "%.2f", "embree_mrays": "%.2f", "ratio": "%.2f"}), ""]
+    return rep
+
+
+def main():
+    a = parse_args()
+    if a.replot:
+        return replot(a.replot)
+    if a.quick:
+        a.runs = 1
+    clrt, help_text, strategies = clrt_setup(a)
+    if a.path_only:  # issue 16's strategies on the path-traced scenes alone
+        import bench_path
+        return bench_path.main_path_only(sys.modules[__name__], clrt, a)
+    mi, mi_version = mitsuba_module(a)
+    strategies, pipelines, samplers = variant_options(a, help_text, strategies)
+    scenes = select_scenes(a)
+    tmp = tempfile.mkdtemp(prefix="clrt-bench-scenes-")
+    prepared = {sc["name"]: prepare_scene(sc, tmp) for sc in scenes}
+    device_name, out = device_folder(clrt, prepared[scenes[0]["name"]][0], a)
+    log("bench: device '%s' -> %s; %d runs per point; strategies: %s" % (device_name, out, a.runs, ", ".join(strategies)))
+
+    ctx = types.SimpleNamespace(a=a, clrt=clrt, mi=mi, strategies=strategies, pipelines=pipelines, samplers=samplers,
+                                runs_rows=[], ref_rows=[], mi_rows=[])
+    summary, t_start = [], time.perf_counter()
+    for sc in scenes:
+        summary += run_scene(ctx, sc, *prepared[sc["name"]], out)
+    t_bench = time.perf_counter() - t_start
+    write_run_csvs(out, summary, ctx.runs_rows, ctx.ref_rows)
+    feat_rows = [] if a.no_features else run_features(clrt, a, prepared, out)
+    rb_rows, rb_text = run_ray_bench(a, out)
+
+    rep = report_errors(device_name, a, t_bench, ctx.ref_rows, summary)
+    rep += report_mitsuba(mi, mi_version, ctx.mi_rows, out)
+    rep += report_rest(summary, ctx.runs_rows, feat_rows, rb_rows, rb_text)
     if not a.no_path:  # issue 16: the path-traced scenes, every strategy (bench/bench_path.py)
         import bench_path
         rep += bench_path.run(sys.modules[__name__], clrt, a, out, tmp)

@@ -73,6 +73,19 @@ def convergence_slope(rs, floor):
     return float(np.polyfit(x, y, 1)[0])
 
 
+def plot_strategy(ax, label, rs, floor, colours):
+    """One strategy's curves: relMSE against time, convergence and efficiency against spp (RR dashed)."""
+    base, rr = label.replace("+RR", ""), label.endswith("+RR")
+    kw = dict(color=colours[base], ls="--" if rr else "-", marker="s" if rr else "o", label=label)
+    t = np.array([r["render_s"] for r in rs])
+    e = np.array([r["relmse"] for r in rs])
+    eerr = np.array([[r["relmse"] - r["relmse_min"] for r in rs], [r["relmse_max"] - r["relmse"] for r in rs]])
+    ax[0].errorbar(t, e, yerr=eerr, capsize=2, **kw)
+    spps = [r["spp"] for r in rs]
+    ax[1].plot(spps, np.maximum(e - floor, 1e-12), **kw)
+    ax[2].plot(spps, [r["efficiency"] for r in rs], **kw)
+
+
 def plot(name, rows, floor, path):
     import matplotlib
     matplotlib.use("Agg")
@@ -81,17 +94,8 @@ def plot(name, rows, floor, path):
     colours = dict(zip([n for n, _ in BASE], plt.rcParams["axes.prop_cycle"].by_key()["color"]))
     for label, _ in STRATEGIES:
         rs = sorted((r for r in rows if r["strategy"] == label), key=lambda r: r["spp"])
-        if not rs:
-            continue
-        base, rr = label.replace("+RR", ""), label.endswith("+RR")
-        kw = dict(color=colours[base], ls="--" if rr else "-", marker="s" if rr else "o", label=label)
-        t = np.array([r["render_s"] for r in rs])
-        e = np.array([r["relmse"] for r in rs])
-        eerr = np.array([[r["relmse"] - r["relmse_min"] for r in rs], [r["relmse_max"] - r["relmse"] for r in rs]])
-        ax[0].errorbar(t, e, yerr=eerr, capsize=2, **kw)
-        spps = [r["spp"] for r in rs]
-        ax[1].plot(spps, np.maximum(e - floor, 1e-12), **kw)
-        ax[2].plot(spps, [r["efficiency"] for r in rs], **kw)
+        if rs:
+            plot_strategy(ax, label, rs, floor, colours)
     ax[0].axhline(floor, ls=":", color="gray", lw=1, label="reference noise floor")
     spps = sorted({r["spp"] for r in rows})
     top = max(r["relmse"] - floor for r in rows if r["spp"] == spps[0])
@@ -113,6 +117,65 @@ def plot(name, rows, floor, path):
     plt.close(fig)
 
 
+def run_points(B, clrt, a, sc, paths, ref, meta, spps, runs_rows):
+    """Every strategy of one scene at every spp, --runs times (run k of every strategy back to back: drift
+    hits all alike); appends the single runs to runs_rows and returns the scene's rows (medians)."""
+    scene_rows = []
+    for spp in spps:
+        by = {label: [] for label, _ in STRATEGIES}
+        for run_ in range(a.runs):
+            for label, _ in STRATEGIES:
+                st, img, _ = clrt.render(paths[label], spp, run_ + 1)
+                r = dict(scene=sc["name"], strategy=label, spp=spp, seed=run_ + 1, render=st["render"],
+                         relmse=B.rel_mse(img, ref, 1.0), nonfinite=int((~np.isfinite(img)).sum()))
+                runs_rows.append(r)
+                by[label].append(r)
+        for label, params in STRATEGIES:
+            scene_rows.append(point_row(B, sc, label, params, spp, by[label], meta))
+    return scene_rows
+
+
+def point_row(B, sc, label, params, spp, rs, meta):
+    """path.csv's row of one strategy at one spp from its runs rs."""
+    t = [r["render"] for r in rs]
+    e = [r["relmse"] for r in rs]
+    row = dict(scene=sc["name"], strategy=label, params=params or "(none)", spp=spp, runs=len(rs),
+               render_s=B.med(t), relmse=B.med(e), nonfinite=sum(r["nonfinite"] for r in rs))
+    row["render_s_min"], row["render_s_max"] = B.spread(t)
+    row["relmse_min"], row["relmse_max"] = B.spread(e)
+    row["efficiency"] = 1.0 / (row["relmse"] * max(row["render_s"], 1e-9))
+    row["ref_relmse"] = meta["relmse"]
+    B.log("  %-10s spp %4d: render %.3fs  relMSE %.4g [%.4g-%.4g]  eff %.4g" % (
+        label, spp, row["render_s"], row["relmse"], row["relmse_min"], row["relmse_max"], row["efficiency"]))
+    return row
+
+
+def table_row(label, params, scene_rows, meta, spps):
+    """The report table's row of one strategy: its efficiency per spp (bold where best) and its slope."""
+    slope = convergence_slope([x for x in scene_rows if x["strategy"] == label], meta["relmse"])
+    t = dict(strategy=label, params=params or "(none)", slope="%.2f" % slope if slope is not None else "-")
+    for spp in spps:
+        r = next(x for x in scene_rows if x["strategy"] == label and x["spp"] == spp)
+        best = max(x["efficiency"] for x in scene_rows if x["spp"] == spp)
+        cell = "%.3g (%.3g s, %.3g)" % (r["efficiency"], r["render_s"], r["relmse"])
+        t["spp %d" % spp] = ("**%s**" % cell) if r["efficiency"] == best else cell
+    return t
+
+
+def scene_report(B, a, sc, scene_rows, meta, spps):
+    """The report's lines of one scene: one row per strategy, efficiency per spp, the best per spp in bold."""
+    table = [table_row(label, params, scene_rows, meta, spps) for label, params in STRATEGIES]
+    top = max((x for x in scene_rows if x["spp"] == spps[-1]), key=lambda x: x["efficiency"])
+    return ["### %s (%dx%d; reference MIS %d spp, its relMSE %.3g)" % (sc["name"], sc["res"][0], sc["res"][1],
+                                                                     meta["spp"], meta["relmse"]), "",
+            B.md_table(table, ["strategy", "params"] + ["spp %d" % s for s in spps] + ["slope"]), "",
+            "Cells: efficiency 1/(relMSE x render s) (render s, relMSE), medians of %d runs; bold: the most "
+            "efficient strategy at that spp; slope: of log(relMSE - reference relMSE) against log spp (-1: "
+            "converging as 1/spp). Most efficient at %d spp: **%s**. Non-finite pixels in all renders: %d."
+            % (a.runs, spps[-1], top["strategy"], sum(x["nonfinite"] for x in scene_rows)),
+            "Plot: path_%s.png." % sc["name"], ""]
+
+
 def run(B, clrt, a, out, tmp):
     """B: the bench module (its reference(), rel_mse(), med(), spread(), md_table(), write_csv(), log()).
     Returns the report's lines."""
@@ -131,51 +194,10 @@ def run(B, clrt, a, out, tmp):
         spps = sc["spp"][:2] if a.quick else sc["spp"]
         for label, _ in STRATEGIES:
             clrt.render(paths[label], 1, 0)  # warm-up: kernel cache
-        scene_rows = []
-        for spp in spps:
-            by = {label: [] for label, _ in STRATEGIES}
-            for run_ in range(a.runs):  # run k of every strategy back to back (drift hits all alike)
-                for label, _ in STRATEGIES:
-                    st, img, _ = clrt.render(paths[label], spp, run_ + 1)
-                    r = dict(scene=sc["name"], strategy=label, spp=spp, seed=run_ + 1, render=st["render"],
-                             relmse=B.rel_mse(img, ref, 1.0), nonfinite=int((~np.isfinite(img)).sum()))
-                    runs_rows.append(r)
-                    by[label].append(r)
-            for label, params in STRATEGIES:
-                rs = by[label]
-                t = [r["render"] for r in rs]
-                e = [r["relmse"] for r in rs]
-                row = dict(scene=sc["name"], strategy=label, params=params or "(none)", spp=spp, runs=len(rs),
-                           render_s=B.med(t), relmse=B.med(e), nonfinite=sum(r["nonfinite"] for r in rs))
-                row["render_s_min"], row["render_s_max"] = B.spread(t)
-                row["relmse_min"], row["relmse_max"] = B.spread(e)
-                row["efficiency"] = 1.0 / (row["relmse"] * max(row["render_s"], 1e-9))
-                row["ref_relmse"] = meta["relmse"]
-                scene_rows.append(row)
-                B.log("  %-10s spp %4d: render %.3fs  relMSE %.4g [%.4g-%.4g]  eff %.4g" % (
-                    label, spp, row["render_s"], row["relmse"], row["relmse_min"], row["relmse_max"], row["efficiency"]))
+        scene_rows = run_points(B, clrt, a, sc, paths, ref, meta, spps, runs_rows)
         plot(sc["name"], scene_rows, meta["relmse"], os.path.join(out, "path_%s.png" % sc["name"]))
         rows += scene_rows
-        # the table: one row per strategy, efficiency per spp, the best per spp in bold
-        table = []
-        for label, params in STRATEGIES:
-            slope = convergence_slope([x for x in scene_rows if x["strategy"] == label], meta["relmse"])
-            t = dict(strategy=label, params=params or "(none)", slope="%.2f" % slope if slope is not None else "-")
-            for spp in spps:
-                r = next(x for x in scene_rows if x["strategy"] == label and x["spp"] == spp)
-                best = max(x["efficiency"] for x in scene_rows if x["spp"] == spp)
-                cell = "%.3g (%.3g s, %.3g)" % (r["efficiency"], r["render_s"], r["relmse"])
-                t["spp %d" % spp] = ("**%s**" % cell) if r["efficiency"] == best else cell
-            table.append(t)
-        top = max((x for x in scene_rows if x["spp"] == spps[-1]), key=lambda x: x["efficiency"])
-        rep += ["### %s (%dx%d; reference MIS %d spp, its relMSE %.3g)" % (sc["name"], sc["res"][0], sc["res"][1],
-                                                                         meta["spp"], meta["relmse"]), "",
-                B.md_table(table, ["strategy", "params"] + ["spp %d" % s for s in spps] + ["slope"]), "",
-                "Cells: efficiency 1/(relMSE x render s) (render s, relMSE), medians of %d runs; bold: the most "
-                "efficient strategy at that spp; slope: of log(relMSE - reference relMSE) against log spp (-1: "
-                "converging as 1/spp). Most efficient at %d spp: **%s**. Non-finite pixels in all renders: %d."
-                % (a.runs, spps[-1], top["strategy"], sum(x["nonfinite"] for x in scene_rows)),
-                "Plot: path_%s.png." % sc["name"], ""]
+        rep += scene_report(B, a, sc, scene_rows, meta, spps)
     rep.insert(2, "Scenes, strategies and reference: bench/bench_path.py. %.0f s." % (time.perf_counter() - t0))
     rep.insert(3, "")
     B.write_csv(os.path.join(out, "path.csv"), rows,
@@ -190,13 +212,7 @@ def main_path_only(B, clrt, a):
     import shutil
     import tempfile
     tmp = tempfile.mkdtemp(prefix="clrt-bench-path-")
-    first = make_scene(PATH_SCENES[0], "", tmp, "probe")
-    _, _, err = clrt.render(first, 1, 0, verbose=True)
-    m = re.search(r"device: \[\d+\] (.*?) \(", err)
-    device_name = m.group(1).strip() if m else (a.device or "default")
-    out = a.out or os.path.join(ROOT, "bench", "results", B.slug(device_name))
-    os.makedirs(out, exist_ok=True)
-    os.makedirs(a.refs, exist_ok=True)
+    device_name, out = B.device_folder(clrt, make_scene(PATH_SCENES[0], "", tmp, "probe"), a)
     B.log("bench: path scenes only; device '%s' -> %s; %d runs per point" % (device_name, out, a.runs))
     rep = ["# clrt benchmark, path tracing: %s" % device_name, ""] + run(B, clrt, a, out, tmp)
     open(os.path.join(out, "path_report.md"), "w").write("\n".join(rep) + "\n")

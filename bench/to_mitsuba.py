@@ -8,7 +8,7 @@ Materials' DiffuseReflectance, Point/Directional/Area lights and SphericalDirect
 and probe maps resampled to lat-long). Drops, with a warning each: specular/mirror/dielectric/conductor
 terms, textures, spot and ambient lights, MeshInstance, LightMesh/LightSphere, degamma, thin lens.
 
-Conventions (measured against clrt, see README "Benchmark"):
+Conventions (measured against clrt, see bench/README.md "Against Mitsuba 3"):
 - Radiance: the course's shading model has no 1/π in the diffuse term (L = kd·cosθ·E); Mitsuba's
   Lambertian BRDF is ρ/π. So every diffuse reflectance is converted to ρ = π·kd and the emitters keep
   their values: one Mitsuba render is the course's image, the environment seen by the camera included

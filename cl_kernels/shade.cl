@@ -423,7 +423,7 @@ inline ShadowRay Shadow_Make(ShadingPoint sp, const __global Material* materials
 }
 
 /* Share of shading points that take multi-sample MIS's cosine sample (1 or ½; see EnvLight_SampleMis).
- * Measured (scripts/env_mis_compare.py, README "Environment MIS never loses"): ½, every other sample of
+ * Measured (experiments/env_mis_compare.py, docs/studies/2026-11-29-env-mis.md): ½, every other sample of
  * a pixel, cuts sample_lights by ~25% but doubles the relMSE on sunset.exr and gains nothing on
  * studio.exr; so 1, every shading point takes both samples. */
 #ifndef CLRT_ENV_MIS_COSINE_SHARE

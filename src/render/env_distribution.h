@@ -70,7 +70,7 @@ EnvDistribution buildEnvDistribution(const EnvMapView& map);
 // of that mass (one table for all buckets), and the point within the texel as the map's distribution
 // places it (EnvDistribution::cellSample). So a small bright source keeps its texel-sharp density, and no
 // normal of a bucket finds a light above its horizon weighted by less than its own cosine. A model of the
-// 1+1 MIS estimate (scripts/env_cosine_sim.py: 16 normals on each of the 8 maps of ../shared/envmaps) put
+// 1+1 MIS estimate (experiments/env_cosine_sim.py: 16 normals on each of the 8 maps of ../shared/envmaps) put
 // its variance 1.4–3.2× lower than with the map's distribution for the worst normal of each map, 2.3–7.2×
 // for the median one; the centre's cosine instead of the largest lost up to 2.9× for some normals (night,
 // studio), and coarse cells without the texel step up to 7.7× (6 of the 8 maps). Every texel with solid

@@ -1,8 +1,8 @@
 // SceneNode over nlohmann::ordered_json: the 2025 JSON form of the CENG795 scene format. Reads no
-// element semantics (scene_walker.cpp does). Mapping: {"Scene": {...}} is the root; keys starting with
-// '_' are attributes ("_id", "_type", "_plyFile", ...); an element's text is its string value, or its
-// "_data" key when it also has attributes; an array value means the element repeats. Numbers may be
-// strings or JSON numbers. Locations are key paths: "scene.json: Scene.Objects.Mesh[3].Faces".
+// element semantics (the walker does: scene_walker.h). Mapping: {"Scene": {...}} is the root; keys
+// starting with '_' are attributes ("_id", "_type", "_plyFile", ...); an element's text is its string
+// value, or its "_data" key when it also has attributes; an array value means the element repeats.
+// Numbers may be strings or JSON numbers. Locations are key paths: "scene.json: Scene.Objects.Mesh[3].Faces".
 // Syntax errors, and numbers beyond double range (1e400), become clrt::Error "scene.json:line:col:
 // <description>".
 #include <nlohmann/json.hpp>

@@ -113,6 +113,21 @@ public:
 
     void setStartLine(size_t line) { line_ = line; }
 
+    // A list property's count; a negative one (a signed count type) is an error, naming the face
+    // when `face` is given.
+    double listCount(Type t, const char* what, const uint64_t* face = nullptr) {
+        double n = read(t, what);
+        if (n < 0)
+            throw Error(path_ + ": " + where() + ": negative list count" +
+                        (face ? " in face " + std::to_string(*face) : std::string()));
+        return n;
+    }
+
+    // Reads n values of type t and drops them.
+    void skip(Type t, double n, const char* what) {
+        for (double k = 0; k < n; ++k) read(t, what);
+    }
+
 private:
     [[noreturn]] void truncated(const char* what) const {
         throw Error(path_ + ": file ends early while reading " + what +
@@ -140,14 +155,18 @@ private:
         return 0;
     }
 
-    double readAscii(Type t, const char* what) {
-        // Skip whitespace (CR and LF included), counting lines.
+    // Skips whitespace (CR and LF included), counting lines.
+    void skipSpace() {
         while (pos_ < data_.size()) {
             char c = data_[pos_];
             if (c == '\n') ++line_;
             else if (c != ' ' && c != '\t' && c != '\r' && c != '\f' && c != '\v') break;
             ++pos_;
         }
+    }
+
+    double readAscii(Type t, const char* what) {
+        skipSpace();
         size_t start = pos_;
         while (pos_ < data_.size() && !std::isspace(static_cast<unsigned char>(data_[pos_]))) ++pos_;
         if (start == pos_) truncated(what);
@@ -180,77 +199,101 @@ struct Header {
     size_t dataLine = 1;   // line number of the first data line (ASCII messages)
 };
 
-Header parseHeader(const std::string& path, const std::string& bytes) {
+// The header's lines after the magic word, one at a time, into a Header.
+struct HeaderParser {
+    const std::string& path;
     Header h;
+    size_t lineNo = 0;
+    bool sawFormat = false;
+
+    explicit HeaderParser(const std::string& p) : path(p) {}
+
+    Error bad(const std::string& why) const {
+        return Error(path + ": bad PLY header, line " + std::to_string(lineNo) + ": " + why);
+    }
+
+    // One line; false at end_header.
+    bool keywordLine(const std::string& line) {
+        std::istringstream ls(line);
+        std::string kw;
+        if (!(ls >> kw)) return true;  // blank line
+        if (kw == "comment" || kw == "obj_info") return true;
+        if (kw == "end_header") return false;
+        if (kw == "format") formatLine(ls);
+        else if (kw == "element") elementLine(ls);
+        else if (kw == "property") propertyLine(ls);
+        else throw bad("unknown keyword '" + kw + "'");
+        return true;
+    }
+
+    void formatLine(std::istringstream& ls) {
+        std::string f, version;
+        if (!(ls >> f >> version)) throw bad("expected 'format <type> <version>'");
+        if (f == "ascii") h.format = Format::Ascii;
+        else if (f == "binary_little_endian") h.format = Format::BinaryLE;
+        else if (f == "binary_big_endian") h.format = Format::BinaryBE;
+        else throw Error(path + ": unsupported PLY format '" + f + "'");
+        sawFormat = true;
+    }
+
+    void elementLine(std::istringstream& ls) {
+        Element e;
+        std::string count;
+        if (!(ls >> e.name >> count)) throw bad("expected 'element <name> <count>'");
+        if (count.empty() || count.find_first_not_of("0123456789") != std::string::npos)
+            throw bad("element count '" + count + "' is not a non-negative integer");
+        errno = 0;
+        unsigned long long c = std::strtoull(count.c_str(), nullptr, 10);
+        if (errno == ERANGE) throw bad("element count '" + count + "' is too large");
+        e.count = c;
+        h.elements.push_back(e);
+    }
+
+    void propertyLine(std::istringstream& ls) {
+        if (h.elements.empty()) throw bad("property before any element");
+        Property p;
+        std::string t;
+        if (!(ls >> t)) throw bad("expected a property type");
+        if (t == "list") {
+            std::string ct, vt;
+            p.isList = true;
+            if (!(ls >> ct >> vt >> p.name)) throw bad("expected 'property list <count type> <type> <name>'");
+            if (!parseType(ct, p.countType)) throw bad("unknown type '" + ct + "'");
+            if (!isIntegral(p.countType)) throw bad("list count type '" + ct + "' is not an integer type");
+            if (!parseType(vt, p.valueType)) throw bad("unknown type '" + vt + "'");
+        } else {
+            if (!parseType(t, p.valueType)) throw bad("unknown type '" + t + "'");
+            if (!(ls >> p.name)) throw bad("expected a property name");
+        }
+        h.elements.back().props.push_back(p);
+    }
+};
+
+Header parseHeader(const std::string& path, const std::string& bytes) {
     if (bytes.compare(0, 3, "ply") != 0) throw Error(path + ": not a PLY file (it does not start with 'ply')");
-    bool sawFormat = false, sawEnd = false;
-    size_t pos = 0, lineNo = 0;
+    HeaderParser hp(path);
+    bool sawEnd = false;
+    size_t pos = 0;
     while (pos < bytes.size()) {
         size_t nl = bytes.find('\n', pos);
         size_t end = nl == std::string::npos ? bytes.size() : nl;
         std::string line = bytes.substr(pos, end - pos);
         pos = nl == std::string::npos ? bytes.size() : nl + 1;
-        ++lineNo;
+        ++hp.lineNo;
         if (!line.empty() && line.back() == '\r') line.pop_back();
-        auto bad = [&](const std::string& why) {
-            return Error(path + ": bad PLY header, line " + std::to_string(lineNo) + ": " + why);
-        };
-        if (lineNo == 1) {
+        if (hp.lineNo == 1) {
             // Tolerate trailing blanks after the magic word, nothing else.
             if (line.compare(0, 3, "ply") != 0 || line.find_first_not_of(" \t", 3) != std::string::npos)
                 throw Error(path + ": not a PLY file (it does not start with 'ply')");
             continue;
         }
-        std::istringstream ls(line);
-        std::string kw;
-        if (!(ls >> kw)) continue;  // blank line
-        if (kw == "comment" || kw == "obj_info") continue;
-        if (kw == "end_header") { sawEnd = true; break; }
-        if (kw == "format") {
-            std::string f, version;
-            if (!(ls >> f >> version)) throw bad("expected 'format <type> <version>'");
-            if (f == "ascii") h.format = Format::Ascii;
-            else if (f == "binary_little_endian") h.format = Format::BinaryLE;
-            else if (f == "binary_big_endian") h.format = Format::BinaryBE;
-            else throw Error(path + ": unsupported PLY format '" + f + "'");
-            sawFormat = true;
-        } else if (kw == "element") {
-            Element e;
-            std::string count;
-            if (!(ls >> e.name >> count)) throw bad("expected 'element <name> <count>'");
-            if (count.empty() || count.find_first_not_of("0123456789") != std::string::npos)
-                throw bad("element count '" + count + "' is not a non-negative integer");
-            errno = 0;
-            unsigned long long c = std::strtoull(count.c_str(), nullptr, 10);
-            if (errno == ERANGE) throw bad("element count '" + count + "' is too large");
-            e.count = c;
-            h.elements.push_back(e);
-        } else if (kw == "property") {
-            if (h.elements.empty()) throw bad("property before any element");
-            Property p;
-            std::string t;
-            if (!(ls >> t)) throw bad("expected a property type");
-            if (t == "list") {
-                std::string ct, vt;
-                p.isList = true;
-                if (!(ls >> ct >> vt >> p.name)) throw bad("expected 'property list <count type> <type> <name>'");
-                if (!parseType(ct, p.countType)) throw bad("unknown type '" + ct + "'");
-                if (!isIntegral(p.countType)) throw bad("list count type '" + ct + "' is not an integer type");
-                if (!parseType(vt, p.valueType)) throw bad("unknown type '" + vt + "'");
-            } else {
-                if (!parseType(t, p.valueType)) throw bad("unknown type '" + t + "'");
-                if (!(ls >> p.name)) throw bad("expected a property name");
-            }
-            h.elements.back().props.push_back(p);
-        } else {
-            throw bad("unknown keyword '" + kw + "'");
-        }
+        if (!hp.keywordLine(line)) { sawEnd = true; break; }
     }
     if (!sawEnd) throw Error(path + ": bad PLY header: no 'end_header' line");
-    if (!sawFormat) throw Error(path + ": bad PLY header: no 'format' line");
-    h.dataStart = pos;
-    h.dataLine = lineNo + 1;
-    return h;
+    if (!hp.sawFormat) throw Error(path + ": bad PLY header: no 'format' line");
+    hp.h.dataStart = pos;
+    hp.h.dataLine = hp.lineNo + 1;
+    return hp.h;
 }
 
 int findProp(const Element& e, const char* name) {
@@ -267,11 +310,9 @@ size_t minElementSize(const Element& e, Format fmt) {
     return n;
 }
 
-}  // namespace
-
-MeshData readPly(const std::string& path) {
+// The whole file. Directories, FIFOs and devices (/dev/zero) would throw from the stream or never end.
+std::string readFileBytes(const std::string& path) {
     std::error_code ec;
-    // Directories, FIFOs and devices (/dev/zero) would throw from the stream or never end.
     if (!std::filesystem::is_regular_file(path, ec))
         throw Error(path + (std::filesystem::exists(path, ec) ? ": cannot open PLY file: not a regular file"
                                                               : ": cannot open PLY file: no such file"));
@@ -279,7 +320,131 @@ MeshData readPly(const std::string& path) {
     if (!in) throw Error(path + ": cannot open PLY file");
     std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     if (in.bad()) throw Error(path + ": cannot read PLY file");
+    return bytes;
+}
 
+// Where x y z [nx ny nz] [u v] are among a vertex element's properties: want[k] is the property of
+// out value k, -1 when the file has none.
+struct VertexLayout {
+    int want[8];
+    bool hasN, hasUv;
+};
+
+VertexLayout vertexLayout(const std::string& path, const Element& e) {
+    int ix = findProp(e, "x"), iy = findProp(e, "y"), iz = findProp(e, "z");
+    if (ix < 0 || iy < 0 || iz < 0) throw Error(path + ": vertex element lacks an x, y or z property");
+    int inx = findProp(e, "nx"), iny = findProp(e, "ny"), inz = findProp(e, "nz");
+    bool hasN = inx >= 0 && iny >= 0 && inz >= 0;
+    int iu = -1, iv = -1;
+    static const char* kUv[][2] = {{"u", "v"}, {"s", "t"}, {"texture_u", "texture_v"}, {"texture_s", "texture_t"}};
+    for (const auto& uv : kUv) {
+        iu = findProp(e, uv[0]);
+        iv = findProp(e, uv[1]);
+        if (iu >= 0 && iv >= 0) break;
+    }
+    bool hasUv = iu >= 0 && iv >= 0;
+    return VertexLayout{{ix, iy, iz, hasN ? inx : -1, hasN ? iny : -1, hasN ? inz : -1, hasUv ? iu : -1,
+                         hasUv ? iv : -1},
+                        hasN, hasUv};
+}
+
+// The vertex element: positions, and normals and texture coordinates when it has them all.
+void readVertices(const std::string& path, const Element& e, DataReader& rd, MeshData& mesh) {
+    if (e.count > uint64_t(std::numeric_limits<int>::max()))
+        throw Error(path + ": too many vertices (" + std::to_string(e.count) + ")");
+    const VertexLayout layout = vertexLayout(path, e);
+    mesh.positions.resize(e.count);
+    if (layout.hasN) mesh.normals.resize(e.count);
+    if (layout.hasUv) mesh.uvs.resize(e.count);
+    std::vector<double> vals(e.props.size());
+    for (uint64_t i = 0; i < e.count; ++i) {
+        for (size_t p = 0; p < e.props.size(); ++p) {
+            const Property& pr = e.props[p];
+            if (pr.isList) rd.skip(pr.valueType, rd.listCount(pr.countType, "a vertex list count"), "a vertex list");
+            else vals[p] = rd.read(pr.valueType, "vertex data");
+        }
+        // x y z [nx ny nz] [u v] into out[0..7], each a finite float or an error.
+        float out[8] = {};
+        for (int k = 0; k < 8; ++k) {
+            const int w = layout.want[k];
+            if (w >= 0 && !finiteFloat(vals[size_t(w)], out[k]))
+                throw Error(path + ": " + rd.where() + ": vertex " + std::to_string(i) + " has " +
+                            e.props[size_t(w)].name + " = " + numberText(vals[size_t(w)]) +
+                            ", not a finite 32-bit float");
+        }
+        mesh.positions[i] = Vec3(out[0], out[1], out[2]);
+        if (layout.hasN) mesh.normals[i] = Vec3(out[3], out[4], out[5]);
+        if (layout.hasUv) mesh.uvs[i] = Vec2{out[6], out[7]};
+    }
+}
+
+// The face element's vertex index list property (the last one so named).
+size_t faceListProperty(const std::string& path, const Element& e) {
+    int list = -1;
+    for (size_t p = 0; p < e.props.size(); ++p)
+        if (e.props[p].isList && (e.props[p].name == "vertex_indices" || e.props[p].name == "vertex_index"))
+            list = int(p);
+    if (list < 0) throw Error(path + ": face element has no 'vertex_indices' list property");
+    if (!isIntegral(e.props[size_t(list)].valueType))
+        throw Error(path + ": face vertex indices have a floating-point type");
+    return size_t(list);
+}
+
+// The n vertex indices of face f, fanned into triangles appended to `indices`.
+void readPolygon(const std::string& path, const Property& pr, double n, uint64_t f, DataReader& rd,
+                 std::vector<int>& poly, std::vector<int>& indices) {
+    poly.clear();
+    for (double k = 0; k < n; ++k) {
+        double idx = rd.read(pr.valueType, "face indices");
+        if (idx < 0 || idx > double(std::numeric_limits<int>::max()))
+            throw Error(path + ": " + rd.where() + ": face " + std::to_string(f) + " has vertex index " +
+                        numberText(idx) + ", out of range");
+        poly.push_back(int(idx));
+    }
+    for (size_t k = 1; k + 1 < poly.size(); ++k) {
+        indices.push_back(poly[0]);
+        indices.push_back(poly[k]);
+        indices.push_back(poly[k + 1]);
+    }
+}
+
+// The face element: its polygons as triangles; other properties read and dropped.
+void readFaces(const std::string& path, const Element& e, DataReader& rd, MeshData& mesh) {
+    const size_t list = faceListProperty(path, e);
+    mesh.indices.reserve(size_t(e.count) * 3);  // bounded by the size check in readPly
+    std::vector<int> poly;
+    for (uint64_t f = 0; f < e.count; ++f) {
+        for (size_t p = 0; p < e.props.size(); ++p) {
+            const Property& pr = e.props[p];
+            if (!pr.isList) { rd.read(pr.valueType, "face data"); continue; }
+            double n = rd.listCount(pr.countType, "a face list count", &f);
+            if (p != list) rd.skip(pr.valueType, n, "a face list");
+            else readPolygon(path, pr, n, f, rd, poly, mesh.indices);
+        }
+    }
+}
+
+// Any other element: read (so that the data are checked) and dropped.
+void skipElement(const Element& e, DataReader& rd) {
+    for (uint64_t i = 0; i < e.count; ++i)
+        for (const Property& pr : e.props) {
+            if (!pr.isList) { rd.read(pr.valueType, e.name.c_str()); continue; }
+            rd.skip(pr.valueType, rd.listCount(pr.countType, e.name.c_str()), e.name.c_str());
+        }
+}
+
+void checkFaceIndices(const std::string& path, const MeshData& mesh) {
+    const size_t nv = mesh.positions.size();
+    for (size_t i = 0; i < mesh.indices.size(); ++i)
+        if (size_t(mesh.indices[i]) >= nv)
+            throw Error(path + ": triangle " + std::to_string(i / 3) + " uses vertex index " +
+                        std::to_string(mesh.indices[i]) + " but there are only " + std::to_string(nv) + " vertices");
+}
+
+}  // namespace
+
+MeshData readPly(const std::string& path) {
+    std::string bytes = readFileBytes(path);
     Header h = parseHeader(path, bytes);
     DataReader rd(path, bytes, h.dataStart, h.format);
     rd.setStartLine(h.dataLine);
@@ -295,104 +460,18 @@ MeshData readPly(const std::string& path) {
         const bool isVertex = e.name == "vertex", isFace = e.name == "face";
         if ((isVertex && sawVertex) || (isFace && sawFace))
             throw Error(path + ": more than one '" + e.name + "' element");
-
         if (isVertex) {
             sawVertex = true;
-            if (e.count > uint64_t(std::numeric_limits<int>::max()))
-                throw Error(path + ": too many vertices (" + std::to_string(e.count) + ")");
-            int ix = findProp(e, "x"), iy = findProp(e, "y"), iz = findProp(e, "z");
-            if (ix < 0 || iy < 0 || iz < 0) throw Error(path + ": vertex element lacks an x, y or z property");
-            int inx = findProp(e, "nx"), iny = findProp(e, "ny"), inz = findProp(e, "nz");
-            bool hasN = inx >= 0 && iny >= 0 && inz >= 0;
-            int iu = -1, iv = -1;
-            static const char* kUv[][2] = {{"u", "v"}, {"s", "t"}, {"texture_u", "texture_v"}, {"texture_s", "texture_t"}};
-            for (const auto& uv : kUv) {
-                iu = findProp(e, uv[0]);
-                iv = findProp(e, uv[1]);
-                if (iu >= 0 && iv >= 0) break;
-            }
-            bool hasUv = iu >= 0 && iv >= 0;
-            mesh.positions.resize(e.count);
-            if (hasN) mesh.normals.resize(e.count);
-            if (hasUv) mesh.uvs.resize(e.count);
-            std::vector<double> vals(e.props.size());
-            for (uint64_t i = 0; i < e.count; ++i) {
-                for (size_t p = 0; p < e.props.size(); ++p) {
-                    const Property& pr = e.props[p];
-                    if (pr.isList) {
-                        double n = rd.read(pr.countType, "a vertex list count");
-                        if (n < 0) throw Error(path + ": " + rd.where() + ": negative list count");
-                        for (double k = 0; k < n; ++k) rd.read(pr.valueType, "a vertex list");
-                    } else {
-                        vals[p] = rd.read(pr.valueType, "vertex data");
-                    }
-                }
-                // x y z [nx ny nz] [u v] into out[0..7], each a finite float or an error.
-                const int want[8] = {ix, iy, iz, hasN ? inx : -1, hasN ? iny : -1, hasN ? inz : -1,
-                                     hasUv ? iu : -1, hasUv ? iv : -1};
-                float out[8] = {};
-                for (int k = 0; k < 8; ++k)
-                    if (want[k] >= 0 && !finiteFloat(vals[size_t(want[k])], out[k]))
-                        throw Error(path + ": " + rd.where() + ": vertex " + std::to_string(i) + " has " +
-                                    e.props[size_t(want[k])].name + " = " + numberText(vals[size_t(want[k])]) +
-                                    ", not a finite 32-bit float");
-                mesh.positions[i] = Vec3(out[0], out[1], out[2]);
-                if (hasN) mesh.normals[i] = Vec3(out[3], out[4], out[5]);
-                if (hasUv) mesh.uvs[i] = Vec2{out[6], out[7]};
-            }
+            readVertices(path, e, rd, mesh);
         } else if (isFace) {
             sawFace = true;
-            int list = -1;
-            for (size_t p = 0; p < e.props.size(); ++p)
-                if (e.props[p].isList && (e.props[p].name == "vertex_indices" || e.props[p].name == "vertex_index"))
-                    list = int(p);
-            if (list < 0) throw Error(path + ": face element has no 'vertex_indices' list property");
-            if (!isIntegral(e.props[list].valueType))
-                throw Error(path + ": face vertex indices have a floating-point type");
-            mesh.indices.reserve(size_t(e.count) * 3);  // bounded by the size check above
-            std::vector<int> poly;
-            for (uint64_t f = 0; f < e.count; ++f) {
-                for (size_t p = 0; p < e.props.size(); ++p) {
-                    const Property& pr = e.props[p];
-                    if (!pr.isList) { rd.read(pr.valueType, "face data"); continue; }
-                    double n = rd.read(pr.countType, "a face list count");
-                    if (n < 0) throw Error(path + ": " + rd.where() + ": negative list count in face " + std::to_string(f));
-                    if (int(p) != list) {
-                        for (double k = 0; k < n; ++k) rd.read(pr.valueType, "a face list");
-                        continue;
-                    }
-                    poly.clear();
-                    for (double k = 0; k < n; ++k) {
-                        double idx = rd.read(pr.valueType, "face indices");
-                        if (idx < 0 || idx > double(std::numeric_limits<int>::max()))
-                            throw Error(path + ": " + rd.where() + ": face " + std::to_string(f) + " has vertex index " +
-                                        numberText(idx) + ", out of range");
-                        poly.push_back(int(idx));
-                    }
-                    for (size_t k = 1; k + 1 < poly.size(); ++k) {
-                        mesh.indices.push_back(poly[0]);
-                        mesh.indices.push_back(poly[k]);
-                        mesh.indices.push_back(poly[k + 1]);
-                    }
-                }
-            }
+            readFaces(path, e, rd, mesh);
         } else {
-            for (uint64_t i = 0; i < e.count; ++i)
-                for (const Property& pr : e.props) {
-                    if (!pr.isList) { rd.read(pr.valueType, e.name.c_str()); continue; }
-                    double n = rd.read(pr.countType, e.name.c_str());
-                    if (n < 0) throw Error(path + ": " + rd.where() + ": negative list count");
-                    for (double k = 0; k < n; ++k) rd.read(pr.valueType, e.name.c_str());
-                }
+            skipElement(e, rd);
         }
     }
     if (!sawVertex) throw Error(path + ": PLY file has no vertex element");
-
-    const size_t nv = mesh.positions.size();
-    for (size_t i = 0; i < mesh.indices.size(); ++i)
-        if (size_t(mesh.indices[i]) >= nv)
-            throw Error(path + ": triangle " + std::to_string(i / 3) + " uses vertex index " +
-                        std::to_string(mesh.indices[i]) + " but there are only " + std::to_string(nv) + " vertices");
+    checkFaceIndices(path, mesh);
     return mesh;
 }
 

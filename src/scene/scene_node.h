@@ -1,6 +1,7 @@
-// SceneNode: the small read-only tree interface that the scene walker (scene_walker.cpp) reads. The
+// SceneNode: the small read-only tree interface that the scene walker (scene_walker.h) reads. The
 // XML reader (xml_node.cpp, pugixml) and the JSON reader (json_node.cpp, nlohmann::json) each expose
-// their document through it, so every scene element is interpreted in exactly one place (the walker).
+// their document through it, so every scene element is interpreted in exactly one place (the walker's
+// element readers, read_*.cpp).
 // Reads no elements itself. Locations are "file.xml:12:5" (XML, 1-based line:col of the element's
 // '<') or "file.json: Scene.Objects.Mesh[3].Faces" (JSON key path).
 #pragma once
@@ -50,7 +51,7 @@ public:
 SceneNodePtr parseXmlScene(const std::string& path, std::string data);
 SceneNodePtr parseJsonScene(const std::string& path, const std::string& data);
 
-// The walker (scene_walker.cpp): interprets a <Scene> node tree into the scene model.
+// The walker (scene_walker.h): interprets a <Scene> node tree into the scene model.
 struct Scene;
 Scene walkScene(const SceneNode& root, const std::string& path);
 

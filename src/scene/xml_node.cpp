@@ -1,5 +1,5 @@
 // SceneNode over a pugixml document: the XML form of the CENG795 scene format. Reads no element
-// semantics (scene_walker.cpp does); it exposes names, text, attributes and children, and turns
+// semantics (the walker does: scene_walker.h); it exposes names, text, attributes and children, and turns
 // pugixml's byte offsets into "file.xml:line:col" locations (1-based; col counts bytes and points at
 // the element's '<'). Parse errors become clrt::Error "file.xml:line:col: <pugixml description>".
 #include <algorithm>
