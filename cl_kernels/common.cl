@@ -51,7 +51,7 @@ inline float Rng_Uniform(RngKey k, uint dim) {
     return (float)(h >> 8) * (1.0f / 16777216.0f);
 }
 
-/* ---- Stratified 2D samples (CLRT_SAMPLER_STRATIFIED) --------------------------------------------
+/* ---- Stratified 2D samples (CLRT_PIXEL_SAMPLER_STRATIFIED) --------------------------------------------
  * Sample s of a pixel takes point idx of the (0,2)-sequence (radical inverse, Sobol's second
  * dimension), Owen-scrambled, where idx is s shuffled by an Owen scramble of its bits (Burley 2020,
  * "Practical Hash-based Owen Scrambling", JCGT 9(4)). The shuffle and both scrambles are hashed from
@@ -108,9 +108,9 @@ inline float2 Rng_Stratified2D(RngKey k, int sample, uint dim) {
 }
 
 /* The 2D sample of dimensions (dim, dim + 1) at a shading point of `path`: stratified over the pixel's
- * samples or independent, by scene.sampler. key = Rng_Key(scene.seed, path.pixel, path.sample, path.pathId). */
+ * samples or independent, by scene.pixelSampler. key = Rng_Key(scene.seed, path.pixel, path.sample, path.pathId). */
 inline float2 Sampler_2D(SceneParams scene, PathState path, RngKey key, uint dim) {
-    if (scene.sampler == CLRT_SAMPLER_STRATIFIED)
+    if (scene.pixelSampler == CLRT_PIXEL_SAMPLER_STRATIFIED)
         return Rng_Stratified2D(key, path.sample, dim);
     return (float2)(Rng_Uniform(key, dim), Rng_Uniform(key, dim + 1u));
 }

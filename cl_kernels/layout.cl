@@ -39,7 +39,7 @@
     S(ImageInfo) M(ImageInfo, offset) M(ImageInfo, width) M(ImageInfo, height) M(ImageInfo, format) \
     S(Light) M(Light, position) M(Light, direction) M(Light, radiance) M(Light, edgeU)            \
         M(Light, edgeV) M(Light, cosCoverageHalf) M(Light, cosFalloffHalf) M(Light, area)         \
-        M(Light, kind) M(Light, image) M(Light, mapping) M(Light, sampler) M(Light, distribution)  \
+        M(Light, kind) M(Light, image) M(Light, mapping) M(Light, envStrategy) M(Light, distribution)  \
         M(Light, objFirst) M(Light, objCount) M(Light, objRadius) M(Light, envCosine)                 \
     S(CameraParams) M(CameraParams, position) M(CameraParams, u) M(CameraParams, v)               \
         M(CameraParams, w) M(CameraParams, nearPlane) M(CameraParams, nearDistance)               \
@@ -50,7 +50,7 @@
         M(SceneParams, maxDepth) M(SceneParams, backgroundTexture) M(SceneParams, envLight)       \
         M(SceneParams, seed) M(SceneParams, splitDepth) M(SceneParams, envScale)                  \
         M(SceneParams, envImage) M(SceneParams, envMapping) M(SceneParams, numPlanes)               \
-        M(SceneParams, pathMode) M(SceneParams, sampler) M(SceneParams, samplerPad)                                      \
+        M(SceneParams, pathMode) M(SceneParams, pixelSampler) M(SceneParams, pixelSamplerPad)                                      \
     S(Ray) M(Ray, origin) M(Ray, direction)                                                       \
     S(Hit) M(Hit, t) M(Hit, prim) M(Hit, u) M(Hit, v)                                             \
     S(PathState) M(PathState, throughput) M(PathState, pixel) M(PathState, sample)                \

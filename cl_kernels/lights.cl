@@ -103,7 +103,7 @@ inline EnvLightDist EnvLight_Distribution(const __global Light* light, const __g
     EnvLightDist d;
     d.own = envDist + (light->distribution == CLRT_INVALID ? 0 : light->distribution);
     d.tab = envDist + (light->envCosine == CLRT_INVALID ? 0 : light->envCosine);
-    d.bucket = light->sampler == ENV_SAMPLE_MIS && light->envCosine != CLRT_INVALID ? EnvCos_Bucket(d.tab, n) : -1;
+    d.bucket = light->envStrategy == ENV_STRATEGY_MIS && light->envCosine != CLRT_INVALID ? EnvCos_Bucket(d.tab, n) : -1;
     return d;
 }
 
@@ -119,27 +119,27 @@ inline float3 EnvironmentLight_Sample(const __global Light* light, float3 n, flo
                                       const __global float4* texels, const __global float* envDist, float3* wi,
                                       float* dist) {
     *dist = INFINITY;
-    int sampler = light->sampler;
-    if (light->distribution == CLRT_INVALID && (sampler == ENV_SAMPLE_IMPORTANCE || sampler == ENV_SAMPLE_MIS))
-        sampler = ENV_SAMPLE_COSINE;
+    int strategy = light->envStrategy;
+    if (light->distribution == CLRT_INVALID && (strategy == ENV_STRATEGY_IMPORTANCE || strategy == ENV_STRATEGY_MIS))
+        strategy = ENV_STRATEGY_COSINE;
     const EnvLightDist d = EnvLight_Distribution(light, envDist, n);
     const int mapping = light->mapping;
     float3 w = n;
     float pdf = 0.0f;
     float2 uv = (float2)(-1.0f); /* map coordinates of w when a branch knows them */
-    switch (sampler) {
-    case ENV_SAMPLE_UNIFORM:
+    switch (strategy) {
+    case ENV_STRATEGY_UNIFORM:
         w = EnvSample_Uniform(n, u);
         pdf = 1.0f / (2.0f * CLRT_PI);
         break;
-    case ENV_SAMPLE_COSINE:
+    case ENV_STRATEGY_COSINE:
         w = EnvSample_Cosine(n, u);
         pdf = fmax(dot(w, n), 0.0f) * CLRT_INV_PI;
         break;
-    case ENV_SAMPLE_IMPORTANCE:
+    case ENV_STRATEGY_IMPORTANCE:
         if (!EnvLightDist_SampleUv(d, u.x, u.y, &w, &pdf, &uv)) return (float3)(0.0f);
         break;
-    default: { /* ENV_SAMPLE_MIS */
+    default: { /* ENV_STRATEGY_MIS */
         float pImp;
         if (u.x < 0.5f) {
             if (!EnvLightDist_SampleUv(d, 2.0f * u.x, u.y, &w, &pImp, &uv)) return (float3)(0.0f);
@@ -161,7 +161,7 @@ inline float3 EnvironmentLight_Sample(const __global Light* light, float3 n, flo
 
 /* Whether an environment light is sampled by multi-sample MIS (two shadow-ray slots). */
 inline int EnvLight_UsesMis(const __global Light* light) {
-    return light->kind == LIGHT_ENVIRONMENT && light->sampler == ENV_SAMPLE_MIS && light->distribution != CLRT_INVALID;
+    return light->kind == LIGHT_ENVIRONMENT && light->envStrategy == ENV_STRATEGY_MIS && light->distribution != CLRT_INVALID;
 }
 
 /* Power heuristic weight of a sample of density p drawn with expected count nP per shading point,

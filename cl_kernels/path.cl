@@ -56,8 +56,8 @@ inline float Path_EmissionWeight(int mode, float bsdfPdf, float lightPdf) {
  * course's NEE rule under MIS). */
 inline float Path_EnvLightPdf(const __global Light* light, const __global float* envDist, float3 dirWorld) {
 #ifdef CLRT_HAS_ENV_LIGHT
-    if (light->sampler == ENV_SAMPLE_UNIFORM) return 0.5f * CLRT_INV_PI;
-    if (light->sampler == ENV_SAMPLE_IMPORTANCE && light->distribution != CLRT_INVALID)
+    if (light->envStrategy == ENV_STRATEGY_UNIFORM) return 0.5f * CLRT_INV_PI;
+    if (light->envStrategy == ENV_STRATEGY_IMPORTANCE && light->distribution != CLRT_INVALID)
         return EnvDist_PdfUv(envDist + light->distribution, EnvMap_DirToUv(light->mapping, dirWorld));
 #endif
     return -1.0f;

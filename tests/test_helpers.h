@@ -81,14 +81,15 @@ struct TempDir {
 };
 
 // Flattens `scene` and renders `cam` at `spp` samples with `seed` on the test device.
-// stratified = false: --sampler independent (to compare noise with references rendered so).
-inline ImageRGB renderCamera(const Scene& scene, const Camera& cam, int spp = 1, uint32_t seed = 0, bool stratified = true) {
+// PixelSampler::Independent: --sampler independent (to compare noise with references rendered so).
+inline ImageRGB renderCamera(const Scene& scene, const Camera& cam, int spp = 1, uint32_t seed = 0,
+                             PixelSampler pixelSampler = PixelSampler::Stratified) {
     DeviceScene ds = flattenScene(scene);
     Renderer r(testContext(), ds);
     RenderSettings rs;
     rs.spp = spp;
     rs.seed = seed;
-    rs.stratified = stratified;
+    rs.pixelSampler = pixelSampler;
     RenderCounters c;
     return r.render(cam, rs, c);
 }

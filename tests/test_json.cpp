@@ -141,7 +141,7 @@ std::vector<std::string> modelDiffs(const Scene& A, const Scene& B) {
         d.s(p + "imageName", x.imageName, y.imageName);
         d.i(p + "tonemaps.size", int(x.tonemaps.size()), int(y.tonemaps.size()));
         for (size_t t = 0; t < std::min(x.tonemaps.size(), y.tonemaps.size()); ++t) {
-            const Tonemap &s = x.tonemaps[t], &r = y.tonemaps[t];
+            const TonemapSettings &s = x.tonemaps[t], &r = y.tonemaps[t];
             std::string q = p + "tonemaps[" + std::to_string(t) + "].";
             d.i(q + "op", int(s.op), int(r.op));
             d.f(q + "key", s.key, r.key);
@@ -165,7 +165,7 @@ std::vector<std::string> modelDiffs(const Scene& A, const Scene& B) {
         d.f(p + "falloffAngle", x.falloffAngle, y.falloffAngle);
         d.i(p + "imageIndex", x.imageIndex, y.imageIndex);
         d.i(p + "mapping", int(x.mapping), int(y.mapping));
-        d.i(p + "sampler", int(x.sampler), int(y.sampler));
+        d.i(p + "envStrategy", int(x.envStrategy), int(y.envStrategy));
     }
     d.i("materials.size", int(A.materials.size()), int(B.materials.size()));
     for (size_t k = 0; k < std::min(A.materials.size(), B.materials.size()); ++k) {
@@ -493,15 +493,15 @@ TEST_CASE("json: JSON-only spellings of the later course scenes", "[json]") {
         REQUIRE(a.lights.size() == 1);
         CHECK(a.lights[0].type == dev::LIGHT_ENVIRONMENT);
         CHECK(a.lights[0].mapping == dev::ENV_PROBE);
-        CHECK(a.lights[0].sampler == dev::ENV_SAMPLE_COSINE);
+        CHECK(a.lights[0].envStrategy == dev::ENV_STRATEGY_COSINE);
         CHECK(a.imagePaths.at(size_t(a.lights[0].imageIndex)).find("env.exr") != std::string::npos);
         Scene b = loadScene(writeText("env_latlong.json", envScene(R"({"_id": "1", "_type": "latlong", "ImageId": "1", "Sampler": "uniform"})")));
         REQUIRE(b.lights.size() == 1);
         CHECK(b.lights[0].mapping == dev::ENV_LATLONG);
-        CHECK(b.lights[0].sampler == dev::ENV_SAMPLE_UNIFORM);
+        CHECK(b.lights[0].envStrategy == dev::ENV_STRATEGY_UNIFORM);
         Scene c = loadScene(writeText("env_default.json", envScene(R"({"_id": "1", "ImageId": "1"})")));
         CHECK(c.lights.at(0).mapping == dev::ENV_LATLONG);
-        CHECK(c.lights.at(0).sampler == dev::ENV_SAMPLE_MIS);  // the default
+        CHECK(c.lights.at(0).envStrategy == dev::ENV_STRATEGY_MIS);  // the default
         std::string bad = writeText("env_bad.json", envScene(R"({"_id": "1", "_type": "cube", "ImageId": "1"})"));
         CHECK_THAT(loadError(bad), Catch::StartsWith(bad + ": Scene.Lights.SphericalDirectionalLight: ") &&
                                        Catch::Contains("cube"));

@@ -171,9 +171,9 @@ std::vector<std::string> lightFlags(uint32_t kinds) {
     return f.defines();
 }
 
-ImageRGB renderFile(const std::string& path, int spp, dev::EnvSamplerKind* override = nullptr, uint32_t seed = 1) {
+ImageRGB renderFile(const std::string& path, int spp, dev::EnvStrategy* override = nullptr, uint32_t seed = 1) {
     Scene scene = loadScene(path);
-    if (override) overrideEnvSampling(scene, *override);
+    if (override) overrideEnvStrategy(scene, *override);
     return renderCamera(scene, scene.cameras.at(0), spp, seed);
 }
 
@@ -744,12 +744,12 @@ TEST_CASE("env samplers on sunset.exr: importance and MIS beat uniform >= 10x in
     std::string path = writeFile(tmp.file("sunset.xml"),
                                  envSceneXml(image, "latlong", "mis", size, spp, "0.5 0.4 0.3", ground, "0.3 0.3 0.3", 60,
                                              "4.4 1.0 -11.0", "0 0 -5"));
-    dev::EnvSamplerKind mis = dev::ENV_SAMPLE_MIS;
+    dev::EnvStrategy mis = dev::ENV_STRATEGY_MIS;
     ImageRGB ref = renderFile(path, refSpp, &mis, 12345);
     std::vector<ImageRGB> imgs;
     std::vector<double> err;
     for (int s = 0; s < 4; ++s) {
-        dev::EnvSamplerKind es = dev::EnvSamplerKind(s);
+        dev::EnvStrategy es = dev::EnvStrategy(s);
         imgs.push_back(renderFile(path, spp, &es, 7));
         err.push_back(relativeMse(imgs.back(), ref));
         WARN("sunset.exr, " << size << "x" << size << ", " << spp << " spp, " << kSamplerNames[s] << ": relMSE " << err.back()
@@ -1035,7 +1035,7 @@ __kernel void mis_test(const __global Light* lights, const __global float4* nrm,
         Scene scene = loadScene(writeFile(tmp.file("mis.xml"), envSceneXml(name, "latlong", "mis", 4, 1)));
         DeviceScene ds = flattenScene(scene);
         REQUIRE(ds.lights.size() == 1);
-        REQUIRE(ds.lights[0].sampler == dev::ENV_SAMPLE_MIS);
+        REQUIRE(ds.lights[0].envStrategy == dev::ENV_STRATEGY_MIS);
         std::mt19937 rng(5);
         std::uniform_real_distribution<float> uni(0.0f, 0.99999994f);
         std::vector<dev::float4> nrm(n), us(n), out(n);

@@ -708,8 +708,8 @@ void checkHw6(const std::string& name, int spp, std::string (*edit)(const std::s
     if (edit) xml = edit(xml);
     TempDir d;
     Scene scene = loadScene(writeText(d, "hw6.xml", xml));
-    ImageRGB a = boxDownsample(renderCamera(scene, scene.cameras.at(0), spp, 1, false), 8);
-    ImageRGB b = boxDownsample(renderCamera(scene, scene.cameras.at(0), spp, 2, false), 8);
+    ImageRGB a = boxDownsample(renderCamera(scene, scene.cameras.at(0), spp, 1, PixelSampler::Independent), 8);
+    ImageRGB b = boxDownsample(renderCamera(scene, scene.cameras.at(0), spp, 2, PixelSampler::Independent), 8);
     ImageRGB ref = boxDownsample(readImage(hw6 + "_reference_outputs/" + name + ".exr"), 8);
     REQUIRE(a.width == ref.width);
     double toRef = relativeMse(a, ref), floor = relativeMse(a, b);

@@ -186,7 +186,7 @@ ImageRGB renderPathCamera(const Scene& scene, int cam, int size, int spp, uint32
     RenderSettings rs;
     rs.spp = spp;
     rs.seed = seed;
-    rs.stratified = false;  // the references jitter each sample independently
+    rs.pixelSampler = PixelSampler::Independent;  // the references jitter each sample independently
     RenderCounters counters;
     return r.render(c, rs, counters);
 }

@@ -1,4 +1,4 @@
-// The stratified sampler (cl_kernels/common.cl, Rng_Stratified2D; CLRT_SAMPLER_STRATIFIED): a host
+// The stratified sampler (cl_kernels/common.cl, Rng_Stratified2D; CLRT_PIXEL_SAMPLER_STRATIFIED): a host
 // replica checked bit for bit against the device, then on the replica: the samples of a pixel form
 // (0,m,2)-nets (one point in every elementary interval), each point alone is uniform over pixels (χ²),
 // and two dimension pairs of one pixel are independent (the correlation of their coordinates). Then renders: the
@@ -229,14 +229,14 @@ TEST_CASE("stratified sampler: less noise than independent samples, the same exp
     std::ofstream(tmp.file("sky.xml")) << skyScene(tmp.file("sky.exr"), 32);
     Scene scene = loadScene(tmp.file("sky.xml"));
     // Reference: 4096 independent samples; its own relMSE is ~1/256 of a 16-spp independent render's.
-    const ImageRGB ref = renderCamera(scene, scene.cameras.at(0), 4096, 99, false);
+    const ImageRGB ref = renderCamera(scene, scene.cameras.at(0), 4096, 99, PixelSampler::Independent);
     const int spp = 16, runs = 8;
     double errS = 0, errI = 0;
     ImageRGB meanS = ref;
     std::fill(meanS.pixels.begin(), meanS.pixels.end(), 0.0f);
     for (int k = 0; k < runs; ++k) {
-        const ImageRGB s = renderCamera(scene, scene.cameras.at(0), spp, uint32_t(k + 1), true);
-        const ImageRGB i = renderCamera(scene, scene.cameras.at(0), spp, uint32_t(k + 1), false);
+        const ImageRGB s = renderCamera(scene, scene.cameras.at(0), spp, uint32_t(k + 1), PixelSampler::Stratified);
+        const ImageRGB i = renderCamera(scene, scene.cameras.at(0), spp, uint32_t(k + 1), PixelSampler::Independent);
         errS += relativeMse(s, ref) / runs;
         errI += relativeMse(i, ref) / runs;
         for (size_t j = 0; j < s.pixels.size(); ++j) meanS.pixels[j] += s.pixels[j] / runs;

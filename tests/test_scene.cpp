@@ -171,7 +171,7 @@ TEST_CASE("scene: <Gamma>sRGB</Gamma> in a Tonemap block selects the sRGB curve"
     REQUIRE(s.cameras.at(0).tonemaps.size() == 1);
     CHECK(s.cameras[0].tonemaps[0].srgb);
     CHECK(load("srgb_lower.xml", tonemap("<Gamma> srgb </Gamma>")).cameras[0].tonemaps[0].srgb);
-    const Tonemap t = load("g24.xml", tonemap("<Gamma>2.4</Gamma>")).cameras[0].tonemaps[0];
+    const TonemapSettings t = load("g24.xml", tonemap("<Gamma>2.4</Gamma>")).cameras[0].tonemaps[0];
     CHECK_FALSE(t.srgb);
     CHECK(t.gamma == 2.4f);
     CHECK_FALSE(load("nog.xml", tonemap("")).cameras[0].tonemaps[0].srgb);
@@ -469,10 +469,10 @@ TEST_CASE("scene: lights", "[scene]") {
     CHECK(s.lights[3].falloffAngle == 20);
     CHECK(s.lights[4].type == dev::LIGHT_ENVIRONMENT);
     CHECK(s.lights[4].mapping == dev::ENV_PROBE);
-    CHECK(s.lights[4].sampler == dev::ENV_SAMPLE_COSINE);
+    CHECK(s.lights[4].envStrategy == dev::ENV_STRATEGY_COSINE);
     CHECK(s.lights[4].imageIndex == 0);
     CHECK(s.lights[5].mapping == dev::ENV_LATLONG);
-    CHECK(s.lights[5].sampler == dev::ENV_SAMPLE_IMPORTANCE);
+    CHECK(s.lights[5].envStrategy == dev::ENV_STRATEGY_IMPORTANCE);
     REQUIRE(s.imagePaths.size() == 1);
     CHECK(fs::path(s.imagePaths[0]) == (fs::path(path).parent_path() / "maps/env.exr").lexically_normal());
 }

@@ -14,6 +14,7 @@
 
 #include "cl/devices.h"
 #include "cl/program.h"
+#include "cli/args.h"
 #include "cli/output_names.h"
 #include "dist/part_file.h"
 #include "dist/tiles.h"
@@ -111,24 +112,19 @@ Camera cameraOf(const PartHeader& h) {
 }  // namespace
 
 int cmdMerge(int argc, char** argv) {
-    std::vector<std::string> paths;
     std::string outDir = ".", device;
-    for (int i = 2; i < argc; ++i) {
-        std::string s = argv[i];
-        auto value = [&]() -> std::string {
-            if (i + 1 >= argc) throw Error(s + ": missing value", ExitCode::Usage);
-            return argv[++i];
-        };
-        if (s == "-h" || s == "--help") {
-            std::fputs(kMergeHelp, stdout);
-            return 0;
-        }
-        if (s == "-o" || s == "--output") outDir = value();
-        else if (s == "--device") device = value();
-        else if (s == "-v" || s == "--verbose") setVerbose(true);
-        else if (!s.empty() && s[0] == '-') throw Error("unknown option '" + s + "' (see clrt merge --help)", ExitCode::Usage);
-        else paths.push_back(s);
+    bool help = false, verboseFlag = false;
+    const std::vector<std::string> paths = parseArgs(argc, argv, 2, {
+        {{"-h", "--help"}, false, [&](const std::string&, const std::string&) { help = true; }, /*endsParsing=*/true},
+        textOption({"-o", "--output"}, outDir),
+        textOption({"--device"}, device),
+        flagOption({"-v", "--verbose"}, verboseFlag),
+    }, "merge");
+    if (help) {
+        std::fputs(kMergeHelp, stdout);
+        return 0;
     }
+    if (verboseFlag) setVerbose(true);
     if (paths.empty()) throw Error("merge: expected part files (see clrt merge --help)", ExitCode::Usage);
     checkOutputDirectory(outDir);
 

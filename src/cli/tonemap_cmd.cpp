@@ -3,16 +3,14 @@
 #include "cli/tonemap_cmd.h"
 
 #include <cctype>
-#include <cerrno>
-#include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "cl/devices.h"
+#include "cli/args.h"
 #include "cli/output_names.h"
 #include "image/image.h"
 #include "output/output.h"
@@ -60,57 +58,47 @@ std::string lowerAscii(std::string v) {
     return v;
 }
 
-float parseFloatArg(const std::string& opt, const std::string& v) {
-    char* end = nullptr;
-    errno = 0;
-    float x = std::strtof(v.c_str(), &end);
-    if (v.empty() || *end != '\0' || errno != 0 || !std::isfinite(x))
-        throw Error(opt + ": expected a number, got '" + v + "'", ExitCode::Usage);
-    return x;
-}
-
 struct TonemapArgs {
     std::string in, outPath, scenePath, cameraId, deviceSpec;
     bool haveTmo = false, haveKey = false, haveBurn = false, haveSat = false, haveGamma = false, haveDelta = false;
-    TonemapSettings over;
+    TonemapSettings over;  // the explicit options (each with its have* flag)
     bool truncate = true;
     bool help = false;
 };
 
+// A float option that sets `target` and `have`.
+ArgOption floatOption(const char* name, float& target, bool& have) {
+    return {{name}, true, [&target, &have](const std::string& f, const std::string& v) {
+                target = parseFloatArg(f, v);
+                have = true;
+            }};
+}
+
 TonemapArgs parseTonemapArgs(int argc, char** argv) {
     TonemapArgs a;
-    std::vector<std::string> positional;
-    for (int i = 2; i < argc; ++i) {
-        std::string s = argv[i];
-        auto value = [&]() -> std::string {
-            if (i + 1 >= argc) throw Error(s + ": missing value", ExitCode::Usage);
-            return argv[++i];
-        };
-        if (s == "-h" || s == "--help") a.help = true;
-        else if (s == "-o" || s == "--output") a.outPath = value();
-        else if (s == "--tmo") { a.over.op = parseTmoKind(value()); a.haveTmo = true; }
-        else if (s == "--key") { a.over.key = parseFloatArg(s, value()); a.haveKey = true; }
-        else if (s == "--burn") { a.over.burnPercent = parseFloatArg(s, value()); a.haveBurn = true; }
-        else if (s == "--saturation") { a.over.saturation = parseFloatArg(s, value()); a.haveSat = true; }
-        else if (s == "--gamma") {
-            std::string v = value();
-            a.over.srgb = lowerAscii(v) == "srgb";
-            if (!a.over.srgb) a.over.gamma = parseFloatArg(s, v);
-            a.haveGamma = true;
-        }
-        else if (s == "--quantize") {
-            std::string v = value();
-            if (v != "round" && v != "floor") throw Error("--quantize: expected round or floor, got '" + v + "'", ExitCode::Usage);
-            a.truncate = v == "floor";
-        }
-        else if (s == "--delta") { a.over.delta = parseFloatArg(s, value()); a.haveDelta = true; }
-        else if (s == "--scene") a.scenePath = value();
-        else if (s == "--camera") a.cameraId = value();
-        else if (s == "--device") a.deviceSpec = value();
-        else if (s == "-v" || s == "--verbose") setVerbose(true);
-        else if (!s.empty() && s[0] == '-') throw Error("unknown option '" + s + "' (see clrt tonemap --help)", ExitCode::Usage);
-        else positional.push_back(s);
-    }
+    TonemapSettings& o = a.over;
+    bool verboseFlag = false;
+    using Str = const std::string&;
+    const std::vector<std::string> positional = parseArgs(argc, argv, 2, {
+        flagOption({"-h", "--help"}, a.help),
+        textOption({"-o", "--output"}, a.outPath),
+        {{"--tmo"}, true, [&](Str, Str v) { o.op = parseTmoKind(v); a.haveTmo = true; }},
+        floatOption("--key", o.key, a.haveKey),
+        floatOption("--burn", o.burnPercent, a.haveBurn),
+        floatOption("--saturation", o.saturation, a.haveSat),
+        {{"--gamma"}, true, [&](Str f, Str v) {
+             o.srgb = lowerAscii(v) == "srgb";
+             if (!o.srgb) o.gamma = parseFloatArg(f, v);
+             a.haveGamma = true;
+         }},
+        {{"--quantize"}, true, [&](Str f, Str v) { a.truncate = parseChoiceArg(f, v, {"round", "floor"}) == 1; }},
+        {{"--delta"}, true, [&](Str f, Str v) { o.delta = parseFloatArg(f, v); a.haveDelta = true; }},
+        textOption({"--scene"}, a.scenePath),
+        textOption({"--camera"}, a.cameraId),
+        textOption({"--device"}, a.deviceSpec),
+        flagOption({"-v", "--verbose"}, verboseFlag),
+    }, "tonemap");
+    if (verboseFlag) setVerbose(true);
     if (a.help) return a;
     if (positional.size() != 1) throw Error("tonemap: expected exactly one input image (see clrt tonemap --help)", ExitCode::Usage);
     if (!a.cameraId.empty() && a.scenePath.empty()) throw Error("tonemap: --camera needs --scene", ExitCode::Usage);
@@ -120,8 +108,8 @@ TonemapArgs parseTonemapArgs(int argc, char** argv) {
 }
 
 // The Tonemap blocks of the --scene camera, or one default block.
-std::vector<Tonemap> sceneBlocks(const TonemapArgs& a, const Scene* scene) {
-    if (!scene) return std::vector<Tonemap>(1);
+std::vector<TonemapSettings> sceneBlocks(const TonemapArgs& a, const Scene* scene) {
+    if (!scene) return std::vector<TonemapSettings>(1);
     const Camera* cam = nullptr;
     for (const Camera& c : scene->cameras)
         if (a.cameraId.empty() ? scene->cameras.size() == 1 : std::to_string(c.id) == a.cameraId) cam = &c;
@@ -133,12 +121,9 @@ std::vector<Tonemap> sceneBlocks(const TonemapArgs& a, const Scene* scene) {
     return cam->tonemaps;
 }
 
-// The blocks' settings with the explicit options applied (and the blocks' operators updated, for
-// their output names).
-std::vector<TonemapSettings> applyOptions(const TonemapArgs& a, std::vector<Tonemap>& blocks) {
-    std::vector<TonemapSettings> settings;
-    for (Tonemap& b : blocks) {
-        TonemapSettings s = tonemapSettingsFrom(b);
+// The explicit options applied to every block (the operator too, so the output names follow it).
+void applyOptions(const TonemapArgs& a, std::vector<TonemapSettings>& blocks) {
+    for (TonemapSettings& s : blocks) {
         if (a.haveTmo) s.op = a.over.op;
         if (a.haveKey) s.key = a.over.key;
         if (a.haveBurn) s.burnPercent = a.over.burnPercent;
@@ -147,15 +132,12 @@ std::vector<TonemapSettings> applyOptions(const TonemapArgs& a, std::vector<Tone
         if (a.haveDelta) s.delta = a.over.delta;
         s.truncate = a.truncate;
         validateTonemapSettings(s, "tonemap");
-        settings.push_back(s);
-        if (a.haveTmo) b.op = s.op;
     }
-    return settings;
 }
 
 // The output paths (with several blocks, -o gives the stem the block names are added to), each a
 // plain .png/.exr name in the -o directory, no two alike.
-std::vector<PlannedOutput> planTonemapOutputs(const std::string& outPath, const std::vector<Tonemap>& blocks) {
+std::vector<PlannedOutput> planTonemapOutputs(const std::string& outPath, const std::vector<TonemapSettings>& blocks) {
     const fs::path dir = fs::path(outPath).parent_path();
     const std::string name = fs::path(outPath).filename().string(), ext = lowerExtension(name);
     auto refuse = [&](const std::string& n, const std::string& why) {
@@ -191,9 +173,9 @@ int cmdTonemap(int argc, char** argv) {
     const std::string outDir = fs::path(a.outPath).parent_path().empty() ? "." : fs::path(a.outPath).parent_path().string();
     std::unique_ptr<Scene> scene;
     if (!a.scenePath.empty()) scene = std::make_unique<Scene>(loadScene(a.scenePath));
-    std::vector<Tonemap> blocks = sceneBlocks(a, scene.get());
-    const std::vector<TonemapSettings> settings = applyOptions(a, blocks);
-    const std::vector<PlannedOutput> outs = planTonemapOutputs(a.outPath, blocks);
+    std::vector<TonemapSettings> settings = sceneBlocks(a, scene.get());
+    applyOptions(a, settings);
+    const std::vector<PlannedOutput> outs = planTonemapOutputs(a.outPath, settings);
     checkOutputDirectory(outDir);
     std::vector<std::string> inputs = {a.in};
     if (scene) {

@@ -29,15 +29,15 @@ std::string fmtFloat(float v) {
 }
 // One Tonemap block as "tmo key burn saturation gamma srgb extension" (srgb 0/1; the extension last,
 // may be empty).
-std::string formatTonemap(const Tonemap& t) {
+std::string formatTonemap(const TonemapSettings& t) {
     return std::string(tmoKindName(t.op)) + " " + fmtFloat(t.key) + " " + fmtFloat(t.burnPercent) + " " +
            fmtFloat(t.saturation) + " " + fmtFloat(t.gamma) + " " + (t.srgb ? "1" : "0") + " " + t.extension;
 }
-Tonemap parseTonemap(const std::string& s, const std::string& what) {
+TonemapSettings parseTonemap(const std::string& s, const std::string& what) {
     std::istringstream in(s);
     std::string op;
     int srgb = 0;
-    Tonemap t;
+    TonemapSettings t;
     if (!(in >> op >> t.key >> t.burnPercent >> t.saturation >> t.gamma >> srgb) || (srgb != 0 && srgb != 1))
         throw Error(what + ": bad Tonemap attribute '" + s + "'");
     t.srgb = srgb == 1;

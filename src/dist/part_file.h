@@ -24,7 +24,7 @@ struct PartHeader {
     int part = 0, parts = 0;   // K of N
     std::vector<size_t> tiles; // sorted
     bool truncatePng = false, exrHalf = false;
-    std::vector<Tonemap> tonemaps;
+    std::vector<TonemapSettings> tonemaps;
     double renderSeconds = 0;
     std::string device;
 };

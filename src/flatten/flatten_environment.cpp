@@ -14,14 +14,14 @@ void flattenEnvironmentLight(const Scene& scene, const Light& l, int lightIndex,
     const int full = atlas.use(l.imageIndex);  // float4: what the distribution is built from
     d.image = atlas.useEnvironment(l.imageIndex);  // what the device reads (half4 where exact)
     d.mapping = l.mapping;
-    d.sampler = l.sampler;
+    d.envStrategy = l.envStrategy;
     const dev::ImageInfo& info = ds.images[size_t(full)];
     EnvMapView view{&ds.texels[info.offset], info.width, info.height, d.mapping};
     auto te = std::chrono::steady_clock::now();
     EnvDistribution dist = buildEnvDistribution(view);
     d.distribution = int(ds.envDistribution.size());
     ds.envDistribution.insert(ds.envDistribution.end(), dist.data.begin(), dist.data.end());
-    if (d.sampler == dev::ENV_SAMPLE_MIS) {  // light samples drawn by the shading normal's bucket
+    if (d.envStrategy == dev::ENV_STRATEGY_MIS) {  // light samples drawn by the shading normal's bucket
         const EnvCosineTable table(dist);
         d.envCosine = int(ds.envDistribution.size());
         ds.envDistribution.insert(ds.envDistribution.end(), table.data().begin(), table.data().end());

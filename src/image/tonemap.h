@@ -1,6 +1,7 @@
-// tonemap.h — tone-mapping operators on the host: the settings of one camera Tonemap block, the
-// plain C++ reference of every operator (Photographic = Reinhard et al. 2002 global, ACES =
-// Narkowicz's 2015 fit, Filmic = Hable's Uncharted 2 curve), and the per-image statistics they need.
+// tonemap.h — tone-mapping operators on the host (their settings: TonemapSettings, in
+// shared/tonemap_settings.h): the plain C++ reference of every operator (Photographic = Reinhard et
+// al. 2002 global, ACES = Narkowicz's 2015 fit, Filmic = Hable's Uncharted 2 curve), and the
+// per-image statistics they need.
 // The OpenCL kernels in cl_kernels/tonemap.cl implement the same formulas; tests compare the two.
 //
 // Conventions (chosen because they reproduce the course's reference PNGs, see README "Tone mapping"):
@@ -18,24 +19,14 @@
 #include <vector>
 
 #include "image/image.h"
-#include "shared/device_types.h"  // dev::TmoKind, the one operator enum (host, kernels, scene model)
+#include "shared/device_types.h"    // dev::TmoKind, the one operator enum (host, kernels, scene model)
+#include "shared/tonemap_settings.h"  // TonemapSettings, shared with the scene model (a camera's Tonemap blocks)
 
 namespace clrt {
 
 // "photographic", "aces", "filmic" (case-insensitive); throws clrt::Error (Usage) naming `what`.
 dev::TmoKind parseTmoKind(const std::string& name, const std::string& what = "--tmo");
 const char* tmoKindName(dev::TmoKind k);  // lower case
-
-struct TonemapSettings {
-    dev::TmoKind op = dev::TMO_PHOTOGRAPHIC;
-    float key = 0.18f;          // TMOOptions[0]
-    float burnPercent = 1.0f;   // TMOOptions[1] (Photographic only), in [0, 100]
-    float saturation = 1.0f;
-    float gamma = 2.2f;
-    bool srgb = false;          // <Gamma>sRGB</Gamma>: the sRGB transfer curve instead of v^(1/gamma)
-    double delta = 1e-6;        // the δ of the log-average (1e-6 reproduces the course)
-    bool truncate = true;       // 8-bit quantisation: floor (the course's) or round
-};
 
 // Throws clrt::Error naming `what` when a setting is out of range (key <= 0, burn outside [0,100],
 // saturation < 0, gamma <= 0, any NaN).

@@ -46,25 +46,14 @@ std::string lowerExtension(const std::string& name) {
     return ext;
 }
 
-TonemapSettings tonemapSettingsFrom(const Tonemap& t) {
-    TonemapSettings s;
-    s.op = t.op;
-    s.key = t.key;
-    s.burnPercent = t.burnPercent;
-    s.saturation = t.saturation;
-    s.gamma = t.gamma;
-    s.srgb = t.srgb;
-    return s;
-}
-
-std::vector<std::string> tonemapPngPaths(const std::string& hdrPath, const std::vector<Tonemap>& blocks) {
+std::vector<std::string> tonemapPngPaths(const std::string& hdrPath, const std::vector<TonemapSettings>& blocks) {
     fs::path p(hdrPath);
     const std::string stem = (p.parent_path() / p.stem()).string();
     std::vector<std::string> out;
     std::set<std::string> taken = {hdrPath};
     for (size_t i = 0; i < blocks.size(); ++i) {
         std::string suffix = blocks[i].extension;
-        if (suffix.empty() && blocks.size() > 1) suffix = std::string("_") + tmoKindName(tonemapSettingsFrom(blocks[i]).op);
+        if (suffix.empty() && blocks.size() > 1) suffix = std::string("_") + tmoKindName(blocks[i].op);
         std::string path = stem + suffix + ".png";
         if (taken.count(path)) {
             std::string alt = stem + suffix + "_" + std::to_string(i + 1) + ".png";
@@ -88,8 +77,7 @@ std::vector<std::vector<unsigned char>> tonemapCamera(const Camera& cam, const I
     TonemapDevice tm(dc);
     lap("tone-map program");
     tm.upload(radiance);
-    for (const Tonemap& t : cam.tonemaps) {
-        TonemapSettings s = tonemapSettingsFrom(t);
+    for (TonemapSettings s : cam.tonemaps) {
         s.truncate = opts.tonemapTruncate;
         TonemapDeviceResult r = tm.map(s);
         if (verbose())

@@ -38,13 +38,10 @@ std::string plainNameProblem(const std::string& name);
 // The lowercase extension of a file name (".png", ".exr", ...; "" if none).
 std::string lowerExtension(const std::string& name);
 
-// The host TonemapSettings of a scene Tonemap block.
-TonemapSettings tonemapSettingsFrom(const Tonemap& t);
-
 // The PNG paths of the tone-mapped images of `hdrPath` (its extension replaced): one block -> stem +
 // its Extension (usually none) + ".png"; several -> stem + (Extension, or "_<tmo>") + ".png", a
 // name already taken getting "_<block number>" appended (with a warning).
-std::vector<std::string> tonemapPngPaths(const std::string& hdrPath, const std::vector<Tonemap>& blocks);
+std::vector<std::string> tonemapPngPaths(const std::string& hdrPath, const std::vector<TonemapSettings>& blocks);
 
 // Writes the outputs of one camera (see above) into opts.outDir; returns the paths written. Throws
 // clrt::Error if the ImageName or a derived name is not a plain .png/.exr file name.

@@ -214,6 +214,14 @@ const char* renderStageName(int stage) {
     return stage >= 0 && stage < STAGE_COUNT ? names[stage] : "?";
 }
 
+bool parsePixelSampler(const std::string& name, PixelSampler& out) {
+    if (name != "stratified" && name != "independent") return false;
+    out = name == "stratified" ? PixelSampler::Stratified : PixelSampler::Independent;
+    return true;
+}
+
+const char* pixelSamplerName(PixelSampler s) { return s == PixelSampler::Stratified ? "stratified" : "independent"; }
+
 Renderer::Renderer(DeviceContext& dc, const DeviceScene& scene) : impl_(new Impl(dc, scene)) {}
 Renderer::~Renderer() = default;
 const BuildInfo& Renderer::buildInfo() const { return impl_->build; }
@@ -282,7 +290,7 @@ static BatchPlan planBatches(const DeviceScene& ds, size_t numPixels, const Rend
     const size_t batchPaths = plan.batch * size_t(plan.group);
     plan.bounces = ds.features.bounces() || sp.pathMode != 0;
     sp.seed = settings.seed;
-    sp.sampler = settings.stratified ? CLRT_SAMPLER_STRATIFIED : CLRT_SAMPLER_INDEPENDENT;
+    sp.pixelSampler = int(settings.pixelSampler);
     // Path tracing with Russian roulette has no depth cap (the course's references show none): the
     // roulette ends paths, kMaxRecursionDepth is the backstop.
     if (sp.pathMode & CLRT_PATH_RR) sp.maxDepth = kMaxRecursionDepth;
@@ -297,7 +305,7 @@ static BatchPlan planBatches(const DeviceScene& ds, size_t numPixels, const Rend
     sp.splitDepth = split;
     plan.capacity = plan.bounces ? batchPaths << split : batchPaths;
     for (const dev::Light& l : ds.lights)
-        if (l.kind == dev::LIGHT_ENVIRONMENT && l.sampler == dev::ENV_SAMPLE_MIS && l.distribution != CLRT_INVALID)
+        if (l.kind == dev::LIGHT_ENVIRONMENT && l.envStrategy == dev::ENV_STRATEGY_MIS && l.distribution != CLRT_INVALID)
             plan.lightSlots = 2;  // sample_lights' EnvLight_SampleMis: a light and a cosine sample
     if (sp.numLights > 0) {
         size_t budget = (size_t(256) << 20) / sizeof(dev::ShadowRay) / size_t(plan.lightSlots);

@@ -21,6 +21,15 @@
 
 namespace clrt {
 
+// How the numbers of a pixel's samples are drawn (clrt render --sampler, SceneParams.pixelSampler).
+// Stratified: camera jitter, lens, light and BSDF 2D samples stratified over a pixel's samples (a
+// scrambled (0,2)-sequence, cl_kernels/common.cl); Independent: every number independent, the noise of
+// renderers that sample so (tests/test_brdf.cpp).
+enum class PixelSampler { Independent = CLRT_PIXEL_SAMPLER_INDEPENDENT, Stratified = CLRT_PIXEL_SAMPLER_STRATIFIED };
+// "stratified", "independent" (the --sampler values); false for any other name.
+bool parsePixelSampler(const std::string& name, PixelSampler& out);
+const char* pixelSamplerName(PixelSampler s);
+
 const char* renderStageName(int stage);  // RenderStage -> "generate", "trace camera", ...
 
 struct RenderSettings {
@@ -31,10 +40,7 @@ struct RenderSettings {
     uint32_t seed = 0;
     size_t maxBatchPixels = 1u << 18;  // camera paths per batch (pixels x samples of each)
     int splitDepthOverride = -1;       // >= 0: force the dielectric split depth
-    bool stratified = true;            // true: camera jitter, lens, light and BSDF 2D samples stratified
-                                       // over a pixel's samples (CLRT_SAMPLER_STRATIFIED, common.cl);
-                                       // false: every number independent, the noise of renderers that
-                                       // sample so (tests/test_brdf.cpp); clrt render --sampler
+    PixelSampler pixelSampler = PixelSampler::Stratified;  // clrt render --sampler
     const std::atomic<bool>* stop = nullptr;  // set (from any thread): end after the current sample pass
     Pipeline pipeline = Pipeline::Auto;
 };

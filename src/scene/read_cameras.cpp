@@ -138,9 +138,9 @@ int readRenderer(const SceneNode& n, const std::string& who) {
     return mode;
 }
 
-Tonemap readTonemap(Walker& w, const SceneNode& n) {
+TonemapSettings readTonemap(Walker& w, const SceneNode& n) {
     w.checkChildren(n, {"TMO", "TMOOptions", "Saturation", "Gamma", "Extension"});
-    Tonemap t;
+    TonemapSettings t;
     if (auto c = n.child("TMO")) {
         std::string v = lower(trim(c->text()));
         if (!lookupType(tonemapOperators(), v, t.op))

@@ -76,8 +76,8 @@ void readEnvironmentLight(Walker& w, const SceneNode& l, Light& light) {
     if (type && !lookupType(envMappings(), lower(trim(*type)), light.mapping))
         fail(l, describe(l) + ": unknown type '" + *type + "' (latlong or probe)");
     std::optional<std::string> sampler = attributeOrChild(l, "sampler", "Sampler");
-    if (sampler && !lookupType(envSamplers(), lower(trim(*sampler)), light.sampler))
-        fail(l, describe(l) + ": unknown sampler '" + *sampler + "' (" + typeNames(envSamplers()) + ")");
+    if (sampler && !lookupType(envStrategies(), lower(trim(*sampler)), light.envStrategy))
+        fail(l, describe(l) + ": unknown sampler '" + *sampler + "' (" + typeNames(envStrategies()) + ")");
 }
 
 // LightMesh, LightSphere: shapes as well as lights, read by read_objects.cpp.

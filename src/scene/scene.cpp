@@ -5,13 +5,13 @@
 
 namespace clrt {
 
-bool parseEnvSampler(const std::string& name, dev::EnvSamplerKind& out) {
-    return lookupType(envSamplers(), name, out);
+bool parseEnvStrategy(const std::string& name, dev::EnvStrategy& out) {
+    return lookupType(envStrategies(), name, out);
 }
 
-void overrideEnvSampling(Scene& scene, dev::EnvSamplerKind sampler) {
+void overrideEnvStrategy(Scene& scene, dev::EnvStrategy strategy) {
     for (Light& l : scene.lights)
-        if (l.type == dev::LIGHT_ENVIRONMENT) l.sampler = sampler;
+        if (l.type == dev::LIGHT_ENVIRONMENT) l.envStrategy = strategy;
 }
 
 }  // namespace clrt

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "shared/device_types.h"  // the enums (one per concept, shared with the kernels)
+#include "shared/tonemap_settings.h"  // TonemapSettings: one camera Tonemap block
 #include "util/math.h"
 
 namespace clrt {
@@ -19,16 +20,6 @@ namespace clrt {
 // warning naming the file; a larger --spp is a usage error). Documented in README and `render --help`.
 constexpr int kMaxSamplesPerPixel = 1 << 20;  // 1,048,576 samples per pixel
 constexpr int kMaxRecursionDepth = 256;       // bounces after the camera ray
-
-struct Tonemap {
-    dev::TmoKind op = dev::TMO_PHOTOGRAPHIC;
-    float key = 0.18f;          // TMOOptions[0]
-    float burnPercent = 1.0f;   // TMOOptions[1]
-    float saturation = 1.0f;
-    float gamma = 2.2f;
-    bool srgb = false;          // <Gamma>sRGB</Gamma>: the sRGB transfer curve instead of a power
-    std::string extension;      // e.g. "_aces"; empty when the block names none
-};
 
 struct Camera {
     int id = 0;
@@ -43,7 +34,7 @@ struct Camera {
     int width = 0, height = 0;
     int numSamples = 1;
     std::string imageName;
-    std::vector<Tonemap> tonemaps;
+    std::vector<TonemapSettings> tonemaps;  // its Tonemap blocks
     int pathMode = 0;  // 0: classic ray tracing; <Renderer>PathTracing: dev CLRT_PATH_* bits (CLRT_PATH_ON set)
 };
 
@@ -95,7 +86,7 @@ struct Light {
     float coverageAngle = 0, falloffAngle = 0;  // Spot, full angles in degrees
     int imageIndex = -1;  // Environment
     dev::EnvMappingKind mapping = dev::ENV_LATLONG;
-    dev::EnvSamplerKind sampler = dev::ENV_SAMPLE_MIS;
+    dev::EnvStrategy envStrategy = dev::ENV_STRATEGY_MIS;  // sampler= (or <Sampler>)
     int shapeIndex = -1;  // LightMesh, LightSphere: the emitting shape (into Scene::shapes); intensity = Radiance
 };
 
@@ -144,8 +135,8 @@ struct Scene {
 };
 
 // Environment-light sampling strategy by name (uniform | cosine | importance | mis); false if unknown.
-bool parseEnvSampler(const std::string& name, dev::EnvSamplerKind& out);
-// Sets the sampler of every environment light (clrt render --env-sampling), before flattening.
-void overrideEnvSampling(Scene& scene, dev::EnvSamplerKind sampler);
+bool parseEnvStrategy(const std::string& name, dev::EnvStrategy& out);
+// Sets the env strategy of every environment light (clrt render --env-sampling), before flattening.
+void overrideEnvStrategy(Scene& scene, dev::EnvStrategy strategy);
 
 }  // namespace clrt

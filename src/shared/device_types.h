@@ -51,9 +51,9 @@ struct alignas(8) float2 { float x, y; };
     B(BRDF_TORRANCE_SPARROW, "TorranceSparrow", "CLRT_HAS_BRDF_TORRANCE_SPARROW")
 /* The other enums: N(KIND, name in scene files / on the command line). */
 #define CLRT_ENV_MAPPING_TABLE(N) N(ENV_LATLONG, "latlong") N(ENV_PROBE, "probe")
-#define CLRT_ENV_SAMPLER_TABLE(N)                                                                  \
-    N(ENV_SAMPLE_UNIFORM, "uniform") N(ENV_SAMPLE_COSINE, "cosine") N(ENV_SAMPLE_IMPORTANCE, "importance") \
-    N(ENV_SAMPLE_MIS, "mis")
+#define CLRT_ENV_STRATEGY_TABLE(N)                                                                  \
+    N(ENV_STRATEGY_UNIFORM, "uniform") N(ENV_STRATEGY_COSINE, "cosine") N(ENV_STRATEGY_IMPORTANCE, "importance") \
+    N(ENV_STRATEGY_MIS, "mis")
 #define CLRT_TEXTURE_TABLE(N) N(TEXTURE_IMAGE, "image") N(TEXTURE_PERLIN, "perlin") N(TEXTURE_CHECKERBOARD, "checkerboard")
 #define CLRT_DECAL_TABLE(N)                                                                        \
     N(DECAL_REPLACE_KD, "replace_kd") N(DECAL_BLEND_KD, "blend_kd") N(DECAL_REPLACE_KS, "replace_ks")    \
@@ -71,7 +71,7 @@ enum LightKind { CLRT_LIGHT_TABLE(CLRT_ENUM_CONSTANT_) };
 enum MaterialKind { CLRT_MATERIAL_TABLE(CLRT_ENUM_CONSTANT_) };
 enum BrdfKind { CLRT_BRDF_TABLE(CLRT_ENUM_CONSTANT_) };
 enum EnvMappingKind { CLRT_ENV_MAPPING_TABLE(CLRT_ENUM_CONSTANT_) };
-enum EnvSamplerKind { CLRT_ENV_SAMPLER_TABLE(CLRT_ENUM_CONSTANT_) };
+enum EnvStrategy { CLRT_ENV_STRATEGY_TABLE(CLRT_ENUM_CONSTANT_) };
 enum TextureKind { CLRT_TEXTURE_TABLE(CLRT_ENUM_CONSTANT_) };
 enum DecalKind { CLRT_DECAL_TABLE(CLRT_ENUM_CONSTANT_) };
 enum InterpKind { CLRT_INTERP_TABLE(CLRT_ENUM_CONSTANT_) };
@@ -252,12 +252,12 @@ typedef struct Light {
     int kind;              /* LightKind */
     int image;             /* env: index into images */
     int mapping;           /* env: EnvMappingKind */
-    int sampler;           /* env: EnvSamplerKind */
+    int envStrategy;       /* env: EnvStrategy (the scene's sampler=, --env-sampling) */
     int distribution;      /* env: offset into the env distribution buffer, or CLRT_INVALID */
     int objFirst;          /* LightMesh, LightSphere: first float4 of its data in lightData (see below) */
     int objCount;          /* LightMesh: number of triangles */
     float objRadius;       /* LightSphere: radius of the world-space bounding sphere around position */
-    int envCosine;         /* env, mis sampler: offset of its cosine-weighted distributions (env_distribution.h) in
+    int envCosine;         /* env, mis strategy: offset of its cosine-weighted distributions (env_distribution.h) in
                             * the env distribution buffer, or CLRT_INVALID (every other light) */
 } Light;
 /* lightData (float4s) of the object lights, written by src/render/flatten_lights.cpp:
@@ -298,13 +298,13 @@ typedef struct SceneParams {
     int envMapping;        /* its EnvMappingKind */
     int numPlanes;         /* infinite planes (see Plane) */
     int pathMode;          /* 0: classic recursive ray tracing; else CLRT_PATH_* bits (cl_kernels/path.cl) */
-    int sampler;           /* CLRT_SAMPLER_*: how light and BSDF samples are drawn (cl_kernels/common.cl) */
-    int samplerPad[3];     /* explicit padding to the float4 alignment */
+    int pixelSampler;      /* CLRT_PIXEL_SAMPLER_*: how a pixel's camera, light and BSDF samples are drawn (common.cl) */
+    int pixelSamplerPad[3]; /* explicit padding to the float4 alignment */
 } SceneParams;
 
-/* SceneParams.sampler (set per render from RenderSettings::stratified, clrt render --sampler). */
-#define CLRT_SAMPLER_INDEPENDENT 0 /* every number an independent uniform (Rng_Uniform) */
-#define CLRT_SAMPLER_STRATIFIED 1  /* light and BSDF 2D samples stratified over a pixel's samples */
+/* SceneParams.pixelSampler (set per render from RenderSettings::pixelSampler, clrt render --sampler). */
+#define CLRT_PIXEL_SAMPLER_INDEPENDENT 0 /* every number an independent uniform (Rng_Uniform) */
+#define CLRT_PIXEL_SAMPLER_STRATIFIED 1  /* light and BSDF 2D samples stratified over a pixel's samples */
 
 /* SceneParams.pathMode: the camera's <Renderer>PathTracing and its <RendererParams> (set per render). */
 #define CLRT_PATH_ON 1          /* <Renderer>PathTracing</Renderer> */

@@ -38,8 +38,8 @@ inline const TypeTable<dev::EnvMappingKind>& envMappings() {
     static const TypeTable<dev::EnvMappingKind> t = {CLRT_ENV_MAPPING_TABLE(CLRT_TYPE_ROW_N_)};
     return t;
 }
-inline const TypeTable<dev::EnvSamplerKind>& envSamplers() {
-    static const TypeTable<dev::EnvSamplerKind> t = {CLRT_ENV_SAMPLER_TABLE(CLRT_TYPE_ROW_N_)};
+inline const TypeTable<dev::EnvStrategy>& envStrategies() {
+    static const TypeTable<dev::EnvStrategy> t = {CLRT_ENV_STRATEGY_TABLE(CLRT_TYPE_ROW_N_)};
     return t;
 }
 inline const TypeTable<dev::TextureKind>& textureTypes() {

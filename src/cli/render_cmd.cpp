@@ -1,0 +1,218 @@
+// render_cmd.cpp — `clrt render` (see render_cmd.h): the pipeline load -> output checks -> flatten/BVH
+// -> kernel build -> one camera at a time (cli/camera_drivers.cpp) -> stats, and the refusals made
+// before any work (unknown camera, outputs that are inputs, an image no device can hold, options that
+// do not go together). Reads the scene's cameras (id, size) and its input files.
+#include "cli/render_cmd.h"
+
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "cl/devices.h"
+#include "cl/program.h"
+#include "cli/camera_drivers.h"
+#include "cli/interrupt.h"
+#include "cli/output_names.h"
+#include "cli/render_args.h"
+#include "cli/render_stats.h"
+#include "dist/dist_render.h"
+#include "dist/mpi_job.h"
+#include "dist/part_file.h"
+#include "flatten/device_scene.h"
+#include "output/output.h"
+#include "scene/scene_loader.h"
+#include "util/error.h"
+
+namespace clrt {
+
+namespace {
+
+// The cameras to render (--camera, else all); an error naming the scene if none.
+std::vector<const Camera*> selectCameras(const Scene& scene, const RenderArgs& a) {
+    std::vector<const Camera*> cams;
+    for (const Camera& c : scene.cameras)
+        if (a.cameraId.empty() || std::to_string(c.id) == a.cameraId) cams.push_back(&c);
+    if (cams.empty())
+        throw Error(a.positional[0] + (a.cameraId.empty() ? ": the scene has no camera" : ": no camera with id " + a.cameraId));
+    return cams;
+}
+
+// An image no selected device can hold is refused here, before the BVH, the kernel build and any
+// host allocation of its size (the renderer checks the same limit per device).
+void checkImagesFit(const RenderArgs& a, const std::vector<const Camera*>& cams, const std::vector<DeviceInfo>& devs) {
+    for (const Camera* c : cams) {
+        const uint64_t bytes = uint64_t(c->width) * uint64_t(c->height) * sizeof(dev::float4);
+        uint64_t best = 0;
+        std::string bestName;
+        for (const DeviceInfo& d : devs)
+            if (std::min<uint64_t>(d.maxAlloc, d.globalMem / 2) >= best) {
+                best = std::min<uint64_t>(d.maxAlloc, d.globalMem / 2);
+                bestName = d.name;
+            }
+        if (bytes > best)
+            throw Error(a.positional[0] + ": camera " + std::to_string(c->id) + ": " + std::to_string(c->width) + "x" +
+                            std::to_string(c->height) + " needs " + std::to_string(bytes >> 20) +
+                            " MiB of image memory; device '" + bestName + "' allows " + std::to_string(best >> 20) +
+                            " MiB per buffer",
+                        ExitCode::BadInput);
+    }
+}
+
+// One context and renderer (program) per device; a device whose setup fails is dropped while others
+// remain.
+struct DeviceRenderers {
+    std::vector<std::unique_ptr<DeviceContext>> contexts;
+    std::vector<std::unique_ptr<Renderer>> renderers;
+};
+DeviceRenderers makeRenderers(const std::vector<DeviceInfo>& devs, const DeviceScene& ds) {
+    DeviceRenderers out;
+    for (const DeviceInfo& d : devs) {
+        try {
+            auto dc = std::make_unique<DeviceContext>(d, /*profiling=*/!std::getenv("CLRT_NO_PROFILE"));  // per-kernel times for stats
+            auto r = std::make_unique<Renderer>(*dc, ds);
+            out.contexts.push_back(std::move(dc));
+            out.renderers.push_back(std::move(r));
+        } catch (const Error& e) {
+            if (devs.size() == 1) throw;
+            warn("device [" + std::to_string(d.index) + "] " + d.name + " dropped: " + e.what());
+        }
+    }
+    if (out.renderers.empty()) throw Error("no selected device could build the renderer", ExitCode::Device);
+    return out;
+}
+
+// What a render writes: the cameras' outputs, or with --part K/N one part file per camera.
+std::vector<PlannedOutput> plannedOutputs(const RenderArgs& a, const Scene& scene, const std::vector<const Camera*>& cams) {
+    std::vector<PlannedOutput> out = planRenderOutputs(scene, cams, a.outDir);
+    if (a.dist.parts == 0) return out;
+    out.clear();
+    for (const Camera* c : cams) {
+        const std::string name = partFileName(c->imageName, a.dist.part, a.dist.parts);
+        if (!plainNameProblem(name).empty())
+            throw Error(a.positional[0] + ": camera " + std::to_string(c->id) + ": part file name '" + name +
+                        "' is not a plain file name (" + plainNameProblem(name) + ")");
+        out.push_back({(std::filesystem::path(a.outDir) / name).string(), "camera " + std::to_string(c->id) + ": part file"});
+    }
+    return out;
+}
+
+// From here on Ctrl-C finishes the pass and writes the partial image; not in an MPI job: a signal
+// there (mpirun ending every rank because one failed, or the job cancelled) exits at once, writing
+// no image of a camera not yet finished, with a line naming the rank.
+void setRenderInterrupts(const RenderArgs& a) {
+    MpiJob& job = MpiJob::get();
+    setGracefulInterrupt(!job.distributed());
+    if (!job.distributed()) return;
+    static std::string note;
+    note = "clrt: error: rank " + std::to_string(job.rank()) + " of " + std::to_string(job.size()) + " (" + job.host() +
+           "): the MPI job was ended (a rank failed, see mpirun's message naming it, or the job was cancelled); "
+           "no image of an unfinished camera written" +
+           (a.dist.checkpointDir.empty() ? "" : ", finished tiles kept in " + a.dist.checkpointDir);
+    setImmediateExitNote(note.c_str());
+}
+
+// The scene file with the options that change the scene model applied: --env-sampling (every
+// environment light's env strategy) and --resolution (every camera at WxH, same view).
+Scene loadRenderScene(const RenderArgs& a) {
+    Scene scene = loadScene(a.positional[0]);
+    if (!a.envStrategy.empty()) {
+        dev::EnvStrategy es;
+        parseEnvStrategy(a.envStrategy, es);
+        overrideEnvStrategy(scene, es);
+    }
+    if (a.width > 0)
+        for (Camera& c : scene.cameras) {
+            c.width = a.width;
+            c.height = a.height;
+        }
+    return scene;
+}
+
+// The render of the parsed options: every selected camera, then the stats; 128 + signal if interrupted.
+int renderScene(RenderArgs a) {
+    if (a.positional.size() != 1) throw Error("render: expected exactly one scene file (see clrt render --help)", ExitCode::Usage);
+    setVerbose(a.verbose);
+    MpiJob& job = MpiJob::get();
+    if (job.rank() == 0) checkOutputDirectory(a.outDir);  // exists and accepts a new file: exit 4 before any work
+
+    StageTimes times;
+    auto t = std::chrono::steady_clock::now();
+    Scene scene = loadRenderScene(a);
+    times.parse = secondsSince(t);
+
+    std::vector<const Camera*> cams = selectCameras(scene, a);
+    // Plain .png/.exr names, no two alike, none of them a file the scene reads: exit 2 before any work.
+    checkOutputsAreNotInputs(plannedOutputs(a, scene, cams), sceneInputs(scene), a.positional[0]);
+    if (job.rank() == 0 && (a.dist.parts > 0 || !a.dist.checkpointDir.empty()))
+        a.dist.identity = renderIdentity(sceneInputs(scene), pixelOptions(a));
+    if (a.stop.active() && (a.dist.parts > 0 || !a.dist.checkpointDir.empty() || job.distributed()))
+        throw Error("--target-error/--time-limit: not with --part, --checkpoint or MPI ranks", ExitCode::Usage);
+    if (a.stop.active() && a.spp > 0 && a.spp < 4)
+        throw Error("--target-error/--time-limit: --spp caps the samples and must be at least 4 (one pair of "
+                    "2-sample passes), got " + std::to_string(a.spp), ExitCode::Usage);
+    std::vector<DeviceInfo> devs = selectDevices(a.device);
+    checkImagesFit(a, cams, devs);
+
+    t = std::chrono::steady_clock::now();
+    DeviceScene ds = flattenScene(scene);
+    times.flatten = secondsSince(t);
+    if (a.allFeatures) {
+        const int stack = ds.features.bvhStack;  // not a feature: the tree's own need
+        ds.features = FeatureSet::all();
+        ds.features.bvhStack = stack;
+    }
+    t = std::chrono::steady_clock::now();
+    DeviceRenderers dr = makeRenderers(devs, ds);
+    std::vector<std::unique_ptr<Renderer>>& renderers = dr.renderers;
+    times.build = secondsSince(t);
+    if (verbose()) printSetup(ds, renderers);
+
+    RenderCounters counters;
+    std::vector<DeviceWork> work(renderers.size());
+    for (size_t i = 0; i < renderers.size(); ++i)
+        work[i].name = "[" + std::to_string(renderers[i]->context().info().index) + "] " + renderers[i]->context().info().name;
+    std::string notRendered;  // cameras skipped after an interrupt
+    bool anyPartial = false;
+    int statsSpp = -1;
+    setRenderInterrupts(a);
+    int camIndex = 0;
+    for (const Camera* cam : cams) {
+        if (stopRequested().load()) {
+            notRendered += (notRendered.empty() ? "" : ", ") + std::to_string(cam->id);
+            continue;
+        }
+        const int asked = a.stop.active() ? 0 : a.spp > 0 ? a.spp : cam->numSamples;  // progressive: no target spp
+        const int reached = renderAndWriteCamera(a, *cam, camIndex++, renderers, work, counters, times.output);
+        if (reached < asked || (a.stop.active() && stopRequested().load())) anyPartial = true;
+        if (statsSpp < 0) statsSpp = reached;  // the stats line reports the first camera's
+    }
+    if (job.distributed()) gatherRankStats(work);
+    if (job.rank() != 0) return 0;
+    sumDeviceCounters(work, counters);
+    printTimes(times, ds, *renderers.front(), counters, work, std::max(statsSpp, 0));
+    if (stopRequested().load()) {
+        std::fprintf(stderr, "clrt: interrupted (%s)%s%s%s\n", stopSignal() == SIGTERM ? "SIGTERM" : stopSignal() == SIGHUP ? "SIGHUP" : "SIGINT",
+                     anyPartial ? ": partial images written (see above)" : "",
+                     notRendered.empty() ? "" : "; cameras not rendered: ", notRendered.c_str());
+        return 128 + stopSignal();
+    }
+    return 0;
+}
+
+}  // namespace
+
+int cmdRender(int argc, char** argv) {
+    RenderArgs a = parseRenderArgs(argc, argv, 2);
+    if (a.help) {
+        std::fputs(kRenderHelp, stdout);
+        return 0;
+    }
+    return renderScene(a);
+}
+
+}  // namespace clrt
