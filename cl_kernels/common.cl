@@ -140,7 +140,8 @@ inline float MotionBlur_Time(uint seed, int pixel, int sample) {
 
 /* x^e for x >= 0 (Phong lobes). exp2(e·log2 x) instead of pow(): PoCL's one-value pow() costs about
  * as much as the rest of sample_lights (TT at 1 spp: 0.36 -> 0.30 s for the kernel); the relative
- * error, ~3 ulp of log2 times e·|log2 x|, stays below 1e-5 wherever the lobe is not negligible. */
+ * error, ~3 ulp of log2 times e·|log2 x|, stays below 1e-5 wherever the lobe is not negligible.
+ * The form on every device, not a quirk (docs/quirks.md "Not quirks"). */
 inline float Math_PowNonNegative(float x, float e) {
     return x > 0.0f ? exp2(e * log2(x)) : pow(x, e); /* pow for x = 0: 0^0 = 1, 0^e = 0 */
 }
