@@ -8,6 +8,20 @@
 #define CLRT_PI 3.14159265358979323846f
 #define CLRT_INV_PI 0.31830988618379067154f
 
+/* ---- Device quirks ---------------------------------------------------------------------------
+ * The one place where the kernels read the CLRT_QUIRK_<NAME> defines that the host gives a device's
+ * programs (the table in src/cl/quirks.cpp; docs/quirks.md has each defect and its reproducer). Code
+ * elsewhere uses the macros defined here, never a vendor name.
+ * CLRT_QUIRK_INTEL_VEC_HINT (Intel's CPU runtime): its implicit work-item vectoriser miscompiles
+ * shade_hits (issue 17; scripts/intel_vectorizer_repro.sh, tests/intel_repro/shade_hits_alone.cpp) and
+ * slows render_fused 2.1x; vec_type_hint(float4) on those kernels keeps it from vectorising them. Other
+ * implementations ignore the hint (it only describes the kernel's data), so it is left out there. */
+#ifdef CLRT_QUIRK_INTEL_VEC_HINT
+#define CLRT_KERNEL_VEC_HINT __attribute__((vec_type_hint(float4)))
+#else
+#define CLRT_KERNEL_VEC_HINT
+#endif
+
 inline float4 f4(float3 v, float w) { return (float4)(v, w); }
 inline float maxComponent(float3 v) { return fmax(v.x, fmax(v.y, v.z)); }
 inline int allFinite3(float3 v) { return isfinite(v.x) && isfinite(v.y) && isfinite(v.z); }
@@ -126,7 +140,8 @@ inline float MotionBlur_Time(uint seed, int pixel, int sample) {
 
 /* x^e for x >= 0 (Phong lobes). exp2(e·log2 x) instead of pow(): PoCL's one-value pow() costs about
  * as much as the rest of sample_lights (TT at 1 spp: 0.36 -> 0.30 s for the kernel); the relative
- * error, ~3 ulp of log2 times e·|log2 x|, stays below 1e-5 wherever the lobe is not negligible. */
+ * error, ~3 ulp of log2 times e·|log2 x|, stays below 1e-5 wherever the lobe is not negligible.
+ * The form on every device, not a quirk (docs/quirks.md "Not quirks"). */
 inline float Math_PowNonNegative(float x, float e) {
     return x > 0.0f ? exp2(e * log2(x)) : pow(x, e); /* pow for x = 0: 0^0 = 1, 0^e = 0 */
 }

@@ -15,7 +15,8 @@
  * polynomial's error is 8.7e-8 over [0, 1]; the rest is the rounding of the quadrant fix-ups): atan(a) = a·P(a²) on
  * a = min/max in [0, 1], P fitted by us (least squares on Chebyshev nodes, degree 8 in a²). PoCL's
  * atan2 made EnvMap_DirToUv most of shade_hits and much of sample_lights (README "Where the time goes").
- * atan2(±0, x<0) gives +π (u = 0 or 1: the same lat-long column either way). */
+ * atan2(±0, x<0) gives +π (u = 0 or 1: the same lat-long column either way). The form on every device,
+ * not a quirk (docs/quirks.md "Not quirks"). */
 inline float Env_Atan2(float y, float x) {
     float ax = fabs(x), ay = fabs(y);
     float mx = fmax(ax, ay), mn = fmin(ax, ay);

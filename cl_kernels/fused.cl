@@ -68,12 +68,13 @@ typedef struct {
 } FusedEntry;
 
 /* Parameters: src/shared/kernel_params.h (CLRT_KERNEL_render_fused).
- * vec_type_hint(float4) keeps Intel's OpenCL CPU runtime from vectorising this kernel across work-items
- * (PoCL ignores it). Vectorised 16 wide (its default choice; CL_CONFIG_DUMP_ASM shows zmm code with ~700
- * gathers, calling 16-wide variants of Shade_Hit and Light_ShadowRays) the divergent kernel took 2.1x the
- * scalar time: sphere 64 spp 0.35 against 0.18 s, TT 3.1 against 1.4 s; forced to 8 wide with every
+ * CLRT_KERNEL_VEC_HINT (common.cl; quirk INTEL_VEC_HINT, docs/quirks.md): vec_type_hint(float4) on
+ * Intel's OpenCL CPU runtime, which keeps it from vectorising this kernel across work-items (a speed
+ * defect, not a wrong result); nothing elsewhere. Vectorised 16 wide (its default choice;
+ * CL_CONFIG_DUMP_ASM shows zmm code with ~700 gathers, calling 16-wide variants of Shade_Hit and
+ * Light_ShadowRays) the divergent kernel took 2.1x the scalar time: sphere 64 spp 0.35 against 0.18 s, TT 3.1 against 1.4 s; forced to 8 wide with every
  * function inlined, 0.22 s (README "Intel's runtime and render_fused"). */
-__kernel __attribute__((vec_type_hint(float4))) void render_fused(CLRT_KERNEL_PARAMS(render_fused)) {
+__kernel CLRT_KERNEL_VEC_HINT void render_fused(CLRT_KERNEL_PARAMS(render_fused)) {
     const int i = get_global_id(0);
     if (i >= count) return;
     const int pixel = firstPixel + i;

@@ -276,7 +276,8 @@ __attribute__((always_inline)) inline int Leaf_Intersect(const __global Bvh4Leaf
         float4 V, W, T, det;
         const int4 cand = Triangle4_Intersect(block->vertex, orgK, shear, isTri, *tMax, &V, &W, &T, &det);
         /* Spheres are not compiled out without CLRT_HAS_SPHERES: with the sphere test gone, Intel's CPU
-         * runtime traced the Audi TT's rays at about half the speed (measured). */
+         * runtime traced the Audi TT's rays at about half the speed (measured). On every device, not a
+         * quirk (docs/quirks.md "Not quirks"). */
         if (any(cand | (prim >= (int4)(numTriangles))))
             found |= Leaf_Block(block, prim, cand, V, W, T, det, spheres, numTriangles, org, dir, time, anyHit, tMax, hit);
 #endif

@@ -359,16 +359,17 @@ inline void Shade_Hit(SceneParams scene, CameraParams cam, PathState path, Ray r
 }
 
 /* Parameters of every kernel here: src/shared/kernel_params.h.
- * vec_type_hint(float4): a workaround for a miscompile by Intel's OpenCL CPU runtime (2026.22, its
- * implicit 16-way work-item vectoriser), which that hint turns off for this kernel alone ("Kernel
- * "shade_hits" was not vectorized" in the build log); other implementations ignore it (it only
- * describes the kernel's data). Vectorised, this kernel hands Child_Write float3 values (weight,
- * origin, direction) that hold other work-items' components and, at times, memory never written, so
- * classic/veachAjar's glass teapot went wrong on ~1.5% of pixels, differently from run to run, and
- * only when enough other code (textures, --all-features) was compiled in — even code never executed
- * (the Perlin evaluation). The same source is right with CL_CONFIG_USE_VECTORIZER=False, on PoCL
- * and on Oclgrind (no report); README "Conformance" and issue 17 have the evidence. */
-__kernel __attribute__((vec_type_hint(float4))) void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
+ * CLRT_KERNEL_VEC_HINT (common.cl; quirk INTEL_VEC_HINT, docs/quirks.md): vec_type_hint(float4) on
+ * Intel's OpenCL CPU runtime, nothing elsewhere. A workaround for a miscompile by that runtime (2026.22,
+ * its implicit 16-way work-item vectoriser), which the hint turns off for this kernel alone ("Kernel
+ * "shade_hits" was not vectorized" in the build log). Vectorised, this kernel hands Child_Write float3
+ * values (weight, origin, direction) that hold other work-items' components and, at times, memory never
+ * written, so classic/veachAjar's glass teapot went wrong on ~1.5% of pixels, differently from run to
+ * run, and only when enough other code (textures, --all-features) was compiled in — even code never
+ * executed (the Perlin evaluation). The same source is right with CL_CONFIG_USE_VECTORIZER=False, on PoCL
+ * and on Oclgrind (no report); README "Conformance" and issue 17 have the evidence; reproducer:
+ * scripts/intel_vectorizer_repro.sh (with tests/intel_repro/shade_hits_alone.cpp). */
+__kernel CLRT_KERNEL_VEC_HINT void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
     int i = get_global_id(0);
     if (i >= *queueCount) return;
     ShadeResult res;

@@ -13,7 +13,8 @@
  * and the two are the same code instantiated per vector width, so the bytes equal those of the scalar
  * one-pixel-per-work-item form (pow checked exhaustively for the exponents 1/2.2 and 1 on PoCL;
  * tests/test_tonemap.cpp compares the kernels with that form, kept there, byte for byte). Branches
- * become select() over both sides; every other operation is IEEE-exact, so lanes equal scalars. */
+ * become select() over both sides; every other operation is IEEE-exact, so lanes equal scalars.
+ * The form on every device, not a quirk (docs/quirks.md "Not quirks"). */
 #ifndef CLRT_TONEMAP_CL
 #define CLRT_TONEMAP_CL
 

@@ -7,6 +7,10 @@
 #   clang -x cl -cl-std=CL1.2 -target T -Xclang -finclude-default-header OPTIONS -S
 # This catches what GPU compilers reject and a CPU compiler accepts (address-space mismatches,
 # unsupported extensions, recursion, variable-length stack arrays). Fails on any compile error.
+# Device quirks (src/cl/quirks.cpp, docs/quirks.md): the dumped options carry the quirk defines of the
+# device that built them (PoCL: none), and NVIDIA and AMD devices get none either (tests/test_quirks.cpp
+# checks it), so the programs compiled here are the ones those GPUs would build. A quirk that gives
+# them a define goes into GPU_QUIRK_DEFINES below.
 # Usage: bash scripts/gpu_compile_check.sh [--all-scenes]   (--all-scenes: every scene under
 #        ../shared/scenes instead of the variant list; scenes that fail to load are listed, skipped)
 set -uo pipefail
@@ -15,6 +19,7 @@ ROOT=$PWD
 SCENES=$ROOT/../shared/scenes
 OUT=$ROOT/build/gpu-compile
 CLANG=${CLANG:-clang}
+GPU_QUIRK_DEFINES=""  # -DCLRT_QUIRK_<NAME> that src/cl/quirks.cpp gives NVIDIA/AMD devices: none today
 fail() { echo "gpu_compile_check: FAIL: $*"; exit 1; }
 command -v "$CLANG" >/dev/null || fail "$CLANG not found (Debian package clang)"
 [ -x build/clrt ] || fail "build/clrt missing (run scripts/setup.sh)"
@@ -40,7 +45,7 @@ done <<< "$list"
 
 n=0; errors=0; warnings=0
 for src in "$OUT"/programs/*.cl; do
-  opts=$(cat "${src%.cl}.options")
+  opts="$GPU_QUIRK_DEFINES $(cat "${src%.cl}.options")"
   for target in nvptx64-nvidia-nvcl "amdgcn-amd-amdhsa -nogpulib"; do
     t=${target%% *}
     log=${src%.cl}.$t.log

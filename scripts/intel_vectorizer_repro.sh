@@ -1,17 +1,19 @@
 #!/usr/bin/env bash
 # intel_vectorizer_repro.sh — reproduces issue 17: Intel's OpenCL CPU runtime (its implicit work-item
-# vectoriser) miscompiles shade_hits unless the kernel carries the vec_type_hint(float4) workaround
-# (cl_kernels/shade.cl). Copies the kernel sources to a temporary folder WITHOUT that attribute and
-# renders classic/veachAjar (64x48, 2 spp, seed 7; the glass teapot) through CLRT_KERNEL_DIR, never
-# from the kernel cache:
+# vectoriser) miscompiles shade_hits unless the kernel carries the vec_type_hint(float4) workaround:
+# quirk INTEL_VEC_HINT (src/cl/quirks.cpp, docs/quirks.md; CLRT_KERNEL_VEC_HINT in cl_kernels/common.cl).
+# Renders classic/veachAjar (64x48, 2 spp, seed 7; the glass teapot) on the wavefront pipeline (the
+# one that runs shade_hits; CPU devices pick the fused one for this size), never from the kernel cache,
+# with the quirk turned off on Intel's runtime through CLRT_QUIRKS=-INTEL_VEC_HINT:
 #   1. on PoCL (the reference);
 #   2. on Intel's runtime, twice (vectorised: differs from PoCL, and from run to run);
 #   3. on Intel's runtime with CL_CONFIG_USE_VECTORIZER=False (same source, not vectorised: agrees);
-#   4. on Intel's runtime with the sources as they are (workaround in place: agrees).
+#   4. on Intel's runtime as clrt runs there (the quirk's workaround in place: agrees).
 # Prints one clrt-imgdiff line against PoCL per render. Expected: 2 shows relmse ~0.1 and ~1.5% of
 # pixels, 3 and 4 relmse ~1e-8 (the last-bit differences of "Conformance" in the README).
 # Then the standalone reproducer, tests/intel_repro/shade_hits_alone.cpp: the same program (dumped by
-# CLRT_DUMP_PROGRAM), shade_hits alone on synthetic hits, no scene; its outputs on Intel against PoCL's
+# CLRT_DUMP_PROGRAM on PoCL, without and with CLRT_QUIRKS=+INTEL_VEC_HINT), shade_hits alone on synthetic
+# hits, no scene; its outputs on Intel against PoCL's
 # (expected: ~1500 of 16384 child slots differ vectorised, none without the vectoriser or with the hint).
 # Needs build/clrt, build/clrt-imgdiff, build/opencl-env.sh (scripts/setup_intel_ocl.sh) and ../shared.
 # Usage: bash scripts/intel_vectorizer_repro.sh
@@ -23,25 +25,24 @@ SCENE=$ROOT/../shared/scenes/classic/veachAjar.xml
 . build/opencl-env.sh
 build/clrt devices | grep -q "(platform: Intel(R) OpenCL)" || { echo "intel_vectorizer_repro: Intel's platform not listed"; exit 1; }
 [ -f "$SCENE" ] || { echo "intel_vectorizer_repro: $SCENE missing"; exit 1; }
+grep -q "CLRT_KERNEL_VEC_HINT void shade_hits(" cl_kernels/shade.cl ||
+  { echo "intel_vectorizer_repro: shade_hits no longer carries CLRT_KERNEL_VEC_HINT"; exit 1; }
 TMP=$(mktemp -d); trap 'rm -rf "$TMP"' EXIT
-mkdir -p "$TMP/src" && cp -r cl_kernels "$TMP/" && cp -r src/shared "$TMP/src/"
-sed -i 's/__kernel __attribute__((vec_type_hint(float4))) void shade_hits(/__kernel void shade_hits(/' "$TMP/cl_kernels/shade.cl"
-grep -q "__kernel void shade_hits(" "$TMP/cl_kernels/shade.cl" || { echo "intel_vectorizer_repro: shade_hits declaration not found"; exit 1; }
 export CLRT_NO_CACHE=1
-render() {  # render NAME KERNEL_DIR DEVICE [env...]
-  local name=$1 dir=$2 dev=$3; shift 3
+render() {  # render NAME QUIRKS DEVICE [env...]   (QUIRKS: the CLRT_QUIRKS value)
+  local name=$1 quirks=$2 dev=$3; shift 3
   mkdir -p "$TMP/$name"
-  env "$@" CLRT_KERNEL_DIR="$dir" build/clrt render "$SCENE" --resolution 64x48 --spp 2 --seed 7 \
-    --device "$dev" -o "$TMP/$name" > "$TMP/$name.log" 2>&1 || { tail -3 "$TMP/$name.log"; exit 1; }
+  env "$@" CLRT_QUIRKS="$quirks" build/clrt render "$SCENE" --resolution 64x48 --spp 2 --seed 7 \
+    --pipeline wavefront --device "$dev" -o "$TMP/$name" > "$TMP/$name.log" 2>&1 || { tail -3 "$TMP/$name.log"; exit 1; }
 }
-render pocl "$TMP/cl_kernels" platform:portable
-render intel1 "$TMP/cl_kernels" platform:intel
-render intel2 "$TMP/cl_kernels" platform:intel
-render novec "$TMP/cl_kernels" platform:intel CL_CONFIG_USE_VECTORIZER=False
-render fixed "$ROOT/cl_kernels" platform:intel
+render pocl "" platform:portable
+render intel1 -INTEL_VEC_HINT platform:intel
+render intel2 -INTEL_VEC_HINT platform:intel
+render novec -INTEL_VEC_HINT platform:intel CL_CONFIG_USE_VECTORIZER=False
+render fixed "" platform:intel
 ref=$TMP/pocl/VeachAjar.png
 for r in "intel1:Intel, vectorised (no workaround)" "intel2:Intel, vectorised, again" \
-         "novec:Intel, CL_CONFIG_USE_VECTORIZER=False" "fixed:Intel, with vec_type_hint (cl_kernels as is)"; do
+         "novec:Intel, CL_CONFIG_USE_VECTORIZER=False" "fixed:Intel, with vec_type_hint (quirk on, as clrt runs)"; do
   printf '%-50s %s\n' "${r#*:}" "$(build/clrt-imgdiff "$ref" "$TMP/${r%%:*}/VeachAjar.png")"
 done
 printf '%-50s %s\n' "Intel run 1 vs run 2 (no workaround)" \
@@ -49,14 +50,14 @@ printf '%-50s %s\n' "Intel run 1 vs run 2 (no workaround)" \
 
 # The standalone reproducer: shade_hits alone, on synthetic hits.
 g++ -std=c++17 -O1 -Isrc -o "$TMP/shade_hits_alone" tests/intel_repro/shade_hits_alone.cpp -lOpenCL
-dump() {  # dump NAME KERNEL_DIR: the veachAjar program's source and options
+dump() {  # dump NAME QUIRKS: the veachAjar program's source and options, as built on PoCL with CLRT_QUIRKS
   mkdir -p "$TMP/dump-$1"
-  CLRT_DUMP_PROGRAM="$TMP/dump-$1" CLRT_KERNEL_DIR="$2" build/clrt render "$SCENE" --resolution 8x8 --spp 1 \
+  CLRT_DUMP_PROGRAM="$TMP/dump-$1" CLRT_QUIRKS="$2" build/clrt render "$SCENE" --resolution 8x8 --spp 1 \
     --device platform:portable -o "$TMP/pocl" > /dev/null 2>&1
   ls "$TMP/dump-$1"/*.cl > /dev/null
 }
-dump nohint "$TMP/cl_kernels"
-dump hint "$ROOT/cl_kernels"
+dump nohint ""
+dump hint +INTEL_VEC_HINT
 alone() {  # alone OUT PROGRAM PLATFORM [env...]
   local out=$1 prog=$2 plat=$3; shift 3
   local src; src=$(ls "$TMP/dump-$prog"/*.cl)

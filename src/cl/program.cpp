@@ -23,7 +23,7 @@ namespace clrt {
 
 // ---- DeviceContext ----------------------------------------------------------------------------
 
-DeviceContext::DeviceContext(const DeviceInfo& info, bool profiling) : info_(info) {
+DeviceContext::DeviceContext(const DeviceInfo& info, bool profiling) : info_(info), quirks_(deviceQuirks(info)) {
     cl_int err = CL_SUCCESS;
     cl_device_id dev = info_.device();
     cl_context_properties props[] = {CL_CONTEXT_PLATFORM, (cl_context_properties)info_.platform(), 0};
@@ -385,7 +385,9 @@ cl::Program buildProgramFromSources(DeviceContext& dc, const std::vector<NamedSo
     BuildInfo local;
     BuildInfo& bi = info ? *info : local;
     bi = BuildInfo();
-    bi.options = buildOptions(defines);
+    std::vector<std::string> allDefines = defines;  // the caller's, then the device's quirks (the per-device hook)
+    allDefines.insert(allDefines.end(), dc.quirks().defines.begin(), dc.quirks().defines.end());
+    bi.options = buildOptions(allDefines);
 
     std::string source, names;
     for (const NamedSource& ns : namedSources) {

@@ -2,7 +2,7 @@
 // program.h — an OpenCL context + queue for one device (DeviceContext) and program building:
 // sources are the named cl_kernels/ files with what they #include (embedded at build time, or read
 // from $CLRT_KERNEL_DIR so kernels can be edited without rebuilding), compiled with
-// "-cl-std=CL1.2" plus the caller's defines, and cached as device binaries on disk
+// "-cl-std=CL1.2" plus the caller's defines and the device's quirk defines (src/cl/quirks.h), and cached as device binaries on disk
 // ($CLRT_CACHE_DIR, else $XDG_CACHE_HOME/clrt, else ~/.cache/clrt; CLRT_NO_CACHE=1 disables); each
 // entry carries its length and an FNV-1a 64 checksum, and a damaged entry is rebuilt and rewritten.
 // $CLRT_DUMP_PROGRAM=DIR also writes each program's exact source and options string into DIR
@@ -17,14 +17,18 @@
 #include <vector>
 
 #include "cl/devices.h"
+#include "cl/quirks.h"
 
 namespace clrt {
 
-// Owns the context and the (in-order) command queue of one device.
+// Owns the context and the (in-order) command queue of one device, and knows its quirks.
 class DeviceContext {
 public:
     explicit DeviceContext(const DeviceInfo& info, bool profiling = false);
     const DeviceInfo& info() const { return info_; }
+    // The device's quirks (deviceQuirks(), read once): the defines every program built here gets, and
+    // the host settings (work-group size) its launches use.
+    const DeviceQuirks& quirks() const { return quirks_; }
     const cl::Device& device() const { return info_.device; }
     cl::Context& context() { return context_; }
     cl::CommandQueue& queue() { return queue_; }
@@ -32,6 +36,7 @@ public:
 
 private:
     DeviceInfo info_;
+    DeviceQuirks quirks_;
     cl::Context context_;
     cl::CommandQueue queue_;
 };
@@ -76,7 +81,8 @@ cl::Program buildProgram(DeviceContext& dc, KernelProgram program, const std::ve
 
 // Builds exactly the given sources (concatenated in order; nothing is prepended except a
 // `#line 1 "<name>"` marker for texts that do not start with "#line"). Defines are build options such
-// as "-DCLRT_HAS_SPHERES=1". Uses the binary cache. On failure throws clrt::Error (Device) whose
+// as "-DCLRT_HAS_SPHERES=1"; the device's quirk defines (dc.quirks().defines) follow them, so they are
+// in the options string and in the cache key. Uses the binary cache. On failure throws clrt::Error (Device) whose
 // message holds the error name, the device, the options string and the full build log.
 cl::Program buildProgramFromSources(DeviceContext& dc, const std::vector<NamedSource>& namedSources,
                                     const std::vector<std::string>& defines, BuildInfo* info = nullptr);

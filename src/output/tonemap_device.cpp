@@ -1,5 +1,5 @@
 // tonemap_device.cpp — the host driver of cl_kernels/tonemap.cl (see tonemap_device.h): buffers,
-// launches with a fixed work-group size of 64 (PoCL compiles once per local size), the double sum
+// launches with the device's work-group size (quirk FIXED_WORK_GROUP: 64), the double sum
 // of the per-work-item compensated partials, the radix select of the percentile luminance, and the
 // map kernels at kPixelsPerMapItem pixels per work-item.
 #include "output/tonemap_device.h"
@@ -17,7 +17,6 @@
 namespace clrt {
 
 namespace {
-constexpr size_t kLocal = 64;
 constexpr size_t kMaxWorkItems = 16384;  // partial sums / histogram work-items per launch
 // Pixels per work-item of Tonemap_Map / Tonemap_MapFloat: TONEMAP_VEC in tonemap.cl (its pow calls
 // run on float16 vectors, ~15x faster on PoCL's CPU device than one scalar pow per pixel).
@@ -27,6 +26,7 @@ size_t mapWorkItems(size_t numPixels) { return (numPixels + kPixelsPerMapItem - 
 
 struct TonemapDevice::Impl {
     DeviceContext& dc;
+    const size_t local;  // work-group size (src/cl/quirks.h); the partial sums' order follows it
     BuildInfo build;
     cl::Program program;
     KernelArgs kLum, kHist, kMap, kMapFloat;  // bound by parameter name (src/shared/kernel_params.h)
@@ -37,7 +37,7 @@ struct TonemapDevice::Impl {
     bool lumValid = false;
     double lumDelta = -1, logSum = 0;
 
-    explicit Impl(DeviceContext& d) : dc(d) {
+    explicit Impl(DeviceContext& d) : dc(d), local(d.quirks().host.workGroupSize) {
         program = buildProgram(dc, KernelProgram::Tonemap, {}, &build);
         kLum = KernelArgs(program, "Tonemap_Luminance");
         kHist = KernelArgs(program, "Tonemap_Histogram");
@@ -48,8 +48,8 @@ struct TonemapDevice::Impl {
     }
 
     void launch(KernelArgs& k, size_t globalItems) {
-        CL_CPP(dc.queue().enqueueNDRangeKernel(k.ready(), cl::NullRange, cl::NDRange(roundUp(globalItems, kLocal)),
-                                               cl::NDRange(kLocal)));
+        CL_CPP(dc.queue().enqueueNDRangeKernel(k.ready(), cl::NullRange, cl::NDRange(roundUp(globalItems, local)),
+                                               local ? cl::NDRange(local) : cl::NullRange));
     }
 
     void upload(const ImageRGB& img) {
@@ -75,7 +75,7 @@ struct TonemapDevice::Impl {
         numPixels = n;
         width = img.width;
         height = img.height;
-        workItems = std::min(roundUp(n, kLocal), kMaxWorkItems);
+        workItems = std::min(roundUp(n, local), kMaxWorkItems);
         lumValid = false;
     }
 
@@ -86,7 +86,7 @@ struct TonemapDevice::Impl {
         kLum.set("rgb", rgb).set("n", cl_uint(numPixels)).set("delta", float(delta)).set("lum", lum);
         kLum.set("partials", partials);
         launch(kLum, workItems);
-        std::vector<float> p(roundUp(workItems, kLocal) * 2);
+        std::vector<float> p(roundUp(workItems, local) * 2);
         CL_CPP(dc.queue().enqueueReadBuffer(partials, CL_TRUE, 0, p.size() * sizeof(float), p.data()));
         double sum = 0;
         for (size_t i = 0; i < p.size(); i += 2) sum += double(p[i]) + double(p[i + 1]);

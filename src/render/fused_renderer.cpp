@@ -70,7 +70,8 @@ void collectEvents(std::vector<cl::Event>& events, RenderCounters& counters) {
 }
 }  // namespace
 
-FusedPath::FusedPath(cl::Context& ctx, const cl::Program& program) : k_(program, "render_fused") {
+FusedPath::FusedPath(cl::Context& ctx, const cl::Program& program, size_t localSize)
+    : k_(program, "render_fused"), localSize_(localSize) {
     rayCounts_ = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, 16));
 }
 
@@ -108,7 +109,8 @@ int FusedPath::renderTile(cl::CommandQueue& q, bool profiling, size_t tileFirst,
             k_.set("passes", passes);
             cl::Event ev;
             CL_CPP(q.enqueueNDRangeKernel(k_.ready(), cl::NullRange, cl::NDRange(roundUp(size_t(n), localSize_)),
-                                          cl::NDRange(localSize_), nullptr, profiling ? &ev : nullptr));
+                                          localSize_ ? cl::NDRange(localSize_) : cl::NullRange, nullptr,
+                                          profiling ? &ev : nullptr));
             const uint64_t cameraRays = uint64_t(n) * uint64_t(samples) * uint64_t(passes);
             uint64_t secondary = 0;
             if (plan.bounces) {  // blocking: the count of this launch (a 32-bit counter per launch)

@@ -42,7 +42,8 @@ std::string fusedUnsupported(const dev::SceneParams& sp, const FusedPlan& plan);
 class FusedPath {
 public:
     FusedPath() = default;
-    FusedPath(cl::Context& ctx, const cl::Program& program);
+    // localSize: the device's work-group size (DeviceContext::quirks().host; 0: the runtime's choice).
+    FusedPath(cl::Context& ctx, const cl::Program& program, size_t localSize);
     // The kernel, for binding its scene group (Renderer::Impl::setRenderArgs).
     KernelArgs& kernel() { return k_; }
 
@@ -64,7 +65,7 @@ public:
 private:
     KernelArgs k_;
     cl::Buffer rayCounts_;
-    size_t localSize_ = 64;
+    size_t localSize_ = 0;
 };
 
 }  // namespace clrt

@@ -73,7 +73,7 @@ struct Renderer::Impl {
         cl::Context& ctx = dc.context();
         queueCount = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(int)));
         nextCount = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(int)));
-        fused = FusedPath(ctx, program);
+        fused = FusedPath(ctx, program, localSize);
         nodes = uploader.upload(ds.bvh4.nodes);
         leaves = uploader.upload(ds.bvh4.leaves);
         tris = uploader.upload(ds.triangles);
@@ -119,9 +119,9 @@ struct Renderer::Impl {
         }
     }
 
-    // A fixed work-group size: PoCL compiles a kernel once per distinct local size, so letting the
-    // runtime choose (it varies with the global size) would recompile at every queue length.
-    size_t localSize = 64;
+    // The device's work-group size (quirk FIXED_WORK_GROUP, src/cl/quirks.cpp: 64 on every device, as
+    // PoCL compiles a kernel once per distinct local size); 0 would let the runtime choose.
+    size_t localSize = dc.quirks().host.workGroupSize;
     // With a profiling queue, each launch keeps its event and stage until collectProfile(), which runs
     // whenever the queue is drained (at least every batch and every kProfileEvents launches), so
     // host memory stays flat however many samples or bounces a render takes.
@@ -142,7 +142,8 @@ struct Renderer::Impl {
         if (local == 0) local = localSize;
         cl::Event ev;
         CL_CPP(dc.queue().enqueueNDRangeKernel(k.ready(), cl::NullRange, cl::NDRange(roundUp(n, local)),
-                                               cl::NDRange(local), nullptr, profiling ? &ev : nullptr));
+                                               local ? cl::NDRange(local) : cl::NullRange, nullptr,
+                                               profiling ? &ev : nullptr));
         if (profiling) events.push_back({stage, depthBin, ev});
     }
     // Adds the device time of the first `upTo` launches (all by default; they must have finished:
