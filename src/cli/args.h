@@ -1,3 +1,4 @@
+// src/cli/: the clrt commands (render, tonemap, merge) and what they share (argument parsing, output checks, signals).
 // args.h — the one command-line parser of the clrt commands (render, tonemap, merge): each command
 // lists its options in a table (spellings, whether a value follows, what to do with it), and
 // parseArgs walks argv by that table. The value parsers below give every command the same error

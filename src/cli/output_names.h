@@ -1,4 +1,3 @@
-// src/cli/: the clrt commands and what they share (output-name checks, interrupts, clrt tonemap, clrt merge).
 // output_names.h — the checks every run makes on its output files before any work starts: each name
 // is a plain file name of the right image type, no two outputs of a run share a name, none of them
 // is (by filesystem identity) a file the run reads, and the output directory really accepts a new
