@@ -1,6 +1,6 @@
 /* envmap.cl — environment maps on the device: the lat-long and probe mappings of SCENE_FORMAT.md,
  * their (u,v) -> solid-angle Jacobians, the bilinear radiance lookup, and sampling / pdf of the
- * piecewise-constant importance distribution built by src/render/env_distribution.cpp (whose host
+ * piecewise-constant importance distribution built by src/flatten/env_distribution.cpp (whose host
  * functions mirror these float-for-float; see the layout and within-cell rules there). No kernels. */
 #ifndef CLRT_ENVMAP_CL
 #define CLRT_ENVMAP_CL
@@ -240,7 +240,7 @@ inline int EnvDist_Sample(const __global float* dist, float u1, float u2, float3
     return EnvDist_SampleUv(dist, u1, u2, dir, pdf, &uv);
 }
 
-/* ---- Cosine-weighted light sampling (the mis sampler; layout and rules: src/render/env_distribution.h,
+/* ---- Cosine-weighted light sampling (the mis env strategy; layout and rules: src/flatten/env_distribution.h,
  * EnvCosineTable, whose sample and pdf mirror these) ---------------------------------------------------
  * The bucket of (world) shading normal n in table `tab`: its cell of the octahedral k × k grid (y up), or
  * -1 where n is 0 or not finite (the map's own distribution is used then). */

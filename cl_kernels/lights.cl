@@ -4,7 +4,7 @@
  * L(wi)/pdf(wi) for a direction drawn by the light's sampler) divided by the pdf of the chosen
  * direction, and the direction and distance (INFINITY: directional, environment) for the shadow ray.
  * LightMesh and LightSphere (object lights, also geometry): object_lights.cl.
- * Environment samplers (SCENE_FORMAT.md): uniform (hemisphere around n by rejection, pdf 1/2π),
+ * Env strategies (SCENE_FORMAT.md): uniform (hemisphere around n by rejection, pdf 1/2π),
  * cosine (pdf cosθ/π), importance (the map's luminance distribution, envmap.cl), mis. MIS is
  * multi-sample (EnvLight_SampleMis): one importance and one cosine direction per shading point, two
  * shadow rays, each weighted by the power heuristic; the renderer gives such a light two shadow-ray
@@ -90,8 +90,8 @@ inline float3 EnvSample_Cosine(float3 n, float2 u) {
 }
 
 /* The importance distribution an env light samples at a shading point: the map's (own), and under the mis
- * sampler the cosine-weighted table (tab) with the bucket of the point's normal (envmap.cl, EnvCos_*; bucket
- * -1: the map's). The importance sampler keeps the map's: the path tracer's MIS evaluates its pdf without a
+ * strategy the cosine-weighted table (tab) with the bucket of the point's normal (envmap.cl, EnvCos_*; bucket
+ * -1: the map's). The importance strategy keeps the map's: the path tracer's MIS evaluates its pdf without a
  * normal (path.cl, Path_EnvLightPdf). */
 typedef struct {
     const __global float* own;
@@ -214,7 +214,7 @@ inline void EnvLight_SampleMis(const __global Light* light, float3 n, float2 uLi
     *eB = withCosine ? EnvLight_MisValue(lB, cosShare, fmax(dot(wB, n), 0.0f) * CLRT_INV_PI, 1.0f, pB) : (float3)(0.0f);
 }
 
-/* The dispatcher. p: the shading point, n: its shading normal (environment samplers), u: two uniform
+/* The dispatcher. p: the shading point, n: its shading normal (env strategies), u: two uniform
  * numbers for lights that need them; images/texels/envDist: the texel atlas and the environment
  * distributions; lightData: the object lights' triangles and spheres (object_lights.cl). */
 inline float3 Light_Sample(const __global Light* light, float3 p, float3 n, float2 u, const __global ImageInfo* images,

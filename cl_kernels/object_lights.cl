@@ -1,7 +1,7 @@
 /* object_lights.cl — sampling the object lights (LightMesh, LightSphere: shapes in <Objects> that are
  * lights too) and the emission a ray sees when it hits one. Their data (world-space triangles with an
  * area CDF; a sphere's object-space centre, radius and worldToObject rows) is in the lightData buffer,
- * laid out as device_types.h describes next to struct Light (written by src/render/flatten_lights.cpp).
+ * laid out as device_types.h describes next to struct Light (written by src/flatten/flatten_lights.cpp).
  * Both return, like every Light_Sample case, L(wi) / pdf(wi) for the sampled direction wi (solid angle).
  *   LightMesh:   a triangle by area (binary search of the CDF), a uniform point on it: pdf over the
  *                area 1/A, in solid angle d²/(A·cosθ_L); one-sided, the front face (counter-clockwise

@@ -52,7 +52,7 @@ inline float Path_EmissionWeight(int mode, float bsdfPdf, float lightPdf) {
 }
 
 /* The solid-angle density with which sample_lights draws direction dirWorld from an environment light,
- * or -1 where it depends on the shading normal (the cosine and mis samplers: such a light keeps the
+ * or -1 where it depends on the shading normal (the cosine and mis env strategies: such a light keeps the
  * course's NEE rule under MIS). */
 inline float Path_EnvLightPdf(const __global Light* light, const __global float* envDist, float3 dirWorld) {
 #ifdef CLRT_HAS_ENV_LIGHT
@@ -122,7 +122,7 @@ inline float Path_BouncePdf(ShadingPoint sp, const __global Material* materials,
 
 /* The MIS weight of a light sample (sample_lights) in direction wi: the power heuristic against the
  * BSDF sampling of the same direction for lights a BSDF ray can reach (environment lights with a
- * normal-independent sampler, object lights); 1 for every other light and without
+ * normal-independent env strategy, object lights); 1 for every other light and without
  * MultipleImportanceSampling. e: what Light_Sample returned. */
 inline float Path_LightSampleWeight(int mode, const __global Light* light, ShadingPoint sp,
                                     const __global Material* materials, const __global float* envDist, float3 wi,

@@ -1,5 +1,5 @@
 /* tonemap.cl — tone mapping of a float RGB image (3 floats per pixel, row-major) to 8-bit RGB.
- * Three kernels, driven by src/render/tonemap_device.cpp:
+ * Three kernels, driven by src/output/tonemap_device.cpp:
  *   Tonemap_Luminance: Y per pixel, and per work-item compensated (Neumaier) partial sums of
  *                      log(δ + Y) that the host adds up in double;
  *   Tonemap_Histogram: one radix-select pass (256 bins of 8 bits of the float bit pattern, among the

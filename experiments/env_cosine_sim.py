@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-# env_cosine_sim.py — does the mis sampler's cosine-weighted light sampling (src/flatten/env_distribution.h,
+# env_cosine_sim.py — does the mis env strategy's cosine-weighted light sampling (src/flatten/env_distribution.h,
 # EnvCosineTable) beat the map's own distribution, for every normal? A numpy model, not clrt's code: per
 # texel of a lat-long map, the exact variance of the 1+1 MIS estimate (one light sample, one cosine sample,
 # power heuristic) of E(n) = ∫ L(w) max(0, n.w) dw, no visibility, relative to E(n)^2, for 16 normals (up and

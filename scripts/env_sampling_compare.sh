@@ -1,6 +1,6 @@
 #!/bin/sh
 # env_sampling_compare.sh — renders a sphere on a ground plane under ../shared/envmaps/sunset.exr with
-# each environment sampler (uniform, cosine, importance, mis) at equal spp, and a high-spp MIS reference;
+# each env strategy (uniform, cosine, importance, mis) at equal spp, and a high-spp MIS reference;
 # prints each sampler's relMSE against the reference and writes docs/env_sampling_sunset.png (left to
 # right: uniform, cosine, importance, mis, reference) and docs/env_sampling_sunset.txt.
 # The work is the [envcompare] test case of clrt_tests (tests/test_lights.cpp), which fails unless

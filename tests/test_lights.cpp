@@ -4,11 +4,11 @@
 // and lookup functions against these host references on PoCL; half4 texels: packed only when exact,
 // looked up bit for bit as their float4 image), the white furnace per sampler and
 // mapping (a kd = 0.5 sphere under radiance 1 shows π/2), spot/directional/area/environment
-// Light_Sample kernels against host reference evaluations at random points, the mis sampler's
+// Light_Sample kernels against host reference evaluations at random points, the mis env strategy's
 // cosine-weighted tables (each bucket's pdf integrating to one, chi-square, cells and buckets covering
 // texels and normals, the device's bucket, samples and pdfs against EnvCosineTable), Env_Atan2
 // against libm, and (tagged [.slow],
-// run by scripts/env_sampling_compare.sh) the relMSE of each env sampler on sunset.exr.
+// run by scripts/env_sampling_compare.sh) the relMSE of each env strategy on sunset.exr.
 #include <catch.hpp>
 
 #include <Imath/half.h>
@@ -648,7 +648,7 @@ __kernel void light_test(const __global Light* lights, int numLights, const __gl
             areaLit += e > 0;
             if (!close3(o[4], 10 * e, 20 * e, 30 * e) || (e > 0 && std::fabs(o[4].w - dl) > 1e-4 * dl)) ++bad[2];
         }
-        {  // environment, importance sampler: L(wi) / pdf(wi)
+        {  // environment, importance strategy: L(wi) / pdf(wi)
             Vec3 w;
             float pdf;
             bool ok = env.dist.sample(pts[i].w, nrm[i].w, w, pdf);

@@ -57,7 +57,7 @@ using NamedSource = std::pair<std::string, std::string>;
 // one place that lists it; the renderer, the tone mapper, bench/ray_bench and the tests use it.
 enum class KernelProgram {
     Render,     // the wavefront renderer (src/render/renderer.cpp)
-    Tonemap,    // device tone mapping (src/render/tonemap_device.cpp)
+    Tonemap,    // device tone mapping (src/output/tonemap_device.cpp)
     Intersect,  // the two intersection kernels alone (bench/ray_bench, intersection tests)
     Layout      // layout_report (src/cl/layout_check.cpp)
 };

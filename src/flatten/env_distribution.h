@@ -60,7 +60,7 @@ struct EnvDistribution {
 
 EnvDistribution buildEnvDistribution(const EnvMapView& map);
 
-// Cosine-weighted light sampling, for the mis sampler (EnvLight_SampleMis, and its one-sample form). The
+// Cosine-weighted light sampling, for the mis env strategy (EnvLight_SampleMis, and its one-sample form). The
 // map's own distribution ignores the shading normal: on courtyard.exr a third of the luminance lies below
 // the horizon, which the light samples of an upward surface waste. Here the light sample at a point with
 // normal n comes from the table of n's bucket (a kEnvCosineBuckets² octahedral grid over the sphere of

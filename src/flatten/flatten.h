@@ -3,7 +3,7 @@
 //   flatten_textures.cpp     the texel atlas (ImageAtlas), texture maps, per-shape texture sets
 //   flatten_geometry.cpp     planes, spheres, meshes (on all hardware threads), the BVH, leaf order
 //   flatten_lights.cpp       lights (one case per light type)
-//   flatten_environment.cpp  environment lights: map, sampler, importance distribution, miss radiance
+//   flatten_environment.cpp  environment lights: map, env strategy, importance distribution, miss radiance
 // Each appends to a DeviceScene and marks the features it finds. The driver calls them in the order
 // above: images enter the atlas in order of first use (textures, then environment maps).
 #pragma once

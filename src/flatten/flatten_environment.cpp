@@ -1,5 +1,5 @@
 // flatten_environment.cpp — environment (SphericalDirectionalLight) lights: the map in the texel
-// atlas, mapping and sampler, the importance distribution (env_distribution.h), and the radiance of
+// atlas, mapping and env strategy, the importance distribution (env_distribution.h), and the radiance of
 // rays that miss (the first environment light's map); see flatten.h.
 #include "flatten/env_distribution.h"
 #include "flatten/flatten.h"

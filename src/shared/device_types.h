@@ -26,7 +26,7 @@ struct alignas(8) float2 { float x, y; };
  *   materials  M(KIND, type= name in scene files, kernel feature flag or "" (always compiled),
  *                spawns reflection/refraction children 1/0)
  *   BRDFs      B(KIND, element name inside <BRDFs>, kernel feature flag) (cl_kernels/brdf.cl)
- * A scene that uses a type gets -D<flag>=1 in its program (FeatureSet, src/render/device_scene.h);
+ * A scene that uses a type gets -D<flag>=1 in its program (FeatureSet, src/flatten/device_scene.h);
  * the parser looks names up here (src/shared/type_tables.h). Values are the row order. */
 #define CLRT_LIGHT_TABLE(L)                                                                        \
     L(LIGHT_POINT, "PointLight", "CLRT_HAS_POINT_LIGHT")                                           \
@@ -260,7 +260,7 @@ typedef struct Light {
     int envCosine;         /* env, mis strategy: offset of its cosine-weighted distributions (env_distribution.h) in
                             * the env distribution buffer, or CLRT_INVALID (every other light) */
 } Light;
-/* lightData (float4s) of the object lights, written by src/render/flatten_lights.cpp:
+/* lightData (float4s) of the object lights, written by src/flatten/flatten_lights.cpp:
  *   LightMesh:   per triangle k, 3 float4s: world-space v0, v1, v2; v0.w = the area CDF up to and
  *                including triangle k (the last is 1), v1.w = the triangle's area. Light.area = total area.
  *   LightSphere: 4 float4s: the object-space centre and radius (w), then 3 rows of worldToObject.
@@ -354,7 +354,7 @@ typedef struct ShadingPoint {
 } ShadingPoint;
 
 /* Tone mapping (cl_kernels/tonemap.cl): what the per-pixel mapping needs, computed by the host from
- * the device's log-sum and luminance percentile (src/render/tonemap_device.cpp). */
+ * the device's log-sum and luminance percentile (src/output/tonemap_device.cpp). */
 typedef struct TonemapParams {
     int op;                /* TmoKind */
     float scale;           /* key / log-average luminance: L = Y * scale */

@@ -1,6 +1,6 @@
 // tonemap_settings.h — the settings of one tone mapping: a camera's Tonemap block in the scene model
 // (scene/scene.h, Camera::tonemaps), the options of `clrt tonemap`, and what the host reference
-// (image/tonemap.h) and the device (render/tonemap_device.h) map an image with. Header-only and
+// (image/tonemap.h) and the device (output/tonemap_device.h) map an image with. Header-only and
 // host-only; here (beside dev::TmoKind) so that the scene model and the image module share one type.
 #pragma once
 #include <string>

@@ -1,7 +1,7 @@
 // type_tables.h — the host's view of the enum tables of device_types.h: each enum's names (scene
 // files, command line), and for lights, materials and BRDFs the kernel feature flag and whether the type
-// spawns child rays. The parser (src/scene/scene_walker.cpp), the command line, the flattener and
-// FeatureSet (src/render/) all read these; nothing else lists a type's name or flag.
+// spawns child rays. The scene readers (src/scene/read_*.cpp), the command line, the flattener and
+// FeatureSet (src/flatten/) all read these; nothing else lists a type's name or flag.
 #pragma once
 #include <string>
 #include <vector>
