@@ -599,15 +599,7 @@ TEST_CASE("vector map kernels equal the scalar one-pixel-per-work-item kernels b
         tm.upload(img);
         const TonemapDeviceResult r = tm.map(s), rf = tm.map(s, true);
         const size_t n = size_t(img.width) * img.height;
-        dev::TonemapParams p{};  // as tonemap_device.cpp fills it
-        p.op = int(s.op);
-        p.scale = r.stats.scale;
-        p.whiteL = r.stats.whiteL;
-        p.hasWhite = r.stats.hasWhite ? 1 : 0;
-        p.saturation = s.saturation;
-        p.invGamma = 1.0f / s.gamma;
-        p.truncate = s.truncate ? 1 : 0;
-        p.numPixels = cl_uint(n);
+        const dev::TonemapParams p = tonemapDeviceParams(s, r.stats, n);  // what the vector kernels get
         cl::Buffer in = CL_CPP(cl::Buffer(dc.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * 3 * sizeof(float),
                                           const_cast<float*>(img.pixels.data())));
         cl::Buffer out8 = CL_CPP(cl::Buffer(dc.context(), CL_MEM_WRITE_ONLY, n * 3));

@@ -16,6 +16,20 @@
 
 namespace clrt {
 
+dev::TonemapParams tonemapDeviceParams(const TonemapSettings& s, const TonemapStats& stats, size_t numPixels) {
+    dev::TonemapParams p{};
+    p.op = int(s.op);
+    p.scale = stats.scale;
+    p.whiteL = stats.whiteL;
+    p.hasWhite = stats.hasWhite ? 1 : 0;
+    p.saturation = s.saturation;
+    p.invGamma = 1.0f / s.gamma;
+    p.srgb = s.srgb ? 1 : 0;
+    p.truncate = s.truncate ? 1 : 0;
+    p.numPixels = cl_uint(numPixels);
+    return p;
+}
+
 namespace {
 constexpr size_t kMaxWorkItems = 16384;  // partial sums / histogram work-items per launch
 // Pixels per work-item of Tonemap_Map / Tonemap_MapFloat: TONEMAP_VEC in tonemap.cl (its pow calls
@@ -138,16 +152,7 @@ struct TonemapDevice::Impl {
         r.kthLuminance = needWhite ? select(k) : 0.0f;
         r.stats = tonemapStatsFrom(logSum, numPixels, r.kthLuminance, s);
 
-        dev::TonemapParams p{};
-        p.op = int(s.op);
-        p.scale = r.stats.scale;
-        p.whiteL = r.stats.whiteL;
-        p.hasWhite = r.stats.hasWhite ? 1 : 0;
-        p.saturation = s.saturation;
-        p.invGamma = 1.0f / s.gamma;
-        p.srgb = s.srgb ? 1 : 0;
-        p.truncate = s.truncate ? 1 : 0;
-        p.numPixels = cl_uint(numPixels);
+        const dev::TonemapParams p = tonemapDeviceParams(s, r.stats, numPixels);
         if (floatDisplay) {
             if (outFloat() == nullptr)
                 outFloat = CL_CPP(cl::Buffer(dc.context(), CL_MEM_WRITE_ONLY, capacity * 3 * sizeof(float)));

@@ -12,6 +12,9 @@
 
 namespace clrt {
 
+// The map kernels' parameters for settings `s` and the image statistics `stats` of numPixels pixels.
+dev::TonemapParams tonemapDeviceParams(const TonemapSettings& s, const TonemapStats& stats, size_t numPixels);
+
 struct TonemapDeviceResult {
     std::vector<unsigned char> rgb8;  // width*height*3, row-major (8-bit mode)
     std::vector<float> display;       // width*height*3 gamma-encoded values in [0,1] (float mode)
