@@ -381,7 +381,7 @@ TEST_CASE("device struct layout matches the host; second build hits the program 
     std::vector<int> dev1 = deviceLayout(dc, &first);
     CHECK_FALSE(first.cacheHit);
     CHECK(first.seconds > 0);
-    CHECK(first.options == buildOptions(dc.quirks().defines));  // "-cl-std=CL1.2" on PoCL (no quirk defines)
+    CHECK(first.options == buildOptions(dc.quirks().defines));  // "-cl-std=CL1.2" on PoCL (its quirks are host settings, no kernel defines)
     REQUIRE(!first.cacheFile.empty());
     CHECK(fs::exists(first.cacheFile));
     CHECK(fs::path(first.cacheFile).parent_path() == dir);

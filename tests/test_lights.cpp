@@ -726,7 +726,7 @@ void writeStrip(const std::string& path, const std::vector<const ImageRGB*>& img
 }
 }  // namespace
 
-TEST_CASE("env samplers on sunset.exr: importance and MIS beat uniform >= 10x in relMSE", "[.slow][envcompare]") {
+TEST_CASE("env strategies on sunset.exr: importance and MIS beat uniform >= 10x in relMSE", "[.slow][envcompare]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
     TempDir tmp;
     const char* sizeEnv = std::getenv("CLRT_ENV_COMPARE_SIZE");

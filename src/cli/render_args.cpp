@@ -47,7 +47,7 @@ const char* const kRenderHelp =
     "                        ImageResolution: tiny renders for checking kernels (oclgrind)\n"
     "  --ldr-quantize MODE   round (default) or floor: how .png outputs turn clamped radiance into\n"
     "                        8 bits; the course's reference renders truncate (floor)\n"
-    "  --env-sampling S      sampler of every SphericalDirectionalLight: uniform, cosine, importance or\n"
+    "  --env-sampling S      strategy of every SphericalDirectionalLight: uniform, cosine, importance or\n"
     "                        mis (default: the scene's sampler=, else mis)\n"
     "  --pipeline P          fused (one kernel per sample pass), wavefront (a kernel per stage) or\n"
     "                        auto (default: fused on CPU devices for images of >= 1024 pixels,\n"

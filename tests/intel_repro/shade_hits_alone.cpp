@@ -7,6 +7,9 @@
 // (scripts/intel_vectorizer_repro.sh runs it); with CL_CONFIG_USE_VECTORIZER=False, or with
 // shade_hits' vec_type_hint(float4), it agrees.
 // Built by scripts/intel_vectorizer_repro.sh (g++ -Isrc ... -lOpenCL), not by CMake.
+// It binds shade_hits' arguments by index, in issue 17's parameter list: it runs against a program dumped by
+// a build before 6682b8f (queueCount became a buffer there); with later programs clSetKernelArg fails with -51
+// (docs/quirks.md, INTEL_VEC_HINT).
 // usage: shade_hits_alone PROGRAM.cl OPTIONS PLATFORM_SUBSTRING OUT.bin
 //        shade_hits_alone --compare A.bin B.bin
 #define CL_TARGET_OPENCL_VERSION 120
