@@ -9,6 +9,7 @@
 
 #include "scene/scene_walker.h"
 #include "shared/type_tables.h"
+#include "util/error.h"
 
 namespace clrt::walker {
 namespace {
@@ -32,12 +33,28 @@ Vec3 lookAtPlane(const SceneNode& n, const std::string& who, Camera& cam) {
     return gaze;
 }
 
+// <NearPlane>'s four numbers (left right bottom top). More are read as the course's own reader read
+// them (hw1 spheres.xml has "-1 1 -1 1 10"): the first four are used, with one warning naming the
+// element's location. Fewer is an error.
+std::vector<double> nearPlaneNumbers(const SceneNode& planeNode) {
+    auto p = numbers(planeNode);
+    if (p.size() < 4) return numbers(planeNode, 4);  // the error "has N values, expected 4"
+    if (p.size() > 4) {
+        std::ostringstream extra;
+        for (size_t i = 4; i < p.size(); ++i) extra << (i > 4 ? " " : "") << p[i];
+        warn(planeNode.location() + ": <NearPlane> has " + std::to_string(p.size()) +
+             " values; using the first 4 (left right bottom top) and ignoring '" + extra.str() + "'");
+        p.resize(4);
+    }
+    return p;
+}
+
 // The image plane of a simple camera, its <NearPlane> (left right bottom top); returns the gaze.
 Vec3 simplePlane(const SceneNode& n, const std::string& who, Camera& cam) {
     auto gazeNode = need(n, "Gaze");
     Vec3 gaze = vec3(*gazeNode);
     auto planeNode = need(n, "NearPlane");
-    auto p = numbers(*planeNode, 4);
+    auto p = nearPlaneNumbers(*planeNode);
     cam.left = float(p[0]);
     cam.right = float(p[1]);
     cam.bottom = float(p[2]);
