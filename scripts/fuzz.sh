@@ -55,7 +55,7 @@ objs() { for s in "$@"; do compile "$s" | tail -1; done; }
 
 UTIL=$(objs src/util/error.cpp)
 SCENE=$(objs src/scene/scene_walker.cpp src/scene/read_*.cpp src/scene/xml_node.cpp src/scene/json_node.cpp src/scene/ply_reader.cpp src/scene/transforms.cpp)
-IMAGE=$(objs src/image/image_io.cpp fuzz/stb_impl.cpp)
+IMAGE=$(objs src/image/image_io.cpp src/image/chromaticities.cpp fuzz/stb_impl.cpp)
 for t in scene ply image; do objs "fuzz/fuzz_$t.cpp" >/dev/null; done
 
 link() {  # link target NAME from object lists

@@ -8,6 +8,7 @@
 //   no output or temporary file left.
 #include <catch.hpp>
 
+#include <algorithm>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -298,5 +299,80 @@ TEST_CASE("cli input: JSON numbers out of range are exit 2 naming the file", "[c
     SECTION("1e39 in VertexData") {
         writeFileBytes(d.file("s.json"), jsonPlanes("", "\"10 20 30\"", "0 1e39 0"));
         expectBadInput(d, render(d, "s.json"), {"s.json: Scene.VertexData", "'1e39'"});
+    }
+}
+
+// ==== issue 29: tolerant reading where the course's own reader was =====================================
+
+namespace {
+// "line:col" (1-based, col in bytes) of the first `needle` in `text`.
+std::string lineColOf(const std::string& text, const std::string& needle) {
+    size_t off = text.find(needle);
+    REQUIRE(off != std::string::npos);
+    size_t line = 1 + size_t(std::count(text.begin(), text.begin() + long(off), '\n'));
+    size_t lineStart = text.rfind('\n', off);
+    size_t col = lineStart == std::string::npos ? off + 1 : off - lineStart;
+    return std::to_string(line) + ":" + std::to_string(col);
+}
+// The lines of `log` that contain `needle`.
+int linesWith(const std::string& log, const std::string& needle) {
+    int n = 0;
+    std::istringstream in(log);
+    for (std::string line; std::getline(in, line);) n += line.find(needle) != std::string::npos;
+    return n;
+}
+}  // namespace
+
+TEST_CASE("cli input: extra numbers in <NearPlane> give one warning naming file:line:col, then render",
+          "[cli][cli-input][scene]") {
+    TempDir d;
+    const std::string tri = "<Triangle id=\"1\"><Indices>1 2 3</Indices><Material>1</Material></Triangle>";
+    const std::string four = xmlScene("-1 -1 0 1 -1 0 0 1 0", tri);
+    writeFileBytes(d.file("four.xml"), four);
+    CliRun r4 = render(d, "four.xml");
+    REQUIRE(r4.rc == 0);
+    const std::string want = readFileBytes(d.file("out.png"));
+    fs::remove(d.path / "out.png");
+
+    SECTION("XML: hw1 spheres.xml's five numbers") {
+        const std::string five = sub(four, "<NearPlane>-1 1 -1 1</NearPlane>", "<NearPlane> -1 1 -1 1 10</NearPlane>");
+        writeFileBytes(d.file("five.xml"), five);
+        CliRun r = render(d, "five.xml");
+        INFO(r.log);
+        CHECK(r.rc == 0);
+        CHECK(r.errorLines == 0);
+        CHECK(linesWith(r.log, "warning:") == 1);
+        CHECK(linesWith(r.log, "five.xml:" + lineColOf(five, "<NearPlane>") + ": <NearPlane> has 5 values") == 1);
+        CHECK(linesWith(r.log, "ignoring '10'") == 1);
+        CHECK(readFileBytes(d.file("out.png")) == want);  // the first four numbers, as with four
+    }
+    SECTION("JSON: the key path") {
+        std::string json = jsonPlanes();
+        writeFileBytes(d.file("four.json"), json);
+        REQUIRE(render(d, "four.json").rc == 0);
+        const std::string wantJson = readFileBytes(d.file("out.png"));
+        fs::remove(d.path / "out.png");
+        writeFileBytes(d.file("six.json"), sub(json, "\"NearPlane\": \"-1 1 -1 1\"", "\"NearPlane\": \"-1 1 -1 1 10 20\""));
+        CliRun r = render(d, "six.json");
+        INFO(r.log);
+        CHECK(r.rc == 0);
+        CHECK(linesWith(r.log, "warning:") == 1);
+        CHECK(linesWith(r.log, "six.json: Scene.Cameras.Camera.NearPlane: <NearPlane> has 6 values") == 1);
+        CHECK(linesWith(r.log, "ignoring '10 20'") == 1);
+        CHECK(readFileBytes(d.file("out.png")) == wantJson);
+    }
+    SECTION("fewer than four stays an error") {
+        const std::string three = sub(four, "<NearPlane>-1 1 -1 1</NearPlane>", "<NearPlane>-1 1 -1</NearPlane>");
+        writeFileBytes(d.file("three.xml"), three);
+        expectBadInput(d, render(d, "three.xml"), {"three.xml:" + lineColOf(three, "<NearPlane>"), "has 3 values, expected 4"});
+    }
+    SECTION("an unknown element still warns once") {
+        const std::string odd = sub(four, "<NearDistance>", "<Scissor>1</Scissor><NearDistance>");
+        writeFileBytes(d.file("odd.xml"), odd);
+        CliRun r = render(d, "odd.xml");
+        INFO(r.log);
+        CHECK(r.rc == 0);
+        CHECK(linesWith(r.log, "warning:") == 1);
+        CHECK(linesWith(r.log, "Scissor") == 1);
     }
 }

@@ -1,7 +1,8 @@
 // Image files (see image.h): readImage picks a decoder from the magic bytes (PNG/JPEG via stb_image,
 // EXR via OpenEXR's generic InputFile so any R,G,B / Y layout, half or float, scanline or tiled,
-// reads). Every writer (PNG and EXR) and the temporary-file helpers are in image_write.cpp, so the
-// fuzz targets, which compile this file alone, need neither zlib nor the writers.
+// reads; an EXR with a `chromaticities` attribute is converted to linear Rec.709/D65, chromaticities.h).
+// Every writer (PNG and EXR) and the temporary-file helpers are in image_write.cpp, so the
+// fuzz targets, which compile this file (and chromaticities.cpp) alone, need neither zlib nor the writers.
 #include "image/image.h"
 
 #include <algorithm>
@@ -22,11 +23,13 @@
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <ImfRgbaFile.h>
+#include <ImfStandardAttributes.h>
 #include <ImfStringAttribute.h>
 #include <ImfThreading.h>
 #include <Imath/half.h>
 #include <stb/stb_image.h>
 
+#include "image/chromaticities.h"
 #include "util/error.h"
 
 namespace clrt {
@@ -163,15 +166,31 @@ void readExrLuminanceChroma(const std::string& path, ImageRGB& img) {
     }
 }
 
+// The file's `chromaticities` attribute as Primaries (Rec.709/D65, OpenEXR's default, without one).
+Primaries filePrimaries(const Imf::Header& hdr) {
+    if (!Imf::hasChromaticities(hdr)) return kRec709Primaries;
+    const Imf::Chromaticities& c = Imf::chromaticities(hdr);
+    return {{c.red.x, c.red.y}, {c.green.x, c.green.y}, {c.blue.x, c.blue.y}, {c.white.x, c.white.y}};
+}
+
+// RGB texels in the file's primaries -> linear Rec.709/D65 (unchanged, bit for bit, when they are
+// those already). Grey (Y-only) files stay grey: adapted white maps to white.
+void toWorkingPrimaries(const std::string& path, ImageRGB& img, const Primaries& from) {
+    if (!convertToRec709(img.pixels.data(), (long long)img.width * img.height, from))
+        warn(path + ": its EXR chromaticities are degenerate; texels are used as Rec.709 RGB");
+}
+
 ImageRGB readExr(const std::string& path) {
     initExrThreads();
     ImageRGB img;
     img.isHdr = true;
     try {
-        bool lumaChroma = false;
+        bool lumaChroma = false, grey = false;
+        Primaries primaries = kRec709Primaries;
         {
             Imf::InputFile file(path.c_str());  // reads scanline and tiled files alike
             const Imf::Header& hdr = file.header();
+            primaries = filePrimaries(hdr);
             const Imath::Box2i dw = hdr.dataWindow();
             const int64_t w = int64_t(dw.max.x) - dw.min.x + 1, h = int64_t(dw.max.y) - dw.min.y + 1;
             if (w <= 0 || h <= 0) throw Error(path + ": EXR data window has a bad size");
@@ -198,12 +217,14 @@ ImageRGB readExr(const std::string& path) {
                 file.setFrameBuffer(fb);
                 file.readPixels(dw.min.y, dw.max.y);
                 if (!file.isComplete()) throw Error(path + ": EXR file is incomplete (truncated?)");
-                if (!rgb)
+                grey = !rgb;
+                if (grey)
                     for (size_t i = 0; i < img.pixels.size(); i += 3)
                         img.pixels[i + 1] = img.pixels[i + 2] = img.pixels[i];
             }
         }
-        if (lumaChroma) readExrLuminanceChroma(path, img);
+        if (lumaChroma) readExrLuminanceChroma(path, img);  // RGB in the file's primaries
+        if (!grey) toWorkingPrimaries(path, img, primaries);
     } catch (const Error&) {
         throw;
     } catch (const std::exception& e) {

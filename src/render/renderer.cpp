@@ -440,6 +440,7 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     checkImageFits(m.dc.info(), cam);
     dev::SceneParams sp = m.ds.params;
     sp.pathMode = cam.pathMode;  // per camera: <Renderer>PathTracing (compiled in when any camera has it)
+    if (cam.maxRecursionDepth >= 0) sp.maxDepth = cam.maxRecursionDepth;  // the camera's own (2025 scenes)
     if (sp.pathMode != 0 && !m.ds.features.pathTracing)
         throw Error("camera " + std::to_string(cam.id) + " is path traced but the program was built without CLRT_HAS_PATH_TRACING");
     const BatchPlan plan = planBatches(m.ds, numPixels, settings, cp, sp);

@@ -2,13 +2,16 @@
 // handedness = left|right). A Camera reads: Position Up Gaze GazePoint (lookAt) NearPlane (simple)
 // NearDistance FovY (lookAt) ImageResolution ImageName NumSamples FocusDistance ApertureSize, any
 // number of <Tonemap> blocks (TMO TMOOptions Saturation Gamma Extension), and <Renderer> with its
-// <RendererParams> (course hw6 path tracing). The camera frame is checked to stay finite.
+// <RendererParams> (course hw6 path tracing). 2025 scenes add <Transformations> (the camera moved as
+// an object) and per-camera MaxRecursionDepth, MinRecursionDepth, SplittingFactor. The camera frame
+// is checked to stay finite.
 #include <cfloat>
 #include <cmath>
 #include <sstream>
 
 #include "scene/scene_walker.h"
 #include "shared/type_tables.h"
+#include "util/error.h"
 
 namespace clrt::walker {
 namespace {
@@ -32,12 +35,28 @@ Vec3 lookAtPlane(const SceneNode& n, const std::string& who, Camera& cam) {
     return gaze;
 }
 
+// <NearPlane>'s four numbers (left right bottom top). More are read as the course's own reader read
+// them (hw1 spheres.xml has "-1 1 -1 1 10"): the first four are used, with one warning naming the
+// element's location. Fewer is an error.
+std::vector<double> nearPlaneNumbers(const SceneNode& planeNode) {
+    auto p = numbers(planeNode);
+    if (p.size() < 4) return numbers(planeNode, 4);  // the error "has N values, expected 4"
+    if (p.size() > 4) {
+        std::ostringstream extra;
+        for (size_t i = 4; i < p.size(); ++i) extra << (i > 4 ? " " : "") << p[i];
+        warn(planeNode.location() + ": <NearPlane> has " + std::to_string(p.size()) +
+             " values; using the first 4 (left right bottom top) and ignoring '" + extra.str() + "'");
+        p.resize(4);
+    }
+    return p;
+}
+
 // The image plane of a simple camera, its <NearPlane> (left right bottom top); returns the gaze.
 Vec3 simplePlane(const SceneNode& n, const std::string& who, Camera& cam) {
     auto gazeNode = need(n, "Gaze");
     Vec3 gaze = vec3(*gazeNode);
     auto planeNode = need(n, "NearPlane");
-    auto p = numbers(*planeNode, 4);
+    auto p = nearPlaneNumbers(*planeNode);
     cam.left = float(p[0]);
     cam.right = float(p[1]);
     cam.bottom = float(p[2]);
@@ -96,6 +115,48 @@ void readSampling(const SceneNode& n, const std::string& who, Camera& cam) {
     if (auto c = n.child("FocusDistance")) cam.focusDistance = number(*c);
     if (auto c = n.child("ApertureSize")) cam.apertureSize = number(*c);
     if (cam.focusDistance < 0 || cam.apertureSize < 0) fail(n, who + ": FocusDistance and ApertureSize must not be negative");
+}
+
+// <Transformations> inside <Camera> (2025): the camera is moved as an object. Its position by the full
+// matrix, its gaze and up by the linear part; lengths (near plane, FocusDistance, ApertureSize) by the
+// volume scale cbrt|det| (under a uniform scale the rays are the same, the lens scales with the
+// camera). Returns true when the matrix mirrors (det < 0): the image flips horizontally, as it
+// would if u were transformed too.
+bool placeCamera(const Walker& w, const SceneNode& n, const std::string& who, Camera& cam, Vec3& gaze, Vec3& up) {
+    auto t = n.child("Transformations");
+    if (!t) return false;
+    Mat4 camToWorld = transformOf(w, n);
+    double det = linearDeterminant(camToWorld);
+    if (!(std::fabs(det) > 0) || !std::isfinite(det)) fail(*t, who + ": its Transformations are singular");
+    float s = float(std::cbrt(std::fabs(det)));
+    cam.position = camToWorld.transformPoint(cam.position);
+    gaze = camToWorld.transformVector(gaze);
+    up = camToWorld.transformVector(up);
+    for (float* len : {&cam.left, &cam.right, &cam.bottom, &cam.top, &cam.nearDistance, &cam.focusDistance, &cam.apertureSize})
+        *len *= s;
+    if (!isFinite(cam.position) || !isFinite(gaze) || !isFinite(up) || !std::isfinite(cam.nearDistance))
+        fail(*t, who + ": the transformed camera overflows a 32-bit float");
+    return det < 0;
+}
+
+// The path-tracing settings a 2025 <Camera> carries besides <Renderer>: MaxRecursionDepth (overrides
+// the scene's), MinRecursionDepth and SplittingFactor (read and checked; not used, with a warning).
+void readCameraPathSettings(const SceneNode& n, const std::string& who, Camera& cam) {
+    if (auto c = n.child("MaxRecursionDepth")) {
+        cam.maxRecursionDepth = cappedInteger(*c, kMaxRecursionDepth);
+        if (cam.maxRecursionDepth < 0) fail(*c, who + ": MaxRecursionDepth must not be negative");
+    }
+    if (auto c = n.child("MinRecursionDepth")) {
+        cam.minRecursionDepth = cappedInteger(*c, kMaxRecursionDepth);
+        if (cam.minRecursionDepth < 0) fail(*c, who + ": MinRecursionDepth must not be negative");
+        if (cam.pathMode & CLRT_PATH_RR)
+            warnOnce(c->location() + ": <MinRecursionDepth> is not used: clrt's Russian roulette runs from the first bounce");
+    }
+    if (auto c = n.child("SplittingFactor")) {
+        if (cappedInteger(*c, kMaxSamplesPerPixel) < 1) fail(*c, who + ": SplittingFactor must be at least 1");
+        warnOnce(c->location() + ": <SplittingFactor> is not used: clrt traces one path per camera sample "
+                                 "(NumSamples or --spp sets how many)");
+    }
 }
 
 // The CLRT_PATH_* bit of one <RendererParams> option, or 0 if unknown.
@@ -171,7 +232,8 @@ TonemapSettings readTonemap(Walker& w, const SceneNode& n) {
 void readCamera(Walker& w, const SceneNode& n) {
     w.checkChildren(n, {"Position", "Gaze", "GazePoint", "Up", "NearPlane", "NearDistance", "FovY",
                         "ImageResolution", "ImageName", "NumSamples", "FocusDistance", "ApertureSize",
-                        "Tonemap", "Renderer", "RendererParams"});
+                        "Tonemap", "Renderer", "RendererParams", "Transformations", "MaxRecursionDepth",
+                        "MinRecursionDepth", "SplittingFactor"});
     Camera cam;
     cam.id = intAttribute(n, "id", 0);
     std::string who = describe(n);
@@ -184,10 +246,12 @@ void readCamera(Walker& w, const SceneNode& n) {
     Vec3 up = vec3(*need(n, "Up"));
     readImageSize(n, who, cam);
     Vec3 gaze = lookAt ? lookAtPlane(n, who, cam) : simplePlane(n, who, cam);
-    cameraFrame(n, who, gaze, up, left, cam);
     readSampling(n, who, cam);
+    bool mirrored = placeCamera(w, n, who, cam, gaze, up);
+    cameraFrame(n, who, gaze, up, left != mirrored, cam);
     for (auto& t : n.children("Tonemap")) cam.tonemaps.push_back(readTonemap(w, *t));
     cam.pathMode = readRenderer(n, who);
+    readCameraPathSettings(n, who, cam);
     w.scene.cameras.push_back(cam);
 }
 

@@ -4,12 +4,14 @@
 //   PointLight (Position Intensity), AreaLight (Position Normal Size Radiance), DirectionalLight
 //   (Direction Radiance), SpotLight (Position Direction Intensity CoverageAngle FalloffAngle),
 //   SphericalDirectionalLight (ImageId, type/Type latlong|probe, sampler/Sampler: the env strategy).
+// Each may carry <Transformations> (2025 scenes; transformLight).
 // LightMesh and LightSphere are shapes as well as lights: read in <Objects> (read_objects.cpp); here
 // they are an error.
 #include <cmath>
 #include <optional>
 
 #include "scene/scene_walker.h"
+#include "scene/transforms.h"
 #include "shared/type_tables.h"
 #include "util/error.h"
 
@@ -25,13 +27,13 @@ Vec3 direction(const SceneNode& l, const char* child) {
 }
 
 void readPointLight(Walker& w, const SceneNode& l, Light& light) {
-    w.checkChildren(l, {"Position", "Intensity"});
+    w.checkChildren(l, {"Position", "Intensity", "Transformations"});
     light.position = vec3(*need(l, "Position"));
     light.intensity = vec3(*need(l, "Intensity"));
 }
 
 void readAreaLight(Walker& w, const SceneNode& l, Light& light) {
-    w.checkChildren(l, {"Position", "Normal", "Size", "Radiance"});
+    w.checkChildren(l, {"Position", "Normal", "Size", "Radiance", "Transformations"});
     light.position = vec3(*need(l, "Position"));
     light.direction = direction(l, "Normal");
     auto sn = need(l, "Size");
@@ -42,13 +44,14 @@ void readAreaLight(Walker& w, const SceneNode& l, Light& light) {
 }
 
 void readDirectionalLight(Walker& w, const SceneNode& l, Light& light) {
-    w.checkChildren(l, {"Direction", "Radiance"});
+    w.checkChildren(l, {"Direction", "Radiance", "Transformations"});
     light.direction = direction(l, "Direction");
     light.intensity = vec3(*need(l, "Radiance"));
 }
 
 void readSpotLight(Walker& w, const SceneNode& l, Light& light) {
-    w.checkChildren(l, {"Position", "Direction", "Intensity", "CoverageAngle", "FalloffAngle", "FallOffAngle"});
+    w.checkChildren(l, {"Position", "Direction", "Intensity", "CoverageAngle", "FalloffAngle", "FallOffAngle",
+                        "Transformations"});
     light.position = vec3(*need(l, "Position"));
     light.direction = direction(l, "Direction");
     light.intensity = vec3(*need(l, "Intensity"));
@@ -70,7 +73,7 @@ std::optional<std::string> attributeOrChild(const SceneNode& l, const char* attr
 }
 
 void readEnvironmentLight(Walker& w, const SceneNode& l, Light& light) {
-    w.checkChildren(l, {"ImageId", "Type", "Sampler"});
+    w.checkChildren(l, {"ImageId", "Type", "Sampler", "Transformations"});
     light.imageIndex = imageRef(w, l, *need(l, "ImageId"));
     std::optional<std::string> type = attributeOrChild(l, "type", "Type");
     if (type && !lookupType(envMappings(), lower(trim(*type)), light.mapping))
@@ -78,6 +81,35 @@ void readEnvironmentLight(Walker& w, const SceneNode& l, Light& light) {
     std::optional<std::string> sampler = attributeOrChild(l, "sampler", "Sampler");
     if (sampler && !lookupType(envStrategies(), lower(trim(*sampler)), light.envStrategy))
         fail(l, describe(l) + ": unknown sampler '" + *sampler + "' (" + typeNames(envStrategies()) + ")");
+}
+
+// <Transformations> inside a light (2025): the light moved as an object. Positions by the full matrix;
+// directions (Directional, Spot) by the linear part; an area light's normal by the inverse transpose
+// and its side by the square root of the area scale |det|·|M⁻ᵀn| (the transformed square's area; it
+// stays a square in clrt's own orientation about its normal). An environment map is not rotated:
+// its Transformations are ignored with a warning.
+void transformLight(const Walker& w, const SceneNode& l, Light& light) {
+    auto t = l.child("Transformations");
+    if (!t) return;
+    if (light.type == dev::LIGHT_ENVIRONMENT) {
+        warnOnce(t->location() + ": " + describe(l) + ": <Transformations> of an environment light are ignored (clrt does not rotate its map)");
+        return;
+    }
+    Mat4 m = transformOf(w, l);
+    double det = linearDeterminant(m);
+    if (!(std::fabs(det) > 0) || !std::isfinite(det)) fail(*t, describe(l) + ": its Transformations are singular");
+    light.position = m.transformPoint(light.position);
+    if (light.type == dev::LIGHT_AREA) {
+        Vec3 n = m.transformNormal(light.direction);  // light.direction is unit
+        double areaScale = std::fabs(det) * double(length(n));
+        light.size = float(double(light.size) * std::sqrt(areaScale));
+        light.direction = unit(n);
+    } else if (light.type == dev::LIGHT_DIRECTIONAL || light.type == dev::LIGHT_SPOT) {
+        light.direction = unit(m.transformVector(light.direction));
+    }
+    if (!isFinite(light.position) || !isFinite(light.direction) || !std::isfinite(light.size * light.size) ||
+        !(light.size > 0))
+        fail(*t, describe(l) + ": the transformed light overflows a 32-bit float");
 }
 
 // LightMesh, LightSphere: shapes as well as lights, read by read_objects.cpp.
@@ -125,6 +157,7 @@ void readLights(Walker& w, const SceneNode& n) {
         if (!row) continue;
         light.type = row->kind;
         readLight(w, l, light);
+        transformLight(w, l, light);
         w.scene.lights.push_back(light);
     }
 }

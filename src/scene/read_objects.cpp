@@ -45,11 +45,6 @@ std::vector<int> textureRefs(const Walker& w, const SceneNode& owner, const Scen
     }
     return out;
 }
-Mat4 transformOf(const Walker& w, const SceneNode& owner) {
-    auto t = owner.child("Transformations");
-    if (!t) return Mat4::identity();
-    return composeTransforms(t->text(), w.transforms, t->location() + ": " + describe(owner));
-}
 // <MotionBlur>x y z</MotionBlur>: a world-space translation over the shutter interval [0, 1],
 // applied after the object's transformations (the object sits at transform, then + time·motion).
 Vec3 motionOf(const SceneNode& owner) {

@@ -1,6 +1,6 @@
 // Named transformations: <Transformations> and its Translation, Scaling, Rotation and Composite
 // elements, each with a unique id per kind, into Walker::transforms (transforms.h), where objects'
-// <Transformations> strings ("t1 s2 r1") look them up (read_objects.cpp).
+// <Transformations> strings ("t1 s2 r1") look them up (transformOf: objects, cameras, lights).
 #include <cstddef>
 
 #include "scene/scene_walker.h"
@@ -52,6 +52,12 @@ void readTransformations(Walker& w, const SceneNode& n) {
                 fail(*c, "duplicate " + name + " id " + std::to_string(id));
         }
     }
+}
+
+Mat4 transformOf(const Walker& w, const SceneNode& owner) {
+    auto t = owner.child("Transformations");
+    if (!t) return Mat4::identity();
+    return composeTransforms(t->text(), w.transforms, t->location() + ": " + describe(owner));
 }
 
 }  // namespace clrt::walker

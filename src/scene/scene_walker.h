@@ -117,6 +117,9 @@ void readLights(Walker& w, const SceneNode& n);               // read_lights.cpp
 void readObjects(Walker& w, const SceneNode& n);              // read_objects.cpp
 
 // ---- Look-ups that more than one family makes ---------------------------------------------------------
+// The owner's <Transformations> string ("t1 s2 r1") composed into one matrix (identity without one):
+// objects, cameras and lights (read_transforms.cpp).
+Mat4 transformOf(const Walker& w, const SceneNode& owner);
 // The Scene::imagePaths index of the Image whose id is idNode's text (read_textures.cpp).
 int imageRef(const Walker& w, const SceneNode& owner, const SceneNode& idNode);
 // A vertex index as written (1-based unless ZeroBasedIndexing) plus offset -> 0-based, checked

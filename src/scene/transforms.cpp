@@ -67,4 +67,10 @@ Mat4 composeTransforms(const std::string& refs, const TransformTable& table, con
     return m;
 }
 
+double linearDeterminant(const Mat4& m) {
+    const auto& a = m.m;
+    return a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
+           a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+}
+
 }  // namespace clrt

@@ -23,5 +23,7 @@ Mat4 composeTransforms(const std::string& refs, const TransformTable& table, con
 Mat4 makeRotation(double angleDeg, double ax, double ay, double az);
 // A row-major 4x4 from 16 numbers.
 Mat4 makeComposite(const double v[16]);
+// The determinant of m's linear (upper-left 3x3) part: its volume scale, negative for a mirror.
+double linearDeterminant(const Mat4& m);
 
 }  // namespace clrt
