@@ -3,7 +3,8 @@
 // (ξ1·u + ξ2·v)), ξ uniform in [-1/2, 1/2], (u, v) = makeBasis(r). scenes/rough_glass_edge.xml puts a
 // rough sheet of index 1 (no reflection; the refracted ray goes straight on, then is perturbed) in front
 // of a lit/unlit edge; the blurred edge profile of the wavefront and the fused pipeline is compared with a
-// host integration of that law, pixel by pixel, within the sampling noise. A sheet that refracts without
+// host integration of that law, pixel by pixel, within the sampling noise; scenes/rough_glass_edge_path.xml
+// does the same through the path tracer (the lit half a LightMesh). A sheet that refracts without
 // the perturbation shows a sharp step and fails by tens of noise sigmas next to the edge.
 #include <catch.hpp>
 
@@ -56,45 +57,58 @@ double hostEdgeProfile(int i, int width, double halfWidth, double roughness, int
     return 100.0 * lit / samples;
 }
 
+
+// The edge profile of one camera row against the host's, within 5 sigma of the sampling noise.
+void checkEdgeProfile(const ImageRGB& img, const Camera& cam, const std::vector<double>& host, int spp,
+                      int hostSamples, const char* what) {
+    int worst = 0;
+    double worstZ = 0;
+    for (int i = 0; i < cam.width; ++i) {
+        double got = img.pixels[(size_t(cam.height / 2) * cam.width + i) * 3];
+        double p = host[i] / 100.0;
+        // Binomial noise of spp samples (stratification only lowers it) and of the host's.
+        double sigma = 100.0 * std::sqrt(p * (1 - p) * (1.0 / spp + 1.0 / hostSamples)) + 0.05;
+        double z = std::fabs(got - host[i]) / sigma;
+        if (z > worstZ) { worstZ = z; worst = i; }
+    }
+    INFO(what << ": worst column " << worst << " at " << worstZ << " sigma (host " << host[worst] << ")");
+    CHECK(worstZ < 5.0);
+}
+
 }  // namespace
 
-TEST_CASE("a rough dielectric blurs its refracted ray by the course's perturbation (wavefront and fused)",
+TEST_CASE("a rough dielectric blurs its refracted ray by the course's perturbation (wavefront, fused, path tracer)",
           "[surface][render]") {
-    Scene scene = loadScene(std::string(CLRT_SOURCE_DIR) + "/scenes/rough_glass_edge.xml");
-    const Camera& cam = scene.cameras.at(0);
-    REQUIRE(scene.materials.at(0).type == dev::MATERIAL_DIELECTRIC);
-    const double roughness = scene.materials.at(0).roughness;
-    REQUIRE(roughness == Approx(0.3));
     const double halfWidth = 0.2525;
     const int spp = 1024, hostSamples = 200000;
-    std::vector<double> host(cam.width);
-    for (int i = 0; i < cam.width; ++i) host[i] = hostEdgeProfile(i, cam.width, halfWidth, roughness, hostSamples);
-    DeviceScene ds = flattenScene(scene);
-    Renderer r(testContext(), ds);
-    for (Pipeline pipeline : {Pipeline::Wavefront, Pipeline::Fused}) {
-        RenderSettings rs;
-        rs.spp = spp;
-        rs.seed = 5;
-        rs.pipeline = pipeline;
-        RenderCounters counters;
-        ImageRGB img = r.render(cam, rs, counters);
-        int worst = 0;
-        double worstZ = 0;
-        for (int i = 0; i < cam.width; ++i) {
-            double got = img.pixels[(size_t(cam.height / 2) * cam.width + i) * 3];
-            double p = host[i] / 100.0;
-            // Binomial noise of spp samples (stratification only lowers it) and of the host's.
-            double sigma = 100.0 * std::sqrt(p * (1 - p) * (1.0 / spp + 1.0 / hostSamples)) + 0.05;
-            double z = std::fabs(got - host[i]) / sigma;
-            if (z > worstZ) { worstZ = z; worst = i; }
+    std::vector<double> host;
+    for (const char* name : {"rough_glass_edge", "rough_glass_edge_path"}) {
+        Scene scene = loadScene(std::string(CLRT_SOURCE_DIR) + "/scenes/" + name + ".xml");
+        const Camera& cam = scene.cameras.at(0);
+        REQUIRE(scene.materials.at(0).type == dev::MATERIAL_DIELECTRIC);
+        const double roughness = scene.materials.at(0).roughness;
+        REQUIRE(roughness == Approx(0.3));
+        if (host.empty()) {
+            for (int i = 0; i < cam.width; ++i) host.push_back(hostEdgeProfile(i, cam.width, halfWidth, roughness, hostSamples));
+            // The profile is a blur, not a step: the columns next to the edge are between the two sides.
+            CHECK(host[cam.width / 2] == Approx(50.0).margin(5.0));
+            CHECK(host[cam.width / 2 - 10] > 60.0);
+            CHECK(host[cam.width / 2 - 10] < 95.0);
         }
-        INFO((pipeline == Pipeline::Fused ? "fused" : "wavefront") << ": worst column " << worst << " at " << worstZ
-                                                                    << " sigma (host " << host[worst] << ")");
-        CHECK(worstZ < 5.0);
-        // The profile is a blur, not a step: the columns next to the edge are between the two sides.
-        CHECK(host[cam.width / 2] == Approx(50.0).margin(5.0));
-        CHECK(host[cam.width / 2 - 10] > 60.0);
-        CHECK(host[cam.width / 2 - 10] < 95.0);
+        DeviceScene ds = flattenScene(scene);
+        const bool path = std::string(name) == "rough_glass_edge_path";
+        CHECK(ds.features.pathTracing == path);
+        Renderer r(testContext(), ds);
+        for (Pipeline pipeline : {Pipeline::Wavefront, Pipeline::Fused}) {
+            RenderSettings rs;
+            rs.spp = spp;
+            rs.seed = 5;
+            rs.pipeline = pipeline;
+            RenderCounters counters;
+            ImageRGB img = r.render(cam, rs, counters);
+            std::string what = std::string(name) + (pipeline == Pipeline::Fused ? " fused" : " wavefront");
+            checkEdgeProfile(img, cam, host, spp, hostSamples, what.c_str());
+        }
     }
 }
 
