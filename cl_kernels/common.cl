@@ -179,6 +179,17 @@ inline float3 Ray_OffsetOrigin(float3 p, float3 n) {
     return p + d * n;
 }
 
+/* The origin of a shadow ray from p (ng: the geometric normal on the side of the light): the scene's
+ * ShadowRayEpsilon along ng, or the robust offset where that is larger (large coordinates). The course's
+ * references show the epsilon: at 1e-3, hw1 bunny's shadow terminators (points whose own neighbouring
+ * faces block a shadow ray that starts closer) come out lit as in the reference. */
+inline float3 Shadow_Origin(float3 p, float3 ng, float shadowEpsilon) {
+    const float floorOffset = 1.0f / 65536.0f;
+    float m = fmax(fmax(fabs(p.x), fabs(p.y)), fabs(p.z));
+    float d = fmax(fmax(CLRT_OFFSET_ULPS * FLT_EPSILON * m, floorOffset), shadowEpsilon);
+    return p + d * ng;
+}
+
 /* A ray's shutter time (0 without motion blur: the origin's w is then never read). */
 inline float Ray_Time(Ray r) {
 #ifdef CLRT_HAS_MOTION_BLUR

@@ -51,7 +51,7 @@ inline float3 Fused_Path(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int lightSlo
         return finiteOrZero(sum.xyz);
     }
     RngKey key = Rng_Key(scene.seed, path.pixel, path.sample, path.pathId);
-    const ShadowRay none = Shadow_Make(sp, materials, (float3)(0.0f), (float3)(0.0f, 0.0f, 1.0f), 0.0f, (float3)(0.0f));
+    const ShadowRay none = Shadow_Make(sp, materials, (float3)(0.0f), (float3)(0.0f, 0.0f, 1.0f), 0.0f, (float3)(0.0f), 0.0f);
     for (int l = 0; l < scene.numLights; ++l) {
         ShadowRay sr = none, sr2 = none;
         Light_ShadowRays(scene, path, sp, l, lightSlots, key, materials, lights, images, texels, envDist, lightData,

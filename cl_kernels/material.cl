@@ -1,5 +1,6 @@
 /* material.cl — what the shading stages of shade.cl and path.cl share about a material: the Fresnel
- * factors of dielectrics and conductors, and Material_EvalDirect, the light a surface reflects per
+ * factors of dielectrics and conductors, the glossy perturbation of a rough material's mirror and
+ * refraction directions (Glossy_Perturb: Roughness), and Material_EvalDirect, the light a surface reflects per
  * unit of incident light (the classic Blinn-Phong terms, or the material's BRDF; reads Material,
  * ShadingPoint). */
 #ifndef CLRT_MATERIAL_CL
@@ -22,6 +23,16 @@ inline float Fresnel_Conductor(float cosI, float n, float k) {
     float rs = (nk - 2.0f * n * cosI + c2) / (nk + 2.0f * n * cosI + c2);
     float rp = (nk * c2 - 2.0f * n * cosI + 1.0f) / (nk * c2 + 2.0f * n * cosI + 1.0f);
     return 0.5f * (rs + rp);
+}
+
+/* Glossy perturbation of a reflected or refracted direction (course hw3: r' = normalize(r + roughness·(ξ1·u
+ * + ξ2·v)), ξ uniform in [-1/2, 1/2], u, v an orthonormal basis across r). A rough dielectric perturbs both
+ * its reflected and its refracted ray, each with its own ξ. */
+inline float3 Glossy_Perturb(float3 r, float roughness, float u1, float u2) {
+    if (roughness <= 0.0f) return r;
+    float3 a, b;
+    makeBasis(r, &a, &b);
+    return normalize(r + roughness * ((u1 - 0.5f) * a + (u2 - 0.5f) * b));
 }
 
 /* The light reflected towards sp.wo per unit of what Light_Sample returns from direction wi

@@ -178,9 +178,9 @@ inline int Path_RussianRoulette(float3* throughput, float u) {
 }
 
 /* The specular child of a mirror, conductor or dielectric (weight w), the same directions as
- * shade_hits' classic children; insideDielectric: the ray travelled t inside (Beer's law). */
+ * shade_hits' classic children (a rough material's perturbed by Glossy_Perturb with uGlossy); insideDielectric: the ray travelled t inside (Beer's law). */
 inline int Path_SpecularBounce(Material m, float3 wo, float3 ns, float3 ng, float3 p, float t, int inside, float u,
-                               float3* weight, float3* org, float3* dir) {
+                               float2 uGlossy, float3* weight, float3* org, float3* dir) {
     float cosI = dot(wo, ns);
     *dir = normalize(2.0f * cosI * ns - wo);
     *org = Ray_OffsetOrigin(p, ng);
@@ -202,6 +202,7 @@ inline int Path_SpecularBounce(Material m, float3 wo, float3 ns, float3 ng, floa
     } else if (m.kind != MATERIAL_MIRROR) {
         return 0;
     }
+    *dir = Glossy_Perturb(*dir, m.roughness, uGlossy.x, uGlossy.y);  /* Roughness: reflected or refracted */
     return allFinite3(*dir);
 }
 
@@ -228,7 +229,10 @@ inline void Path_ShadeHit(SceneParams scene, PathState path, Material m, float3 
     float3 weight, org, dir;
     float pdf = 0.0f;
     if (pickSpecular) {
-        if (!Path_SpecularBounce(m, wo, ns, ng, pWorld, t, inside, Rng_Uniform(key, dim + 2u), &weight, &org, &dir)) return;
+        float2 uGlossy = (float2)(Rng_Uniform(key, dim), Rng_Uniform(key, dim + 1u));
+        if (!Path_SpecularBounce(m, wo, ns, ng, pWorld, t, inside, Rng_Uniform(key, dim + 2u), uGlossy, &weight, &org,
+                                 &dir))
+            return;
         weight /= pSpecular;
     } else {
         float2 u = Sampler_2D(scene, path, key, dim + 5u);

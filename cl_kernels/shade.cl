@@ -129,14 +129,6 @@ inline void MotionBlur_StampChildren(ShadeResult* res, float time) {
         if (res->childValid[k]) res->childRay[k].origin.w = time;
 }
 
-/* Glossy perturbation of a reflected direction (course: r' = r + roughness·(ξ1·u + ξ2·v)). */
-inline float3 Glossy_Perturb(float3 r, float roughness, float u1, float u2) {
-    if (roughness <= 0.0f) return r;
-    float3 a, b;
-    makeBasis(r, &a, &b);
-    return normalize(r + roughness * ((u1 - 0.5f) * a + (u2 - 0.5f) * b));
-}
-
 /* Radiance of a ray (direction dir) that hits nothing: the environment map when the scene has an
  * environment light (camera, mirror and refraction rays alike), else the background texture (camera
  * rays) or the background colour. */
@@ -251,6 +243,7 @@ inline void Shade_ClassicChildren(SceneParams scene, PathState path, Material m,
             fr = Fresnel_Dielectric(c, cosT, n1, n2);
         }
         float3 refrDir = normalize(-eta * wo + (eta * c - cosT) * ns);
+        refrDir = Glossy_Perturb(refrDir, m.roughness, Rng_Uniform(key, dim + 3), Rng_Uniform(key, dim + 4));
         float3 refrOrg = Ray_OffsetOrigin(p, -ng);
         if (fr >= 1.0f) {
             Child_Make(res, 0, path, weight, 0u, reflOrg, reflDir);
@@ -401,7 +394,7 @@ __kernel CLRT_KERNEL_VEC_HINT void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
  * better: sphere_perlin_bump 40.8 -> 41.8 dB); the rest would need a shadow ray that skips its own
  * primitive. */
 inline ShadowRay Shadow_Make(ShadingPoint sp, const __global Material* materials, float3 throughput, float3 wi,
-                             float dist, float3 e) {
+                             float dist, float3 e, float shadowEpsilon) {
     ShadowRay sr;
     sr.contribution = (float4)(0.0f);
     sr.origin = (float4)(0.0f);
@@ -414,7 +407,7 @@ inline ShadowRay Shadow_Make(ShadingPoint sp, const __global Material* materials
 #endif
     if (lit) {
         float3 c = throughput * Material_EvalDirect(sp, materials, wi, cosTheta) * e;
-        float3 org = Ray_OffsetOrigin(p, ng);
+        float3 org = Shadow_Origin(p, ng, shadowEpsilon);
         float tMax = isinf(dist) ? INFINITY : length(p + dist * wi - org) * (1.0f - 1e-5f);
         sr.origin = (float4)(org, tMax);
         sr.direction = (float4)(wi, 0.0f);
@@ -454,14 +447,14 @@ inline void Light_ShadowRays(SceneParams scene, PathState path, ShadingPoint sp,
         float3 wiB, eL, eB;
         EnvLight_SampleMis(&lights[l], sp.normal.xyz, u, u2, CLRT_ENV_MIS_COSINE_SHARE, withCos, images, texels,
                            envDist, &wi, &eL, &wiB, &eB);
-        *sr = Shadow_Make(sp, materials, path.throughput.xyz, wi, INFINITY, eL);
-        *sr2 = Shadow_Make(sp, materials, path.throughput.xyz, wiB, INFINITY, eB);
+        *sr = Shadow_Make(sp, materials, path.throughput.xyz, wi, INFINITY, eL, scene.shadowEpsilon);
+        *sr2 = Shadow_Make(sp, materials, path.throughput.xyz, wiB, INFINITY, eB, scene.shadowEpsilon);
     } else
 #endif
     {
         float3 e = Light_Sample(&lights[l], sp.position.xyz, sp.normal.xyz, u, images, texels, envDist, lightData,
                                 &wi, &dist);
-        *sr = Shadow_Make(sp, materials, path.throughput.xyz, wi, dist, e);
+        *sr = Shadow_Make(sp, materials, path.throughput.xyz, wi, dist, e, scene.shadowEpsilon);
 #ifdef CLRT_HAS_PATH_TRACING
         sr->contribution *= Path_LightSampleWeight(scene.pathMode, &lights[l], sp, materials, envDist, wi, e);
 #endif
@@ -486,7 +479,7 @@ __kernel void sample_lights(CLRT_KERNEL_PARAMS(sample_lights)) {
     ShadingPoint sp = points[i];
     PathState path = paths[i];
     RngKey key = Rng_Key(scene.seed, path.pixel, path.sample, path.pathId);
-    const ShadowRay none = Shadow_Make(sp, materials, (float3)(0.0f), (float3)(0.0f, 0.0f, 1.0f), 0.0f, (float3)(0.0f));
+    const ShadowRay none = Shadow_Make(sp, materials, (float3)(0.0f), (float3)(0.0f, 0.0f, 1.0f), 0.0f, (float3)(0.0f), 0.0f);
     for (int l = lightBegin; l < lightEnd; ++l) {
         size_t slot = ((size_t)i * chunk + (l - lightBegin)) * lightSlots;
         ShadowRay sr = none, sr2 = none;

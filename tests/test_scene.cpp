@@ -199,6 +199,7 @@ TEST_CASE("scene: lookAt camera with <Gaze> (a direction), as the course's hw6 s
 TEST_CASE("scene: globals and defaults", "[scene]") {
     Scene d = load("defaults.xml", sceneWith(""));
     CHECK(d.maxRecursionDepth == 6);
+    CHECK(d.shadowRayEpsilon == 1e-3f);  // the course's default
     std::string body = R"(
   <!-- a comment -->
   <BackgroundColor>1 2 3</BackgroundColor>
@@ -209,9 +210,11 @@ TEST_CASE("scene: globals and defaults", "[scene]") {
 )";
     Scene s = load("globals.xml", "<!-- leading comment -->\n<?xml-stylesheet x?>\n" + sceneWith(body));
     CHECK(s.backgroundColor == Vec3(1, 2, 3));
-    // ShadowRayEpsilon / IntersectionTestEpsilon are read but unused (robust ray origins); a
-    // malformed one is still an error.
+    // ShadowRayEpsilon offsets shadow rays; IntersectionTestEpsilon is read but unused (watertight
+    // tests). A malformed or negative one is an error.
+    CHECK(s.shadowRayEpsilon == 1e-4f);
     CHECK_THROWS_AS(load("bad_eps.xml", sceneWith("<ShadowRayEpsilon>abc</ShadowRayEpsilon>")), Error);
+    CHECK_THROWS_AS(load("neg_eps.xml", sceneWith("<ShadowRayEpsilon>-1</ShadowRayEpsilon>")), Error);
     CHECK(s.maxRecursionDepth == 3);
     CHECK(s.ambientLight == Vec3(5, 6, 7));
     CHECK(s.materials.size() == 2);

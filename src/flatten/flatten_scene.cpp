@@ -3,6 +3,7 @@
 // of flatten.h (one domain per flatten_*.cpp file), and the scene-wide parameters.
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #include "flatten/device_scene.h"
 #include "flatten/flatten.h"
@@ -27,6 +28,7 @@ DeviceScene flattenScene(const Scene& scene) {
     p.background = toFloat4(scene.backgroundColor);
     p.ambient = toFloat4(scene.ambientLight);
     p.maxDepth = std::max(0, scene.maxRecursionDepth);
+    p.shadowEpsilon = std::isfinite(scene.shadowRayEpsilon) ? std::max(0.0f, scene.shadowRayEpsilon) : 0.0f;
     for (const Camera& c : scene.cameras) ds.features.pathTracing = ds.features.pathTracing || c.pathMode != 0;
     ds.flattenSeconds = secondsSince(t0) - ds.bvhSeconds;
     return ds;

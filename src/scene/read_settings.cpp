@@ -8,9 +8,16 @@ namespace clrt::walker {
 
 void readBackgroundColor(Walker& w, const SceneNode& n) { w.scene.backgroundColor = vec3(n); }
 
-// Read (a malformed value is still an error) but not used: ray origins are offset robustly
-// (cl_kernels/common.cl, Ray_OffsetOrigin) and the intersection tests need no epsilon.
+// Read (a malformed value is still an error) but not used: the intersection tests are watertight and
+// need no epsilon.
 void readIntersectionEpsilon(Walker&, const SceneNode& n) { (void)number(n); }
+
+// Shadow rays start ShadowRayEpsilon (1e-3 when absent) off the surface along its geometric normal, or
+// the robust offset of cl_kernels/common.cl (Ray_OffsetOrigin) where that is larger.
+void readShadowRayEpsilon(Walker& w, const SceneNode& n) {
+    w.scene.shadowRayEpsilon = float(number(n));
+    if (!(w.scene.shadowRayEpsilon >= 0)) fail(n, "ShadowRayEpsilon must not be negative");
+}
 
 void readMaxRecursionDepth(Walker& w, const SceneNode& n) {
     w.scene.maxRecursionDepth = cappedInteger(n, kMaxRecursionDepth);

@@ -124,6 +124,7 @@ struct Scene {
     std::string path;              // the scene file
     Vec3 backgroundColor{0, 0, 0};
     int maxRecursionDepth = 6;
+    float shadowRayEpsilon = 1e-3f;  // ShadowRayEpsilon (the course's default when absent)
     Vec3 ambientLight{0, 0, 0};
     std::vector<Camera> cameras;
     std::vector<Light> lights;     // all but ambient

@@ -30,7 +30,7 @@ namespace fs = std::filesystem;
 static const std::vector<ElementReader>& sceneElements() {
     static const std::vector<ElementReader> table = {
         {"BackgroundColor", readBackgroundColor, true},
-        {"ShadowRayEpsilon", readIntersectionEpsilon, true},
+        {"ShadowRayEpsilon", readShadowRayEpsilon, true},
         {"IntersectionTestEpsilon", readIntersectionEpsilon, true},
         {"MaxRecursionDepth", readMaxRecursionDepth, true},
         {"ZeroBasedIndexing", readZeroBasedIndexing, true},

@@ -103,7 +103,8 @@ struct Walker {
 
 // ---- The readers of <Scene>'s children (the rows of sceneElements() in scene_walker.cpp) ------------
 void readBackgroundColor(Walker& w, const SceneNode& n);      // read_settings.cpp
-void readIntersectionEpsilon(Walker& w, const SceneNode& n);  // read_settings.cpp (either epsilon)
+void readIntersectionEpsilon(Walker& w, const SceneNode& n);  // read_settings.cpp
+void readShadowRayEpsilon(Walker& w, const SceneNode& n);     // read_settings.cpp
 void readMaxRecursionDepth(Walker& w, const SceneNode& n);    // read_settings.cpp
 void readZeroBasedIndexing(Walker& w, const SceneNode& n);    // read_settings.cpp
 void readTransformations(Walker& w, const SceneNode& n);      // read_transforms.cpp

@@ -299,7 +299,8 @@ typedef struct SceneParams {
     int numPlanes;         /* infinite planes (see Plane) */
     int pathMode;          /* 0: classic recursive ray tracing; else CLRT_PATH_* bits (cl_kernels/path.cl) */
     int pixelSampler;      /* CLRT_PIXEL_SAMPLER_*: how a pixel's camera, light and BSDF samples are drawn (common.cl) */
-    int pixelSamplerPad[3]; /* explicit padding to the float4 alignment */
+    float shadowEpsilon;   /* shadow rays start this far off the surface along its normal (at least the robust offset) */
+    int pixelSamplerPad[2]; /* explicit padding to the float4 alignment */
 } SceneParams;
 
 /* SceneParams.pixelSampler (set per render from RenderSettings::pixelSampler, clrt render --sampler). */

@@ -1,0 +1,136 @@
+// Surface scattering tests (cl_kernels/material.cl Glossy_Perturb, shade.cl Shade_ClassicChildren):
+// a rough dielectric perturbs its refracted ray by the course's hw3 law, r' = normalize(r + roughness·
+// (ξ1·u + ξ2·v)), ξ uniform in [-1/2, 1/2], (u, v) = makeBasis(r). scenes/rough_glass_edge.xml puts a
+// rough sheet of index 1 (no reflection; the refracted ray goes straight on, then is perturbed) in front
+// of a lit/unlit edge; the blurred edge profile of the wavefront and the fused pipeline is compared with a
+// host integration of that law, pixel by pixel, within the sampling noise; scenes/rough_glass_edge_path.xml
+// does the same through the path tracer (the lit half a LightMesh). A sheet that refracts without
+// the perturbation shows a sharp step and fails by tens of noise sigmas next to the edge.
+#include <catch.hpp>
+
+#include <cmath>
+#include <random>
+
+#include "flatten/device_scene.h"
+#include "render/renderer.h"
+#include "scene/scene_loader.h"
+#include "test_helpers.h"
+
+using namespace clrt;
+using namespace clrt::test;
+
+namespace {
+
+struct D3 {
+    double x, y, z;
+};
+D3 operator+(D3 a, D3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+D3 operator*(double s, D3 a) { return {s * a.x, s * a.y, s * a.z}; }
+D3 unit(D3 a) { return (1.0 / std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z)) * a; }
+
+// cl_kernels/common.cl makeBasis (Duff et al. 2017), written out again.
+void basis(D3 n, D3& t, D3& b) {
+    double sign = n.z >= 0 ? 1.0 : -1.0, a = -1.0 / (sign + n.z), c = n.x * n.y * a;
+    t = {1.0 + sign * n.x * n.x * a, sign * c, -sign * n.x};
+    b = {c, sign + n.y * n.y * a, -n.y};
+}
+
+// The expected radiance of pixel column i of the scene's middle row: the camera ray through a point
+// drawn uniformly in the pixel reaches the sheet at z = -1, goes on along its perturbed direction to
+// z = -2, and sees 100 (ambient 100 × AmbientReflectance 1) where x < 0, else 0.
+double hostEdgeProfile(int i, int width, double halfWidth, double roughness, int samples) {
+    std::mt19937_64 rng(1234 + i);
+    std::uniform_real_distribution<double> U(0.0, 1.0);
+    const double pixel = 2 * halfWidth / width;
+    double lit = 0;
+    for (int s = 0; s < samples; ++s) {
+        double x = -halfWidth + (i + U(rng)) * pixel, y = (U(rng) - 0.5) * pixel;
+        D3 d = unit({x, y, -1});
+        D3 p1 = (1.0 / -d.z) * d;
+        D3 u, v;
+        basis(d, u, v);
+        D3 r = unit(d + roughness * ((U(rng) - 0.5) * u + (U(rng) - 0.5) * v));
+        if (!(r.z < 0)) continue;
+        D3 p2 = p1 + (1.0 / -r.z) * r;
+        lit += p2.x < 0 ? 1.0 : 0.0;
+    }
+    return 100.0 * lit / samples;
+}
+
+
+// The edge profile of one camera row against the host's, within 5 sigma of the sampling noise.
+void checkEdgeProfile(const ImageRGB& img, const Camera& cam, const std::vector<double>& host, int spp,
+                      int hostSamples, const char* what) {
+    int worst = 0;
+    double worstZ = 0;
+    for (int i = 0; i < cam.width; ++i) {
+        double got = img.pixels[(size_t(cam.height / 2) * cam.width + i) * 3];
+        double p = host[i] / 100.0;
+        // Binomial noise of spp samples (stratification only lowers it) and of the host's.
+        double sigma = 100.0 * std::sqrt(p * (1 - p) * (1.0 / spp + 1.0 / hostSamples)) + 0.05;
+        double z = std::fabs(got - host[i]) / sigma;
+        if (z > worstZ) { worstZ = z; worst = i; }
+    }
+    INFO(what << ": worst column " << worst << " at " << worstZ << " sigma (host " << host[worst] << ")");
+    CHECK(worstZ < 5.0);
+}
+
+}  // namespace
+
+TEST_CASE("a rough dielectric blurs its refracted ray by the course's perturbation (wavefront, fused, path tracer)",
+          "[surface][render]") {
+    const double halfWidth = 0.2525;
+    const int spp = 1024, hostSamples = 200000;
+    std::vector<double> host;
+    for (const char* name : {"rough_glass_edge", "rough_glass_edge_path"}) {
+        Scene scene = loadScene(std::string(CLRT_SOURCE_DIR) + "/scenes/" + name + ".xml");
+        const Camera& cam = scene.cameras.at(0);
+        REQUIRE(scene.materials.at(0).type == dev::MATERIAL_DIELECTRIC);
+        const double roughness = scene.materials.at(0).roughness;
+        REQUIRE(roughness == Approx(0.3));
+        if (host.empty()) {
+            for (int i = 0; i < cam.width; ++i) host.push_back(hostEdgeProfile(i, cam.width, halfWidth, roughness, hostSamples));
+            // The profile is a blur, not a step: the columns next to the edge are between the two sides.
+            CHECK(host[cam.width / 2] == Approx(50.0).margin(5.0));
+            CHECK(host[cam.width / 2 - 10] > 60.0);
+            CHECK(host[cam.width / 2 - 10] < 95.0);
+        }
+        DeviceScene ds = flattenScene(scene);
+        const bool path = std::string(name) == "rough_glass_edge_path";
+        CHECK(ds.features.pathTracing == path);
+        Renderer r(testContext(), ds);
+        for (Pipeline pipeline : {Pipeline::Wavefront, Pipeline::Fused}) {
+            RenderSettings rs;
+            rs.spp = spp;
+            rs.seed = 5;
+            rs.pipeline = pipeline;
+            RenderCounters counters;
+            ImageRGB img = r.render(cam, rs, counters);
+            std::string what = std::string(name) + (pipeline == Pipeline::Fused ? " fused" : " wavefront");
+            checkEdgeProfile(img, cam, host, spp, hostSamples, what.c_str());
+        }
+    }
+}
+
+// Shadow rays start ShadowRayEpsilon (1e-3 when absent) off the surface along the geometric normal:
+// hw1 bunny (no epsilon given, a 0.15-unit model) has points on faces that face the light whose shadow
+// rays, started closer, are blocked by their neighbouring faces; the course's reference lights them.
+// 36.4 dB with the robust offset alone (313 pixels off by more than 8 levels), 58.6 dB with the epsilon.
+TEST_CASE("hw1 bunny: shadow rays start ShadowRayEpsilon off the surface (course pixel reference)",
+          "[surface][render][shared]") {
+    if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
+    std::string dir = sharedDir() + "/scenes/hw1/";
+    Scene scene = loadScene(dir + "bunny.xml");
+    CHECK(scene.shadowRayEpsilon == 1e-3f);
+    DeviceScene ds = flattenScene(scene);
+    Renderer r(testContext(), ds);
+    RenderSettings rs;
+    rs.spp = scene.cameras.at(0).numSamples;
+    RenderCounters counters;
+    ImageRGB img = r.render(scene.cameras.at(0), rs, counters);
+    ImageRGB ref = readImage(dir + "_reference_outputs/bunny.png");
+    REQUIRE(img.width == ref.width);
+    double p = psnr8(quantize(img, true), ref);
+    WARN("hw1 bunny: PSNR " << p << " dB (truncated)");
+    CHECK(p >= 55.0);
+}
