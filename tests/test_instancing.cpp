@@ -1,0 +1,192 @@
+// Mesh instances (<MeshInstance baseMeshId resetTransform>): instances of instances compose their
+// transformations (the base's composed one first, then the instance's own; resetTransform keeps only
+// the instance's own), take their own or else their base's material, textures and shading mode, and
+// move by their own MotionBlur only. Parsing (transforms, inheritance, a base defined later, the Mesh
+// an id names before an instance, cycles and ambiguous ids named in the error), and a render of
+// nested, rotated, scaled and moving instances against the same scene written out as plain Meshes
+// with the composed transformation strings (bit for bit). The hw2 grass field against its reference.
+#include <catch.hpp>
+
+#include <cstring>
+
+#include "flatten/device_scene.h"
+#include "scene/scene_loader.h"
+#include "test_helpers.h"
+#include "util/error.h"
+
+using namespace clrt;
+using namespace clrt::test;
+
+namespace {
+
+// A camera looking down −z at a floor with a small pyramid mesh (id 1) and the given objects.
+std::string instanceScene(const std::string& objects) {
+    return R"(<Scene><BackgroundColor>10 20 30</BackgroundColor><MaxRecursionDepth>2</MaxRecursionDepth>
+<Cameras><Camera id="1"><Position>0 3 6</Position><Gaze>0 -0.45 -1</Gaze><Up>0 1 0</Up>
+<NearPlane>-0.6 0.6 -0.45 0.45</NearPlane><NearDistance>1</NearDistance>
+<ImageResolution>64 48</ImageResolution><ImageName>i.exr</ImageName></Camera></Cameras>
+<Lights><AmbientLight>20 20 20</AmbientLight>
+<PointLight id="1"><Position>2 6 4</Position><Intensity>4000 4000 4000</Intensity></PointLight></Lights>
+<Materials>
+<Material id="1"><AmbientReflectance>0.1 0.1 0.1</AmbientReflectance><DiffuseReflectance>0.8 0.7 0.6</DiffuseReflectance>
+<SpecularReflectance>0.3 0.3 0.3</SpecularReflectance><PhongExponent>20</PhongExponent></Material>
+<Material id="2"><AmbientReflectance>0.1 0.1 0.1</AmbientReflectance><DiffuseReflectance>0.2 0.5 0.9</DiffuseReflectance>
+<SpecularReflectance>0.5 0.5 0.5</SpecularReflectance><PhongExponent>50</PhongExponent>
+<MirrorReflectance>0.3 0.3 0.3</MirrorReflectance></Material>
+</Materials>
+<Transformations>
+<Translation id="1">1.5 0 -1</Translation><Translation id="2">-2 0.2 -2</Translation>
+<Translation id="3">0 0.5 1</Translation>
+<Rotation id="1">30 0 1 0</Rotation><Rotation id="2">-50 1 0.3 0</Rotation>
+<Scaling id="1">0.6 1.2 0.8</Scaling><Scaling id="2">1.5 1.5 1.5</Scaling>
+</Transformations>
+<VertexData>-0.5 0 -0.5  0.5 0 -0.5  0.5 0 0.5  -0.5 0 0.5  0 1 0
+-20 0 -20  20 0 -20  20 0 20  -20 0 20</VertexData>
+<Objects>
+<Mesh id="100"><Material>1</Material><Faces>6 8 7  6 9 8</Faces></Mesh>
+)" + objects + "</Objects></Scene>";
+}
+
+// Nested instances: 2 (rotated) of mesh 1 (scaled), 3 (moving) of 2, 4 (scaled, standing still) of 3,
+// 5 (resetTransform, smooth) of 4, 6 of 7, which is defined after it.
+const char* kNested = R"(
+<Mesh id="1"><Material>1</Material><Transformations>s1</Transformations><Faces>1 2 5  2 3 5  3 4 5  4 1 5</Faces></Mesh>
+<MeshInstance id="2" baseMeshId="1"><Material>2</Material><Transformations>r1</Transformations></MeshInstance>
+<MeshInstance id="3" baseMeshId="2"><Transformations>t1</Transformations><MotionBlur>0.4 0 0.2</MotionBlur></MeshInstance>
+<MeshInstance id="4" baseMeshId="3"><Transformations>s2</Transformations></MeshInstance>
+<MeshInstance id="5" baseMeshId="4" resetTransform="true" shadingMode="smooth"><Material>1</Material><Transformations>t2</Transformations></MeshInstance>
+<MeshInstance id="6" baseMeshId="7"><Transformations>t3</Transformations></MeshInstance>
+<MeshInstance id="7" baseMeshId="1"><Transformations>r2</Transformations></MeshInstance>
+)";
+
+// kNested written out: each shape a Mesh with the whole transformation string, its material and motion.
+const char* kNestedAsMeshes = R"(
+<Mesh id="1"><Material>1</Material><Transformations>s1</Transformations><Faces>1 2 5  2 3 5  3 4 5  4 1 5</Faces></Mesh>
+<Mesh id="2"><Material>2</Material><Transformations>s1 r1</Transformations><Faces>1 2 5  2 3 5  3 4 5  4 1 5</Faces></Mesh>
+<Mesh id="3"><Material>2</Material><Transformations>s1 r1 t1</Transformations><MotionBlur>0.4 0 0.2</MotionBlur><Faces>1 2 5  2 3 5  3 4 5  4 1 5</Faces></Mesh>
+<Mesh id="4"><Material>2</Material><Transformations>s1 r1 t1 s2</Transformations><Faces>1 2 5  2 3 5  3 4 5  4 1 5</Faces></Mesh>
+<Mesh id="5" shadingMode="smooth"><Material>1</Material><Transformations>t2</Transformations><Faces>1 2 5  2 3 5  3 4 5  4 1 5</Faces></Mesh>
+<Mesh id="6"><Material>1</Material><Transformations>s1 r2 t3</Transformations><Faces>1 2 5  2 3 5  3 4 5  4 1 5</Faces></Mesh>
+<Mesh id="7"><Material>1</Material><Transformations>s1 r2</Transformations><Faces>1 2 5  2 3 5  3 4 5  4 1 5</Faces></Mesh>
+)";
+
+Scene loadText(TempDir& dir, const std::string& name, const std::string& xml) {
+    const std::string path = dir.file(name);
+    writeFileBytes(path, xml);
+    return loadScene(path);
+}
+
+std::string loadError(TempDir& dir, const std::string& name, const std::string& xml) {
+    try {
+        loadText(dir, name, xml);
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "";
+}
+
+bool nearVec(const Vec3& a, const Vec3& b) { return length(a - b) <= 1e-5f; }
+
+}  // namespace
+
+TEST_CASE("instancing: instances of instances compose transforms; material, motion and shading", "[instancing][scene]") {
+    TempDir dir;
+    Scene s = loadText(dir, "nested.xml", instanceScene(kNested));
+    Scene m = loadText(dir, "meshes.xml", instanceScene(kNestedAsMeshes));
+    REQUIRE(s.shapes.size() == 8);
+    REQUIRE(m.shapes.size() == 8);
+    CHECK(s.meshes.size() == 2);  // the floor and the pyramid, shared by every instance
+    const Vec3 probes[] = {Vec3(0.3f, 0.7f, -0.2f), Vec3(1, 2, 3), Vec3(-0.5f, 0, 0.5f)};
+    for (size_t i = 1; i < s.shapes.size(); ++i) {
+        INFO(s.shapes[i].source);
+        for (const Vec3& p : probes)
+            CHECK(nearVec(s.shapes[i].transform.transformPoint(p), m.shapes[i].transform.transformPoint(p)));
+        CHECK(s.shapes[i].materialIndex == m.shapes[i].materialIndex);
+        CHECK(s.shapes[i].motion == m.shapes[i].motion);
+        CHECK(s.shapes[i].smooth == m.shapes[i].smooth);
+        CHECK(s.shapes[i].meshIndex == s.shapes[1].meshIndex);
+    }
+    // By hand: instance 4 = s2 · t1 · r1 · s1; instance 5 (reset) = t2 only.
+    const Vec3 p(0.5f, 0, 0.5f);  // s1 -> (0.3, 0, 0.4); r1 (30° about y) -> (0.3c+0.4s, 0, -0.3s+0.4c)
+    const float c = std::cos(float(M_PI) / 6), sn = std::sin(float(M_PI) / 6);
+    const Vec3 r(0.3f * c + 0.4f * sn, 0, -0.3f * sn + 0.4f * c);
+    CHECK(nearVec(s.shapes[4].transform.transformPoint(p), (r + Vec3(1.5f, 0, -1)) * 1.5f));
+    CHECK(nearVec(s.shapes[5].transform.transformPoint(p), p + Vec3(-2, 0.2f, -2)));
+    CHECK(s.shapes[3].motion == Vec3(0.4f, 0, 0.2f));
+    CHECK(s.shapes[4].motion == Vec3(0, 0, 0));  // its base moves; it moves by its own MotionBlur only
+    CHECK(s.shapes[4].materialIndex == s.shapes[2].materialIndex);  // inherited through 3 from 2
+    CHECK(s.shapes[6].source.find("MeshInstance id=6") == 0);
+}
+
+TEST_CASE("instancing: a Mesh id is named before an instance id; cycles and ambiguous ids are errors", "[instancing][scene]") {
+    TempDir dir;
+    const std::string mesh =
+        R"(<Mesh id="1"><Material>1</Material><Faces>1 2 5</Faces></Mesh>)";
+    SECTION("a Mesh and a MeshInstance share id 1: baseMeshId 1 is the Mesh") {
+        Scene s = loadText(dir, "shared_id.xml", instanceScene(mesh + R"(
+<MeshInstance id="1" baseMeshId="1"><Transformations>t1</Transformations></MeshInstance>
+<MeshInstance id="2" baseMeshId="1"><Transformations>t3</Transformations></MeshInstance>)"));
+        REQUIRE(s.shapes.size() == 4);
+        CHECK(nearVec(s.shapes[3].transform.transformPoint(Vec3(0, 0, 0)), Vec3(0, 0.5f, 1)));
+    }
+    SECTION("a cycle of three") {
+        std::string e = loadError(dir, "cycle.xml", instanceScene(mesh + R"(
+<MeshInstance id="4" baseMeshId="5"/><MeshInstance id="5" baseMeshId="6"/><MeshInstance id="6" baseMeshId="4"/>)"));
+        INFO(e);
+        CHECK(e.find("cycle") != std::string::npos);
+        CHECK(e.find("4 -> 5 -> 6 -> 4") != std::string::npos);
+    }
+    SECTION("an instance of itself") {
+        std::string e = loadError(dir, "self.xml", instanceScene(mesh + R"(<MeshInstance id="7" baseMeshId="7"/>)"));
+        INFO(e);
+        CHECK(e.find("7 -> 7") != std::string::npos);
+    }
+    SECTION("a cycle reached from an instance outside it names the cycle only") {
+        std::string e = loadError(dir, "tail.xml", instanceScene(mesh + R"(
+<MeshInstance id="3" baseMeshId="8"/><MeshInstance id="8" baseMeshId="9"/><MeshInstance id="9" baseMeshId="8"/>)"));
+        INFO(e);
+        CHECK(e.find("8 -> 9 -> 8") != std::string::npos);
+        CHECK(e.find("3 -> ") == std::string::npos);
+    }
+    SECTION("two instances with the id a third names") {
+        std::string e = loadError(dir, "dup.xml", instanceScene(mesh + R"(
+<MeshInstance id="2" baseMeshId="1"/><MeshInstance id="2" baseMeshId="1"/><MeshInstance id="3" baseMeshId="2"/>)"));
+        INFO(e);
+        CHECK(e.find("MeshInstance 2") != std::string::npos);
+    }
+    SECTION("an undefined base") {
+        std::string e = loadError(dir, "undef.xml", instanceScene(mesh + R"(<MeshInstance id="2" baseMeshId="42"/>)"));
+        CHECK(e.find("undefined Mesh 42") != std::string::npos);
+    }
+}
+
+TEST_CASE("instancing: nested, rotated, scaled and moving instances render as the same meshes written out", "[instancing][render]") {
+    TempDir dir;
+    Scene s = loadText(dir, "nested.xml", instanceScene(kNested));
+    Scene m = loadText(dir, "meshes.xml", instanceScene(kNestedAsMeshes));
+    ImageRGB a = renderCamera(s, s.cameras.at(0), 4, 3);
+    ImageRGB b = renderCamera(m, m.cameras.at(0), 4, 3);
+    REQUIRE(a.pixels.size() == b.pixels.size());
+    CHECK(std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(float)) == 0);
+    // The instances are there: the picture differs from the floor alone.
+    Scene floorOnly = loadText(dir, "floor.xml", instanceScene(""));
+    ImageRGB f = renderCamera(floorOnly, floorOnly.cameras.at(0), 4, 3);
+    CHECK(std::memcmp(a.pixels.data(), f.pixels.data(), a.pixels.size() * sizeof(float)) != 0);
+}
+
+TEST_CASE("instancing: hw2 grass_desert (instances of instances) matches the course's PNG", "[instancing][render][shared]") {
+    if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
+    const std::string dir = sharedDir() + "/scenes/hw2/grass/";
+    Scene scene = loadScene(dir + "grass_desert.xml");
+    ImageRGB img = renderCamera(scene, scene.cameras.at(0), 1);
+    ImageRGB ref = readImage(dir + "_reference_outputs/grass_desert.png");
+    REQUIRE(img.width == ref.width);
+    REQUIRE(img.height == ref.height);
+    const double p = psnr8(quantize(img, true), ref);
+    WARN("grass_desert: PSNR " << p << " dB (truncated)");
+    // 29.97 dB measured; the background and the ground are exact, what differs is the shading of
+    // whole grass blades (thin open geometry lit from both sides), not where they are. The other
+    // readings of the hw2 text score below this bound: resetTransform dropping only the base's own
+    // transforms 27.95 dB, every instance an instance of the Mesh 28.13 dB.
+    CHECK(p >= 29.5);
+}
