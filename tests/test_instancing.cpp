@@ -9,6 +9,8 @@
 // instance) against brute force over the world-space triangles that flattening makes.
 #include <catch.hpp>
 
+#include <chrono>
+#include <cstdlib>
 #include <cstring>
 #include <random>
 
@@ -271,4 +273,81 @@ TEST_CASE("instancing: the host two-level BVH finds the hits of the flattened tr
     // take the neighbouring triangle, never another surface.
     CHECK(sameHit >= n - n / 500);
     CHECK(tClose >= n - n / 1000);
+}
+
+// Not a timed test (hidden: run with "[.instancing-bench]" and CLRT_BENCH_SCENE=scene.xml): the host
+// cost of flattening a scene's meshes into one BVH against the two-level BVH: build seconds, bytes
+// of the structures the device would hold, and host closest-hit walks per second on camera rays.
+TEST_CASE("instancing: flattened against two-level on the host (bench)", "[.instancing-bench]") {
+    const char* path = std::getenv("CLRT_BENCH_SCENE");
+    if (!path) { WARN("set CLRT_BENCH_SCENE"); return; }
+    Scene s = loadScene(path);
+    using clock = std::chrono::steady_clock;
+    auto secs = [](clock::time_point t0) { return std::chrono::duration<double>(clock::now() - t0).count(); };
+    // Flattened: world-space triangles (48 B + 96 B of shading each, as dev::Triangle/TriangleShading).
+    auto t0 = clock::now();
+    std::vector<Vec3> world;
+    std::vector<Aabb> boxes;
+    for (const Shape& sh : s.shapes) {
+        if (sh.type != ShapeType::Mesh) continue;
+        const MeshData& m = s.meshes[size_t(sh.meshIndex)];
+        for (size_t t = 0; t + 2 < m.indices.size(); t += 3) {
+            Aabb b;
+            for (int k = 0; k < 3; ++k) {
+                world.push_back(sh.transform.transformPoint(m.positions[size_t(m.indices[t + size_t(k)])]));
+                b.grow(world.back());
+            }
+            boxes.push_back(b);
+        }
+    }
+    BvhBuildOptions opts;
+    opts.traversalCost = 2;
+    Bvh flat = buildBvh(boxes, opts);
+    const double flatBuild = secs(t0);
+    const double flatBytes = double(boxes.size()) * (48 + 96) + double(flat.nodes.size()) * sizeof(BvhNode);
+    // Two-level.
+    t0 = clock::now();
+    std::vector<TwoLevelMesh> meshes;
+    std::vector<TwoLevelInstance> insts;
+    twoLevelInputs(s, meshes, insts);
+    TwoLevelBvh two = buildTwoLevelBvh(meshes, insts);
+    const double twoBuild = secs(t0);
+    double twoBytes = double(two.instances.size()) * (2 * 48 + 16 + 16) + double(two.top.nodes.size()) * sizeof(BvhNode);
+    for (size_t m = 0; m < two.bottom.size(); ++m)
+        if (!two.bottom[m].primRefs.empty())
+            twoBytes += double(s.meshes[m].indices.size() / 3) * (48 + 96) + double(two.bottom[m].nodes.size()) * sizeof(BvhNode);
+    // Camera rays of the first camera, host walks.
+    const Camera& cam = s.cameras.at(0);
+    const int w = 160, h = 90;
+    std::vector<Vec3> dirs;
+    const Vec3 org = cam.position;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const float px = cam.left + (cam.right - cam.left) * (x + 0.5f) / w;
+            const float py = cam.top - (cam.top - cam.bottom) * (y + 0.5f) / h;
+            dirs.push_back(normalize(cam.u * px + cam.v * py - cam.w * cam.nearDistance));
+        }
+    t0 = clock::now();
+    int flatHits = 0;
+    for (const Vec3& d : dirs) {
+        float tMax = INFINITY;
+        bool hit = false;
+        traverseBvh(flat, org, d, tMax, [&](int tri, float& tm) {
+            float t, b1, b2;
+            if (intersectTriangleWatertight(org, d, world[3 * size_t(tri)], world[3 * size_t(tri) + 1],
+                                            world[3 * size_t(tri) + 2], tm, t, b1, b2)) { tm = t; hit = true; }
+        });
+        flatHits += hit;
+    }
+    const double flatRays = double(dirs.size()) / secs(t0);
+    t0 = clock::now();
+    int twoHits = 0;
+    for (const Vec3& d : dirs) twoHits += closestHitTwoLevel(two, meshes, org, d, INFINITY).instance >= 0;
+    const double twoRays = double(dirs.size()) / secs(t0);
+    WARN(path << ": " << boxes.size() << " triangles as seen, " << two.instances.size() << " instances\n"
+              << "  flattened: build " << flatBuild << " s, " << flatBytes / 1e6 << " MB, " << flatRays / 1e3
+              << " k host rays/s (" << flatHits << " hits)\n"
+              << "  two-level: build " << twoBuild << " s, " << twoBytes / 1e6 << " MB, " << twoRays / 1e3
+              << " k host rays/s (" << twoHits << " hits)");
+    CHECK(flatHits == twoHits);
 }
