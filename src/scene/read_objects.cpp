@@ -1,13 +1,14 @@
 // Objects: <Objects> and its shapes, each with an optional id, a <Material>, optional <Textures> (ids
 // of TextureMaps) and <Transformations> (a string such as "t1 s2 r1", read_transforms.cpp). Reads:
 //   Mesh (shadingMode = smooth|flat; <Faces>: inline indices into VertexData, or binaryFile, or
-//     plyFile (ply_reader.h); vertexOffset textureOffset), MeshInstance (baseMeshId resetTransform,
-//     shadingMode), Triangle (Indices), Sphere (Center Radius), Plane (Point Normal; JSON 2025 scenes),
+//     plyFile (ply_reader.h); vertexOffset textureOffset), MeshInstance (baseMeshId: a Mesh, else
+//     another MeshInstance; resetTransform, shadingMode), Triangle (Indices), Sphere (Center Radius), Plane (Point Normal; JSON 2025 scenes),
 //     LightMesh (as Mesh + Radiance) and LightSphere (as Sphere + Radiance): a shape and a light each.
 //   Mesh, MeshInstance, Triangle and Sphere take <MotionBlur> (a translation over the shutter); object
 //   lights do not (their sampling data are the rest position).
 // The Meshes of an <Objects> are read first, so that instances may name a mesh defined after them;
-// then every child is placed in document order by its row of objectReaders().
+// then every child is placed in document order by its row of objectReaders(). A MeshInstance is
+// resolved when first needed (placed, or named by another), so chains may run in any order.
 #include <set>
 #include <unordered_map>
 
