@@ -1,13 +1,14 @@
 // Objects: <Objects> and its shapes, each with an optional id, a <Material>, optional <Textures> (ids
 // of TextureMaps) and <Transformations> (a string such as "t1 s2 r1", read_transforms.cpp). Reads:
 //   Mesh (shadingMode = smooth|flat; <Faces>: inline indices into VertexData, or binaryFile, or
-//     plyFile (ply_reader.h); vertexOffset textureOffset), MeshInstance (baseMeshId resetTransform,
-//     shadingMode), Triangle (Indices), Sphere (Center Radius), Plane (Point Normal; JSON 2025 scenes),
+//     plyFile (ply_reader.h); vertexOffset textureOffset), MeshInstance (baseMeshId: a Mesh, else
+//     another MeshInstance; resetTransform, shadingMode), Triangle (Indices), Sphere (Center Radius), Plane (Point Normal; JSON 2025 scenes),
 //     LightMesh (as Mesh + Radiance) and LightSphere (as Sphere + Radiance): a shape and a light each.
 //   Mesh, MeshInstance, Triangle and Sphere take <MotionBlur> (a translation over the shutter); object
 //   lights do not (their sampling data are the rest position).
 // The Meshes of an <Objects> are read first, so that instances may name a mesh defined after them;
-// then every child is placed in document order by its row of objectReaders().
+// then every child is placed in document order by its row of objectReaders(). A MeshInstance is
+// resolved when first needed (placed, or named by another), so chains may run in any order.
 #include <set>
 #include <unordered_map>
 
@@ -19,11 +20,16 @@
 namespace clrt::walker {
 namespace {
 
-// The Meshes of one <Objects>, read before its other children.
+// The Meshes of one <Objects>, read before its other children, and its MeshInstances, resolved on
+// first use (an instance may name another instance, defined before or after it).
 struct ObjectsContext {
-    std::map<int, Shape> meshById;  // what MeshInstance baseMeshId names
+    std::map<int, Shape> meshById;  // what MeshInstance baseMeshId names first
     std::vector<Shape> meshes;      // in document order
     size_t nextMesh = 0;            // the next one to place
+    // Instances are keyed by location(): node wrappers are made afresh by each children() call.
+    std::map<int, std::vector<SceneNodePtr>> instanceNodes;  // MeshInstance id -> its elements
+    std::map<std::string, Shape> instanceShapes;             // resolved instances by location
+    std::vector<std::pair<std::string, int>> resolving;      // (location, id) chain being resolved
 };
 
 std::string sourceOf(const SceneNode& n) { return describe(n) + " (" + n.location() + ")"; }
@@ -237,16 +243,50 @@ void readPlane(Walker& w, const SceneNode& n, ObjectsContext&) {
     w.scene.shapes.push_back(s);
 }
 
-// MeshInstance: the mesh baseMeshId names, with its own (or the mesh's) material, textures and
-// shading mode, and its own transformation before (or, with resetTransform, instead of) the mesh's.
-void readInstance(Walker& w, const SceneNode& n, ObjectsContext& objects) {
+Shape resolveInstance(Walker& w, const SceneNode& n, ObjectsContext& objects);
+
+// "4 -> 5 -> 4": the ids of a cycle of instances, from where it closes.
+std::string idCycle(const std::vector<std::pair<std::string, int>>& chain, const SceneNode& last) {
+    std::string out;
+    bool in = false;
+    for (auto& [where, id] : chain) {
+        in = in || where == last.location();
+        if (in) out += std::to_string(id) + " -> ";
+    }
+    return out + std::to_string(intAttribute(last, "id", 0));
+}
+
+// What baseMeshId names: a Mesh of this <Objects> if one has that id, else the MeshInstance with that
+// id (resolved first: its transforms, material and textures are those it ends up with).
+Shape baseOf(Walker& w, const SceneNode& n, ObjectsContext& objects, int baseId) {
+    std::string who = describe(n);
+    if (auto it = objects.meshById.find(baseId); it != objects.meshById.end()) return it->second;
+    auto inst = objects.instanceNodes.find(baseId);
+    if (inst == objects.instanceNodes.end())
+        fail(n, who + " references undefined Mesh " + std::to_string(baseId) + " (no Mesh or MeshInstance has that id)");
+    if (inst->second.size() > 1)
+        fail(n, who + " references MeshInstance " + std::to_string(baseId) + ", which " +
+                    std::to_string(inst->second.size()) + " MeshInstances share as id");
+    const SceneNode& baseNode = *inst->second.front();
+    for (auto& [where, id] : objects.resolving)
+        if (where == baseNode.location())
+            fail(n, "MeshInstances name each other as baseMeshId in a cycle: " + idCycle(objects.resolving, baseNode));
+    return resolveInstance(w, baseNode, objects);
+}
+
+// MeshInstance: the geometry of what baseMeshId names (a Mesh, or another MeshInstance's mesh), with
+// its own (or the base's) material, textures and shading mode, and its own transformation after the
+// base's composed one (or, with resetTransform, instead of it). It moves by its own MotionBlur only.
+Shape resolveInstance(Walker& w, const SceneNode& n, ObjectsContext& objects) {
+    std::string key = n.location();
+    if (auto done = objects.instanceShapes.find(key); done != objects.instanceShapes.end()) return done->second;
     w.checkChildren(n, {"Material", "Textures", "Transformations", "MotionBlur"});
     std::string who = describe(n);
     if (!n.attribute("baseMeshId")) fail(n, who + " has no baseMeshId attribute");
     int baseId = intAttribute(n, "baseMeshId", 0);
-    auto it = objects.meshById.find(baseId);
-    if (it == objects.meshById.end()) fail(n, who + " references undefined Mesh " + std::to_string(baseId));
-    const Shape& base = it->second;
+    objects.resolving.emplace_back(key, intAttribute(n, "id", 0));
+    const Shape base = baseOf(w, n, objects, baseId);
+    objects.resolving.pop_back();
     bool reset = false;
     if (auto r = n.attribute("resetTransform")) reset = boolean(n, *r, who + ": resetTransform");
     Shape s = base;
@@ -260,7 +300,12 @@ void readInstance(Walker& w, const SceneNode& n, ObjectsContext& objects) {
     s.motion = motionOf(n);  // its own motion only: an instance of a moving mesh may stand still
     if (hasImageTexture(w, s.textureIndices) && w.scene.meshes[size_t(s.meshIndex)].uvs.empty())
         warnOnce(n.location() + ": " + who + " has an image texture but its mesh has no texture coordinates");
-    w.scene.shapes.push_back(s);
+    objects.instanceShapes.emplace(key, s);
+    return s;
+}
+
+void readInstance(Walker& w, const SceneNode& n, ObjectsContext& objects) {
+    w.scene.shapes.push_back(resolveInstance(w, n, objects));
 }
 
 // A Mesh, read ahead by readObjects: placed here, in document order.
@@ -324,6 +369,8 @@ void readMeshesAhead(Walker& w, const SceneNode& n, ObjectsContext& objects) {
         objects.meshById.emplace(s.id, s);
         objects.meshes.push_back(s);
     }
+    for (auto& c : n.children("MeshInstance"))
+        if (c->attribute("id")) objects.instanceNodes[intAttribute(*c, "id", 0)].push_back(c);
 }
 
 }  // namespace
