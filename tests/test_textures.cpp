@@ -14,6 +14,7 @@
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
 #include "test_helpers.h"
+#include "util/error.h"
 
 using namespace clrt;
 using namespace clrt::test;
@@ -156,6 +157,44 @@ double rmseRows(const ImageRGB& a, const ImageRGB& b, int y0, int y1) {
 }
 
 }  // namespace
+
+TEST_CASE("NumOctaves and Interpolation trilinear are read from XML and JSON; a bad count is one error", "[textures][scene]") {
+    TempDir dir;
+    std::vector<unsigned char> rgb(3, 0);
+    writePng8(dir.file("tex.png"), 1, 1, rgb);
+    const std::string maps = R"(<TextureMap id="1" type="image"><ImageId>1</ImageId><Interpolation>trilinear</Interpolation>
+</TextureMap><TextureMap id="2" type="perlin"><NumOctaves>4</NumOctaves></TextureMap>)";
+    std::string xml = quadScene(maps);
+    writeFileBytes(dir.file("a.xml"), xml);
+    Scene s = loadScene(dir.file("a.xml"));
+    REQUIRE(s.textures.size() == 2);
+    CHECK(s.textures[0].interpolation == dev::INTERP_TRILINEAR);
+    CHECK(s.textures[1].numOctaves == 4);
+    CHECK(s.textures[0].numOctaves == 1);  // default
+    writeFileBytes(dir.file("a.json"), R"({"Scene": {"Materials": {"Material": {"_id": "1"}},
+ "Textures": {"Images": {"Image": {"_id": "1", "_data": "tex.png"}},
+   "TextureMap": [{"_id": "1", "_type": "image", "ImageId": "1", "Interpolation": "trilinear"},
+                  {"_id": "2", "_type": "perlin", "NumOctaves": "3"}]}}})");
+    Scene j = loadScene(dir.file("a.json"));
+    REQUIRE(j.textures.size() == 2);
+    CHECK(j.textures[0].interpolation == dev::INTERP_TRILINEAR);
+    CHECK(j.textures[1].numOctaves == 3);
+    for (const char* bad : {"0", "17", "2.5"}) {
+        std::string b = xml;
+        b.replace(b.find("<NumOctaves>4"), 13, std::string("<NumOctaves>") + bad);
+        writeFileBytes(dir.file("b.xml"), b);
+        try {
+            loadScene(dir.file("b.xml"));
+            FAIL("no error for NumOctaves " << bad);
+        } catch (const Error& e) {
+            std::string msg = e.what();
+            INFO(msg);
+            CHECK(msg.find("b.xml:") != std::string::npos);
+            CHECK(msg.find("NumOctaves") != std::string::npos);
+            CHECK(msg.find('\n') == std::string::npos);
+        }
+    }
+}
 
 TEST_CASE("mip pyramid: box filter over each texel's exact footprint, odd sizes keep the mean", "[textures]") {
     MipLevel l0;
