@@ -54,7 +54,7 @@
     S(Ray) M(Ray, origin) M(Ray, direction)                                                       \
     S(Hit) M(Hit, t) M(Hit, prim) M(Hit, u) M(Hit, v)                                             \
     S(PathState) M(PathState, throughput) M(PathState, pixel) M(PathState, sample)                \
-        M(PathState, depth) M(PathState, pathId) M(PathState, coneWidth)                                                \
+        M(PathState, depth) M(PathState, pathId) M(PathState, coneWidth) M(PathState, pathPad)                                                \
     S(ShadowRay) M(ShadowRay, origin) M(ShadowRay, direction) M(ShadowRay, contribution)        \
     S(ShadingPoint) M(ShadingPoint, position) M(ShadingPoint, normal)                             \
         M(ShadingPoint, geomNormal) M(ShadingPoint, wo) M(ShadingPoint, kd) M(ShadingPoint, ks)    \
