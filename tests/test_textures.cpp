@@ -5,7 +5,9 @@
 // against a host reference; one octave renders as before, byte for byte).
 #include <catch.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <random>
 
 #include "cl/check.h"
@@ -247,8 +249,8 @@ TEST_CASE("trilinear: the device's level of detail and lookup match the host ref
     DeviceScene ds = flattenScene(loadScene(dir.file("s.xml")));
     REQUIRE(ds.features.mipMaps);
     REQUIRE(ds.textures[0].mipLevels == 6);  // 37×23 … 1×1
-    CHECK(std::find(ds.features.defines().begin(), ds.features.defines().end(), "-DCLRT_HAS_MIPMAPS=1") !=
-          ds.features.defines().end());
+    const std::vector<std::string> defines = ds.features.defines();
+    CHECK(std::find(defines.begin(), defines.end(), "-DCLRT_HAS_MIPMAPS=1") != defines.end());
     MipLevel l0;
     l0.width = w;
     l0.height = hgt;
