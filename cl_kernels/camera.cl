@@ -62,6 +62,8 @@ __attribute__((always_inline)) inline void Camera_GenerateAt(CameraParams cam, S
     p.sample = sample;
     p.depth = 0;
     p.pathId = 1u;
+    p.coneWidth = 0.0f;
+    p.pathPad[0] = p.pathPad[1] = p.pathPad[2] = 0;
     *path = p;
 }
 

@@ -35,7 +35,7 @@
         M(TextureMap, decal) M(TextureMap, interpolation) M(TextureMap, image)                    \
         M(TextureMap, normalizer) M(TextureMap, bumpFactor) M(TextureMap, scale)                  \
         M(TextureMap, offset) M(TextureMap, noiseScale) M(TextureMap, noiseAbs)                   \
-        M(TextureMap, pad0) M(TextureMap, pad1)                                                   \
+        M(TextureMap, octaves) M(TextureMap, mipLevels)                                                   \
     S(ImageInfo) M(ImageInfo, offset) M(ImageInfo, width) M(ImageInfo, height) M(ImageInfo, format) \
     S(Light) M(Light, position) M(Light, direction) M(Light, radiance) M(Light, edgeU)            \
         M(Light, edgeV) M(Light, cosCoverageHalf) M(Light, cosFalloffHalf) M(Light, area)         \
@@ -54,7 +54,7 @@
     S(Ray) M(Ray, origin) M(Ray, direction)                                                       \
     S(Hit) M(Hit, t) M(Hit, prim) M(Hit, u) M(Hit, v)                                             \
     S(PathState) M(PathState, throughput) M(PathState, pixel) M(PathState, sample)                \
-        M(PathState, depth) M(PathState, pathId)                                                  \
+        M(PathState, depth) M(PathState, pathId) M(PathState, coneWidth) M(PathState, pathPad)                                                \
     S(ShadowRay) M(ShadowRay, origin) M(ShadowRay, direction) M(ShadowRay, contribution)        \
     S(ShadingPoint) M(ShadingPoint, position) M(ShadingPoint, normal)                             \
         M(ShadingPoint, geomNormal) M(ShadingPoint, wo) M(ShadingPoint, kd) M(ShadingPoint, ks)    \

@@ -168,6 +168,51 @@ inline void Child_Make(ShadeResult* res, int k, PathState parent, float3 weight,
     res->childValid[k] = maxComponent(c.throughput.xyz) > 0.0f && allFinite3(dir) ? 1 : 0;
 }
 
+#ifdef CLRT_HAS_MIPMAPS
+/* Ray cones (Akenine-Möller et al., "Texture Level of Detail Strategies for Real-Time Ray Tracing", Ray
+ * Tracing Gems ch. 20): a path carries the cone's width (PathState.coneWidth, 0 at the camera), which
+ * grows by the pixel's spread angle per unit of distance along every segment; surfaces do not change
+ * the spread (exact for planar mirrors; docs/scene-format.md, "Trilinear textures"). */
+inline float Camera_PixelSpread(CameraParams cam) {
+    float pw = fabs(cam.nearPlane.y - cam.nearPlane.x) / (float)cam.width;
+    float ph = fabs(cam.nearPlane.w - cam.nearPlane.z) / (float)cam.height;
+    return sqrt(pw * ph) / cam.nearDistance;
+}
+/* |dp/du × dp/dv| at the hit: world area per unit of uv area (triangles from their positions and uvs,
+ * spheres from their parametrisation under their transformation, planes 1). */
+inline float Surface_UvArea(Hit h, SurfaceHit s, const __global Triangle* tris, const __global TriangleShading* shading,
+                            const __global Sphere* spheres, int numTriangles, int numSpheres) {
+    if (h.prim < numTriangles) {
+        const __global Triangle* tri = &tris[h.prim];
+        const __global TriangleShading* sh = &shading[h.prim];
+        float2 d1 = sh->uv01.zw - sh->uv01.xy, d2 = sh->uv2.xy - sh->uv01.xy;
+        float areaWorld = length(cross(tri->v1.xyz - tri->v0.xyz, tri->v2.xyz - tri->v0.xyz));
+        return areaWorld / fabs(d1.x * d2.y - d2.x * d1.y);  /* uvs all alike: +inf (level 0) */
+    }
+    if (h.prim >= numTriangles + numSpheres) return 1.0f;
+    const __global Sphere* sp = &spheres[h.prim - numTriangles];
+    float3 nObj = normalize(affinePoint(sp->worldToObject, s.p) - sp->centerRadius.xyz);
+    float r = sp->centerRadius.w;
+    float cosT = clamp(nObj.y, -1.0f, 1.0f), sinT = sqrt(fmax(0.0f, 1.0f - cosT * cosT));
+    float phi = atan2(nObj.z, nObj.x), cosP = cos(phi), sinP = sin(phi);
+    /* u = (π − φ)/2π, v = θ/π (Surface_FromHit) */
+    float3 dpdu = affineVector(sp->objectToWorld, (-2.0f * CLRT_PI * r) * (float3)(-sinT * sinP, 0.0f, sinT * cosP));
+    float3 dpdv = affineVector(sp->objectToWorld, (CLRT_PI * r) * (float3)(cosT * cosP, -sinT, cosT * sinP));
+    return length(cross(dpdu, dpdv));
+}
+/* The cone's footprint on the surface in uv units: the side of the square of the same area as the
+ * ellipse it cuts (axes W and W/|cos|: W/√|cos|), over the world length of one uv unit. Ray Tracing
+ * Gems ch. 20 takes the long axis (λ = Δ0 + log2 W − log2 |n·d|), which blurs grazing surfaces more
+ * than a pixel's box filter does (scenes/mip_checker_plane.xml: docs/scene-format.md has both). */
+inline float Surface_FootprintUv(Hit h, SurfaceHit s, float coneWidth, const __global Triangle* tris,
+                                 const __global TriangleShading* shading, const __global Sphere* spheres,
+                                 int numTriangles, int numSpheres) {
+    float cosI = fmax(fabs(dot(s.dir, s.ng)), 1e-4f);
+    float uvArea = Surface_UvArea(h, s, tris, shading, spheres, numTriangles, numSpheres);
+    return coneWidth / sqrt(cosI * uvArea);
+}
+#endif
+
 #ifdef CLRT_HAS_TEXTURES
 /* The textures of the hit's shape: kd, ks, the shading normal (normal and bump maps), or the whole
  * radiance (replace_all: returns 1, *radiance set). */
@@ -175,14 +220,19 @@ inline int Shade_Textures(Hit h, SurfaceHit* s, SceneParams scene, const __globa
                           const __global TriangleShading* triShading, const __global Sphere* spheres,
                           const __global Plane* planes, const __global TextureSet* textureSets,
                           const __global TextureMap* textures, const __global ImageInfo* images,
-                          const __global float4* texels, float3* kd, float3* ks, float3* radiance) {
+                          const __global float4* texels, float coneWidth, float3* kd, float3* ks,
+                          float3* radiance) {
     int replaceAll = 0;
     float3 pObj = affinePoint(textureSets[s->textureSet].worldToObject, s->p);  /* procedural textures */
+    float footprintUv = 0.0f;  /* trilinear images */
+#ifdef CLRT_HAS_MIPMAPS
+    footprintUv = Surface_FootprintUv(h, *s, coneWidth, tris, triShading, spheres, scene.numTriangles, scene.numSpheres);
+#endif
     for (int k = 0; k < CLRT_MAX_TEXTURES_PER_SHAPE; ++k) {
         int ti = textureSets[s->textureSet].texture[k];
         if (ti == CLRT_INVALID) continue;
         const __global TextureMap* tex = &textures[ti];
-        float3 c = Texture_Eval(tex, images, texels, s->uv, s->p, pObj);
+        float3 c = Texture_Eval(tex, images, texels, s->uv, s->p, pObj, footprintUv);
         switch (tex->decal) {
         case DECAL_REPLACE_KD: *kd = c; break;
         case DECAL_BLEND_KD: *kd = 0.5f * (*kd + c); break;
@@ -292,6 +342,9 @@ inline void Shade_Hit(SceneParams scene, CameraParams cam, PathState path, Ray r
     ray.origin.xyz -= motionShift;  /* the ray in the rest frame of the primitive it hit */
 #endif
     SurfaceHit s = Surface_FromHit(h, ray, tris, triShading, spheres, planes, scene.numTriangles, scene.numSpheres);
+#ifdef CLRT_HAS_MIPMAPS
+    path.coneWidth += Camera_PixelSpread(cam) * s.t;  /* the cone at the hit: its children start from it */
+#endif
     Material m = materials[s.material];
     float3 wo = -s.dir;
     float3 ng = s.frontFacing ? s.ng : -s.ng;   /* facing the incoming ray */
@@ -301,7 +354,7 @@ inline void Shade_Hit(SceneParams scene, CameraParams cam, PathState path, Ray r
 #ifdef CLRT_HAS_TEXTURES
     if (s.textureSet != CLRT_INVALID)
         replaceAll = Shade_Textures(h, &s, scene, tris, triShading, spheres, planes, textureSets, textures, images,
-                                    texels, &kd, &ks, &radiance);
+                                    texels, path.coneWidth, &kd, &ks, &radiance);
 #endif
 #ifdef CLRT_HAS_MOTION_BLUR
     s.p += motionShift; /* the textures above saw the rest-frame point: they move with the object */

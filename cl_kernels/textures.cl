@@ -1,6 +1,8 @@
 /* textures.cl — texture lookups: image textures from the texel atlas (nearest or bilinear, repeat
- * wrap, the course's texel convention: (i, j) = (u·w, v·h), row 0 at the top), the checkerboard and
- * Perlin procedurals, and the decal modes that change kd / ks / the final colour. */
+ * wrap, the course's texel convention: (i, j) = (u·w, v·h), row 0 at the top; trilinear: bilinear in
+ * the two mip levels around the ray cone's level of detail, CLRT_HAS_MIPMAPS), the checkerboard and
+ * Perlin procedurals (NumOctaves: a fractal sum), and the decal modes that change kd / ks / the final
+ * colour. */
 #ifndef CLRT_TEXTURES_CL
 #define CLRT_TEXTURES_CL
 
@@ -55,15 +57,29 @@ inline float Perlin_Noise(float3 p) {
     }
     return sum;
 }
+/* NumOctaves (course 2025): n = Σ_{k < octaves} 2^-k · noise(2^k · s·p), s = NoiseScale; the
+ * conversion (Perlin_Value) applies to the sum. One octave is the plain noise, bit for bit. */
+inline float Perlin_Fractal(const __global TextureMap* tex, float3 p) {
+    float3 q = p * tex->noiseScale;
+    float n = Perlin_Noise(q);
+    float amplitude = 1.0f;
+    for (int k = 1; k < tex->octaves; ++k) {
+        q *= 2.0f;
+        amplitude *= 0.5f;
+        n += amplitude * Perlin_Noise(q);
+    }
+    return n;
+}
 /* The converted noise (absval: |n|, linear: (n + 1)/2) at the scaled point: the texture's value and
  * the height of a Perlin bump map. */
 inline float Perlin_Value(const __global TextureMap* tex, float3 p) {
-    float n = Perlin_Noise(p * tex->noiseScale);
+    float n = Perlin_Fractal(tex, p);
     return tex->noiseAbs ? fabs(n) : 0.5f * (n + 1.0f);
 }
-/* ∇ of Perlin_Value at p by central differences (step CLRT_PERLIN_GRAD_STEP in scaled units). */
+/* ∇ of Perlin_Value at p by central differences (step CLRT_PERLIN_GRAD_STEP in the units of the
+ * finest octave's lattice). */
 inline float3 Perlin_Gradient(const __global TextureMap* tex, float3 p) {
-    float e = CLRT_PERLIN_GRAD_STEP / fmax(tex->noiseScale, 1e-20f);
+    float e = CLRT_PERLIN_GRAD_STEP / fmax(tex->noiseScale * (float)(1 << (tex->octaves - 1)), 1e-20f);
     float3 g;
     g.x = Perlin_Value(tex, p + (float3)(e, 0.0f, 0.0f)) - Perlin_Value(tex, p - (float3)(e, 0.0f, 0.0f));
     g.y = Perlin_Value(tex, p + (float3)(0.0f, e, 0.0f)) - Perlin_Value(tex, p - (float3)(0.0f, e, 0.0f));
@@ -71,13 +87,40 @@ inline float3 Perlin_Gradient(const __global TextureMap* tex, float3 p) {
     return g / (2.0f * e);
 }
 
+#ifdef CLRT_HAS_MIPMAPS
+/* The level of detail of a footprint of `footprintUv` uv units on an image of w×h texels: log2 of the
+ * footprint in texels (an isotropic footprint: the level's texel spacing equals it), 0 when unknown (NaN). */
+inline float Mip_Level(float footprintUv, int width, int height) {
+    float texelsAcross = footprintUv * sqrt((float)width * (float)height);
+    return texelsAcross > 0.0f ? log2(fmin(texelsAcross, 1e30f)) : 0.0f;  /* NaN: 0; +inf: the coarsest */
+}
+/* Trilinear: the level clamped to the chain, bilinear at the levels below and above it, blended
+ * linearly between them (level k at images[tex->image + k]). */
+inline float3 Image_Trilinear(const __global float4* texels, const __global ImageInfo* images,
+                              const __global TextureMap* tex, float2 uv, float footprintUv) {
+    ImageInfo base = images[tex->image];
+    float level = clamp(Mip_Level(footprintUv, base.width, base.height), 0.0f, (float)(tex->mipLevels - 1));
+    int l0 = (int)floor(level);
+    float f = level - (float)l0;
+    float3 c0 = Image_Lookup(texels, images[tex->image + l0], uv.x, uv.y, INTERP_BILINEAR);
+    if (!(f > 0.0f) || l0 + 1 >= tex->mipLevels) return c0;
+    float3 c1 = Image_Lookup(texels, images[tex->image + l0 + 1], uv.x, uv.y, INTERP_BILINEAR);
+    return (1.0f - f) * c0 + f * c1;
+}
+#endif
+
 /* The value of texture `tex` at (uv, world position p, object-space position pObj), in reflectance
  * units (0..1 for images after the normalizer). The procedural textures are evaluated in object space
- * (the checkerboard's tiles and the noise follow the object's scale, as in the course). */
+ * (the checkerboard's tiles and the noise follow the object's scale, as in the course). footprintUv:
+ * the ray cone's width on the surface in uv units (Surface_FootprintUv, shade.cl), read by trilinear
+ * images only. */
 inline float3 Texture_Eval(const __global TextureMap* tex, const __global ImageInfo* images,
-                           const __global float4* texels, float2 uv, float3 p, float3 pObj) {
+                           const __global float4* texels, float2 uv, float3 p, float3 pObj, float footprintUv) {
     switch (tex->kind) {
     case TEXTURE_IMAGE:
+#ifdef CLRT_HAS_MIPMAPS
+        if (tex->mipLevels > 1) return Image_Trilinear(texels, images, tex, uv, footprintUv) / tex->normalizer;
+#endif
         return Image_Lookup(texels, images[tex->image], uv.x, uv.y, tex->interpolation) / tex->normalizer;
     case TEXTURE_CHECKERBOARD: {
         float3 q = (pObj + tex->offset) * tex->scale;

@@ -26,6 +26,7 @@ std::vector<std::string> FeatureSet::defines() const {
     add(textures, "CLRT_HAS_TEXTURES");
     add(normalMaps, "CLRT_HAS_NORMAL_MAP");
     add(bumpMaps, "CLRT_HAS_BUMP_MAP");
+    add(mipMaps, "CLRT_HAS_MIPMAPS");
     add(spheres, "CLRT_HAS_SPHERES");
     add(motionBlur, "CLRT_HAS_MOTION_BLUR");
     add(pathTracing, "CLRT_HAS_PATH_TRACING");

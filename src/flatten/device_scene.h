@@ -23,6 +23,7 @@ struct FeatureSet {
     bool textures = false;
     bool normalMaps = false;  // a shape uses a replace_normal texture
     bool bumpMaps = false;    // a shape uses a bump_normal texture
+    bool mipMaps = false;     // a trilinear image texture (mip chain, ray cones: CLRT_HAS_MIPMAPS)
     bool spheres = false;
     bool motionBlur = false;        // a mesh, triangle or sphere has a MotionBlur translation
     bool pathTracing = false;       // a camera has <Renderer>PathTracing (cl_kernels/path.cl)
@@ -39,7 +40,7 @@ struct FeatureSet {
     static FeatureSet all() {
         FeatureSet f;
         f.lightKinds = f.materialKinds = f.brdfKinds = ~0u;
-        f.textures = f.normalMaps = f.bumpMaps = f.spheres = f.motionBlur = f.pathTracing = true;
+        f.textures = f.normalMaps = f.bumpMaps = f.mipMaps = f.spheres = f.motionBlur = f.pathTracing = true;
         return f;
     }
 };

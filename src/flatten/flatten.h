@@ -18,7 +18,8 @@ namespace clrt {
 double secondsSince(std::chrono::steady_clock::time_point t0);
 
 // The texel atlas: each scene image that is used is read once, on first use, into ds.texels (float4
-// texels) with its ImageInfo in ds.images; environment maps may add a half4 copy (useEnvironment).
+// texels) with its ImageInfo in ds.images; environment maps may add a half4 copy (useEnvironment),
+// trilinear textures a mip chain (useMipChain).
 class ImageAtlas {
 public:
     ImageAtlas(const Scene& scene, DeviceScene& ds) : scene_(scene), ds_(ds) {}
@@ -26,6 +27,9 @@ public:
     // The device image an environment map is read from: a half4 copy of use(sceneImage) when every
     // value is a half exactly (the same lookups, half the cache footprint), else use(sceneImage).
     int useEnvironment(int sceneImage);
+    // A trilinear texture's images: level 0 (the texels of use(sceneImage)) and its box-filtered
+    // levels (mip_pyramid.h) at consecutive device images from the returned one; *levels their count.
+    int useMipChain(int sceneImage, int* levels);
     bool isHdr(int deviceImage) const { return hdr_.at(size_t(deviceImage)); }
 
 private:
@@ -33,6 +37,7 @@ private:
     DeviceScene& ds_;
     std::map<int, int> slot_;  // scene image index -> device image index
     std::map<int, int> envSlot_;  // scene image index -> device image of useEnvironment
+    std::map<int, std::pair<int, int>> mipSlot_;  // scene image index -> (first device image, levels)
     std::vector<bool> hdr_;    // per device image (other images, e.g. flattenTextures' dummy, may follow)
     void setHdr(int deviceImage, bool hdr) {
         if (hdr_.size() <= size_t(deviceImage)) hdr_.resize(size_t(deviceImage) + 1, false);

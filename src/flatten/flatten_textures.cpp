@@ -1,5 +1,6 @@
 // flatten_textures.cpp — the texel atlas (with the half4 copies of environment maps whose values are all
-// halves), texture maps and per-shape texture sets (see flatten.h).
+// halves, and the mip levels of trilinear textures), texture maps and per-shape texture sets (see
+// flatten.h). Reads the TextureMaps' Interpolation, NumOctaves and the procedural parameters.
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -7,6 +8,7 @@
 #include <Imath/half.h>
 
 #include "flatten/flatten.h"
+#include "flatten/mip_pyramid.h"
 #include "image/image.h"
 #include "util/error.h"
 
@@ -90,6 +92,40 @@ int ImageAtlas::useEnvironment(int sceneImage) {
     return slot;
 }
 
+int ImageAtlas::useMipChain(int sceneImage, int* levels) {
+    auto it = mipSlot_.find(sceneImage);
+    if (it != mipSlot_.end()) {
+        *levels = it->second.second;
+        return it->second.first;
+    }
+    const int full = use(sceneImage);
+    const dev::ImageInfo info = ds_.images[size_t(full)];
+    MipLevel level0;
+    level0.width = info.width;
+    level0.height = info.height;
+    level0.texels = imageTexels(ds_, full);
+    const std::vector<MipLevel> pyramid = mipPyramid(level0);
+    size_t total = 0;
+    for (const MipLevel& l : pyramid) total += l.texels.size();
+    if (ds_.texels.size() + total > size_t(INT32_MAX)) throw Error(scene_.path + ": textures exceed 2^31 texels");
+    const int first = int(ds_.images.size());
+    ds_.images.push_back(info);  // level 0: the same texels
+    setHdr(first, isHdr(full));
+    for (const MipLevel& l : pyramid) {
+        dev::ImageInfo li{};
+        li.offset = int(ds_.texels.size());
+        li.width = l.width;
+        li.height = l.height;
+        li.format = dev::TEXELS_FLOAT4;
+        ds_.texels.insert(ds_.texels.end(), l.texels.begin(), l.texels.end());
+        setHdr(int(ds_.images.size()), isHdr(full));
+        ds_.images.push_back(li);
+    }
+    *levels = 1 + int(pyramid.size());
+    mipSlot_[sceneImage] = {first, *levels};
+    return first;
+}
+
 namespace {
 
 dev::TextureMap textureMap(const Texture& t) {
@@ -97,8 +133,10 @@ dev::TextureMap textureMap(const Texture& t) {
     d.image = CLRT_INVALID;
     d.kind = t.type;
     d.decal = t.decalMode;
-    // No mip-maps on the device: trilinear is filtered bilinearly.
-    d.interpolation = t.interpolation == dev::INTERP_TRILINEAR ? dev::INTERP_BILINEAR : t.interpolation;
+    // Trilinear: mip-mapped where Texture_Eval has a footprint (shapes), bilinear elsewhere (Image_Lookup).
+    d.interpolation = t.interpolation;
+    d.mipLevels = 1;
+    d.octaves = t.numOctaves;
     d.normalizer = t.normalizer;
     d.bumpFactor = t.bumpFactor;
     d.scale = t.scale;
@@ -126,7 +164,12 @@ void flattenTextures(const Scene& scene, DeviceScene& ds, ImageAtlas& atlas) {
         const Texture& t = scene.textures[ti];
         dev::TextureMap d = textureMap(t);
         if (t.type == dev::TEXTURE_IMAGE && t.imageIndex >= 0 && imageUsed(scene, t, int(ti))) {
-            d.image = atlas.use(t.imageIndex);
+            if (t.interpolation == dev::INTERP_TRILINEAR && t.decalMode != dev::DECAL_REPLACE_BACKGROUND) {
+                d.image = atlas.useMipChain(t.imageIndex, &d.mipLevels);
+                ds.features.mipMaps |= d.mipLevels > 1;
+            } else {
+                d.image = atlas.use(t.imageIndex);
+            }
             if (!t.normalizerGiven) d.normalizer = atlas.isHdr(d.image) ? 1.0f : 255.0f;
             // replace_all pastes texel / Normalizer as radiance (the course); without a Normalizer
             // the texel itself (0..255), as before.

@@ -1,7 +1,8 @@
 // Textures: <Textures> with its <Images> (Image: id and a path, resolved against the scene file's
 // folder) and <TextureMap> elements (attributes id, type = image|perlin|checkerboard, degamma):
 //   ImageId Interpolation DecalMode Normalizer BumpFactor (image textures, bump mapping)
-//   NoiseConversion NoiseScale BlackColor WhiteColor Scale Offset (procedural textures).
+//   NoiseConversion NoiseScale NumOctaves BlackColor WhiteColor Scale Offset (procedural textures).
+// Interpolation is nearest, bilinear or trilinear (mip-mapped, 2025); NumOctaves (Perlin, 2025) is 1..16.
 // All Images of a <Textures> are read before its TextureMaps. Objects name TextureMaps by id
 // (read_objects.cpp), SphericalDirectionalLight names an Image (read_lights.cpp, imageRef).
 #include <filesystem>
@@ -11,6 +12,10 @@
 
 namespace clrt::walker {
 namespace {
+
+// Past 16 octaves the terms are below float precision of the first (2^-16) and the lattice of the last
+// is 65536 times finer.
+constexpr int kMaxOctaves = 16;
 
 void readImage(Walker& w, const SceneNode& img) {
     int id = requiredId(img);
@@ -64,6 +69,11 @@ void readTextureScalars(const SceneNode& n, Texture& t) {
         t.noiseConversion = v;
     }
     if (auto c = n.child("NoiseScale")) t.noiseScale = number(*c);
+    if (auto c = n.child("NumOctaves")) {
+        t.numOctaves = integer(*c);
+        if (t.numOctaves < 1 || t.numOctaves > kMaxOctaves)
+            fail(*c, "<NumOctaves> must be 1.." + std::to_string(kMaxOctaves));
+    }
     if (auto c = n.child("BlackColor")) t.blackColor = vec3(*c);
     if (auto c = n.child("WhiteColor")) t.whiteColor = vec3(*c);
     if (auto c = n.child("Scale")) t.scale = number(*c);
@@ -72,7 +82,7 @@ void readTextureScalars(const SceneNode& n, Texture& t) {
 
 void readTextureMap(Walker& w, const SceneNode& n) {
     w.checkChildren(n, {"ImageId", "Interpolation", "DecalMode", "Normalizer", "BumpFactor", "NoiseConversion",
-                        "NoiseScale", "BlackColor", "WhiteColor", "Scale", "Offset"});
+                        "NoiseScale", "NumOctaves", "BlackColor", "WhiteColor", "Scale", "Offset"});
     Texture t;
     t.id = requiredId(n);
     readTextureKind(n, t);

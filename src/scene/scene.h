@@ -74,6 +74,7 @@ struct Texture {
     // Procedural (Perlin, Checkerboard)
     std::string noiseConversion = "linear";  // linear | absval
     float noiseScale = 1;
+    int numOctaves = 1;             // Perlin: NumOctaves (2025), the fractal sum's number of terms
     Vec3 blackColor{0, 0, 0}, whiteColor{1, 1, 1};
     float scale = 1, offset = 0;
 };

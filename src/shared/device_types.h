@@ -59,7 +59,7 @@ struct alignas(8) float2 { float x, y; };
     N(DECAL_REPLACE_KD, "replace_kd") N(DECAL_BLEND_KD, "blend_kd") N(DECAL_REPLACE_KS, "replace_ks")    \
     N(DECAL_REPLACE_BACKGROUND, "replace_background") N(DECAL_REPLACE_NORMAL, "replace_normal")          \
     N(DECAL_BUMP_NORMAL, "bump_normal") N(DECAL_REPLACE_ALL, "replace_all")
-/* The device filters trilinear textures bilinearly (no mip-maps). */
+/* trilinear: mip-mapped, the level from the ray cone's footprint (textures.cl, Mip_Level). */
 #define CLRT_INTERP_TABLE(N) N(INTERP_NEAREST, "nearest") N(INTERP_BILINEAR, "bilinear") N(INTERP_TRILINEAR, "trilinear")
 /* How an image's texels are stored (ImageInfo.format); only environment maps are ever half4 (envmap.cl). */
 #define CLRT_TEXEL_FORMAT_TABLE(N) N(TEXELS_FLOAT4, "float4") N(TEXELS_HALF4, "half4")
@@ -228,7 +228,8 @@ typedef struct TextureMap {
     float offset;
     float noiseScale;
     int noiseAbs;       /* Perlin: 1 = absval conversion, 0 = linear */
-    int pad0, pad1;
+    int octaves;        /* Perlin: NumOctaves (>= 1): sum of 2^-k noise(2^k p), k < octaves */
+    int mipLevels;      /* trilinear image: levels at images[image .. image + mipLevels - 1]; else 1 */
 } TextureMap;
 
 /* An image in the texel atlas (row-major, row 0 at the top): float4 texels, or (environment maps whose
@@ -333,6 +334,8 @@ typedef struct PathState {
     int sample;            /* sample index in the pixel */
     int depth;             /* number of bounces so far */
     uint pathId;           /* position in the split tree: 1 = camera ray, children 2i, 2i+1 */
+    float coneWidth;       /* ray cone width at the ray's origin (0 for camera rays; CLRT_HAS_MIPMAPS) */
+    int pathPad[3];
 } PathState;
 
 /* A shadow ray with the radiance it carries if unoccluded. */
