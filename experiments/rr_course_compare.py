@@ -3,9 +3,11 @@
 course's references (hw6 cornellbox_jaroslav_path_diffuse cameras 2, 4, 6, 8; regions of
 scripts/path_regions.py), study docs/studies/2026-12-03-russian-roulette-references.md.
 Usage: build/bench-venv/bin/python experiments/rr_course_compare.py REFDIR DIR_A [DIR_B ...]
-  For each RR image of REFDIR found in DIR_A: per region the reference's mean, DIR_A's mean and the
-  ratio A/ref per channel; the same for medians (robust against the heavy tails); with a DIR_B (the
-  same rule, another seed) also B/ref, the two renders' own spread."""
+  For each RR image of REFDIR found in DIR_A, per region and channel: the ratio of the means (A/ref,
+  B/ref, ...: with a DIR_B of the same rule and another seed, the renders' own spread), and the ratio
+  of the clipped means (every pixel clipped at the reference's 99th percentile of that region and
+  channel: robust against the heavy tails, yet continuous where a median sits on a discrete value or
+  at zero)."""
 import os
 import sys
 
@@ -22,23 +24,37 @@ def fmt(v):
     return " ".join(f"{x:6.3f}" for x in v)
 
 
+def clipped_means(img, ref):
+    """Per region: the mean of img clipped at ref's 99th percentile (per channel), and that bound."""
+    s = img.shape[0] / 512.0
+    regions = path_regions.REGIONS + [("image", 0, 0, 512, 512)]
+    out = {}
+    for name, x0, y0, x1, y1 in regions:
+        cut = lambda a: a[int(y0 * s):int(y1 * s), int(x0 * s):int(x1 * s)].reshape(-1, 3)
+        bound = np.percentile(cut(ref), 99, axis=0)
+        out[name] = np.minimum(cut(img), bound).mean(axis=0)
+    return out
+
+
 def main(argv):
     ref_dir, dirs = argv[0], argv[1:]
     for name in NAMES:
-        imgs = [os.path.join(d, name + ".exr") for d in dirs]
-        if not os.path.exists(imgs[0]):
+        paths = [os.path.join(d, name + ".exr") for d in dirs if os.path.exists(os.path.join(d, name + ".exr"))]
+        if not paths:
             continue
-        ref = path_regions.region_means(exr_stats.load(os.path.join(ref_dir, name + ".exr")))
-        runs = [path_regions.region_means(exr_stats.load(p)) for p in imgs if os.path.exists(p)]
-        print(name)
+        ref_img = exr_stats.load(os.path.join(ref_dir, name + ".exr"))
+        ref, ref_clip = path_regions.region_means(ref_img), clipped_means(ref_img, ref_img)
+        imgs = [exr_stats.load(p) for p in paths]
+        runs = [path_regions.region_means(i) for i in imgs]
+        clips = [clipped_means(i, ref_img) for i in imgs]
+        print(name + "  (" + ", ".join(paths) + ")")
         for region in ref:
-            rm, rmed = ref[region]
-            line = f"  {region:8s} ref {fmt(rm)} | clrt {fmt(runs[0][region][0])} | mean ratio"
+            line = f"  {region:8s} ref mean {fmt(ref[region][0])} | mean ratio"
             for r in runs:
-                line += f" {fmt(r[region][0] / rm)} |"
-            line += " median ratio"
-            for r in runs:
-                line += f" {fmt(r[region][1] / np.maximum(rmed, 1e-9))} |"
+                line += f" {fmt(r[region][0] / ref[region][0])} |"
+            line += " clipped-mean ratio"
+            for c in clips:
+                line += f" {fmt(c[region] / np.maximum(ref_clip[region], 1e-9))} |"
             print(line)
 
 
