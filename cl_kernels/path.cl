@@ -6,13 +6,15 @@
  *     the course asks; with MultipleImportanceSampling weighted by the power heuristic),
  *   - leaves a ShadingPoint for sample_lights (next-event estimation) when the surface has a
  *     non-specular part (kd or ks), and no ambient term,
- *   - plays Russian roulette (Path_RussianRoulette: the course's q = the throughput's largest
- *     component, at most 1, and C = 0; with RussianRoulette there is no depth cap, as the course's
- *     references show),
+ *   - plays Russian roulette (Path_RussianRoulette: q = the throughput's largest component, at most
+ *     1, and C = 0; with RussianRoulette there is no depth cap, as the course's references show), or
+ *     under clrt render --rr-rule course (CLRT_PATH_RR_COURSE) the course references' biased rule
+ *     (Path_CourseRoulette, played at every hit before its radiance is counted),
  *   - makes ONE child (ShadeResult child 0; the wavefront's slot 2i): the sampled direction with
  *     throughput · f·cosθ / pdf.
  * PathState.throughput.w: the solid-angle pdf of the BSDF sample that made the path (0: a camera ray
- * or a specular bounce).
+ * or a specular bounce); under CLRT_PATH_RR_COURSE instead ±sigma (Path_CourseSigma): + after a BSDF
+ * bounce, − after a specular one, 0 for a camera ray (sigma 1).
  * Sampling (Path_SampleBounce): uniform over the hemisphere (pdf 1/2π) by default; with
  * ImportanceSampling (or MIS) the BRDF's own sampler (Brdf_Sample) for BRDF materials and cosine
  * (pdf cosθ/π) for classic ones. Classic materials (no BRDF) are path traced with the reflectance
@@ -177,6 +179,35 @@ inline int Path_RussianRoulette(float3* throughput, float u) {
     return 1;
 }
 
+/* The course's Russian roulette (clrt render --rr-rule course; docs/studies/2026-12-03-russian-roulette-
+ * references.md). q = min(1, largest component of T), T = the product of the BRDF values f along the
+ * path (not f·cosθ/pdf; 1 for the camera ray, so the first hit always survives). It is played at every
+ * hit, after the hit's own radiance (emission, next-event estimation) is gathered: a survivor divides
+ * that radiance and everything after it by q, a killed path keeps that radiance undivided and ends.
+ * Each hit's radiance therefore counts (2 − q) times in expectation: biased (brighter), as the course's
+ * references are. The path carries T as throughput / sigma, sigma a positive scalar kept in
+ * PathState.throughput.w (sign: BSDF bounce or not; 0 = camera ray, sigma 1). */
+inline float Path_CourseSigma(float w) { return w == 0.0f ? 1.0f : fabs(w); }
+
+/* *scale: what the hit's radiance and the path after it are multiplied by (1/q, or 1 when killed);
+ * returns 0 when the path ends after this hit. */
+inline int Path_CourseRoulette(float3 throughput, float w, float u, float* scale) {
+    float q = fmin(1.0f, maxComponent(throughput) / Path_CourseSigma(w));
+    *scale = 1.0f;
+    if (!(q > 0.0f) || !(u < q)) return 0;
+    *scale = 1.0f / q;
+    return 1;
+}
+
+/* The child's throughput.w under the course rule: ±sigma with T' = T·f (f: the BRDF values of the
+ * bounce, fVec), so that the child's throughput / sigma' = T'. 0 when T' vanishes. */
+inline float Path_CourseChildW(float3 throughput, float w, float3 next, float3 fVec, int specularBounce) {
+    float tNext = maxComponent(throughput / Path_CourseSigma(w) * fVec);
+    if (!(tNext > 0.0f) || !isfinite(tNext)) return 0.0f;
+    float sigma = maxComponent(next) / tNext;
+    return specularBounce ? -sigma : sigma;
+}
+
 /* The specular child of a mirror, conductor or dielectric (weight w), the same directions as
  * shade_hits' classic children (a rough material's perturbed by Glossy_Perturb with uGlossy); insideDielectric: the ray travelled t inside (Beer's law). */
 inline int Path_SpecularBounce(Material m, float3 wo, float3 ns, float3 ng, float3 p, float t, int inside, float u,
@@ -216,13 +247,20 @@ inline void Path_ShadeHit(SceneParams scene, PathState path, Material m, float3 
                           const __global Material* materials, ShadeResult* res) {
     const int mode = scene.pathMode;
     float3 throughput = path.throughput.xyz;
+    RngKey key = Rng_Key(scene.seed, path.pixel, path.sample, path.pathId);
+    uint dim = 4u + 32u * (uint)path.depth;
+    const int course = (mode & CLRT_PATH_RR_COURSE) != 0;
+    float courseScale = 1.0f;
+    const int courseSurvives = course && Path_CourseRoulette(throughput, path.throughput.w, Rng_Uniform(key, dim + 4u),
+                                                             &courseScale);
+    throughput *= courseScale;
+    sp.wo.w = courseScale; /* sample_lights scales this hit's light samples by it (course rule only) */
     res->radiance = (float4)(finiteOrZero(throughput * emitted * Path_EmissionWeight(mode, path.throughput.w, lightPdf)), 0.0f);
     int specular = m.kind == MATERIAL_MIRROR || m.kind == MATERIAL_CONDUCTOR || m.kind == MATERIAL_DIELECTRIC;
     int diffuse = !inside && (maxComponent(sp.kd.xyz) > 0.0f || maxComponent(sp.ks.xyz) > 0.0f);
     if (!Path_UsesNee(mode) || !diffuse) sp.position.w = 0.0f;
     res->sp = sp;
-    RngKey key = Rng_Key(scene.seed, path.pixel, path.sample, path.pathId);
-    uint dim = 4u + 32u * (uint)path.depth;
+    if (course && !courseSurvives) return;
     if (path.depth >= scene.maxDepth || (!specular && !diffuse)) return;
     float pSpecular = specular ? (diffuse ? 0.5f : 1.0f) : 0.0f;
     int pickSpecular = Rng_Uniform(key, dim + 3u) < pSpecular;
@@ -242,9 +280,17 @@ inline void Path_ShadeHit(SceneParams scene, PathState path, Material m, float3 
         if (!(maxComponent(fCos) > 0.0f)) return;
     }
     float3 next = throughput * weight;
-    if ((mode & CLRT_PATH_RR) && !Path_RussianRoulette(&next, Rng_Uniform(key, dim + 4u))) return;
+    float childW = pickSpecular ? 0.0f : pdf;
+    if (course) {
+        /* the bounce's BRDF values: f·cosθ / cosθ, or the specular weight before the 1/pSpecular pick */
+        float3 fVec = pickSpecular ? weight * pSpecular : weight * pdf * (1.0f - pSpecular) / dot(sp.normal.xyz, dir);
+        childW = Path_CourseChildW(path.throughput.xyz, path.throughput.w, next, fVec, pickSpecular);
+        if (childW == 0.0f) return;
+    } else if ((mode & CLRT_PATH_RR) && !Path_RussianRoulette(&next, Rng_Uniform(key, dim + 4u))) {
+        return;
+    }
     PathState c = path;
-    c.throughput = (float4)(next, pickSpecular ? 0.0f : pdf);
+    c.throughput = (float4)(next, childW);
     c.depth = path.depth + 1;
     c.pathId = path.pathId < 0x80000000u ? path.pathId * 2u : path.pathId;
     Ray r;

@@ -515,6 +515,13 @@ inline void Light_ShadowRays(SceneParams scene, PathState path, ShadingPoint sp,
         if (ObjectLight_IsShape(&lights[l])) ObjectLight_AimShadow(sr, sp.position.xyz + dist * wi);
 #endif
     }
+#ifdef CLRT_HAS_PATH_TRACING
+    /* the course's roulette (Path_CourseRoulette) divides this hit's radiance by q when the path survives */
+    if (scene.pathMode & CLRT_PATH_RR_COURSE) {
+        sr->contribution *= sp.wo.w;
+        sr2->contribution *= sp.wo.w;
+    }
+#endif
 #ifdef CLRT_HAS_MOTION_BLUR
     /* the shadow rays of a sample see the scene at the sample's time (camera.cl) */
     sr->direction.w = sr2->direction.w = MotionBlur_Time(scene.seed, path.pixel, path.sample);

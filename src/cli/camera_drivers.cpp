@@ -173,6 +173,7 @@ int renderAndWriteCamera(const RenderArgs& a, const Camera& cam, int camIndex, s
     rs.spp = a.spp > 0 ? a.spp : cam.numSamples;
     rs.seed = a.seed;
     rs.pixelSampler = a.pixelSampler;
+    rs.rouletteRule = a.rouletteRule;
     rs.stop = &stopRequested();
     rs.pipeline = a.pipeline;
     for (DeviceWork& w : work) w.counters.stoppedAtSample = -1;

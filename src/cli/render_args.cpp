@@ -33,6 +33,10 @@ const char* const kRenderHelp =
     "  --sampler S           stratified (default): camera jitter, light and BSDF samples stratified\n"
     "                        over a pixel's samples (scrambled (0,2)-sequence); independent: every\n"
     "                        number drawn independently (the noise of a plain Monte Carlo renderer)\n"
+    "  --rr-rule R           Russian roulette of RussianRoulette cameras: unbiased (default), or course:\n"
+    "                        the course's hw6 references' biased rule (a hit's own light is counted\n"
+    "                        undivided when the path dies there; see docs/scene-format.md); ignored\n"
+    "                        by MultipleImportanceSampling cameras\n"
     "  --target-error X      render in passes until the estimated relMSE of the image is <= X (> 0):\n"
     "                        even and odd passes form two independent half-images, and their\n"
     "                        difference estimates the error (relative to 1, or to 255 for .png\n"
@@ -86,6 +90,9 @@ RenderArgs parseRenderArgs(int argc, char** argv, int start) {
         {{"--sampler"}, true, [&](Str f, Str v) {
              if (!parsePixelSampler(v, a.pixelSampler)) throwExpected(f, "stratified or independent", v);
          }},
+        {{"--rr-rule"}, true, [&](Str f, Str v) {
+             if (!parseRouletteRule(v, a.rouletteRule)) throwExpected(f, "unbiased or course", v);
+         }},
         textOption({"--camera"}, a.cameraId),
         {{"--target-error"}, true, [&](Str f, Str v) { a.stop.targetError = parseBoundedArg(f, v, 0, true); }},
         {{"--time-limit"}, true, [&](Str f, Str v) { a.stop.timeLimit = parseBoundedArg(f, v, 0, false); }},
@@ -122,6 +129,7 @@ RenderArgs parseRenderArgs(int argc, char** argv, int start) {
 std::string pixelOptions(const RenderArgs& a) {
     return "env=" + a.envStrategy + ";all-features=" + std::to_string(a.allFeatures) +
            ";sampler=" + pixelSamplerName(a.pixelSampler) +
+           (a.rouletteRule == RouletteRule::Course ? ";rr-rule=course" : "") +
            ";resolution=" + std::to_string(a.width) + "x" + std::to_string(a.height) +
            ";tile=" + std::to_string(a.dist.tilePixels);
 }

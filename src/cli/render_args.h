@@ -20,6 +20,7 @@ struct RenderArgs {
     uint32_t seed = 0;
     bool verbose = false, help = false, truncatePng = false, exrHalf = false, allFeatures = false;
     PixelSampler pixelSampler = PixelSampler::Stratified;  // --sampler
+    RouletteRule rouletteRule = RouletteRule::Unbiased;    // --rr-rule
     std::string envStrategy;  // --env-sampling: overrides every environment light's env strategy ("" keeps the scene's)
     StopRule stop;            // --target-error, --time-limit (render/progressive.h)
     Pipeline pipeline = Pipeline::Auto;  // --pipeline

@@ -221,6 +221,12 @@ bool parsePixelSampler(const std::string& name, PixelSampler& out) {
     return true;
 }
 
+bool parseRouletteRule(const std::string& name, RouletteRule& out) {
+    if (name != "unbiased" && name != "course") return false;
+    out = name == "course" ? RouletteRule::Course : RouletteRule::Unbiased;
+    return true;
+}
+
 const char* pixelSamplerName(PixelSampler s) { return s == PixelSampler::Stratified ? "stratified" : "independent"; }
 
 Renderer::Renderer(DeviceContext& dc, const DeviceScene& scene) : impl_(new Impl(dc, scene)) {}
@@ -295,6 +301,9 @@ static BatchPlan planBatches(const DeviceScene& ds, size_t numPixels, const Rend
     // Path tracing with Russian roulette has no depth cap (the course's references show none): the
     // roulette ends paths, kMaxRecursionDepth is the backstop.
     if (sp.pathMode & CLRT_PATH_RR) sp.maxDepth = kMaxRecursionDepth;
+    // --rr-rule course: the course references' roulette (needs the BSDF pdf slot MIS uses: not with MIS)
+    if ((sp.pathMode & CLRT_PATH_RR) && !(sp.pathMode & CLRT_PATH_MIS) && settings.rouletteRule == RouletteRule::Course)
+        sp.pathMode |= CLRT_PATH_RR_COURSE;
     sp.maxDepth = std::min(sp.maxDepth, kMaxRecursionDepth);
     // Dielectrics split into both children while the queue can hold them and few samples are taken;
     // beyond that (or with many samples) one child is chosen by Fresnel weight (same expectation).

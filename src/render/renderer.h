@@ -30,6 +30,14 @@ enum class PixelSampler { Independent = CLRT_PIXEL_SAMPLER_INDEPENDENT, Stratifi
 bool parsePixelSampler(const std::string& name, PixelSampler& out);
 const char* pixelSamplerName(PixelSampler s);
 
+// The Russian roulette of RussianRoulette cameras (clrt render --rr-rule). Unbiased (the default): q =
+// min(1, largest throughput component), survivors divided by q. Course: the biased rule that
+// reproduces the course's hw6 references (cl_kernels/path.cl Path_CourseRoulette,
+// docs/studies/2026-12-03-russian-roulette-references.md); not for MultipleImportanceSampling cameras.
+enum class RouletteRule { Unbiased, Course };
+// "unbiased", "course" (the --rr-rule values); false for any other name.
+bool parseRouletteRule(const std::string& name, RouletteRule& out);
+
 const char* renderStageName(int stage);  // RenderStage -> "generate", "trace camera", ...
 
 struct RenderSettings {
@@ -41,6 +49,7 @@ struct RenderSettings {
     size_t maxBatchPixels = 1u << 18;  // camera paths per batch (pixels x samples of each)
     int splitDepthOverride = -1;       // >= 0: force the dielectric split depth
     PixelSampler pixelSampler = PixelSampler::Stratified;  // clrt render --sampler
+    RouletteRule rouletteRule = RouletteRule::Unbiased;    // clrt render --rr-rule
     const std::atomic<bool>* stop = nullptr;  // set (from any thread): end after the current sample pass
     Pipeline pipeline = Pipeline::Auto;
 };

@@ -314,6 +314,7 @@ typedef struct SceneParams {
 #define CLRT_PATH_IMPORTANCE 4  /* ImportanceSampling: cosine (classic materials), the BRDF's sampler */
 #define CLRT_PATH_RR 8          /* RussianRoulette (q = max throughput, C = 0, no depth cap) */
 #define CLRT_PATH_MIS 16        /* MultipleImportanceSampling (clrt's): NEE + BSDF sampling, power heuristic */
+#define CLRT_PATH_RR_COURSE 32  /* with RR, clrt render --rr-rule course: the course references' biased roulette */
 
 /* Ray and hit record of the wavefront. */
 typedef struct Ray {
