@@ -4,8 +4,8 @@
  * laid out as device_types.h describes next to struct Light (written by src/flatten/flatten_lights.cpp).
  * Both return, like every Light_Sample case, L(wi) / pdf(wi) for the sampled direction wi (solid angle).
  *   LightMesh:   a triangle by area (binary search of the CDF), a uniform point on it: pdf over the
- *                area 1/A, in solid angle d²/(A·cosθ_L); one-sided, the front face (counter-clockwise
- *                winding, as the course's files give their light meshes) emits.
+ *                area 1/A, in solid angle d²/(A·|cosθ_L|); both faces emit (the AreaLight rule,
+ *                SCENE_FORMAT.md conventions).
  *   LightSphere: under a similarity, a direction uniform in the cone the sphere subtends: pdf
  *                1/(2π(1 − cosθmax)) (from inside: all directions, 1/4π; the inside emits nothing); under
  *                any other transform (an ellipsoid) the same in object space, from the object-space
@@ -65,8 +65,8 @@ inline float3 MeshLight_Sample(const __global Light* light, const __global float
     *dist = sqrt(d2);
     *wi = d / *dist;
     float3 nL = normalize(cross(v1 - v0, v2 - v0));
-    float cosLight = dot(nL, -*wi);
-    if (!(cosLight > 0.0f)) return (float3)(0.0f); /* one-sided */
+    float cosLight = fabs(dot(nL, *wi)); /* both faces emit, as an AreaLight's */
+    if (!(cosLight > 0.0f)) return (float3)(0.0f);
     *dist = MeshLight_ShadowLength(*dist, q, cosLight);
     return light->radiance.xyz * (light->area * cosLight / d2);
 }
@@ -192,15 +192,15 @@ inline void ObjectLight_AimShadow(ShadowRay* sr, float3 q) {
 }
 
 /* The radiance a ray sees where it hits primitive `prim` (frontFacing: it hit the side the geometric
- * normal points to): the Radiance of its object light from the emitting side (LightMesh: the front
- * face; LightSphere: outside), else 0. */
+ * normal points to): the Radiance of its object light from an emitting side (LightMesh: either face;
+ * LightSphere: outside), else 0. */
 inline float3 ObjectLight_Emission(int prim, int frontFacing, int numTriangles, int numSpheres,
                                    const __global TriangleShading* shading, const __global Sphere* spheres,
                                    const __global Light* lights) {
     int light = CLRT_INVALID;
     if (prim < numTriangles) light = shading[prim].light;
     else if (prim < numTriangles + numSpheres) light = spheres[prim - numTriangles].light;
-    if (light == CLRT_INVALID || !frontFacing) return (float3)(0.0f);
+    if (light == CLRT_INVALID || (!frontFacing && prim >= numTriangles)) return (float3)(0.0f);
     return lights[light].radiance.xyz;
 }
 #endif

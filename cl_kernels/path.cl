@@ -102,7 +102,7 @@ inline float Path_ObjectLightPdf(const __global Light* light, const __global flo
 }
 
 /* What a ray sees emitted where it hit primitive `prim` (the emitting side of an object light, as
- * object_lights.cl's ObjectLight_Emission: LightMesh front faces, LightSphere outside), and the
+ * object_lights.cl's ObjectLight_Emission: LightMesh either face, LightSphere outside), and the
  * density light sampling draws that point with (*lightPdf). bsdfPdf: the pdf of the bounce that made
  * the ray (0: a camera ray or a specular bounce, which see the Radiance itself); after a non-specular
  * bounce a LightSphere gives Radiance·dω_obj/dω_world, as its light samples do. */
@@ -116,7 +116,7 @@ inline float3 Path_HitEmission(int prim, int frontFacing, SceneParams scene, con
         light = spheres[prim - scene.numTriangles].light;
         s = (const __global float4*)&spheres[prim - scene.numTriangles]; /* centre/radius, worldToObject, objectToWorld */
     }
-    if (light == CLRT_INVALID || !frontFacing) return (float3)(0.0f);
+    if (light == CLRT_INVALID || (!frontFacing && s != 0)) return (float3)(0.0f); /* a LightSphere's inside */
     *lightPdf = Path_ObjectLightPdf(&lights[light], s, pHit, dirWorld, t, ngWorld);
     float scale = s != 0 && bsdfPdf > 0.0f ? SphereLight_DirectionScale(&lights[light], s, dirWorld) : 1.0f;
     return lights[light].radiance.xyz * scale;

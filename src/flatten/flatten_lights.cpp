@@ -17,7 +17,7 @@ void flattenMeshLight(const Scene& scene, const Shape& s, dev::Light& d, DeviceS
     const MeshData& mesh = scene.meshes.at(size_t(s.meshIndex));
     d.objFirst = int(ds.lightData.size());
     std::vector<double> areas;
-    const bool mirrored = mirrorsOrientation(s.transform);  // winding as flattenGeometry's (front = emitting)
+    const bool mirrored = mirrorsOrientation(s.transform);  // winding as flattenGeometry's (both faces emit)
     for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
         Vec3 p[3];
         for (int k = 0; k < 3; ++k) p[k] = s.transform.transformPoint(mesh.positions.at(size_t(mesh.indices[t + k])));
