@@ -1,6 +1,8 @@
 /* lights.cl — light sampling, one `case` per light kind. Light_Sample returns what the course's
  * shading model multiplies with the BRDF terms: the irradiance-like quantity E (point and spot:
- * I/d², directional: radiance, area: L·A·cosθ_L/d² for a uniformly drawn point, environment:
+ * I/d², directional: radiance, area: L·A·|cosθ_L|/d² for a uniformly drawn point (an AreaLight emits
+ * from both faces: the course's hw3 box lights its ceiling above a downward light, the hw6 Veach Ajar
+ * room is lit through the door by a light facing away from it), environment:
  * L(wi)/pdf(wi) for a direction drawn by the light's sampler) divided by the pdf of the chosen
  * direction, and the direction and distance (INFINITY: directional, environment) for the shadow ray.
  * LightMesh and LightSphere (object lights, also geometry): object_lights.cl.
@@ -58,8 +60,8 @@ inline float3 AreaLight_Sample(const __global Light* light, float3 p, float2 u, 
     if (!(d2 > 0.0f)) return (float3)(0.0f);
     *dist = sqrt(d2);
     *wi = d / *dist;
-    float cosLight = dot(light->direction.xyz, -*wi);
-    if (cosLight <= 0.0f) return (float3)(0.0f); /* one-sided */
+    float cosLight = fabs(dot(light->direction.xyz, *wi)); /* two-sided (SCENE_FORMAT.md conventions) */
+    if (!(cosLight > 0.0f)) return (float3)(0.0f);
     return light->radiance.xyz * (light->area * cosLight / d2);
 }
 

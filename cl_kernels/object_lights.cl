@@ -4,12 +4,14 @@
  * laid out as device_types.h describes next to struct Light (written by src/flatten/flatten_lights.cpp).
  * Both return, like every Light_Sample case, L(wi) / pdf(wi) for the sampled direction wi (solid angle).
  *   LightMesh:   a triangle by area (binary search of the CDF), a uniform point on it: pdf over the
- *                area 1/A, in solid angle d²/(A·cosθ_L); one-sided, the front face (counter-clockwise
- *                winding, as the course's files give their light meshes) emits.
- *   LightSphere: a direction uniform in the cone the (bounding) sphere subtends: pdf 1/(2π(1 − cosθmax));
- *                the ray is then intersected with the sphere for the shadow-ray length (a direction
- *                that misses a non-uniformly scaled sphere carries nothing). From inside the bounding
- *                sphere: uniform over all directions, pdf 1/4π. */
+ *                area 1/A, in solid angle d²/(A·|cosθ_L|); both faces emit (the AreaLight rule,
+ *                SCENE_FORMAT.md conventions).
+ *   LightSphere: under a similarity, a direction uniform in the cone the sphere subtends: pdf
+ *                1/(2π(1 − cosθmax)) (from inside: all directions, 1/4π; the inside emits nothing); under
+ *                any other transform (an ellipsoid) the same in object space, from the object-space
+ *                shading point, the value divided by that object-space pdf: the light gives the scene
+ *                Radiance·dω_obj/dω_world along each world direction (SphereLight_DirectionScale: the
+ *                course's ellipsoid reference); a ray that sees it directly (camera, mirror) sees Radiance. */
 #ifndef CLRT_OBJECT_LIGHTS_CL
 #define CLRT_OBJECT_LIGHTS_CL
 
@@ -63,8 +65,8 @@ inline float3 MeshLight_Sample(const __global Light* light, const __global float
     *dist = sqrt(d2);
     *wi = d / *dist;
     float3 nL = normalize(cross(v1 - v0, v2 - v0));
-    float cosLight = dot(nL, -*wi);
-    if (!(cosLight > 0.0f)) return (float3)(0.0f); /* one-sided */
+    float cosLight = fabs(dot(nL, *wi)); /* both faces emit, as an AreaLight's */
+    if (!(cosLight > 0.0f)) return (float3)(0.0f);
     *dist = MeshLight_ShadowLength(*dist, q, cosLight);
     return light->radiance.xyz * (light->area * cosLight / d2);
 }
@@ -87,23 +89,75 @@ inline float SphereLight_Hit(const __global float4* s, float3 p, float3 wi) {
     return cc / q;
 }
 
+/* The world normal (unnormalized: M⁻ᵀ·nObj) at the point of object-space unit normal nObj. */
+inline float3 SphereLight_NormalWorld(const __global float4* s, float3 nObj) {
+    return nObj.x * s[1].xyz + nObj.y * s[2].xyz + nObj.z * s[3].xyz;
+}
+
+/* dω_obj/dω_world for world direction dirWorld (unit) under the sphere's worldToObject map A:
+ * |det A|/|A·dir|³, 1 under a similarity. A LightSphere lights the scene as its object-space sphere does
+ * seen from the object-space shading point (the course's ellipsoid reference: SCENE_FORMAT.md
+ * conventions), which is the world shape sending Radiance·dω_obj/dω_world along dirWorld. */
+inline float SphereLight_DirectionScale(const __global Light* light, const __global float4* s, float3 dirWorld) {
+    if (light->objCount == 0) return 1.0f;
+    float3 a = (float3)(dot(s[1].xyz, dirWorld), dot(s[2].xyz, dirWorld), dot(s[3].xyz, dirWorld));
+    float l = length(a);
+    float j = 1.0f / (light->edgeU.x * l * l * l);
+    return l > 0.0f && isfinite(j) ? j : 0.0f;
+}
+
+/* 2π(1 − cosθmax) of a sphere of radius R whose centre is d2 (squared) away, and a direction in its cone
+ * drawn uniformly from u around unit axis n. */
+inline float3 SphereLight_ConeDirection(float3 n, float R, float d2, float2 u, float* solidAngle) {
+    float sin2Max = R * R / d2, cosMax = sqrt(fmax(0.0f, 1.0f - sin2Max));
+    float oneMinusCosMax = sin2Max / (1.0f + cosMax); /* 1 − cosθmax without cancellation */
+    float oneMinusCos = u.x * oneMinusCosMax;
+    float cosT = 1.0f - oneMinusCos, sinT = sqrt(fmax(0.0f, oneMinusCos * (2.0f - oneMinusCos)));
+    float phi = 2.0f * CLRT_PI * u.y;
+    float3 t, b;
+    makeBasis(n, &t, &b);
+    *solidAngle = 2.0f * CLRT_PI * oneMinusCosMax;
+    return normalize(sinT * cos(phi) * t + sinT * sin(phi) * b + cosT * n);
+}
+
+/* A light sphere under a transformation that is no similarity (an ellipsoid): the shading point is taken
+ * to object space, a direction drawn uniformly in the cone the object-space sphere subtends there (pdf
+ * 1/Ω_obj), its near hit carried back to world space. Value: Radiance·Ω_obj (= Radiance·dω_obj/dω_world
+ * over the world pdf). From inside: nothing. */
+inline float3 SphereLight_SampleObjectCone(const __global Light* light, const __global float4* s, float3 p, float2 u,
+                                           float3* wi, float* dist) {
+    float3 pObj = (float3)(dot(s[1].xyz, p) + s[1].w, dot(s[2].xyz, p) + s[2].w, dot(s[3].xyz, p) + s[3].w);
+    float3 f = pObj - s[0].xyz;
+    float R = s[0].w, d2 = dot(f, f);
+    if (!(d2 > R * R)) return (float3)(0.0f);
+    float solidAngle;
+    float3 wObj = SphereLight_ConeDirection(-f / sqrt(d2), R, d2, u, &solidAngle);
+    float b = dot(f, wObj), cc = d2 - R * R;
+    float disc = fmax(b * b - cc, 0.0f); /* ≥ 0 inside the cone but for rounding */
+    float tObj = -b + sqrt(disc) > 0.0f ? cc / (-b + sqrt(disc)) : 0.0f; /* the near root */
+    float3 qObj = pObj + tObj * wObj;
+    float3 q = (float3)(dot(s[4].xyz, qObj) + s[4].w, dot(s[5].xyz, qObj) + s[5].w, dot(s[6].xyz, qObj) + s[6].w);
+    float3 d = q - p;
+    float dl = length(d);
+    if (!(dl > 0.0f) || !isfinite(dl)) return (float3)(0.0f);
+    *wi = d / dl;
+    float3 m = (qObj.x - s[0].x) * s[1].xyz + (qObj.y - s[0].y) * s[2].xyz + (qObj.z - s[0].z) * s[3].xyz;
+    float ml = length(m);
+    float cosLight = ml > 0.0f ? fmax(-dot(m, *wi) / ml, 1e-4f) : 1.0f; /* world normal M⁻ᵀ·n_obj */
+    *dist = MeshLight_ShadowLength(dl, q, cosLight);
+    return finiteOrZero(light->radiance.xyz * solidAngle);
+}
+
 inline float3 SphereLight_Sample(const __global Light* light, const __global float4* data, float3 p, float2 u,
                                  float3* wi, float* dist) {
+    if (light->objCount != 0) return SphereLight_SampleObjectCone(light, data + light->objFirst, p, u, wi, dist);
     float3 axis = light->position.xyz - p;
     float R = light->objRadius, d2 = dot(axis, axis);
     float3 w;
     float invPdf;
     if (d2 > R * R) {
-        float sin2Max = R * R / d2, cosMax = sqrt(fmax(0.0f, 1.0f - sin2Max));
-        float oneMinusCosMax = sin2Max / (1.0f + cosMax); /* 1 − cosθmax without cancellation */
-        float oneMinusCos = u.x * oneMinusCosMax;
-        float cosT = 1.0f - oneMinusCos, sinT = sqrt(fmax(0.0f, oneMinusCos * (2.0f - oneMinusCos)));
-        float phi = 2.0f * CLRT_PI * u.y;
-        float3 n = axis / sqrt(d2), t, b;
-        makeBasis(n, &t, &b);
-        w = normalize(sinT * cos(phi) * t + sinT * sin(phi) * b + cosT * n);
-        invPdf = 2.0f * CLRT_PI * oneMinusCosMax;
-    } else { /* inside the bounding sphere (an ellipsoid's): all directions */
+        w = SphereLight_ConeDirection(axis / sqrt(d2), R, d2, u, &invPdf);
+    } else { /* inside the sphere: all directions (the inside emits nothing: SphereLight_Hit) */
         float z = 1.0f - 2.0f * u.x, r = sqrt(fmax(0.0f, 1.0f - z * z)), phi = 2.0f * CLRT_PI * u.y;
         w = (float3)(r * cos(phi), r * sin(phi), z);
         invPdf = 4.0f * CLRT_PI;
@@ -138,15 +192,15 @@ inline void ObjectLight_AimShadow(ShadowRay* sr, float3 q) {
 }
 
 /* The radiance a ray sees where it hits primitive `prim` (frontFacing: it hit the side the geometric
- * normal points to): the Radiance of its object light from the emitting side (LightMesh: the front
- * face; LightSphere: outside), else 0. */
+ * normal points to): the Radiance of its object light from an emitting side (LightMesh: either face;
+ * LightSphere: outside), else 0. */
 inline float3 ObjectLight_Emission(int prim, int frontFacing, int numTriangles, int numSpheres,
                                    const __global TriangleShading* shading, const __global Sphere* spheres,
                                    const __global Light* lights) {
     int light = CLRT_INVALID;
     if (prim < numTriangles) light = shading[prim].light;
     else if (prim < numTriangles + numSpheres) light = spheres[prim - numTriangles].light;
-    if (light == CLRT_INVALID || !frontFacing) return (float3)(0.0f);
+    if (light == CLRT_INVALID || (!frontFacing && prim >= numTriangles)) return (float3)(0.0f);
     return lights[light].radiance.xyz;
 }
 #endif

@@ -31,6 +31,7 @@
 #include "envmap.cl"
 #include "brdf.cl"
 #include "material.cl"
+#include "object_lights.cl"
 
 #ifdef CLRT_HAS_PATH_TRACING
 
@@ -77,32 +78,50 @@ inline float Path_MissWeight(SceneParams scene, PathState path, const __global L
 
 #if defined(CLRT_HAS_LIGHT_MESH) || defined(CLRT_HAS_LIGHT_SPHERE)
 /* The solid-angle density with which sample_lights draws the point pHit a ray hit on object light
- * `light` (from pHit − t·dirWorld; ngWorld: the geometric normal there): LightMesh: a point by area,
- * pdf t²/(A·cosθ_L); LightSphere: a direction in its cone, 1/(2π(1 − cosθmax)) (1/4π from inside). */
-inline float Path_ObjectLightPdf(const __global Light* light, float3 pHit, float3 dirWorld, float t, float3 ngWorld) {
+ * `light` (from pHit − t·dirWorld; ngWorld: the geometric normal there; s: a LightSphere's 7 float4s,
+ * object_lights.cl): LightMesh: a point by area, pdf t²/(A·cosθ_L); LightSphere under a similarity: a
+ * direction in its cone, 1/(2π(1 − cosθmax)) (1/4π from inside); any other LightSphere: the object-space
+ * cone's, times dω_obj/dω_world. */
+inline float Path_ObjectLightPdf(const __global Light* light, const __global float4* s, float3 pHit, float3 dirWorld,
+                                 float t, float3 ngWorld) {
     if (light->kind == LIGHT_MESH) {
         float cosL = fabs(dot(ngWorld, dirWorld));
         return cosL > 0.0f && light->area > 0.0f ? t * t / (light->area * cosL) : 0.0f;
     }
-    float3 axis = light->position.xyz - (pHit - t * dirWorld);
-    float R = light->objRadius, d2 = dot(axis, axis);
-    if (!(d2 > R * R)) return 0.25f * CLRT_INV_PI;
+    float3 origin = pHit - t * dirWorld;
+    float3 axis = light->position.xyz - origin;
+    float R = light->objRadius, scale = 1.0f;
+    if (light->objCount != 0) { /* the cone in object space, times dω_obj/dω_world */
+        axis = s[0].xyz - (float3)(dot(s[1].xyz, origin) + s[1].w, dot(s[2].xyz, origin) + s[2].w,
+                                   dot(s[3].xyz, origin) + s[3].w);
+        R = s[0].w;
+        scale = SphereLight_DirectionScale(light, s, dirWorld);
+    }
+    float d2 = dot(axis, axis);
+    if (!(d2 > R * R)) return light->objCount != 0 ? 0.0f : 0.25f * CLRT_INV_PI;
     float sin2Max = R * R / d2, cosMax = sqrt(fmax(0.0f, 1.0f - sin2Max));
-    return 1.0f / (2.0f * CLRT_PI * (sin2Max / (1.0f + cosMax)));
+    return scale / (2.0f * CLRT_PI * (sin2Max / (1.0f + cosMax)));
 }
 
 /* What a ray sees emitted where it hit primitive `prim` (the emitting side of an object light, as
- * object_lights.cl's ObjectLight_Emission: LightMesh front faces, LightSphere outside), and the
- * density light sampling draws that point with (*lightPdf). */
+ * object_lights.cl's ObjectLight_Emission: LightMesh either face, LightSphere outside), and the
+ * density light sampling draws that point with (*lightPdf). bsdfPdf: the pdf of the bounce that made
+ * the ray (0: a camera ray or a specular bounce, which see the Radiance itself); after a non-specular
+ * bounce a LightSphere gives Radiance·dω_obj/dω_world, as its light samples do. */
 inline float3 Path_HitEmission(int prim, int frontFacing, SceneParams scene, const __global TriangleShading* shading,
                                const __global Sphere* spheres, const __global Light* lights, float3 pHit,
-                               float3 dirWorld, float t, float3 ngWorld, float* lightPdf) {
+                               float3 dirWorld, float t, float3 ngWorld, float bsdfPdf, float* lightPdf) {
     int light = CLRT_INVALID;
+    const __global float4* s = 0;
     if (prim < scene.numTriangles) light = shading[prim].light;
-    else if (prim < scene.numTriangles + scene.numSpheres) light = spheres[prim - scene.numTriangles].light;
-    if (light == CLRT_INVALID || !frontFacing) return (float3)(0.0f);
-    *lightPdf = Path_ObjectLightPdf(&lights[light], pHit, dirWorld, t, ngWorld);
-    return lights[light].radiance.xyz;
+    else if (prim < scene.numTriangles + scene.numSpheres) {
+        light = spheres[prim - scene.numTriangles].light;
+        s = (const __global float4*)&spheres[prim - scene.numTriangles]; /* centre/radius, worldToObject, objectToWorld */
+    }
+    if (light == CLRT_INVALID || (!frontFacing && s != 0)) return (float3)(0.0f); /* a LightSphere's inside */
+    *lightPdf = Path_ObjectLightPdf(&lights[light], s, pHit, dirWorld, t, ngWorld);
+    float scale = s != 0 && bsdfPdf > 0.0f ? SphereLight_DirectionScale(&lights[light], s, dirWorld) : 1.0f;
+    return lights[light].radiance.xyz * scale;
 }
 #endif
 
@@ -127,15 +146,17 @@ inline float Path_BouncePdf(ShadingPoint sp, const __global Material* materials,
  * normal-independent env strategy, object lights); 1 for every other light and without
  * MultipleImportanceSampling. e: what Light_Sample returned. */
 inline float Path_LightSampleWeight(int mode, const __global Light* light, ShadingPoint sp,
-                                    const __global Material* materials, const __global float* envDist, float3 wi,
-                                    float3 e) {
+                                    const __global Material* materials, const __global float* envDist,
+                                    const __global float4* lightData, float3 wi, float3 e) {
     if (!(mode & CLRT_PATH_MIS)) return 1.0f;
     float lightPdf = -1.0f;
     if (light->kind == LIGHT_ENVIRONMENT) lightPdf = Path_EnvLightPdf(light, envDist, wi);
 #if defined(CLRT_HAS_LIGHT_MESH) || defined(CLRT_HAS_LIGHT_SPHERE)
-    /* object lights return radiance / pdf(wi) (object_lights.cl) */
-    if ((light->kind == LIGHT_MESH || light->kind == LIGHT_SPHERE) && maxComponent(e) > 0.0f)
-        lightPdf = maxComponent(light->radiance.xyz) / maxComponent(e);
+    /* object lights return radiance · dω_obj/dω_world / pdf(wi) (object_lights.cl) */
+    if ((light->kind == LIGHT_MESH || light->kind == LIGHT_SPHERE) && maxComponent(e) > 0.0f) {
+        float scale = light->kind == LIGHT_SPHERE ? SphereLight_DirectionScale(light, lightData + light->objFirst, wi) : 1.0f;
+        lightPdf = maxComponent(light->radiance.xyz) * scale / maxComponent(e);
+    }
 #endif
     if (lightPdf < 0.0f) return 1.0f;
     return Path_PowerHeuristic(lightPdf, Path_BouncePdf(sp, materials, mode, wi));

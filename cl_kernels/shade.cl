@@ -386,7 +386,8 @@ inline void Shade_Hit(SceneParams scene, CameraParams cam, PathState path, Ray r
         float3 emitted = (float3)(0.0f);
         float lightPdf = -1.0f;
 #if defined(CLRT_HAS_LIGHT_MESH) || defined(CLRT_HAS_LIGHT_SPHERE)
-        emitted = Path_HitEmission(h.prim, s.frontFacing, scene, triShading, spheres, lights, s.p, s.dir, s.t, s.ng, &lightPdf);
+        emitted = Path_HitEmission(h.prim, s.frontFacing, scene, triShading, spheres, lights, s.p, s.dir, s.t, s.ng,
+                                   path.throughput.w, &lightPdf);
 #endif
         Path_ShadeHit(scene, path, m, s.p, ng, ns, wo, s.t, insideDielectric, sp, emitted, lightPdf, materials, res);
 #ifdef CLRT_HAS_MOTION_BLUR
@@ -509,7 +510,7 @@ inline void Light_ShadowRays(SceneParams scene, PathState path, ShadingPoint sp,
                                 &wi, &dist);
         *sr = Shadow_Make(sp, materials, path.throughput.xyz, wi, dist, e, scene.shadowEpsilon);
 #ifdef CLRT_HAS_PATH_TRACING
-        sr->contribution *= Path_LightSampleWeight(scene.pathMode, &lights[l], sp, materials, envDist, wi, e);
+        sr->contribution *= Path_LightSampleWeight(scene.pathMode, &lights[l], sp, materials, envDist, lightData, wi, e);
 #endif
 #ifdef CLRT_HAS_OBJECT_LIGHTS
         if (ObjectLight_IsShape(&lights[l])) ObjectLight_AimShadow(sr, sp.position.xyz + dist * wi);

@@ -588,6 +588,7 @@ __kernel void light_test(const __global Light* lights, int numLights, const __gl
     std::vector<dev::float4> pts(n), nrm(n), out(size_t(2) * n * L);
     for (int i = 0; i < n; ++i) {
         pts[i] = {pos(rng), pos(rng), pos(rng), uni(rng)};
+        if (i % 4 == 0) pts[i].y = 5.5f + 0.5f * std::fabs(pts[i].y);  // above the area light: its back face
         Vec3 nn = normalize(Vec3(g(rng), g(rng), g(rng)));
         nrm[i] = {nn.x, nn.y, nn.z, uni(rng)};
     }
@@ -609,7 +610,7 @@ __kernel void light_test(const __global Light* lights, int numLights, const __gl
     env.texels = imageTexels(ds, ds.lights[3].image);  // half4 (exact) in the atlas: unpacked
     env.view = EnvMapView{env.texels.data(), envImg.width, envImg.height, dev::ENV_LATLONG};
     env.dist = buildEnvDistribution(env.view);
-    int bad[4] = {0, 0, 0, 0}, spotPartial = 0, spotZero = 0, areaLit = 0;
+    int bad[4] = {0, 0, 0, 0}, spotPartial = 0, spotZero = 0, areaLit = 0, areaBack = 0;
     auto close3 = [](const dev::float4& a, double x, double y, double z) {
         double s = std::max({1e-6, std::fabs(x), std::fabs(y), std::fabs(z)});
         return std::fabs(a.x - x) <= 2e-4 * s && std::fabs(a.y - y) <= 2e-4 * s && std::fabs(a.z - z) <= 2e-4 * s;
@@ -643,9 +644,10 @@ __kernel void light_test(const __global Light* lights, int numLights, const __gl
             Vec3 d = q - p;
             double d2 = dot(d, d), dl = std::sqrt(d2);
             Vec3 wi = d / float(dl);
-            double cosL = -dot(an, wi);
+            double cosL = std::fabs(double(dot(an, wi)));  // both faces emit
             double e = cosL > 0 ? 4.0 * cosL / d2 : 0.0;
             areaLit += e > 0;
+            areaBack += e > 0 && dot(an, wi) > 0;  // p beyond the light's back face
             if (!close3(o[4], 10 * e, 20 * e, 30 * e) || (e > 0 && std::fabs(o[4].w - dl) > 1e-4 * dl)) ++bad[2];
         }
         {  // environment, importance strategy: L(wi) / pdf(wi)
@@ -664,10 +666,11 @@ __kernel void light_test(const __global Light* lights, int numLights, const __gl
                 ++bad[3];
         }
     }
-    INFO("spot partially lit " << spotPartial << ", unlit " << spotZero << "; area lit " << areaLit);
+    INFO("spot partially lit " << spotPartial << ", unlit " << spotZero << "; area lit " << areaLit << ", from behind " << areaBack);
     CHECK(spotPartial > 50);
     CHECK(spotZero > 50);
     CHECK(areaLit > 50);
+    CHECK(areaBack > 50);  // the back face is exercised: a one-sided light fails bad[2] there
     CHECK(bad[0] == 0);
     CHECK(bad[1] == 0);
     CHECK(bad[2] == 0);

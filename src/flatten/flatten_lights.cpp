@@ -1,7 +1,7 @@
 // flatten_lights.cpp — scene lights -> dev::Light, one case per light type (environment lights:
 // flatten_environment.cpp); see flatten.h. Object lights (LightMesh, LightSphere) also write their
 // sampling data to ds.lightData (layout: device_types.h, after struct Light): the mesh's world-space
-// triangles with an area CDF, the sphere's object-space centre/radius and worldToObject rows.
+// triangles with an area CDF, the sphere's object-space centre/radius, worldToObject and objectToWorld rows.
 #include <algorithm>
 #include <cmath>
 
@@ -17,7 +17,7 @@ void flattenMeshLight(const Scene& scene, const Shape& s, dev::Light& d, DeviceS
     const MeshData& mesh = scene.meshes.at(size_t(s.meshIndex));
     d.objFirst = int(ds.lightData.size());
     std::vector<double> areas;
-    const bool mirrored = mirrorsOrientation(s.transform);  // winding as flattenGeometry's (front = emitting)
+    const bool mirrored = mirrorsOrientation(s.transform);  // winding as flattenGeometry's (both faces emit)
     for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
         Vec3 p[3];
         for (int k = 0; k < 3; ++k) p[k] = s.transform.transformPoint(mesh.positions.at(size_t(mesh.indices[t + k])));
@@ -56,17 +56,42 @@ double maxStretch(const Mat4& m) {
     return std::sqrt(norm);
 }
 
-// LightSphere: world-space centre and bounding radius in d, object-space sphere and worldToObject in lightData.
+// Whether the linear part of m is a similarity (a rotation, possibly mirrored, times one scale): MᵀM ∝ I.
+bool isSimilarity(const Mat4& m) {
+    double g[3][3], tr = 0;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+            g[i][j] = m.m[0][i] * m.m[0][j] + m.m[1][i] * m.m[1][j] + m.m[2][i] * m.m[2][j];
+            if (i == j) tr += g[i][j];
+        }
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            if (std::fabs(g[i][j] - (i == j ? tr / 3 : 0.0)) > 1e-9 * tr) return false;
+    return tr > 0;
+}
+
+// LightSphere: world-space centre and bounding radius in d, |det M| in d.edgeU.x; d.objCount 1 when M is
+// no similarity (sampled in object space: object_lights.cl), else 0. lightData: the object-space sphere,
+// worldToObject rows, objectToWorld rows (the layout of dev::Sphere's first 7 float4s).
 void flattenSphereLight(const Shape& s, dev::Light& d, DeviceScene& ds) {
     Mat4 inv;
     bool ok = s.transform.inverse(inv);
+    const Mat4& m = s.transform;
     d.objFirst = int(ds.lightData.size());
     d.position = toFloat4(s.transform.transformPoint(s.center));
     d.objRadius = ok ? float(s.radius * maxStretch(s.transform) * (1 + 1e-6)) : 0.0f;  // never inside the true sphere
+    double det = m.m[0][0] * (m.m[1][1] * m.m[2][2] - m.m[1][2] * m.m[2][1]) -
+                 m.m[0][1] * (m.m[1][0] * m.m[2][2] - m.m[1][2] * m.m[2][0]) +
+                 m.m[0][2] * (m.m[1][0] * m.m[2][1] - m.m[1][1] * m.m[2][0]);
+    det = std::fabs(det);
+    d.objCount = isSimilarity(m) ? 0 : 1;
+    d.edgeU = {float(det), 0, 0, 0};
     ds.lightData.push_back(toFloat4(s.center, s.radius));
     for (int r = 0; r < 3; ++r)
         ds.lightData.push_back({float(inv.m[r][0]), float(inv.m[r][1]), float(inv.m[r][2]), float(inv.m[r][3])});
-    if (!ok || !(d.objRadius > 0)) {
+    for (int r = 0; r < 3; ++r)
+        ds.lightData.push_back({float(m.m[r][0]), float(m.m[r][1]), float(m.m[r][2]), float(m.m[r][3])});
+    if (!ok || !(d.objRadius > 0) || !(det > 0) || !std::isfinite(det)) {
         d.radiance = {0, 0, 0, 0};  // the sphere itself is skipped by flattenGeometry (warned there)
         d.objRadius = 0;
     }
