@@ -308,6 +308,88 @@ def read_expected(path):
     return exp
 
 
+def judge_camera(r, rel, path, root, cam, reduced):
+    """(rule, ok, figure) for one camera: ok is None when it is SKIPPED (figure: the reason)."""
+    scene_dir = os.path.dirname(path)
+    hdr = cam["image"].lower().endswith(".exr")
+    traits, perlin = scene_traits(root)
+    traits |= cam["traits"]
+    rule = "perlin" if perlin else ("sampled" if traits else "deterministic")
+    missing = missing_inputs(root, scene_dir)
+    if missing:
+        return rule, None, "missing input: " + ", ".join(missing)
+    if rel in KNOWN_EDITED:
+        return rule, None, KNOWN_EDITED[rel]
+    if hdr and not HAVE_OPENEXR:
+        return rule, None, "no OpenEXR Python module to read the EXR reference (scripts/check_course installs it)"
+    ref = read_image(os.path.join(scene_dir, REF_DIR, cam["image"]))
+    if rule == "deterministic":
+        return (rule, *judge_deterministic(r, path, cam, ref, hdr))
+    if rule == "perlin":
+        return (rule, *judge_perlin(r, path, cam, ref, hdr))
+    ok, figure = judge_sampled(r, path, cam, ref, hdr, reduced)
+    return rule, ok, figure + " [" + ", ".join(sorted(traits)) + "]"
+
+
+class Tally:
+    """Counts of ok / FAIL / SKIPPED, and the comparison with the expected-failures list."""
+
+    def __init__(self, expected_path):
+        self.path, self.expected = expected_path, read_expected(expected_path)
+        self.counts = {"ok": 0, "FAIL": 0, "SKIPPED": 0}
+        self.unexpected, self.listed, self.now_passing, self.seen = [], [], [], set()
+
+    def add(self, key, status):
+        """Counts one camera; returns the note for its line."""
+        self.counts[status] += 1
+        self.seen.add(key)
+        name = os.path.basename(self.path)
+        if status == "FAIL" and self.expected:
+            if key in self.expected:
+                self.listed.append(key)
+                return " (listed in %s)" % name
+            self.unexpected.append(key)
+            return " (NEW: not in %s)" % name
+        if status == "ok" and key in self.expected:
+            self.now_passing.append(key)
+            return " (listed as failing: remove it from %s)" % name
+        return ""
+
+    def report(self, mode, seconds, only):
+        c = self.counts
+        print("check_course: %d cameras: %d ok, %d FAIL, %d SKIPPED; %s mode, %.0f s" % (
+            sum(c.values()), c["ok"], c["FAIL"], c["SKIPPED"], mode, seconds))
+        if not self.expected:
+            return 1 if c["FAIL"] else 0
+        gone = sorted(k for k in self.expected if k not in self.seen and not only)
+        print("check_course: against %s: %d new failure(s), %d listed failure(s), %d listed camera(s) now pass%s" % (
+            self.path, len(self.unexpected), len(self.listed), len(self.now_passing),
+            "; %d listed camera(s) not checked: %s" % (len(gone), ", ".join("%s cam %s" % g for g in gone)) if gone else ""))
+        for k in self.unexpected:
+            print("check_course: NEW FAIL %s cam %s" % k)
+        for k in self.now_passing:
+            print("check_course: now passes, remove from the list: %s cam %s" % k)
+        return 1 if self.unexpected else 0
+
+
+def check_scene(r, tally, rel, path, reduced):
+    """Prints one line per camera of the scene that has a reference."""
+    try:
+        root = ET.parse(path).getroot()
+    except ET.ParseError as e:
+        print("%-44s cam ?   %-36s %-13s FAIL    unreadable XML: %s%s" % (rel, "?", "-", e, tally.add((rel, "?"), "FAIL")))
+        return
+    for cam in cameras_of(root):
+        if not os.path.exists(os.path.join(os.path.dirname(path), REF_DIR, cam["image"])):
+            continue  # this camera has no reference
+        t0 = time.time()
+        rule, ok, figure = judge_camera(r, rel, path, root, cam, reduced)
+        status = "SKIPPED" if ok is None else ("ok" if ok else "FAIL")
+        note = tally.add((rel, cam["id"]), status)
+        print("%-44s cam %-3s %-36s %-13s %-7s %s (%.0f s)%s" % (
+            rel, cam["id"], cam["image"], rule, status, figure, time.time() - t0, note), flush=True)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--scenes", default=os.path.join(ROOT, "..", "shared", "scenes"))
@@ -322,88 +404,17 @@ def main():
     if not os.path.isdir(scenes_root):
         print("check_course: %s is not there: nothing to check" % scenes_root)
         return 0
-    expected = read_expected(args.expected)
     start = time.time()
+    tally = Tally(args.expected)
     found, unreferenced = find_scenes(scenes_root)
     for top, n in unreferenced:
         print("%-44s %d scene(s), no reference images in ../shared: not checked" % (top + "/", n))
-    counts = {"ok": 0, "FAIL": 0, "SKIPPED": 0}
-    unexpected, expected_fail, now_passing, seen = [], [], [], set()
     with tempfile.TemporaryDirectory(prefix="check_course.") as tmp:
         r = Renderer(args, tmp)
         for rel, path in found:
-            if args.only and not re.search(args.only, rel):
-                continue
-            scene_dir = os.path.dirname(path)
-            try:
-                root = ET.parse(path).getroot()
-            except ET.ParseError as e:
-                root = None
-                parse_error = str(e)
-            cams = cameras_of(root) if root is not None else []
-            if root is None:
-                cams = [dict(id="?", image="?", spp=1, traits=set(), res=[0, 0])]
-            for cam in cams:
-                ref_path = os.path.join(scene_dir, REF_DIR, cam["image"])
-                if root is not None and not os.path.exists(ref_path):
-                    continue  # this camera has no reference
-                t0 = time.time()
-                hdr = cam["image"].lower().endswith(".exr")
-                rule, ok = "", None
-                if root is None:
-                    rule, ok, figure = "-", False, "unreadable XML: " + parse_error
-                else:
-                    traits, perlin = scene_traits(root)
-                    traits |= cam["traits"]
-                    missing = missing_inputs(root, scene_dir)
-                    rule = "perlin" if perlin else ("sampled" if traits else "deterministic")
-                    if missing:
-                        figure = "missing input: " + ", ".join(missing)
-                    elif rel in KNOWN_EDITED:
-                        figure = KNOWN_EDITED[rel]
-                    elif hdr and not HAVE_OPENEXR:
-                        figure = "no OpenEXR Python module to read the EXR reference (scripts/check_course installs it)"
-                    else:
-                        ref = read_image(ref_path)
-                        if rule == "deterministic":
-                            ok, figure = judge_deterministic(r, path, cam, ref, hdr)
-                        elif rule == "perlin":
-                            ok, figure = judge_perlin(r, path, cam, ref, hdr)
-                        else:
-                            ok, figure = judge_sampled(r, path, cam, ref, hdr, args.reduced)
-                            figure += " [" + ", ".join(sorted(traits)) + "]"
-                status = "SKIPPED" if ok is None else ("ok" if ok else "FAIL")
-                counts[status] += 1
-                key = (rel, cam["id"])
-                seen.add(key)
-                note = ""
-                if status == "FAIL" and expected:
-                    if key in expected:
-                        expected_fail.append(key)
-                        note = " (listed in %s)" % os.path.basename(args.expected)
-                    else:
-                        unexpected.append(key)
-                        note = " (NEW: not in %s)" % os.path.basename(args.expected)
-                if status == "ok" and key in expected:
-                    now_passing.append(key)
-                    note = " (listed as failing: remove it from %s)" % os.path.basename(args.expected)
-                print("%-44s cam %-3s %-36s %-13s %-7s %s (%.0f s)%s" % (
-                    rel, cam["id"], cam["image"], rule, status, figure, time.time() - t0, note), flush=True)
-    total = sum(counts.values())
-    mode = "reduced" if args.reduced else "full"
-    print("check_course: %d cameras: %d ok, %d FAIL, %d SKIPPED; %s mode, %.0f s" % (
-        total, counts["ok"], counts["FAIL"], counts["SKIPPED"], mode, time.time() - start))
-    if expected:
-        gone = sorted(k for k in expected if k not in seen and not args.only)
-        print("check_course: against %s: %d new failure(s), %d listed failure(s), %d listed camera(s) now pass%s" % (
-            args.expected, len(unexpected), len(expected_fail), len(now_passing),
-            "; %d listed camera(s) not checked: %s" % (len(gone), ", ".join("%s cam %s" % g for g in gone)) if gone else ""))
-        for k in unexpected:
-            print("check_course: NEW FAIL %s cam %s" % k)
-        for k in now_passing:
-            print("check_course: now passes, remove from the list: %s cam %s" % k)
-        return 1 if unexpected else 0
-    return 1 if counts["FAIL"] else 0
+            if not args.only or re.search(args.only, rel):
+                check_scene(r, tally, rel, path, args.reduced)
+    return tally.report("reduced" if args.reduced else "full", time.time() - start, args.only)
 
 
 if __name__ == "__main__":
