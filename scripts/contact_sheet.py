@@ -1,13 +1,15 @@
 #!/usr/bin/python3
 """Renders every scene of a folder with clrt and lays the images out on one contact sheet PNG.
 
-usage: /usr/bin/python3 scripts/contact_sheet.py SCENE_DIR OUT.png [--spp N] [--device SPEC] [--cols C]
-                                                 [--references DIR] [--ldr-quantize floor|round]
+usage: /usr/bin/python3 scripts/contact_sheet.py SCENE_DIR [SCENE_DIR...] OUT.png [--spp N] [--device SPEC]
+                                                 [--cols C] [--references DIR|auto] [--ldr-quantize floor|round]
 
 Each scene is rendered into a temporary folder (all its cameras); the sheet shows the first image of
 each scene with the scene name and render time, or the error if it failed. With --references (a folder
 of the course's reference PNGs, named as the scene's ImageName), each scene is one row instead:
-reference | clrt | |difference| x4, with the PSNR of clrt against the reference (8-bit). Needs python3-matplotlib
+reference | clrt | |difference| x4, with the PSNR of clrt against the reference (8-bit); --references auto
+takes each scene's own SCENE_DIR/_reference_outputs (several folders on one sheet, e.g. hw1 hw2 hw2/grass hw3).
+Scenes render at their own NumSamples unless --spp is given. Needs python3-matplotlib
 and python3-numpy (Debian); installs them with apt-get when missing and running as root.
 """
 import argparse
@@ -29,12 +31,13 @@ def ensure_matplotlib():
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("scene_dir")
+    ap.add_argument("scene_dirs", nargs="+")
     ap.add_argument("out")
     ap.add_argument("--spp", type=int, default=0, help="override samples per pixel (0: the scene's)")
     ap.add_argument("--device", default="")
     ap.add_argument("--cols", type=int, default=5)
-    ap.add_argument("--references", default="", help="folder of reference PNGs: one row per scene with the difference")
+    ap.add_argument("--references", default="", help="folder of reference PNGs, or auto (each scene folder's "
+                    "_reference_outputs): one row per scene with the difference")
     ap.add_argument("--ldr-quantize", default="", help="passed to clrt render (floor: the course's 8-bit convention)")
     ap.add_argument("--clrt", default=os.path.join(os.path.dirname(__file__), "..", "build", "clrt"))
     args = ap.parse_args()
@@ -44,7 +47,9 @@ def main():
     import matplotlib.pyplot as plt
     import numpy as np
 
-    scenes = sorted(glob.glob(os.path.join(args.scene_dir, "*.xml")) + glob.glob(os.path.join(args.scene_dir, "*.json")))
+    scenes = []
+    for d in args.scene_dirs:
+        scenes += sorted(glob.glob(os.path.join(d, "*.xml")) + glob.glob(os.path.join(d, "*.json")))
     results = []
     for s in scenes:
         with tempfile.TemporaryDirectory() as tmp:
@@ -64,9 +69,12 @@ def main():
             print("%-40s %6.1fs %s" % (os.path.basename(s), dt, "ok" if not err else err), flush=True)
             ref = None
             if args.references and imgs:
-                rp = os.path.join(args.references, os.path.basename(imgs[0]))
+                refs = os.path.join(os.path.dirname(s), "_reference_outputs") if args.references == "auto" else args.references
+                rp = os.path.join(refs, os.path.basename(imgs[0]))
                 ref = plt.imread(rp)[..., :3] if os.path.exists(rp) else None
-            results.append((os.path.basename(s), img, dt, err, ref))
+            label = os.path.join(os.path.basename(os.path.dirname(s)), os.path.basename(s)) if len(args.scene_dirs) > 1 \
+                else os.path.basename(s)
+            results.append((label, img, dt, err, ref))
 
     if args.references:
         return reference_sheet(results, args.out, plt, np)

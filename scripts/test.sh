@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Sets up (scripts/setup.sh --test), runs the whole Catch2 test suite on the PoCL CPU device, then the
 # OpenCL-implementation checks (scripts/test_implementations.sh: the device tests on Intel's CPU
-# runtime, the oclgrind suite, GPU-target compiles of every kernel variant), then the
-# deterministic fuzz check of the scene/PLY/image readers (scripts/fuzz.sh --gate: the committed
+# runtime, the oclgrind suite, GPU-target compiles of every kernel variant), then the course check
+# (scripts/check_course --reduced against tests/course_expected_failures.txt: every course scene with a
+# reference in ../shared; skip with CLRT_NO_COURSE_CHECK=1), then the deterministic fuzz check of the
+# scene/PLY/image readers (scripts/fuzz.sh --gate: the committed
 # regressions and seeds replayed under ASan/UBSan, then a fixed number of fixed-seed libFuzzer runs;
 # skip with CLRT_NO_FUZZ=1).
 # Usage: bash scripts/test.sh [catch2 args...]
@@ -15,8 +17,12 @@ bash scripts/setup.sh --test
 export CLRT_TEST_DEVICE="${CLRT_TEST_DEVICE:-cpu}"
 export CLRT_CACHE_DIR="${CLRT_CACHE_DIR:-$PWD/build/kernel-cache}"
 log=build/test-log.txt
+# Test cases tagged [course] check what the course check below checks again (the same cameras, the same
+# rule): when that check runs, the suite leaves them out ("~[.]": hidden tests stay hidden).
+args=("$@")
+if [ $# -eq 0 ] && [ -z "${CLRT_NO_COURSE_CHECK:-}" ] && [ -d ../shared/scenes ]; then args=("~[course]~[.]"); fi
 set +e
-(cd build && ./clrt_tests "$@") 2>&1 | tee "$log"
+(cd build && ./clrt_tests "${args[@]}") 2>&1 | tee "$log"
 rc=${PIPESTATUS[0]}
 set -e
 # One plain summary line: "tests: N passed, N failed" (test cases).
@@ -30,6 +36,13 @@ else
 fi
 [ "$rc" -eq 0 ] || exit "$rc"
 [ $# -eq 0 ] && { bash scripts/test_implementations.sh || exit 1; }
+if [ -z "${CLRT_NO_COURSE_CHECK:-}" ] && [ $# -eq 0 ] && [ -d ../shared/scenes ]; then
+  # Reduced spp/size for sampled scenes; a listed failure is reported, a new one fails the run.
+  echo "course check (scripts/check_course --reduced --expected tests/course_expected_failures.txt):"
+  bash scripts/check_course --reduced --expected tests/course_expected_failures.txt > build/course-check-log.txt 2>&1 \
+    || { cat build/course-check-log.txt; echo "course check: a camera failed that tests/course_expected_failures.txt does not list"; exit 1; }
+  grep -E "^check_course:" build/course-check-log.txt
+fi
 if [ -z "${CLRT_NO_FUZZ:-}" ] && [ $# -eq 0 ]; then
   command -v clang++ >/dev/null || { [ "$(id -u)" -eq 0 ] && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq clang >/dev/null; }
   echo "fuzz gate (fuzz/regressions + fuzz/corpus replayed, then a fixed number of -seed=1 runs per target):"

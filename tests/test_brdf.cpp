@@ -392,7 +392,8 @@ ImageRGB renderHw6(const std::string& name, int spp, uint32_t seed, PixelSampler
 
 }  // namespace
 
-TEST_CASE("hw6 brdf scenes match the course's PNGs at >= 40 dB (800x800, 1 spp, deterministic)", "[brdf][render][shared][hw6]") {
+// [course]: scripts/check_course checks the same cameras by the same rule (see tests/test_hw4.cpp).
+TEST_CASE("hw6 brdf scenes match the course's PNGs at >= 40 dB (800x800, 1 spp, deterministic)", "[brdf][render][shared][hw6][course]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
     for (const char* name : {"brdf_phong_original", "brdf_phong_modified", "brdf_blinnphong_original",
                              "brdf_blinnphong_modified_normalized", "brdf_torrancesparrow"}) {

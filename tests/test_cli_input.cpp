@@ -9,6 +9,7 @@
 #include <catch.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -143,6 +144,24 @@ TEST_CASE("cli input: a scene with no objects renders the background", "[cli][cl
             expectRows(d.file("out.png"), 0, 4, 10, 20, 30);
             fs::remove(d.path / "out.png");
         }
+    }
+}
+
+// The default 8-bit quantisation is the course's (floor: its reference PNGs truncate); round on request.
+TEST_CASE("cli input: .png outputs truncate by default, --ldr-quantize round rounds", "[cli][cli-input]") {
+    TempDir d;
+    std::string xml = xmlScene("", "-");
+    xml.replace(xml.find("10 20 30"), 8, "10.6 20.4 30.5");
+    writeFileBytes(d.file("s.xml"), xml);
+    const std::pair<const char*, std::array<float, 3>> cases[] = {
+        {"", {10, 20, 30}}, {"--ldr-quantize floor", {10, 20, 30}}, {"--ldr-quantize round", {11, 20, 31}}};
+    for (const auto& [extra, rgb] : cases) {
+        INFO("flags: '" << extra << "'");
+        CliRun r = render(d, "s.xml", extra);
+        INFO(r.log);
+        CHECK(r.rc == 0);
+        expectRows(d.file("out.png"), 0, 4, rgb[0], rgb[1], rgb[2]);
+        fs::remove(d.path / "out.png");
     }
 }
 

@@ -291,7 +291,9 @@ TEST_CASE("Perlin noise: zero at lattice points, within [-1, 1], gradient by cen
     CHECK(hi - lo > 0.8);  // not a constant
 }
 
-TEST_CASE("course hw4 image-texture scenes match their references at >= 40 dB", "[render][shared][hw4]") {
+// [course]: scripts/check_course checks the same cameras by the same rule; scripts/test.sh leaves this test out
+// of its Catch2 run when it runs that check (it is still in [render][shared] for a run by hand).
+TEST_CASE("course hw4 image-texture scenes match their references at >= 40 dB", "[render][shared][hw4][course]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
     // bump_mapping_transformed: 41.5 dB (floor 62 dB; its mirrored, stretched sphere is the weak part: 36.5 dB)
     for (const char* name : {"brickwall_with_normalmap", "bump_mapping_transformed", "cube_cushion", "cube_wall", "cube_wall_normal", "cube_waves",

@@ -446,15 +446,19 @@ TEST_CASE("camera outputs: EXR with attributes plus one tone-mapped PNG per Tone
         CHECK(names[0] == "x/y_photographic.png");
         CHECK(names[1] == "x/y_photographic_2.png");
     }
-    SECTION(".png camera: clamped, rounded or truncated") {
+    SECTION(".png camera: clamped, truncated by default (the course's PNGs), rounded on request") {
         cam.imageName = "ldr.png";
         ImageRGB ldr = makeImage(2, 1);
         ldr.pixels = {10.6f, 300.0f, -4.0f, NAN, 0.5f, 254.5f};
-        o.truncatePng = true;
+        CHECK(o.truncatePng);  // the default, as `clrt render` without --ldr-quantize
         writeCameraOutputs(cam, ldr, o, testContext());
         ImageRGB back = readImage(tmp.file("ldr.png"));
         CHECK(back.pixels == std::vector<float>{10, 255, 0, 0, 0, 254});
         CHECK_FALSE(std::filesystem::exists(tmp.file("ldr.exr")));
+        o.truncatePng = false;  // --ldr-quantize round
+        writeCameraOutputs(cam, ldr, o, testContext());
+        back = readImage(tmp.file("ldr.png"));
+        CHECK(back.pixels == std::vector<float>{11, 255, 0, 0, 1, 255});
     }
     SECTION("a name that is not a plain .png/.exr file name is refused, nothing written") {
         for (const char* bad : {"some/dir/shot.exr", "../shot.exr", ".shot.exr", "shot.jpg"}) {

@@ -18,7 +18,7 @@ struct RenderArgs {
     std::string outDir = ".", device, cameraId;
     int spp = 0, width = 0, height = 0;  // width/height: --resolution (0: the camera's own)
     uint32_t seed = 0;
-    bool verbose = false, help = false, truncatePng = false, exrHalf = false, allFeatures = false;
+    bool verbose = false, help = false, truncatePng = true, exrHalf = false, allFeatures = false;
     PixelSampler pixelSampler = PixelSampler::Stratified;  // --sampler
     RouletteRule rouletteRule = RouletteRule::Unbiased;    // --rr-rule
     std::string envStrategy;  // --env-sampling: overrides every environment light's env strategy ("" keeps the scene's)

@@ -23,7 +23,7 @@ struct PartHeader {
     size_t tilePixels = 0;
     int part = 0, parts = 0;   // K of N
     std::vector<size_t> tiles; // sorted
-    bool truncatePng = false, exrHalf = false;
+    bool truncatePng = true, exrHalf = false;
     std::vector<TonemapSettings> tonemaps;
     double renderSeconds = 0;
     std::string device;

@@ -1,6 +1,6 @@
 // src/output/: a camera's output files (PNG; EXR + tone-mapped PNGs, committed together) and tone mapping on the OpenCL device.
 // output.h — writing a rendered camera image (the `clrt tonemap` command is in src/cli/).
-// An ImageName ending in .png is clamped and quantised (round, or floor with --ldr-quantize floor);
+// An ImageName ending in .png is clamped and quantised (floor by default, as the course's reference PNGs; round with --ldr-quantize round);
 // one ending in .exr is written as float (or half) RGB OpenEXR, ZIP-compressed, with header
 // attributes (renderer, spp, renderTime, device), and next to it one tone-mapped PNG per Tonemap block
 // of the camera, tone-mapped on the OpenCL device (output/tonemap_device.h) while the EXR is written on
@@ -21,7 +21,7 @@ namespace clrt {
 
 struct OutputOptions {
     std::string outDir = ".";      // must exist
-    bool truncatePng = false;      // .png ImageName: floor instead of round (--ldr-quantize floor)
+    bool truncatePng = true;       // .png ImageName: floor (the default, as the course's PNGs) or round (--ldr-quantize round)
     bool tonemapTruncate = true;   // tone-mapped PNGs: floor (the course's references) or round
     bool exrHalf = false;          // --exr-half: HALF channels instead of FLOAT
     int spp = 0;                   // header attributes of the EXR
