@@ -191,11 +191,12 @@ TEST_CASE("instancing: hw2 grass_desert (instances of instances) matches the cou
     REQUIRE(img.height == ref.height);
     const double p = psnr8(quantize(img, true), ref);
     WARN("grass_desert: PSNR " << p << " dB (truncated)");
-    // 29.97 dB measured; the background and the ground are exact, what differs is the shading of
-    // whole grass blades (thin open geometry lit from both sides), not where they are. The other
-    // readings of the hw2 text score below this bound: resetTransform dropping only the base's own
-    // transforms 27.95 dB, every instance an instance of the Mesh 28.13 dB.
-    CHECK(p >= 29.5);
+    // 50.80 dB measured (29.97 dB while back-facing hits of the blades were shaded with the normal turned
+    // toward the viewer: the blades are thin open geometry, lit through from the stored side; shade.cl,
+    // Shade_OrientsNormalToRay). The other readings of the hw2 text scored below 29.5 dB under that old
+    // rule: resetTransform dropping only the base's own transforms 27.95 dB, every instance an instance
+    // of the Mesh 28.13 dB.
+    CHECK(p >= 50.0);
 }
 
 namespace {

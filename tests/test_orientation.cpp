@@ -2,7 +2,8 @@
 // mirrors (det < 0) keeps the orientation of its object space, as in the course: its winding is
 // reversed when flattened, so the world-space geometric normal is the object-space one carried by the
 // inverse transpose (flatten level); and a triangle seen from behind is shaded at the right point
-// (the device's barycentrics of a back-facing hit), so both windings of a quad render alike.
+// (the device's barycentrics of a back-facing hit) with its stored normal, not one turned toward the
+// viewer: an opaque surface is lit on its stored side, from whichever side it is seen (shade.cl).
 #include <catch.hpp>
 
 #include <cstring>
@@ -16,13 +17,15 @@ using namespace clrt::test;
 
 namespace {
 
-// A camera at the origin looking down −z, a point light at the camera, one material, and `objects`.
-std::string orientationScene(const std::string& transforms, const std::string& objects) {
+// A camera at the origin looking down −z, a point light at (0 0 lightZ) (default: at the camera), one
+// material, and `objects`.
+std::string orientationScene(const std::string& transforms, const std::string& objects,
+                             const std::string& lightZ = "0") {
     return R"(<Scene><BackgroundColor>0 0 0</BackgroundColor>
 <Cameras><Camera id="1"><Position>0 0 0</Position><Gaze>0 0 -1</Gaze><Up>0 1 0</Up>
 <NearPlane>-1 1 -1 1</NearPlane><NearDistance>1</NearDistance><ImageResolution>16 16</ImageResolution>
 <ImageName>o.exr</ImageName></Camera></Cameras>
-<Lights><AmbientLight>5 5 5</AmbientLight><PointLight id="1"><Position>0 0 0</Position><Intensity>1000 1000 1000</Intensity></PointLight></Lights>
+<Lights><AmbientLight>5 5 5</AmbientLight><PointLight id="1"><Position>0 0 )" + lightZ + R"(</Position><Intensity>1000 1000 1000</Intensity></PointLight></Lights>
 <Materials><Material id="1"><AmbientReflectance>1 1 1</AmbientReflectance><DiffuseReflectance>1 1 1</DiffuseReflectance>
 <SpecularReflectance>0 0 0</SpecularReflectance><PhongExponent>1</PhongExponent></Material></Materials>
 <Transformations>)" + transforms + R"(</Transformations>
@@ -67,23 +70,41 @@ TEST_CASE("a mirroring transformation (det < 0) keeps the object-space orientati
     CHECK(plusX == 1);
 }
 
-TEST_CASE("a triangle seen from behind is shaded where it was hit (both windings render alike)", "[orientation][render]") {
+TEST_CASE("a triangle seen from behind is shaded where it was hit, with its stored normal", "[orientation][render]") {
+    // The course's convention (hw2 grass_desert: 29.97 -> 50.80 dB): an opaque surface is lit on its
+    // stored side from whichever side it is seen. A triangle at z = -5 facing the camera with the light
+    // at the camera, and the same triangle wound the other way (facing away, toward -z) with the light
+    // behind it at z = -10, see the same light at the same distance and angle: the two images agree
+    // pixel for pixel (which also checks that a back-facing hit is shaded where it was hit). With the
+    // light at the camera, the triangle facing away is not lit: ambient only. The old two-sided rule
+    // (normal turned toward the viewer) fails both: it lights the third image, darkens the second.
     TempDir dir;
-    ImageRGB img[2];
-    for (int w = 0; w < 2; ++w) {
-        const std::string path = dir.file("wind" + std::to_string(w) + ".xml");
-        const std::string faces = w == 0 ? "1 2 3" : "1 3 2";  // facing the camera, facing away
-        writeFileBytes(path, orientationScene("", "<Mesh id=\"1\"><Material>1</Material><Faces>" + faces + "</Faces></Mesh>"));
+    struct Setup { const char* faces; const char* lightZ; };
+    const Setup setups[3] = {{"1 2 3", "0"}, {"1 3 2", "-10"}, {"1 3 2", "0"}};
+    ImageRGB img[3];
+    for (int k = 0; k < 3; ++k) {
+        const std::string path = dir.file("wind" + std::to_string(k) + ".xml");
+        writeFileBytes(path, orientationScene("", std::string("<Mesh id=\"1\"><Material>1</Material><Faces>") +
+                                                      setups[k].faces + "</Faces></Mesh>", setups[k].lightZ));
         Scene scene = loadScene(path);
-        img[w] = renderCamera(scene, scene.cameras.at(0));
+        img[k] = renderCamera(scene, scene.cameras.at(0));
     }
     REQUIRE(img[0].pixels.size() == img[1].pixels.size());
-    float worst = 0, brightest = 0;
+    REQUIRE(img[0].pixels.size() == img[2].pixels.size());
+    float worst = 0, brightest = 0, unlitWorst = 0;
+    int covered = 0;
     for (size_t i = 0; i < img[0].pixels.size(); ++i) {
         worst = std::max(worst, std::fabs(img[0].pixels[i] - img[1].pixels[i]));
         brightest = std::max(brightest, img[0].pixels[i]);
+        // Where the triangle is (lit in image 0), image 2 holds the ambient term alone (5); elsewhere 0.
+        const float expectUnlit = img[0].pixels[i] > 0.0f ? 5.0f : 0.0f;
+        covered += img[0].pixels[i] > 0.0f;
+        unlitWorst = std::max(unlitWorst, std::fabs(img[2].pixels[i] - expectUnlit));
     }
-    INFO("max |front - back| = " << worst << ", brightest pixel " << brightest);
+    INFO("max |front lit from front - back lit from behind| = " << worst << ", brightest pixel " << brightest
+         << ", max |back lit from front - ambient| = " << unlitWorst << " over " << covered << " channel values");
     CHECK(brightest > 30.0f);  // lit: 1000 / 25 + 5 at the centre
+    CHECK(covered > 0);
     CHECK(worst <= 1e-4f * brightest);
+    CHECK(unlitWorst <= 1e-4f * 5.0f);
 }
