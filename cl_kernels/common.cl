@@ -172,11 +172,14 @@ inline float3 Warp_UniformHemisphere(float u1, float u2) {
 #ifndef CLRT_OFFSET_ULPS
 #define CLRT_OFFSET_ULPS 16.0f
 #endif
-inline float3 Ray_OffsetOrigin(float3 p, float3 n) {
+/* The robust offset distance at p (above). */
+inline float Ray_OffsetDistance(float3 p) {
     const float floorOffset = 1.0f / 65536.0f;
     float m = fmax(fmax(fabs(p.x), fabs(p.y)), fabs(p.z));
-    float d = fmax(CLRT_OFFSET_ULPS * FLT_EPSILON * m, floorOffset);
-    return p + d * n;
+    return fmax(CLRT_OFFSET_ULPS * FLT_EPSILON * m, floorOffset);
+}
+inline float3 Ray_OffsetOrigin(float3 p, float3 n) {
+    return p + Ray_OffsetDistance(p) * n;
 }
 
 /* The origin of a shadow ray from p (ng: the geometric normal on the side of the light): the scene's
@@ -184,10 +187,7 @@ inline float3 Ray_OffsetOrigin(float3 p, float3 n) {
  * references show the epsilon: at 1e-3, hw1 bunny's shadow terminators (points whose own neighbouring
  * faces block a shadow ray that starts closer) come out lit as in the reference. */
 inline float3 Shadow_Origin(float3 p, float3 ng, float shadowEpsilon) {
-    const float floorOffset = 1.0f / 65536.0f;
-    float m = fmax(fmax(fabs(p.x), fabs(p.y)), fabs(p.z));
-    float d = fmax(fmax(CLRT_OFFSET_ULPS * FLT_EPSILON * m, floorOffset), shadowEpsilon);
-    return p + d * ng;
+    return p + fmax(Ray_OffsetDistance(p), shadowEpsilon) * ng;
 }
 
 /* A ray's shutter time (0 without motion blur: the origin's w is then never read). */

@@ -13,6 +13,7 @@
 #include "flatten/device_scene.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
+#include "perlin_reference.h"
 #include "test_helpers.h"
 
 using namespace clrt;
@@ -70,26 +71,6 @@ Vec3 bumpPerturb(Vec3 nW, Frame f, float gu, float gv, float factor, const float
     if (dot(base, nObj) < 0) nb = nb - base * 2.0f;
     Vec3 out = normalize(W.transposed().transformVector(nb));
     return dot(out, nW) < 0 ? out * -1.0f : out;
-}
-
-const int kPerm[16] = {CLRT_PERLIN_PERM_VALUES};
-const float kGrad[16][3] = {CLRT_PERLIN_GRAD_VALUES};
-
-double perlinNoise(double x, double y, double z) {
-    double fx = std::floor(x), fy = std::floor(y), fz = std::floor(z);
-    double sum = 0;
-    auto w = [](double t) {
-        t = std::fabs(t);
-        return t >= 1 ? 0.0 : 1 - 6 * std::pow(t, 5) + 15 * std::pow(t, 4) - 10 * std::pow(t, 3);
-    };
-    for (int c = 0; c < 8; ++c) {
-        int dx = c & 1, dy = (c >> 1) & 1, dz = (c >> 2) & 1;
-        int i = int(fx) + dx, j = int(fy) + dy, k = int(fz) + dz;
-        int g = kPerm[std::abs(i + kPerm[std::abs(j + kPerm[std::abs(k) % 16]) % 16]) % 16];
-        double vx = x - (fx + dx), vy = y - (fy + dy), vz = z - (fz + dz);
-        sum += w(vx) * w(vy) * w(vz) * (kGrad[g][0] * vx + kGrad[g][1] * vy + kGrad[g][2] * vz);
-    }
-    return sum;
 }
 
 Vec3 v3(const dev::float4& v) { return {v.x, v.y, v.z}; }

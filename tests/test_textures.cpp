@@ -15,6 +15,7 @@
 #include "flatten/mip_pyramid.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
+#include "perlin_reference.h"
 #include "test_helpers.h"
 #include "util/error.h"
 
@@ -60,25 +61,6 @@ Rgb trilinear(const std::vector<MipLevel>& chain, double u, double v, double foo
     if (f <= 0 || l0 + 1 >= int(chain.size())) return c0;
     Rgb c1 = bilinear(chain[size_t(l0) + 1], u, v);
     return {(1 - f) * c0.r + f * c1.r, (1 - f) * c0.g + f * c1.g, (1 - f) * c0.b + f * c1.b};
-}
-
-const int kPerm[16] = {CLRT_PERLIN_PERM_VALUES};
-const float kGrad[16][3] = {CLRT_PERLIN_GRAD_VALUES};
-
-double perlinNoise(double x, double y, double z) {
-    double fx = std::floor(x), fy = std::floor(y), fz = std::floor(z), sum = 0;
-    auto w = [](double t) {
-        t = std::fabs(t);
-        return t >= 1 ? 0.0 : 1 - 6 * std::pow(t, 5) + 15 * std::pow(t, 4) - 10 * std::pow(t, 3);
-    };
-    for (int c = 0; c < 8; ++c) {
-        int dx = c & 1, dy = (c >> 1) & 1, dz = (c >> 2) & 1;
-        int i = int(fx) + dx, j = int(fy) + dy, k = int(fz) + dz;
-        int g = kPerm[std::abs(i + kPerm[std::abs(j + kPerm[std::abs(k) % 16]) % 16]) % 16];
-        double vx = x - (fx + dx), vy = y - (fy + dy), vz = z - (fz + dz);
-        sum += w(vx) * w(vy) * w(vz) * (kGrad[g][0] * vx + kGrad[g][1] * vy + kGrad[g][2] * vz);
-    }
-    return sum;
 }
 
 // NumOctaves: n = Σ_{k<N} 2^-k noise(2^k s p), then absval |n| or linear (n + 1)/2.

@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "flatten/flatten.h"
+#include "scene/transforms.h"
 #include "util/error.h"
 
 namespace clrt {
@@ -220,12 +221,7 @@ void buildDeviceBvh(const std::vector<Aabb>& boxes, DeviceScene& ds) {
 
 }  // namespace
 
-bool mirrorsOrientation(const Mat4& m) {
-    const double det = m.m[0][0] * (m.m[1][1] * m.m[2][2] - m.m[1][2] * m.m[2][1]) -
-                       m.m[0][1] * (m.m[1][0] * m.m[2][2] - m.m[1][2] * m.m[2][0]) +
-                       m.m[0][2] * (m.m[1][0] * m.m[2][1] - m.m[1][1] * m.m[2][0]);
-    return det < 0;
-}
+bool mirrorsOrientation(const Mat4& m) { return linearDeterminant(m) < 0; }
 
 void flattenGeometry(const Scene& scene, DeviceScene& ds) {
     std::vector<Aabb> boxes, sphereBoxes;

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "flatten/flatten.h"
+#include "scene/transforms.h"
 #include "util/error.h"
 
 namespace clrt {
@@ -80,10 +81,7 @@ void flattenSphereLight(const Shape& s, dev::Light& d, DeviceScene& ds) {
     d.objFirst = int(ds.lightData.size());
     d.position = toFloat4(s.transform.transformPoint(s.center));
     d.objRadius = ok ? float(s.radius * maxStretch(s.transform) * (1 + 1e-6)) : 0.0f;  // never inside the true sphere
-    double det = m.m[0][0] * (m.m[1][1] * m.m[2][2] - m.m[1][2] * m.m[2][1]) -
-                 m.m[0][1] * (m.m[1][0] * m.m[2][2] - m.m[1][2] * m.m[2][0]) +
-                 m.m[0][2] * (m.m[1][0] * m.m[2][1] - m.m[1][1] * m.m[2][0]);
-    det = std::fabs(det);
+    const double det = std::fabs(linearDeterminant(m));
     d.objCount = isSimilarity(m) ? 0 : 1;
     d.edgeU = {float(det), 0, 0, 0};
     ds.lightData.push_back(toFloat4(s.center, s.radius));
