@@ -3,6 +3,7 @@
 #include "cli/render_args.h"
 
 #include "cli/args.h"
+#include "flatten/memory_estimate.h"  // parseByteSize
 #include "render/fused_renderer.h"  // parsePipeline
 #include "scene/scene.h"            // kMaxSamplesPerPixel, parseEnvStrategy
 #include "util/error.h"
@@ -66,6 +67,10 @@ const char* const kRenderHelp =
     "                        the tiles still missing (same image, bit for bit)\n"
     "  --tile-pixels N       pixels per tile of --part, --checkpoint and MPI renders (default: 1/64\n"
     "                        of the image, 4096 to 65536)\n"
+    "  --max-memory SIZE     refuse (exit 2, before flattening) a scene whose estimated host peak or\n"
+    "                        memory per device exceeds SIZE (e.g. 512M, 4G; K/M/G/T = powers of\n"
+    "                        1024); without it the limits are the devices' own and the machine's\n"
+    "                        available memory; -v prints the estimate\n"
     "  -v, --verbose         print the kernel build flags and other details\n"
     "  -h, --help            this text\n"
     "\n"
@@ -111,6 +116,9 @@ RenderArgs parseRenderArgs(int argc, char** argv, int start) {
              a.dist.part = parseIntArg(f, kn.first, 1, a.dist.parts);
          }},
         flagOption({"--all-features"}, a.allFeatures),
+        {{"--max-memory"}, true, [&](Str f, Str v) {
+             if (!parseByteSize(v, a.maxMemory)) throwExpected(f, "a size such as 512M or 4G", v);
+         }},
         {{"--pipeline"}, true, [&](Str f, Str v) {
              if (!parsePipeline(v, a.pipeline)) throwExpected(f, "fused, wavefront or auto", v);
          }},

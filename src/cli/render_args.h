@@ -19,6 +19,7 @@ struct RenderArgs {
     int spp = 0, width = 0, height = 0;  // width/height: --resolution (0: the camera's own)
     uint32_t seed = 0;
     bool verbose = false, help = false, truncatePng = true, exrHalf = false, allFeatures = false;
+    uint64_t maxMemory = 0;  // --max-memory: cap on the estimated host peak and device memory (0: none)
     PixelSampler pixelSampler = PixelSampler::Stratified;  // --sampler
     RouletteRule rouletteRule = RouletteRule::Unbiased;    // --rr-rule
     std::string envStrategy;  // --env-sampling: overrides every environment light's env strategy ("" keeps the scene's)

@@ -24,6 +24,7 @@
 #include "dist/mpi_job.h"
 #include "dist/part_file.h"
 #include "flatten/device_scene.h"
+#include "flatten/memory_estimate.h"
 #include "output/output.h"
 #include "scene/scene_loader.h"
 #include "util/error.h"
@@ -61,6 +62,40 @@ void checkImagesFit(const RenderArgs& a, const std::vector<const Camera*>& cams,
                             " MiB per buffer",
                         ExitCode::BadInput);
     }
+}
+
+// The scene's memory, estimated from its counts (flatten/memory_estimate.h), against the devices' limits,
+// the machine's available memory and --max-memory: exit 2 with one line before anything of its size
+// is flattened or allocated.
+void checkMemory(const RenderArgs& a, const Scene& scene, const std::vector<DeviceInfo>& devs) {
+    MemoryPlan plan;
+    plan.devices = int(devs.size());
+    plan.cpuDevices = false;
+    for (const DeviceInfo& d : devs) plan.cpuDevices = plan.cpuDevices || (d.type & CL_DEVICE_TYPE_CPU) != 0;
+    plan.spp = a.spp;
+    plan.width = a.width;
+    plan.height = a.height;
+    const MemoryEstimate e = estimateMemory(scene, plan);
+    MemoryLimits lim;
+    lim.cap = a.maxMemory;
+    for (const DeviceInfo& d : devs) {
+        if (lim.deviceName.empty() || d.globalMem < lim.deviceGlobal) {
+            lim.deviceGlobal = d.globalMem;
+            lim.deviceName = d.name;
+        }
+        if (lim.deviceMaxAlloc == 0 || d.maxAlloc < lim.deviceMaxAlloc) lim.deviceMaxAlloc = d.maxAlloc;
+    }
+    const uint64_t available = availableHostMemory();
+    lim.hostAvailable = available ? available + residentBytes() : 0;
+    if (verbose())
+        info("memory estimate: host peak " + formatBytes(e.hostPeak(plan)) + ", per device " + formatBytes(e.devicePeak()) +
+             " (geometry " + formatBytes(e.geometry.bytes) + ", bvh " + formatBytes(e.bvh.bytes) + ", textures " +
+             formatBytes(e.textures.bytes) + ", lights " + formatBytes(e.lights.bytes) + ", render " +
+             formatBytes(e.render.bytes) + "); limits: host " + formatBytes(lim.hostAvailable) + ", device " +
+             formatBytes(lim.deviceGlobal) + " (" + formatBytes(lim.deviceMaxAlloc) + " per buffer)" +
+             (lim.cap ? ", --max-memory " + formatBytes(lim.cap) : ""));
+    const std::string problem = memoryProblem(e, plan, lim);
+    if (!problem.empty()) throw Error(a.positional[0] + ": " + problem, ExitCode::BadInput);
 }
 
 // One context and renderer (program) per device; a device whose setup fails is dropped while others
@@ -157,6 +192,7 @@ int renderScene(RenderArgs a) {
                     "2-sample passes), got " + std::to_string(a.spp), ExitCode::Usage);
     std::vector<DeviceInfo> devs = selectDevices(a.device);
     checkImagesFit(a, cams, devs);
+    checkMemory(a, scene, devs);
 
     t = std::chrono::steady_clock::now();
     DeviceScene ds = flattenScene(scene);

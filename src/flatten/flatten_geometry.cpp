@@ -19,13 +19,19 @@
 namespace clrt {
 namespace {
 
-// The triangles of one mesh shape in world space, in index order (degenerate and non-finite ones
-// counted and left out). Independent per shape, so shapes are flattened on several threads.
-struct MeshTriangles {
-    std::vector<dev::Triangle> triangles;
-    std::vector<dev::TriangleShading> shading;
-    std::vector<Aabb> boxes;
-    size_t degenerate = 0, nonFinite = 0;
+// Where a run of triangles is written: the slots from `first` of the scene's arrays (triangles, their
+// shading and boxes), and what was left out (degenerate and non-finite triangles, counted).
+struct TriangleSlots {
+    dev::Triangle* triangles;
+    dev::TriangleShading* shading;
+    Aabb* boxes;
+    size_t kept = 0, degenerate = 0, nonFinite = 0;
+};
+
+// A mesh shape's vertices in world space, and its smooth normals: what its triangles are made from.
+struct MeshVertices {
+    std::vector<Vec3> pw, nw;
+    int kB = 1, kC = 2;  // corners (a, b, c) of a triangle; a mirrored mesh takes them as (a, c, b)
 };
 
 // The box a primitive sweeps over the shutter interval: moved by t·motion, t in [0, 1], it stays
@@ -38,17 +44,16 @@ Aabb sweptBox(const Aabb& rest, const Vec3& motion) {
     return box;
 }
 
-void flattenMesh(const Scene& scene, const Shape& s, int texSet, MeshTriangles& out) {
+void meshVertices(const Scene& scene, const Shape& s, MeshVertices& out) {
     const MeshData& mesh = scene.meshes.at(s.meshIndex);
-    // Corners (a, b, c) of triangle t; a mirrored mesh takes them as (a, c, b).
     const int kB = mirrorsOrientation(s.transform) ? 2 : 1, kC = 3 - kB;
-    out.triangles.reserve(mesh.indices.size() / 3);
-    out.shading.reserve(mesh.indices.size() / 3);
-    out.boxes.reserve(mesh.indices.size() / 3);
-    std::vector<Vec3> pw(mesh.positions.size());
+    out.kB = kB;
+    out.kC = kC;
+    std::vector<Vec3>& pw = out.pw;
+    pw.resize(mesh.positions.size());
     for (size_t v = 0; v < pw.size(); ++v) pw[v] = s.transform.transformPoint(mesh.positions[v]);
     // Smooth shading: given normals (transformed by the inverse transpose) or area-weighted ones.
-    std::vector<Vec3> nw;
+    std::vector<Vec3>& nw = out.nw;
     if (s.smooth) {
         nw.assign(pw.size(), Vec3(0, 0, 0));
         if (mesh.normals.size() == mesh.positions.size()) {
@@ -65,8 +70,18 @@ void flattenMesh(const Scene& scene, const Shape& s, int texSet, MeshTriangles& 
             for (Vec3& n : nw) n = normalize(n);
         }
     }
+}
+
+// Triangles [tBegin, tEnd) of a mesh shape in world space, in index order, into `out` (degenerate
+// and non-finite ones counted and left out). Independent per range, so a mesh is flattened on several
+// threads.
+void flattenTriangles(const Scene& scene, const Shape& s, int texSet, const MeshVertices& mv, size_t tBegin,
+                      size_t tEnd, TriangleSlots& out) {
+    const MeshData& mesh = scene.meshes.at(s.meshIndex);
+    const std::vector<Vec3>&pw = mv.pw, &nw = mv.nw;
+    const int kB = mv.kB, kC = mv.kC;
     bool hasUv = mesh.uvs.size() == mesh.positions.size();
-    for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+    for (size_t t = 3 * tBegin; t < 3 * tEnd; t += 3) {
         int a = mesh.indices[t], b = mesh.indices[t + kB], c = mesh.indices[t + kC];
         const Vec3 &p0 = pw[a], &p1 = pw[b], &p2 = pw[c];
         if (!isFinite(p0) || !isFinite(p1) || !isFinite(p2)) { ++out.nonFinite; continue; }
@@ -93,9 +108,10 @@ void flattenMesh(const Scene& scene, const Shape& s, int texSet, MeshTriangles& 
         sh.light = s.lightIndex;  // LightMesh: its light, else CLRT_INVALID (-1)
         Aabb box;
         box.grow(p0); box.grow(p1); box.grow(p2);
-        out.triangles.push_back(tri);
-        out.shading.push_back(sh);
-        out.boxes.push_back(sweptBox(box, s.motion));
+        out.triangles[out.kept] = tri;
+        out.shading[out.kept] = sh;
+        out.boxes[out.kept] = sweptBox(box, s.motion);
+        ++out.kept;
     }
 }
 
@@ -151,21 +167,19 @@ bool flattenSphere(const Shape& s, int texSet, DeviceScene& ds, std::vector<Aabb
 
 using MeshJob = std::pair<const Shape*, int>;  // (shape, texture set)
 
-// Meshes on all hardware threads (each job writes only its own result), then concatenated in shape
-// order: the same arrays as a sequential loop. Appends the triangles' boxes to `boxes`; warns about
-// and counts (ds.skippedTriangles) degenerate and non-finite triangles.
-void flattenMeshes(const Scene& scene, const std::vector<MeshJob>& meshJobs, DeviceScene& ds, std::vector<Aabb>& boxes) {
-    std::vector<MeshTriangles> results(meshJobs.size());
+// Runs body(k) for k = 0 .. count - 1 on all hardware threads (this one included); the first
+// exception thrown stops the rest and is rethrown here.
+template <class Body>
+void parallelFor(size_t count, const Body& body) {
     std::atomic<size_t> next{0};
-    const size_t threads = std::min<size_t>(meshJobs.size(), std::max(1u, std::thread::hardware_concurrency()));
+    const size_t threads = std::min<size_t>(count, std::max(1u, std::thread::hardware_concurrency()));
     std::vector<std::exception_ptr> errors(std::max<size_t>(threads, 1));
     auto worker = [&](size_t t) {
         try {
-            for (size_t j; (j = next++) < meshJobs.size();)
-                flattenMesh(scene, *meshJobs[j].first, meshJobs[j].second, results[j]);
+            for (size_t k; (k = next++) < count;) body(k);
         } catch (...) {
             errors[t] = std::current_exception();
-            next = meshJobs.size();  // the others stop too
+            next = count;  // the others stop too
         }
     };
     std::vector<std::thread> pool;
@@ -177,14 +191,74 @@ void flattenMeshes(const Scene& scene, const std::vector<MeshJob>& meshJobs, Dev
     for (std::thread& t : pool) t.join();
     for (const std::exception_ptr& e : errors)
         if (e) std::rethrow_exception(e);
-    size_t nanSkipped = 0;
-    for (MeshTriangles& r : results) {
-        ds.triangles.insert(ds.triangles.end(), r.triangles.begin(), r.triangles.end());
-        ds.triangleShading.insert(ds.triangleShading.end(), r.shading.begin(), r.shading.end());
-        boxes.insert(boxes.end(), r.boxes.begin(), r.boxes.end());
-        ds.skippedTriangles += r.degenerate;
-        nanSkipped += r.nonFinite;
+}
+
+constexpr size_t kTrianglesPerTask = 16384;  // a big mesh is cut into runs of this many for the threads
+
+// Meshes on all hardware threads, written straight into their place in ds.triangles,
+// ds.triangleShading and `boxes` (each task its own run of slots; small meshes one task each, a big
+// one cut into runs after its vertices are transformed), then the runs are closed up over the
+// triangles left out: the same arrays as a sequential loop. Warns about and counts
+// (ds.skippedTriangles) degenerate and non-finite triangles.
+void flattenMeshes(const Scene& scene, const std::vector<MeshJob>& meshJobs, DeviceScene& ds, std::vector<Aabb>& boxes) {
+    struct Task {
+        size_t job, tBegin, tEnd, slot;  // triangles [tBegin, tEnd) of job, written from slot
+        TriangleSlots out;
+    };
+    std::vector<Task> tasks;
+    std::vector<size_t> smallJobs, bigJobs;
+    const size_t base = ds.triangles.size(), boxBase = boxes.size();
+    size_t slot = 0;
+    for (size_t j = 0; j < meshJobs.size(); ++j) {
+        const size_t n = scene.meshes.at(meshJobs[j].first->meshIndex).indices.size() / 3;
+        if (n <= kTrianglesPerTask) {
+            smallJobs.push_back(j);
+            tasks.push_back({j, 0, n, slot, {}});
+        } else {
+            bigJobs.push_back(j);
+            for (size_t t = 0; t < n; t += kTrianglesPerTask)
+                tasks.push_back({j, t, std::min(n, t + kTrianglesPerTask), slot + t, {}});
+        }
+        slot += n;
     }
+    ds.triangles.resize(base + slot);
+    ds.triangleShading.resize(base + slot);
+    boxes.resize(boxBase + slot);
+    auto run = [&](Task& k, const MeshVertices& mv) {
+        k.out = TriangleSlots{ds.triangles.data() + base + k.slot, ds.triangleShading.data() + base + k.slot,
+                              boxes.data() + boxBase + k.slot};
+        flattenTriangles(scene, *meshJobs[k.job].first, meshJobs[k.job].second, mv, k.tBegin, k.tEnd, k.out);
+    };
+    std::vector<size_t> taskOfJob(meshJobs.size());
+    for (size_t i = tasks.size(); i-- > 0;) taskOfJob[tasks[i].job] = i;  // each job's first task
+    parallelFor(smallJobs.size(), [&](size_t k) {
+        MeshVertices mv;
+        meshVertices(scene, *meshJobs[smallJobs[k]].first, mv);
+        run(tasks[taskOfJob[smallJobs[k]]], mv);
+    });
+    for (size_t j : bigJobs) {
+        MeshVertices mv;
+        meshVertices(scene, *meshJobs[j].first, mv);
+        size_t first = taskOfJob[j], count = 0;
+        while (first + count < tasks.size() && tasks[first + count].job == j) ++count;
+        parallelFor(count, [&](size_t k) { run(tasks[first + k], mv); });
+    }
+    // Close up: each run's kept triangles move down to follow the previous run's.
+    size_t to = 0, nanSkipped = 0;
+    for (Task& k : tasks) {
+        if (to != k.slot)
+            for (size_t i = 0; i < k.out.kept; ++i) {
+                ds.triangles[base + to + i] = ds.triangles[base + k.slot + i];
+                ds.triangleShading[base + to + i] = ds.triangleShading[base + k.slot + i];
+                boxes[boxBase + to + i] = boxes[boxBase + k.slot + i];
+            }
+        to += k.out.kept;
+        ds.skippedTriangles += k.out.degenerate;
+        nanSkipped += k.out.nonFinite;
+    }
+    ds.triangles.resize(base + to);
+    ds.triangleShading.resize(base + to);
+    boxes.resize(boxBase + to);
     if (ds.skippedTriangles) warn(scene.path + ": skipped " + std::to_string(ds.skippedTriangles) + " degenerate triangles");
     if (nanSkipped) warn(scene.path + ": skipped " + std::to_string(nanSkipped) + " triangles with NaN/Inf vertices");
     ds.skippedTriangles += nanSkipped;

@@ -30,6 +30,7 @@
 #include <stb/stb_image.h>
 
 #include "image/chromaticities.h"
+#include "image/image_size.h"
 #include "util/error.h"
 
 namespace clrt {
@@ -252,6 +253,54 @@ void initExrThreads() {
         return true;
     }();
     (void)done;
+}
+
+bool readImageSize(const std::string& path, int& width, int& height) {
+    width = height = 0;
+    char magic[4] = {0, 0, 0, 0};
+    {
+        std::ifstream f(path, std::ios::binary);
+        if (!f.read(magic, 4)) return false;
+    }
+    try {
+        if (std::memcmp(magic, "\x76\x2F\x31\x01", 4) == 0) {
+            Imf::InputFile file(path.c_str());  // reads the header only
+            const Imath::Box2i dw = file.header().dataWindow();
+            width = dw.max.x - dw.min.x + 1;
+            height = dw.max.y - dw.min.y + 1;
+            return width > 0 && height > 0;
+        }
+    } catch (const std::exception&) {
+        return false;
+    }
+    std::ifstream f(path, std::ios::binary);
+    auto be16 = [](const unsigned char* b) { return int(b[0]) << 8 | int(b[1]); };
+    unsigned char b[24];
+    if (std::memcmp(magic, "\x89PNG", 4) == 0) {  // the IHDR chunk comes first: width, height at 16
+        if (!f.read(reinterpret_cast<char*>(b), 24)) return false;
+        const uint32_t w = uint32_t(b[16]) << 24 | uint32_t(b[17]) << 16 | uint32_t(b[18]) << 8 | b[19];
+        const uint32_t h = uint32_t(b[20]) << 24 | uint32_t(b[21]) << 16 | uint32_t(b[22]) << 8 | b[23];
+        if (w == 0 || h == 0 || w > INT32_MAX || h > INT32_MAX) return false;
+        width = int(w);
+        height = int(h);
+        return true;
+    }
+    if (std::memcmp(magic, "\xFF\xD8\xFF", 3) != 0) return false;
+    // JPEG: walk the segments to the first start of frame (SOF0..SOF15 but DHT, JPG, DAC).
+    f.seekg(2);
+    while (f.read(reinterpret_cast<char*>(b), 4)) {
+        if (b[0] != 0xFF) return false;
+        const int marker = b[1], len = be16(b + 2);
+        if (marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC) {
+            if (!f.read(reinterpret_cast<char*>(b), 5)) return false;
+            height = be16(b + 1);
+            width = be16(b + 3);
+            return width > 0 && height > 0;
+        }
+        if (len < 2) return false;
+        f.seekg(len - 2, std::ios::cur);
+    }
+    return false;
 }
 
 ImageRGB readImage(const std::string& path) {

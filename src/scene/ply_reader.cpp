@@ -1,6 +1,9 @@
-// PLY reader (see ply_reader.h). The whole file is read into memory; the header is parsed into a list
-// of elements and properties, then every element is walked in order with one value reader per format
-// (ASCII tokens or little/big-endian binary). Only the vertex and face elements are kept; everything
+// PLY reader (see ply_reader.h). The file is memory-mapped (read into memory where it cannot be); the
+// header is parsed into a list of elements and properties, then every element is walked in order with
+// one value reader per format (ASCII tokens or little/big-endian binary). The common binary layouts
+// (float vertex properties; triangles as `list uchar int`) take a direct path that reads each value
+// straight into the mesh arrays; it hands any element or face it does not expect to the general
+// reader, so messages and results are the same either way. Only the vertex and face elements are kept; everything
 // else (edges, materials, extra properties, list properties on vertices) is read and dropped.
 // Counts are checked against the bytes left before anything is allocated, so a header that lies
 // about its counts gives an error instead of a huge allocation or a read past the end. Every value is
@@ -9,6 +12,7 @@
 // vertex and its line (ASCII) or byte offset (binary), and so is a face index outside [0, INT_MAX].
 #include "scene/ply_reader.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <cmath>
@@ -21,6 +25,12 @@
 #include <iterator>
 #include <limits>
 #include <sstream>
+#include <string_view>
+
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "util/error.h"
 
@@ -94,12 +104,16 @@ bool hostIsLittleEndian() {
 // (at most 32-bit integers, float, double) are exactly representable.
 class DataReader {
 public:
-    DataReader(const std::string& path, const std::string& data, size_t pos, Format fmt)
+    DataReader(const std::string& path, std::string_view data, size_t pos, Format fmt)
         : path_(path), data_(data), pos_(pos), fmt_(fmt),
           swap_((fmt == Format::BinaryLE) != hostIsLittleEndian()) {}
 
     size_t remaining() const { return data_.size() - pos_; }
     Format format() const { return fmt_; }
+    // Binary data in the host's byte order (the direct paths of readVertices and readFaces).
+    bool nativeBinary() const { return fmt_ != Format::Ascii && !swap_; }
+    const char* cursor() const { return data_.data() + pos_; }
+    void advance(size_t n) { pos_ += n; }
 
     double read(Type t, const char* what) {
         return fmt_ == Format::Ascii ? readAscii(t, what) : readBinary(t, what);
@@ -170,7 +184,7 @@ private:
         size_t start = pos_;
         while (pos_ < data_.size() && !std::isspace(static_cast<unsigned char>(data_[pos_]))) ++pos_;
         if (start == pos_) truncated(what);
-        std::string tok = data_.substr(start, pos_ - start);
+        std::string tok(data_.substr(start, pos_ - start));
         char* end = nullptr;
         errno = 0;
         double v = std::strtod(tok.c_str(), &end);
@@ -185,7 +199,7 @@ private:
     }
 
     const std::string& path_;
-    const std::string& data_;
+    std::string_view data_;
     size_t pos_;
     Format fmt_;
     bool swap_;
@@ -269,15 +283,15 @@ struct HeaderParser {
     }
 };
 
-Header parseHeader(const std::string& path, const std::string& bytes) {
-    if (bytes.compare(0, 3, "ply") != 0) throw Error(path + ": not a PLY file (it does not start with 'ply')");
+Header parseHeader(const std::string& path, std::string_view bytes) {
+    if (bytes.substr(0, 3) != "ply") throw Error(path + ": not a PLY file (it does not start with 'ply')");
     HeaderParser hp(path);
     bool sawEnd = false;
     size_t pos = 0;
     while (pos < bytes.size()) {
         size_t nl = bytes.find('\n', pos);
         size_t end = nl == std::string::npos ? bytes.size() : nl;
-        std::string line = bytes.substr(pos, end - pos);
+        std::string line(bytes.substr(pos, end - pos));
         pos = nl == std::string::npos ? bytes.size() : nl + 1;
         ++hp.lineNo;
         if (!line.empty() && line.back() == '\r') line.pop_back();
@@ -310,18 +324,44 @@ size_t minElementSize(const Element& e, Format fmt) {
     return n;
 }
 
-// The whole file. Directories, FIFOs and devices (/dev/zero) would throw from the stream or never end.
-std::string readFileBytes(const std::string& path) {
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec))
-        throw Error(path + (std::filesystem::exists(path, ec) ? ": cannot open PLY file: not a regular file"
-                                                              : ": cannot open PLY file: no such file"));
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error(path + ": cannot open PLY file");
-    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (in.bad()) throw Error(path + ": cannot read PLY file");
-    return bytes;
-}
+// The whole file, memory-mapped read-only (no copy: pages come from the page cache as they are read),
+// or read into memory where mapping fails. Directories, FIFOs and devices (/dev/zero) are refused.
+class FileBytes {
+public:
+    explicit FileBytes(const std::string& path) {
+        std::error_code ec;
+        if (!std::filesystem::is_regular_file(path, ec))
+            throw Error(path + (std::filesystem::exists(path, ec) ? ": cannot open PLY file: not a regular file"
+                                                                  : ": cannot open PLY file: no such file"));
+        const int fd = open(path.c_str(), O_RDONLY | O_CLOEXEC);
+        struct stat st {};
+        if (fd >= 0 && fstat(fd, &st) == 0 && st.st_size > 0) {
+            void* p = mmap(nullptr, size_t(st.st_size), PROT_READ, MAP_PRIVATE, fd, 0);
+            if (p != MAP_FAILED) {
+                map_ = p;
+                size_ = size_t(st.st_size);
+                madvise(p, size_, MADV_SEQUENTIAL);
+            }
+        }
+        if (fd >= 0) close(fd);
+        if (map_) return;
+        std::ifstream in(path, std::ios::binary);
+        if (!in) throw Error(path + ": cannot open PLY file");
+        copy_.assign((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        if (in.bad()) throw Error(path + ": cannot read PLY file");
+    }
+    ~FileBytes() {
+        if (map_) munmap(map_, size_);
+    }
+    FileBytes(const FileBytes&) = delete;
+    FileBytes& operator=(const FileBytes&) = delete;
+    std::string_view view() const { return map_ ? std::string_view(static_cast<const char*>(map_), size_) : copy_; }
+
+private:
+    void* map_ = nullptr;
+    size_t size_ = 0;
+    std::string copy_;
+};
 
 // Where x y z [nx ny nz] [u v] are among a vertex element's properties: want[k] is the property of
 // out value k, -1 when the file has none.
@@ -348,6 +388,32 @@ VertexLayout vertexLayout(const std::string& path, const Element& e) {
                         hasN, hasUv};
 }
 
+// The direct path of readVertices: binary in the host's byte order with only float properties (the
+// usual layout): each vertex's floats copied straight into the arrays. Returns the vertices it read,
+// stopping before the first with a non-finite wanted value (the general loop then reports it).
+uint64_t readFloatVertices(const Element& e, const VertexLayout& layout, DataReader& rd, MeshData& mesh) {
+    if (!rd.nativeBinary()) return 0;
+    for (const Property& p : e.props)
+        if (p.isList || p.valueType != Type::Float32) return 0;
+    const size_t stride = 4 * e.props.size();
+    uint64_t i = 0;
+    for (const char* v = rd.cursor(); i < e.count; ++i, v += stride) {
+        float out[8] = {};
+        bool finite = true;
+        for (int k = 0; k < 8; ++k)
+            if (layout.want[k] >= 0) {
+                std::memcpy(&out[k], v + 4 * layout.want[k], 4);
+                finite = finite && std::isfinite(out[k]);
+            }
+        if (!finite) break;
+        mesh.positions[i] = Vec3(out[0], out[1], out[2]);
+        if (layout.hasN) mesh.normals[i] = Vec3(out[3], out[4], out[5]);
+        if (layout.hasUv) mesh.uvs[i] = Vec2{out[6], out[7]};
+    }
+    rd.advance(size_t(i) * stride);
+    return i;
+}
+
 // The vertex element: positions, and normals and texture coordinates when it has them all.
 void readVertices(const std::string& path, const Element& e, DataReader& rd, MeshData& mesh) {
     if (e.count > uint64_t(std::numeric_limits<int>::max()))
@@ -357,7 +423,7 @@ void readVertices(const std::string& path, const Element& e, DataReader& rd, Mes
     if (layout.hasN) mesh.normals.resize(e.count);
     if (layout.hasUv) mesh.uvs.resize(e.count);
     std::vector<double> vals(e.props.size());
-    for (uint64_t i = 0; i < e.count; ++i) {
+    for (uint64_t i = readFloatVertices(e, layout, rd, mesh); i < e.count; ++i) {
         for (size_t p = 0; p < e.props.size(); ++p) {
             const Property& pr = e.props[p];
             if (pr.isList) rd.skip(pr.valueType, rd.listCount(pr.countType, "a vertex list count"), "a vertex list");
@@ -408,12 +474,38 @@ void readPolygon(const std::string& path, const Property& pr, double n, uint64_t
     }
 }
 
+// The direct path of readFaces: binary in the host's byte order, the face element nothing but a
+// `list uchar|char int|uint` (the usual layout): triangles copied straight into mesh.indices. Returns
+// the faces it read, stopping before the first that is not a triangle of indices in [0, INT_MAX] (the
+// general loop goes on from there).
+uint64_t readTriangleFaces(const Element& e, DataReader& rd, MeshData& mesh) {
+    if (!rd.nativeBinary() || e.props.size() != 1) return 0;
+    const Property& p = e.props[0];
+    if ((p.countType != Type::UInt8 && p.countType != Type::Int8) ||
+        (p.valueType != Type::Int32 && p.valueType != Type::UInt32))
+        return 0;
+    const size_t available = rd.remaining() / 13;
+    const uint64_t most = std::min<uint64_t>(e.count, available);
+    mesh.indices.resize(size_t(most) * 3);
+    int* out = mesh.indices.data();
+    uint64_t f = 0;
+    for (const char* c = rd.cursor(); f < most; ++f, c += 13) {
+        int32_t idx[3];
+        std::memcpy(idx, c + 1, 12);
+        if (c[0] != 3 || (idx[0] | idx[1] | idx[2]) < 0) break;  // (uint: above INT_MAX, negative here)
+        std::memcpy(out + 3 * f, idx, 12);
+    }
+    mesh.indices.resize(size_t(f) * 3);
+    rd.advance(size_t(f) * 13);
+    return f;
+}
+
 // The face element: its polygons as triangles; other properties read and dropped.
 void readFaces(const std::string& path, const Element& e, DataReader& rd, MeshData& mesh) {
     const size_t list = faceListProperty(path, e);
     mesh.indices.reserve(size_t(e.count) * 3);  // bounded by the size check in readPly
     std::vector<int> poly;
-    for (uint64_t f = 0; f < e.count; ++f) {
+    for (uint64_t f = readTriangleFaces(e, rd, mesh); f < e.count; ++f) {
         for (size_t p = 0; p < e.props.size(); ++p) {
             const Property& pr = e.props[p];
             if (!pr.isList) { rd.read(pr.valueType, "face data"); continue; }
@@ -444,7 +536,8 @@ void checkFaceIndices(const std::string& path, const MeshData& mesh) {
 }  // namespace
 
 MeshData readPly(const std::string& path) {
-    std::string bytes = readFileBytes(path);
+    const FileBytes file(path);
+    const std::string_view bytes = file.view();
     Header h = parseHeader(path, bytes);
     DataReader rd(path, bytes, h.dataStart, h.format);
     rd.setStartLine(h.dataLine);
