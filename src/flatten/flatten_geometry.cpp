@@ -11,6 +11,7 @@
 #include <exception>
 #include <system_error>
 #include <thread>
+#include <utility>
 
 #include "flatten/flatten.h"
 #include "scene/transforms.h"
@@ -267,7 +268,9 @@ void flattenMeshes(const Scene& scene, const std::vector<MeshJob>& meshJobs, Dev
 // The BVH over `boxes` (triangles, then spheres); the triangles are stored in leaf order so a leaf's
 // triangles are contiguous in memory, then the tree is collapsed to 4-wide nodes with the leaves'
 // triangles copied into their struct-of-arrays blocks.
-void buildDeviceBvh(const std::vector<Aabb>& boxes, DeviceScene& ds) {
+// The boxes are released once the tree is built, and the leaf-order copies are made one array at a
+// time, so the peak holds one extra array rather than boxes and both copies.
+void buildDeviceBvh(std::vector<Aabb>&& boxes, DeviceScene& ds) {
     auto tb = std::chrono::steady_clock::now();
     // The device tests a leaf's triangles four at a time (Bvh4Leaf), so a leaf of up to four costs
     // about what one triangle test did: a node is costed as two triangle tests, which gives fuller
@@ -275,18 +278,25 @@ void buildDeviceBvh(const std::vector<Aabb>& boxes, DeviceScene& ds) {
     BvhBuildOptions opts;
     opts.traversalCost = 2;
     ds.bvh = buildBvh(boxes, opts);
+    std::vector<Aabb>().swap(boxes);
     const int numTris = int(ds.triangles.size());
-    std::vector<dev::Triangle> tris(ds.triangles.size());
-    std::vector<dev::TriangleShading> shading(ds.triangleShading.size());
-    int next = 0;
-    for (int& ref : ds.bvh.primRefs) {
-        if (ref >= numTris) continue;  // spheres keep their indices
-        tris[size_t(next)] = ds.triangles[size_t(ref)];
-        shading[size_t(next)] = ds.triangleShading[size_t(ref)];
-        ref = next++;
+    {
+        std::vector<dev::Triangle> tris(ds.triangles.size());
+        size_t next = 0;
+        for (int ref : ds.bvh.primRefs)
+            if (ref < numTris) tris[next++] = ds.triangles[size_t(ref)];  // spheres keep their indices
+        ds.triangles.swap(tris);
     }
-    ds.triangles.swap(tris);
-    ds.triangleShading.swap(shading);
+    {
+        std::vector<dev::TriangleShading> shading(ds.triangleShading.size());
+        int next = 0;
+        for (int& ref : ds.bvh.primRefs) {
+            if (ref >= numTris) continue;
+            shading[size_t(next)] = ds.triangleShading[size_t(ref)];
+            ref = next++;
+        }
+        ds.triangleShading.swap(shading);
+    }
     ds.bvh4 = collapseBvh4(ds.bvh);
     setLeafTriangles(ds.bvh4, ds.triangles, numTris);
     ds.features.bvhStack = std::max(1, ds.bvh4.maxStack);
@@ -318,7 +328,7 @@ void flattenGeometry(const Scene& scene, DeviceScene& ds) {
         if (s.type != ShapeType::Plane && s.motion != Vec3(0, 0, 0)) ds.features.motionBlur = true;
     const int numTriangles = int(boxes.size());
     boxes.insert(boxes.end(), sphereBoxes.begin(), sphereBoxes.end());
-    buildDeviceBvh(boxes, ds);
+    buildDeviceBvh(std::move(boxes), ds);
     // Never an empty buffer (the counts below stay those of the scene, except planes: see Plane).
     if (ds.triangles.empty()) { ds.triangles.push_back(dev::Triangle{}); ds.triangleShading.push_back(dev::TriangleShading{}); }
     if (ds.spheres.empty()) ds.spheres.push_back(dev::Sphere{});
