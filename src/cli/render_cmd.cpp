@@ -75,6 +75,7 @@ void checkMemory(const RenderArgs& a, const Scene& scene, const std::vector<Devi
     plan.spp = a.spp;
     plan.width = a.width;
     plan.height = a.height;
+    plan.residentNow = residentBytes();
     const MemoryEstimate e = estimateMemory(scene, plan);
     MemoryLimits lim;
     lim.cap = a.maxMemory;
@@ -86,7 +87,7 @@ void checkMemory(const RenderArgs& a, const Scene& scene, const std::vector<Devi
         if (lim.deviceMaxAlloc == 0 || d.maxAlloc < lim.deviceMaxAlloc) lim.deviceMaxAlloc = d.maxAlloc;
     }
     const uint64_t available = availableHostMemory();
-    lim.hostAvailable = available ? available + residentBytes() : 0;
+    lim.hostAvailable = available ? available + plan.residentNow : 0;
     if (verbose())
         info("memory estimate: host peak " + formatBytes(e.hostPeak(plan)) + ", per device " + formatBytes(e.devicePeak()) +
              " (geometry " + formatBytes(e.geometry.bytes) + ", bvh " + formatBytes(e.bvh.bytes) + ", textures " +

@@ -25,6 +25,9 @@ struct MemoryPlan {
     bool cpuDevices = true;    // device buffers live in host memory (PoCL, Intel CPU): they count twice there
     int spp = 0;               // --spp (0: each camera's NumSamples)
     int width = 0, height = 0; // --resolution (0: each camera's own)
+    // What the process holds before flattening (the parsed scene, the OpenCL runtime's libraries);
+    // 0: the parsed meshes alone.
+    uint64_t residentNow = 0;
 };
 
 // A group of device arrays: their total and the largest single buffer among them.
@@ -53,7 +56,8 @@ struct MemoryEstimate {
     uint64_t deviceScene() const { return geometry.bytes + bvh.bytes + textures.bytes + lights.bytes; }
     uint64_t devicePeak() const { return deviceScene() + render.bytes; }  // on each device
     uint64_t largestBuffer() const;
-    // Host resident peak: the scene model plus the larger of the flattening's peak and the render's
+    // Host resident peak: what the process holds before flattening (plan.residentNow, at least the
+    // scene model) plus the larger of the flattening's peak and the render's
     // (the DeviceScene arrays kept for the render, with every device's copy on CPU devices).
     uint64_t hostPeak(const MemoryPlan& plan) const;
 };
