@@ -165,6 +165,55 @@ TEST_CASE("PLY vertex values that are NaN, infinite or beyond float range are er
     CHECK(m.positions[1].y == 3.4e38f);
 }
 
+// Float-only vertices and `list uchar int` faces take the reader's direct binary paths; a quad, a bad
+// index or a non-finite value hands the rest to the general reader, so results and messages are those
+// of the general path (the big-endian file of the same values never takes the direct path).
+TEST_CASE("PLY direct binary paths hand what they do not expect to the general reader", "[ply]") {
+    auto file = [](bool bigEndian, float badY, int badIndex) {
+        std::string s = std::string("ply\nformat ") + (bigEndian ? "binary_big_endian" : "binary_little_endian") +
+                        // (the comments make both headers the same length, so byte offsets agree)
+                        (bigEndian ? " 1.0\ncomment abc\n" : " 1.0\ncomment \n") + "element vertex 5\nproperty float x\nproperty float y\nproperty float z\n"
+                        "property float u\nproperty float v\n"
+                        "element face 4\nproperty list uchar int vertex_indices\nend_header\n";
+        for (int i = 0; i < 5; ++i)
+            for (float f : {float(i), i == 2 ? badY : 1.0f, 0.5f * i, 0.25f * i, 1.0f})
+                put<float>(s, f, bigEndian);
+        const std::vector<std::vector<int>> faces = {{0, 1, 2}, {0, 2, 3, 4}, {4, 3, 1}, {1, 2, badIndex}};
+        for (const auto& f : faces) {
+            put<uint8_t>(s, uint8_t(f.size()), bigEndian);
+            for (int v : f) put<int32_t>(s, v, bigEndian);
+        }
+        return s;
+    };
+    const MeshData le = readPly(writeFile("direct_le.ply", file(false, 1.0f, 3)));
+    const MeshData be = readPly(writeFile("direct_be.ply", file(true, 1.0f, 3)));
+    CHECK(le.indices == std::vector<int>{0, 1, 2, 0, 2, 3, 0, 3, 4, 4, 3, 1, 1, 2, 3});
+    CHECK(le.indices == be.indices);
+    REQUIRE(le.uvs.size() == 5);
+    for (int i = 0; i < 5; ++i) {
+        CHECK(le.positions[i] == be.positions[i]);
+        CHECK(le.positions[i] == clrt::Vec3(float(i), 1.0f, 0.5f * i));
+        CHECK(le.uvs[i].x == 0.25f * i);
+    }
+    // The same message, byte offset included, from either byte order (only the big-endian file is read
+    // by the general path alone).
+    auto message = [&](bool bigEndian, float badY, int badIndex) {
+        const std::string p = writeFile("direct_bad.ply", file(bigEndian, badY, badIndex));
+        try {
+            readPly(p);
+        } catch (const clrt::Error& e) {
+            return std::string(e.what()).substr(p.size());
+        }
+        return std::string("no error");
+    };
+    const std::string badIndex = message(false, 1.0f, -5), badY = message(false, INFINITY, 3);
+    CHECK(badIndex == message(true, 1.0f, -5));
+    CHECK(badY == message(true, INFINITY, 3));
+    CHECK(badIndex.find("face 3 has vertex index -5, out of range") != std::string::npos);
+    CHECK(badIndex.find(": byte ") == 0);
+    CHECK(badY.find("vertex 2 has y = inf, not a finite 32-bit float") != std::string::npos);
+}
+
 TEST_CASE("PLY face index far beyond int range is an error naming it (found by the fuzzer: UB)", "[ply]") {
     const std::string head =
         "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"

@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "bvh/bvh.h"
+#include "image/image.h"  // kMaxImageTexels
 #include "image/image_size.h"
 #include "shared/device_types.h"
 
@@ -43,7 +44,8 @@ uint64_t imageTexels(const Scene& scene, int image) {
     if (image < 0 || size_t(image) >= scene.imagePaths.size()) return 0;
     int w = 0, h = 0;
     if (!readImageSize(scene.imagePaths[size_t(image)], w, h)) return 0;  // flattening reports it
-    return uint64_t(w) * uint64_t(h);
+    const uint64_t texels = uint64_t(w) * uint64_t(h);
+    return texels > uint64_t(kMaxImageTexels) ? 0 : texels;  // refused by readImage, naming the file
 }
 
 bool textureImageUsed(const Scene& scene, size_t index) {

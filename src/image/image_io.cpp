@@ -277,7 +277,7 @@ bool readImageSize(const std::string& path, int& width, int& height) {
     auto be16 = [](const unsigned char* b) { return int(b[0]) << 8 | int(b[1]); };
     unsigned char b[24];
     if (std::memcmp(magic, "\x89PNG", 4) == 0) {  // the IHDR chunk comes first: width, height at 16
-        if (!f.read(reinterpret_cast<char*>(b), 24)) return false;
+        if (!f.read(reinterpret_cast<char*>(b), 24) || std::memcmp(b + 12, "IHDR", 4) != 0) return false;
         const uint32_t w = uint32_t(b[16]) << 24 | uint32_t(b[17]) << 16 | uint32_t(b[18]) << 8 | b[19];
         const uint32_t h = uint32_t(b[20]) << 24 | uint32_t(b[21]) << 16 | uint32_t(b[22]) << 8 | b[23];
         if (w == 0 || h == 0 || w > INT32_MAX || h > INT32_MAX) return false;
