@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "dist/dist_render.h"
+#include "flatten/device_scene.h"
 #include "render/progressive.h"
 #include "render/renderer.h"
 
@@ -21,6 +22,7 @@ struct RenderArgs {
     bool verbose = false, help = false, truncatePng = true, exrHalf = false, allFeatures = false;
     PixelSampler pixelSampler = PixelSampler::Stratified;  // --sampler
     RouletteRule rouletteRule = RouletteRule::Unbiased;    // --rr-rule
+    Instancing instancing = Instancing::Auto;              // --instancing
     std::string envStrategy;  // --env-sampling: overrides every environment light's env strategy ("" keeps the scene's)
     StopRule stop;            // --target-error, --time-limit (render/progressive.h)
     Pipeline pipeline = Pipeline::Auto;  // --pipeline
