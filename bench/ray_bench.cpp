@@ -197,12 +197,13 @@ public:
         scene_ = {sceneUpload_.upload(ds.bvh4.nodes), sceneUpload_.upload(ds.bvh4.leaves),
                   sceneUpload_.upload(ds.triangles), sceneUpload_.upload(ds.spheres)};
         scene_.push_back(sceneUpload_.upload(ds.planes));
+        scene_.push_back(sceneUpload_.upload(ds.instances));
         if (ds.params.numPlanes > 0) std::fprintf(stderr, "note: planes are ignored by this benchmark\n");
         dev::SceneParams sp = ds.params;
         sp.numPlanes = 0;  // planes left out (Embree has none)
         for (KernelArgs* k : {&kClosest_, &kShadow_})
             k->set("scene", sp).set("nodes", scene_[0]).set("leaves", scene_[1]).set("tris", scene_[2])
-                .set("spheres", scene_[3]).set("planes", scene_[4]);
+                .set("spheres", scene_[3]).set("planes", scene_[4]).set("instances", scene_[5]);
     }
     const DeviceInfo& device() const { return di_; }
 

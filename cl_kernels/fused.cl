@@ -32,17 +32,18 @@
 /* A shadow ray's contribution as gather_shadows adds it: zero (untraced) or occluded: zero. */
 inline float4 Fused_Shadow(ShadowRay sr, SceneParams scene, const __global Bvh4Node* nodes,
                            const __global Bvh4Leaf* leaves, const __global Triangle* tris,
-                           const __global Sphere* spheres, const __global Plane* planes) {
+                           const __global Sphere* spheres, const __global Plane* planes,
+                           const __global Instance* instances) {
     float4 c = sr.contribution;
     if (c.x == 0.0f && c.y == 0.0f && c.z == 0.0f) return c;
-    return Shadow_Occluded(sr, scene, nodes, leaves, tris, spheres, planes) ? (float4)(0.0f) : c;
+    return Shadow_Occluded(sr, scene, nodes, leaves, tris, spheres, planes, instances) ? (float4)(0.0f) : c;
 }
 
 /* One path: its closest hit, shading (children into *res) and direct light; returns its radiance as
  * accumulate adds it (finite). */
 inline float3 Fused_Path(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int lightSlots, PathState path, Ray ray, ShadeResult* res) {
-    Hit h = Ray_Closest(ray, scene, nodes, leaves, tris, spheres, planes);
-    Shade_Hit(scene, cam, path, ray, h, tris, triShading, spheres, planes, materials, textureSets, textures, images,
+    Hit h = Ray_Closest(ray, scene, nodes, leaves, tris, spheres, planes, instances);
+    Shade_Hit(scene, cam, path, ray, h, tris, triShading, spheres, planes, instances, materials, textureSets, textures, images,
               texels, lights, envDist, res);
     float4 sum = res->radiance;
     const ShadingPoint sp = res->sp;
@@ -56,8 +57,8 @@ inline float3 Fused_Path(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int lightSlo
         ShadowRay sr = none, sr2 = none;
         Light_ShadowRays(scene, path, sp, l, lightSlots, key, materials, lights, images, texels, envDist, lightData,
                          &sr, &sr2);
-        sum += Fused_Shadow(sr, scene, nodes, leaves, tris, spheres, planes);
-        if (lightSlots == 2) sum += Fused_Shadow(sr2, scene, nodes, leaves, tris, spheres, planes);
+        sum += Fused_Shadow(sr, scene, nodes, leaves, tris, spheres, planes, instances);
+        if (lightSlots == 2) sum += Fused_Shadow(sr2, scene, nodes, leaves, tris, spheres, planes, instances);
     }
     return finiteOrZero(sum.xyz);
 }

@@ -365,38 +365,92 @@ __attribute__((always_inline)) inline int Bvh4_Children(const __global Bvh4Node*
     return e0;
 }
 
-/* Traverses the 4-wide BVH (Bvh4Node, leaves in Bvh4Leaf blocks) near-first. anyHit = 1: stop at the
- * first hit (shadow rays). Returns 1 on a hit. time: the ray's shutter time (used only under
- * CLRT_HAS_MOTION_BLUR). The stack's size is the exact worst case the host computed. */
+/* A ray as the traversal tests it: origin, direction and what the slab and triangle tests derive from
+ * them once (inverse direction, shear, permuted origin, near planes). */
+typedef struct {
+    float3 org, dir, invDir;
+    RayShear shear;
+    float4 orgK;
+    int nearX, nearY, nearZ;
+} TraceRay;
+
+inline TraceRay TraceRay_Make(float3 org, float3 dir) {
+    TraceRay r;
+    r.org = org;
+    r.dir = dir;
+    r.invDir = safeInverse(dir);
+    r.shear = RayShear_Make(dir);
+    r.orgK = RayShear_Permute(r.shear, org);
+    r.nearX = signbit(r.invDir.x) ? 1 : 0;
+    r.nearY = signbit(r.invDir.y) ? 3 : 2;
+    r.nearZ = signbit(r.invDir.z) ? 5 : 4;
+    return r;
+}
+
+#ifdef CLRT_HAS_INSTANCES
+/* Two-level BVH (Instance): the top-level tree's leaf lanes are instances, a node lane with count 0
+ * and child ~((instance + 1) << 4): as a stack entry, a "leaf" whose count bits are 0. */
+inline int Entry_Instance(int entry) { return ((~entry) & 15) == 0 ? ((~entry) >> 4) - 1 : CLRT_INVALID; }
+
+/* Enters instance k: the ray in its object space (Instance), the stack height to leave it at. */
+inline int Instance_Enter(const __global Instance* inst, float3 orgW, float3 dirW, float time, TraceRay* r) {
+    const float3 orgObj = affinePoint(inst->worldToObject, MotionBlur_RestOrigin(orgW, time, inst->motion.xyz));
+    *r = TraceRay_Make(orgObj, affineVector(inst->worldToObject, dirW));
+    return inst->rootNode;
+}
+#endif
+
+/* Traverses the 4-wide BVH (Bvh4Node, leaves in Bvh4Leaf blocks) near-first from nodes[0], then, with
+ * instances, the top-level tree from scene.instanceRoot, descending into an instance's bottom-level
+ * tree in its object space (the stack holds both levels: popping back to the height at which the
+ * instance was entered returns to the world ray). anyHit = 1: stop at the first hit (shadow rays).
+ * Returns 1 on a hit. time: the ray's shutter time (used only under CLRT_HAS_MOTION_BLUR). The
+ * stack's size is the exact worst case the host computed. */
 inline int Bvh_Traverse(const __global Bvh4Node* nodes, const __global Bvh4Leaf* leaves,
-                        const __global Triangle* tris, const __global Sphere* spheres, int numTriangles,
-                        float3 org, float3 dir, float tMax, float time, int anyHit, Hit* hit) {
-    const float3 invDir = safeInverse(dir);
-    const RayShear shear = RayShear_Make(dir);
-    const float4 orgK = RayShear_Permute(shear, org);
-    const int nearX = signbit(invDir.x) ? 1 : 0, nearY = signbit(invDir.y) ? 3 : 2, nearZ = signbit(invDir.z) ? 5 : 4;
+                        const __global Triangle* tris, const __global Sphere* spheres,
+                        const __global Instance* instances, SceneParams scene, float3 org, float3 dir,
+                        float tMax, float time, int anyHit, Hit* hit) {
+    const int numTriangles = scene.numTriangles;
+    TraceRay r = TraceRay_Make(org, dir);
     int stackEntry[CLRT_BVH4_STACK_SIZE];
     float stackT[CLRT_BVH4_STACK_SIZE];
     int sp = 0;
     int entry = 0;
     int found = 0;
+#ifdef CLRT_HAS_INSTANCES
+    int instance = CLRT_INVALID, instanceSp = 0; /* the instance being traversed, the stack height it began at */
+    if (scene.numInstances > 0) { stackEntry[0] = scene.instanceRoot; stackT[0] = 0.0f; sp = 1; }
+#endif
     for (;;) {
         if (entry >= 0) {
             const __global Bvh4Node* n = &nodes[entry];
             float4 tEnter;
             int4 isHit;
-            const int nh = Bvh4_SlabTest(n, org, invDir, nearX, nearY, nearZ, tMax, &tEnter, &isHit);
+            const int nh = Bvh4_SlabTest(n, r.org, r.invDir, r.nearX, r.nearY, r.nearZ, tMax, &tEnter, &isHit);
             if (nh > 0) {
                 entry = Bvh4_Children(n, tEnter, isHit, nh, anyHit, stackEntry, stackT, &sp);
                 continue;
             }
-        } else if (Leaf_Intersect(leaves, ~entry, tris, spheres, numTriangles, org, dir, orgK, shear, time, anyHit,
-                                  &tMax, hit)) {
+#ifdef CLRT_HAS_INSTANCES
+        } else if (Entry_Instance(entry) != CLRT_INVALID) {
+            instance = Entry_Instance(entry);
+            instanceSp = sp;
+            entry = Instance_Enter(&instances[instance], org, dir, time, &r);
+            continue;
+#endif
+        } else if (Leaf_Intersect(leaves, ~entry, tris, spheres, numTriangles, r.org, r.dir, r.orgK, r.shear, time,
+                                  anyHit, &tMax, hit)) {
             found = 1;
+#ifdef CLRT_HAS_INSTANCES
+            hit->instance = instance;
+#endif
             if (anyHit) return 1;
         }
         /* Pop the next entry that can still hold a closer hit (any hit: tMax never drops, so all can). */
         for (;;) {
+#ifdef CLRT_HAS_INSTANCES
+            if (instance != CLRT_INVALID && sp == instanceSp) { instance = CLRT_INVALID; r = TraceRay_Make(org, dir); }
+#endif
             if (sp == 0) return found;
             --sp;
             if (anyHit || stackT[sp] <= tMax) { entry = stackEntry[sp]; break; }
@@ -425,28 +479,31 @@ inline int Planes_Intersect(const __global Plane* planes, int numPlanes, int fir
 
 /* The closest hit of ray r (planes, then the BVH); prim CLRT_INVALID when it hits nothing. */
 inline Hit Ray_Closest(Ray r, SceneParams scene, const __global Bvh4Node* nodes, const __global Bvh4Leaf* leaves,
-                       const __global Triangle* tris, const __global Sphere* spheres, const __global Plane* planes) {
-    const int numTriangles = scene.numTriangles, numPlanes = scene.numPlanes;
+                       const __global Triangle* tris, const __global Sphere* spheres, const __global Plane* planes,
+                       const __global Instance* instances) {
+    const int numPlanes = scene.numPlanes;
     const int firstPlaneRef = scene.numTriangles + scene.numSpheres;
     Hit h;
     h.t = -1.0f; h.prim = CLRT_INVALID; h.u = 0.0f; h.v = 0.0f;
+    h.instance = CLRT_INVALID; h.hitPad[0] = h.hitPad[1] = h.hitPad[2] = 0;
     float3 dir = r.direction.xyz;
     if (allFinite3(r.origin.xyz) && allFinite3(dir) && r.direction.w > 0.0f) {
         float tMax = r.direction.w;
         if (numPlanes > 0 && Planes_Intersect(planes, numPlanes, firstPlaneRef, r.origin.xyz, dir, tMax, 0, &h)) tMax = h.t;
-        Bvh_Traverse(nodes, leaves, tris, spheres, numTriangles, r.origin.xyz, dir, tMax, Ray_Time(r), 0, &h);
+        Bvh_Traverse(nodes, leaves, tris, spheres, instances, scene, r.origin.xyz, dir, tMax, Ray_Time(r), 0, &h);
     }
     return h;
 }
 
 /* Whether shadow ray s is blocked before its tMax (any hit). */
 inline int Shadow_Occluded(ShadowRay s, SceneParams scene, const __global Bvh4Node* nodes, const __global Bvh4Leaf* leaves,
-                           const __global Triangle* tris, const __global Sphere* spheres, const __global Plane* planes) {
-    const int numTriangles = scene.numTriangles, numPlanes = scene.numPlanes;
+                           const __global Triangle* tris, const __global Sphere* spheres, const __global Plane* planes,
+                           const __global Instance* instances) {
+    const int numPlanes = scene.numPlanes;
     const int firstPlaneRef = scene.numTriangles + scene.numSpheres;
     Hit h;
     return (numPlanes > 0 && Planes_Intersect(planes, numPlanes, firstPlaneRef, s.origin.xyz, s.direction.xyz, s.origin.w, 1, &h)) ||
-           Bvh_Traverse(nodes, leaves, tris, spheres, numTriangles, s.origin.xyz, s.direction.xyz, s.origin.w,
+           Bvh_Traverse(nodes, leaves, tris, spheres, instances, scene, s.origin.xyz, s.direction.xyz, s.origin.w,
                         s.direction.w, 1, &h);
 }
 
@@ -455,7 +512,7 @@ inline int Shadow_Occluded(ShadowRay s, SceneParams scene, const __global Bvh4No
 __kernel void intersect_closest(CLRT_KERNEL_PARAMS(intersect_closest)) {
     int i = get_global_id(0);
     if (i >= *queueCount) return;
-    hits[i] = Ray_Closest(rays[i], scene, nodes, leaves, tris, spheres, planes);
+    hits[i] = Ray_Closest(rays[i], scene, nodes, leaves, tris, spheres, planes, instances);
 }
 
 /* Any hit for each shadow ray: an occluded ray's contribution is set to zero. */
@@ -464,7 +521,7 @@ __kernel void intersect_shadow(CLRT_KERNEL_PARAMS(intersect_shadow)) {
     if (i >= *queueCount * raysPerPath) return;
     float4 c = shadows[i].contribution;
     if (c.x == 0.0f && c.y == 0.0f && c.z == 0.0f) return;
-    if (Shadow_Occluded(shadows[i], scene, nodes, leaves, tris, spheres, planes)) shadows[i].contribution = (float4)(0.0f);
+    if (Shadow_Occluded(shadows[i], scene, nodes, leaves, tris, spheres, planes, instances)) shadows[i].contribution = (float4)(0.0f);
 }
 
 /* End of the FP_CONTRACT OFF scope: contraction back to ON, the OpenCL default, which every other

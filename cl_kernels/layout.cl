@@ -21,6 +21,8 @@
     S(TriangleShading) M(TriangleShading, n0) M(TriangleShading, n1) M(TriangleShading, n2)       \
         M(TriangleShading, uv01) M(TriangleShading, uv2) M(TriangleShading, material)             \
         M(TriangleShading, textureSet) M(TriangleShading, light) M(TriangleShading, pad1)          \
+    S(Instance) M(Instance, objectToWorld) M(Instance, worldToObject) M(Instance, motion)                \
+        M(Instance, rootNode) M(Instance, material) M(Instance, textureSet) M(Instance, mirrored)   \
     S(Sphere) M(Sphere, centerRadius) M(Sphere, worldToObject) M(Sphere, objectToWorld)           \
         M(Sphere, motion) M(Sphere, material) M(Sphere, textureSet) M(Sphere, light)              \
         M(Sphere, pad1)                                                                           \
@@ -50,9 +52,10 @@
         M(SceneParams, maxDepth) M(SceneParams, backgroundTexture) M(SceneParams, envLight)       \
         M(SceneParams, seed) M(SceneParams, splitDepth) M(SceneParams, envScale)                  \
         M(SceneParams, envImage) M(SceneParams, envMapping) M(SceneParams, numPlanes)               \
-        M(SceneParams, pathMode) M(SceneParams, pixelSampler) M(SceneParams, shadowEpsilon) M(SceneParams, pixelSamplerPad)                                      \
+        M(SceneParams, pathMode) M(SceneParams, pixelSampler) M(SceneParams, shadowEpsilon)   \
+        M(SceneParams, numInstances) M(SceneParams, instanceRoot)                                 \
     S(Ray) M(Ray, origin) M(Ray, direction)                                                       \
-    S(Hit) M(Hit, t) M(Hit, prim) M(Hit, u) M(Hit, v)                                             \
+    S(Hit) M(Hit, t) M(Hit, prim) M(Hit, u) M(Hit, v) M(Hit, instance) M(Hit, hitPad)  \
     S(PathState) M(PathState, throughput) M(PathState, pixel) M(PathState, sample)                \
         M(PathState, depth) M(PathState, pathId) M(PathState, coneWidth) M(PathState, pathPad)                                                \
     S(ShadowRay) M(ShadowRay, origin) M(ShadowRay, direction) M(ShadowRay, contribution)        \

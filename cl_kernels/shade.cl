@@ -41,26 +41,68 @@ inline int Shade_OrientsNormalToRay(int materialKind, int pathMode) {
     return materialKind == MATERIAL_DIELECTRIC || pathMode != 0;
 }
 
-inline SurfaceHit Surface_FromHit(Hit h, Ray r, const __global Triangle* tris, const __global TriangleShading* shading,
-                                  const __global Sphere* spheres, const __global Plane* planes, int numTriangles,
-                                  int numSpheres) {
+/* The hit triangle as shading sees it, in world space at rest: a world-space triangle as stored; a
+ * triangle of an instanced mesh (Hit.instance) mapped by its Instance: vertices by objectToWorld,
+ * normals by the transpose of worldToObject (then unit, as flattening stores them), the material and
+ * texture set the instance's, and, for a mirroring instance, the winding reversed (corners 1 and 2 and
+ * their barycentrics exchanged), so that it is the triangle flattening would have stored. */
+typedef struct {
+    float3 v0, v1, v2, n0, n1, n2;
+    float2 uv0, uv1, uv2;
+    float b1, b2;        /* barycentrics of v1, v2 */
+    float3 motion;       /* MotionBlur translation */
+    int material, textureSet, light;
+} HitTriangle;
+
+inline void HitTriangle_Load(Hit h, const __global Triangle* tris, const __global TriangleShading* shading,
+                             const __global Instance* instances, HitTriangle* ht) {
+    const __global Triangle* tri = &tris[h.prim];
+    const __global TriangleShading* sh = &shading[h.prim];
+    ht->v0 = tri->v0.xyz; ht->v1 = tri->v1.xyz; ht->v2 = tri->v2.xyz;
+    ht->n0 = sh->n0.xyz; ht->n1 = sh->n1.xyz; ht->n2 = sh->n2.xyz;
+    ht->uv0 = sh->uv01.xy; ht->uv1 = sh->uv01.zw; ht->uv2 = sh->uv2.xy;
+    ht->b1 = h.u; ht->b2 = h.v;
+    ht->motion = Triangle_Motion(tri);
+    ht->material = sh->material; ht->textureSet = sh->textureSet; ht->light = sh->light;
+#ifdef CLRT_HAS_INSTANCES
+    if (h.instance == CLRT_INVALID) return;
+    const __global Instance* in = &instances[h.instance];
+    const __global float4* wo = in->worldToObject;
+    ht->v0 = affinePoint(in->objectToWorld, ht->v0);
+    ht->v1 = affinePoint(in->objectToWorld, ht->v1);
+    ht->v2 = affinePoint(in->objectToWorld, ht->v2);
+    ht->n0 = normalize(ht->n0.x * wo[0].xyz + ht->n0.y * wo[1].xyz + ht->n0.z * wo[2].xyz);
+    ht->n1 = normalize(ht->n1.x * wo[0].xyz + ht->n1.y * wo[1].xyz + ht->n1.z * wo[2].xyz);
+    ht->n2 = normalize(ht->n2.x * wo[0].xyz + ht->n2.y * wo[1].xyz + ht->n2.z * wo[2].xyz);
+    ht->motion = in->motion.xyz;
+    ht->material = in->material; ht->textureSet = in->textureSet; ht->light = CLRT_INVALID;
+    if (in->mirrored) {
+        float3 t3 = ht->v1; ht->v1 = ht->v2; ht->v2 = t3;
+        t3 = ht->n1; ht->n1 = ht->n2; ht->n2 = t3;
+        const float2 t2 = ht->uv1; ht->uv1 = ht->uv2; ht->uv2 = t2;
+        const float b = ht->b1; ht->b1 = ht->b2; ht->b2 = b;
+    }
+#endif
+}
+
+/* ht: the hit triangle (HitTriangle_Load) when h.prim is a triangle, else unread. */
+inline SurfaceHit Surface_FromHit(Hit h, Ray r, const HitTriangle* ht, const __global Sphere* spheres,
+                                  const __global Plane* planes, int numTriangles, int numSpheres) {
     SurfaceHit s;
     s.dir = r.direction.xyz;
     s.t = h.t;
     if (h.prim < numTriangles) {
-        const __global Triangle* tri = &tris[h.prim];
-        const __global TriangleShading* sh = &shading[h.prim];
-        float b1 = h.u, b2 = h.v, b0 = 1.0f - b1 - b2;
-        float3 v0 = tri->v0.xyz, v1 = tri->v1.xyz, v2 = tri->v2.xyz;
+        float b1 = ht->b1, b2 = ht->b2, b0 = 1.0f - b1 - b2;
+        float3 v0 = ht->v0, v1 = ht->v1, v2 = ht->v2;
         s.p = b0 * v0 + b1 * v1 + b2 * v2;
         s.ng = normalize(cross(v1 - v0, v2 - v0));
-        float3 ns = b0 * sh->n0.xyz + b1 * sh->n1.xyz + b2 * sh->n2.xyz;
+        float3 ns = b0 * ht->n0 + b1 * ht->n1 + b2 * ht->n2;
         float l = length(ns);
         s.ns = (l > 0.0f && isfinite(l)) ? ns / l : s.ng;
         if (dot(s.ns, s.ng) < 0.0f) s.ns = -s.ns;
-        s.uv = b0 * sh->uv01.xy + b1 * sh->uv01.zw + b2 * sh->uv2.xy;
-        s.material = sh->material;
-        s.textureSet = sh->textureSet;
+        s.uv = b0 * ht->uv0 + b1 * ht->uv1 + b2 * ht->uv2;
+        s.material = ht->material;
+        s.textureSet = ht->textureSet;
     } else if (h.prim >= numTriangles + numSpheres) {
         const __global Plane* pl = &planes[h.prim - numTriangles - numSpheres];
         s.p = r.origin.xyz + h.t * r.direction.xyz;
@@ -100,15 +142,10 @@ inline SurfaceHit Surface_FromHit(Hit h, Ray r, const __global Triangle* tris, c
 #if defined(CLRT_HAS_NORMAL_MAP) || defined(CLRT_HAS_BUMP_MAP)
 /* dp/du and dp/dv at the hit s (world space): per triangle from its positions and uvs, per sphere from
  * its parametrisation, per plane the axes of its planar uv. */
-inline TangentFrame Surface_TangentFrame(Hit h, SurfaceHit s, const __global Triangle* tris,
-                                         const __global TriangleShading* shading, const __global Sphere* spheres,
+inline TangentFrame Surface_TangentFrame(Hit h, SurfaceHit s, const HitTriangle* ht, const __global Sphere* spheres,
                                          const __global Plane* planes, int numTriangles, int numSpheres) {
     TangentFrame f;
-    if (h.prim < numTriangles) {
-        const __global Triangle* tri = &tris[h.prim];
-        const __global TriangleShading* sh = &shading[h.prim];
-        return Frame_Triangle(tri->v0.xyz, tri->v1.xyz, tri->v2.xyz, sh->uv01.xy, sh->uv01.zw, sh->uv2.xy);
-    }
+    if (h.prim < numTriangles) return Frame_Triangle(ht->v0, ht->v1, ht->v2, ht->uv0, ht->uv1, ht->uv2);
     if (h.prim >= numTriangles + numSpheres) {
         makeBasis(planes[h.prim - numTriangles - numSpheres].normal.xyz, &f.dpdu, &f.dpdv);
         f.objectSpaceBump = 0;
@@ -122,9 +159,9 @@ inline TangentFrame Surface_TangentFrame(Hit h, SurfaceHit s, const __global Tri
 
 /* Motion blur: how far the hit primitive has moved at the ray's shutter time (t·motion; planes do not
  * move). Shading takes the ray back by it into the primitive's rest frame and the hit point forward. */
-inline float3 MotionBlur_HitShift(Hit h, Ray r, const __global Triangle* tris, const __global Sphere* spheres,
+inline float3 MotionBlur_HitShift(Hit h, Ray r, const HitTriangle* ht, const __global Sphere* spheres,
                                   int numTriangles, int numSpheres) {
-    if (h.prim < numTriangles) return Ray_Time(r) * Triangle_Motion(&tris[h.prim]);
+    if (h.prim < numTriangles) return Ray_Time(r) * ht->motion;
     if (h.prim < numTriangles + numSpheres) return Ray_Time(r) * spheres[h.prim - numTriangles].motion.xyz;
     return (float3)(0.0f);
 }
@@ -186,13 +223,11 @@ inline float Camera_PixelSpread(CameraParams cam) {
 }
 /* |dp/du × dp/dv| at the hit: world area per unit of uv area (triangles from their positions and uvs,
  * spheres from their parametrisation under their transformation, planes 1). */
-inline float Surface_UvArea(Hit h, SurfaceHit s, const __global Triangle* tris, const __global TriangleShading* shading,
-                            const __global Sphere* spheres, int numTriangles, int numSpheres) {
+inline float Surface_UvArea(Hit h, SurfaceHit s, const HitTriangle* ht, const __global Sphere* spheres, int numTriangles,
+                            int numSpheres) {
     if (h.prim < numTriangles) {
-        const __global Triangle* tri = &tris[h.prim];
-        const __global TriangleShading* sh = &shading[h.prim];
-        float2 d1 = sh->uv01.zw - sh->uv01.xy, d2 = sh->uv2.xy - sh->uv01.xy;
-        float areaWorld = length(cross(tri->v1.xyz - tri->v0.xyz, tri->v2.xyz - tri->v0.xyz));
+        float2 d1 = ht->uv1 - ht->uv0, d2 = ht->uv2 - ht->uv0;
+        float areaWorld = length(cross(ht->v1 - ht->v0, ht->v2 - ht->v0));
         return areaWorld / fabs(d1.x * d2.y - d2.x * d1.y);  /* uvs all alike: +inf (level 0) */
     }
     if (h.prim >= numTriangles + numSpheres) return 1.0f;
@@ -210,11 +245,10 @@ inline float Surface_UvArea(Hit h, SurfaceHit s, const __global Triangle* tris, 
  * ellipse it cuts (axes W and W/|cos|: W/√|cos|), over the world length of one uv unit. Ray Tracing
  * Gems ch. 20 takes the long axis (λ = Δ0 + log2 W − log2 |n·d|), which blurs grazing surfaces more
  * than a pixel's box filter does (scenes/mip_checker_plane.xml: docs/scene-format.md has both). */
-inline float Surface_FootprintUv(Hit h, SurfaceHit s, float coneWidth, const __global Triangle* tris,
-                                 const __global TriangleShading* shading, const __global Sphere* spheres,
-                                 int numTriangles, int numSpheres) {
+inline float Surface_FootprintUv(Hit h, SurfaceHit s, float coneWidth, const HitTriangle* ht,
+                                 const __global Sphere* spheres, int numTriangles, int numSpheres) {
     float cosI = fmax(fabs(dot(s.dir, s.ng)), 1e-4f);
-    float uvArea = Surface_UvArea(h, s, tris, shading, spheres, numTriangles, numSpheres);
+    float uvArea = Surface_UvArea(h, s, ht, spheres, numTriangles, numSpheres);
     return coneWidth / sqrt(cosI * uvArea);
 }
 #endif
@@ -222,9 +256,8 @@ inline float Surface_FootprintUv(Hit h, SurfaceHit s, float coneWidth, const __g
 #ifdef CLRT_HAS_TEXTURES
 /* The textures of the hit's shape: kd, ks, the shading normal (normal and bump maps), or the whole
  * radiance (replace_all: returns 1, *radiance set). */
-inline int Shade_Textures(Hit h, SurfaceHit* s, SceneParams scene, const __global Triangle* tris,
-                          const __global TriangleShading* triShading, const __global Sphere* spheres,
-                          const __global Plane* planes, const __global TextureSet* textureSets,
+inline int Shade_Textures(Hit h, SurfaceHit* s, SceneParams scene, const HitTriangle* ht,
+                          const __global Sphere* spheres, const __global Plane* planes, const __global TextureSet* textureSets,
                           const __global TextureMap* textures, const __global ImageInfo* images,
                           const __global float4* texels, float coneWidth, float3* kd, float3* ks,
                           float3* radiance) {
@@ -232,7 +265,7 @@ inline int Shade_Textures(Hit h, SurfaceHit* s, SceneParams scene, const __globa
     float3 pObj = affinePoint(textureSets[s->textureSet].worldToObject, s->p);  /* procedural textures */
     float footprintUv = 0.0f;  /* trilinear images */
 #ifdef CLRT_HAS_MIPMAPS
-    footprintUv = Surface_FootprintUv(h, *s, coneWidth, tris, triShading, spheres, scene.numTriangles, scene.numSpheres);
+    footprintUv = Surface_FootprintUv(h, *s, coneWidth, ht, spheres, scene.numTriangles, scene.numSpheres);
 #endif
     for (int k = 0; k < CLRT_MAX_TEXTURES_PER_SHAPE; ++k) {
         int ti = textureSets[s->textureSet].texture[k];
@@ -247,7 +280,7 @@ inline int Shade_Textures(Hit h, SurfaceHit* s, SceneParams scene, const __globa
 #if defined(CLRT_HAS_NORMAL_MAP) || defined(CLRT_HAS_BUMP_MAP)
         case DECAL_REPLACE_NORMAL:
         case DECAL_BUMP_NORMAL: {
-            TangentFrame f = Surface_TangentFrame(h, *s, tris, triShading, spheres, planes, scene.numTriangles,
+            TangentFrame f = Surface_TangentFrame(h, *s, ht, spheres, planes, scene.numTriangles,
                                                   scene.numSpheres);
             s->ns = Texture_PerturbNormal(tex, images, texels, c, s->uv, s->p, f, s->ns,
                                           textureSets[s->textureSet].worldToObject);
@@ -324,8 +357,8 @@ inline void Shade_ClassicChildren(SceneParams scene, PathState path, Material m,
  * background or environment on a miss, object-light emission, replace_all) and the children. */
 inline void Shade_Hit(SceneParams scene, CameraParams cam, PathState path, Ray ray, Hit h,
                       const __global Triangle* tris, const __global TriangleShading* triShading,
-                      const __global Sphere* spheres, const __global Plane* planes, const __global Material* materials,
-                      const __global TextureSet* textureSets, const __global TextureMap* textures,
+                      const __global Sphere* spheres, const __global Plane* planes, const __global Instance* instances,
+                      const __global Material* materials, const __global TextureSet* textureSets, const __global TextureMap* textures,
                       const __global ImageInfo* images, const __global float4* texels, const __global Light* lights,
                       const __global float* envDist, ShadeResult* res) {
     float3 throughput = path.throughput.xyz;
@@ -343,11 +376,13 @@ inline void Shade_Hit(SceneParams scene, CameraParams cam, PathState path, Ray r
         res->radiance = (float4)(throughput * missed, 0.0f);
         return;
     }
+    HitTriangle ht;
+    if (h.prim < scene.numTriangles) HitTriangle_Load(h, tris, triShading, instances, &ht);
 #ifdef CLRT_HAS_MOTION_BLUR
-    const float3 motionShift = MotionBlur_HitShift(h, ray, tris, spheres, scene.numTriangles, scene.numSpheres);
+    const float3 motionShift = MotionBlur_HitShift(h, ray, &ht, spheres, scene.numTriangles, scene.numSpheres);
     ray.origin.xyz -= motionShift;  /* the ray in the rest frame of the primitive it hit */
 #endif
-    SurfaceHit s = Surface_FromHit(h, ray, tris, triShading, spheres, planes, scene.numTriangles, scene.numSpheres);
+    SurfaceHit s = Surface_FromHit(h, ray, &ht, spheres, planes, scene.numTriangles, scene.numSpheres);
 #ifdef CLRT_HAS_MIPMAPS
     path.coneWidth += Camera_PixelSpread(cam) * s.t;  /* the cone at the hit: its children start from it */
 #endif
@@ -366,7 +401,7 @@ inline void Shade_Hit(SceneParams scene, CameraParams cam, PathState path, Ray r
     int replaceAll = 0;
 #ifdef CLRT_HAS_TEXTURES
     if (s.textureSet != CLRT_INVALID)
-        replaceAll = Shade_Textures(h, &s, scene, tris, triShading, spheres, planes, textureSets, textures, images,
+        replaceAll = Shade_Textures(h, &s, scene, &ht, spheres, planes, textureSets, textures, images,
                                     texels, path.coneWidth, &kd, &ks, &radiance);
 #endif
 #ifdef CLRT_HAS_MOTION_BLUR
@@ -433,7 +468,7 @@ __kernel CLRT_KERNEL_VEC_HINT void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
     int i = get_global_id(0);
     if (i >= *queueCount) return;
     ShadeResult res;
-    Shade_Hit(scene, cam, paths[i], rays[i], hits[i], tris, triShading, spheres, planes, materials, textureSets,
+    Shade_Hit(scene, cam, paths[i], rays[i], hits[i], tris, triShading, spheres, planes, instances, materials, textureSets,
               textures, images, texels, lights, envDist, &res);
     /* Whole structs go to global memory from plain locals: oclgrind 21.10's uninitialised-value check
      * (-cl-opt-disable) reports a struct copied straight from a member of res, initialised or not. */

@@ -348,7 +348,9 @@ TEST_CASE("BVH4 traversal stack: the host bound holds, and the kernel with exact
     std::vector<int> queueLength{numRays};  // the kernel reads the queue length on the device
     cl::Buffer cb = ro(queueLength);
     closest.set("queueCount", cb).set("scene", sp).set("nodes", nodes).set("leaves", leaves).set("tris", tb);
-    closest.set("spheres", sb).set("planes", pb).set("rays", rb).set("hits", hb);
+    std::vector<dev::Instance> noInstances(1);
+    cl::Buffer ib = ro(noInstances);
+    closest.set("spheres", sb).set("planes", pb).set("instances", ib).set("rays", rb).set("hits", hb);
     CL_CPP(dc.queue().enqueueNDRangeKernel(closest.ready(), cl::NullRange, cl::NDRange(roundUp(size_t(numRays), 64)),
                                            cl::NDRange(64)));
     std::vector<dev::Hit> hits(numRays);
@@ -407,9 +409,11 @@ DeviceTrace traceOnDevice(Bvh4 b4, const std::vector<Tri>& tris, const std::vect
                                        shadows.data()));
     dev::SceneParams sp{};
     sp.numTriangles = int(tris.size());
+    std::vector<dev::Instance> noInstances(1);
+    cl::Buffer ib = ro(noInstances);
     for (KernelArgs* k : {&closest, &shadow})
         k->set("queueCount", cb).set("scene", sp).set("nodes", nodes).set("leaves", leaves).set("tris", tb)
-            .set("spheres", sb).set("planes", pb);
+            .set("spheres", sb).set("planes", pb).set("instances", ib);
     closest.set("rays", rb).set("hits", hb);
     shadow.set("raysPerPath", 1).set("shadows", shb);
     const cl::NDRange global(roundUp(size_t(n), 64)), local(64);

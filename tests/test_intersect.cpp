@@ -136,9 +136,11 @@ void compareWithHost(const cl::Program& program, const RandomScene& s, bool time
     std::vector<int> queueLength{numRays};  // the kernels read the queue length on the device
     cl::Buffer countBuf = ro(queueLength);
     shadow.set("raysPerPath", 1);
+    std::vector<dev::Instance> noInstances(1);
+    cl::Buffer instBuf = ro(noInstances);
     for (KernelArgs* k : {&closest, &shadow})
         k->set("queueCount", countBuf).set("scene", sp).set("nodes", nodes).set("leaves", leaves).set("tris", tris)
-            .set("spheres", sph).set("planes", planeBuf);
+            .set("spheres", sph).set("planes", planeBuf).set("instances", instBuf);
     closest.set("rays", rayBuf).set("hits", hitBuf);
     shadow.set("shadows", shadowBuf);
     cl::CommandQueue& q = dc.queue();

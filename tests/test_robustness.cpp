@@ -127,7 +127,9 @@ std::vector<dev::Hit> deviceClosest(const std::vector<dev::Triangle>& trisIn, co
     std::vector<int> queueLength{n};  // the kernel reads the queue length on the device
     cl::Buffer cb = ro(queueLength);
     k.set("queueCount", cb).set("scene", sp).set("nodes", nodes).set("leaves", leaves).set("tris", tb).set("spheres", sb);
-    k.set("planes", pb).set("rays", rb).set("hits", hb);
+    std::vector<dev::Instance> noInstances(1);
+    cl::Buffer ib = ro(noInstances);
+    k.set("planes", pb).set("instances", ib).set("rays", rb).set("hits", hb);
     CL_CPP(dc.queue().enqueueNDRangeKernel(k.ready(), cl::NullRange, cl::NDRange(roundUp(size_t(n), 64)), cl::NDRange(64)));
     std::vector<dev::Hit> hits(rays.size());
     CL_CPP(dc.queue().enqueueReadBuffer(hb, CL_TRUE, 0, sizeof(dev::Hit) * hits.size(), hits.data()));

@@ -34,6 +34,10 @@ const char* const kRenderHelp =
     "  --sampler S           stratified (default): camera jitter, light and BSDF samples stratified\n"
     "                        over a pixel's samples (scrambled (0,2)-sequence); independent: every\n"
     "                        number drawn independently (the noise of a plain Monte Carlo renderer)\n"
+    "  --instancing M        how meshes placed several times are stored: auto (default: once, under\n"
+    "                        their own BVH, where their placements hold >= 2^20 triangles), flatten\n"
+    "                        (every triangle in world space), two-level (every mesh that is no light\n"
+    "                        once; the same image within float rounding)\n"
     "  --rr-rule R           Russian roulette of RussianRoulette cameras: unbiased (default), or course:\n"
     "                        the course's hw6 references' biased rule (a hit's own light is counted\n"
     "                        undivided when the path dies there; see docs/scene-format.md); ignored\n"
@@ -94,6 +98,12 @@ RenderArgs parseRenderArgs(int argc, char** argv, int start) {
         {{"--seed"}, true, [&](Str f, Str v) { a.seed = uint32_t(parseIntArg(f, v, 0, 2147483647)); }},
         {{"--sampler"}, true, [&](Str f, Str v) {
              if (!parsePixelSampler(v, a.pixelSampler)) throwExpected(f, "stratified or independent", v);
+         }},
+        {{"--instancing"}, true, [&](Str f, Str v) {
+             if (v == "auto") a.instancing = Instancing::Auto;
+             else if (v == "flatten") a.instancing = Instancing::Flatten;
+             else if (v == "two-level") a.instancing = Instancing::TwoLevel;
+             else throwExpected(f, "auto, flatten or two-level", v);
          }},
         {{"--rr-rule"}, true, [&](Str f, Str v) {
              if (!parseRouletteRule(v, a.rouletteRule)) throwExpected(f, "unbiased or course", v);

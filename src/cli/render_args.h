@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "dist/dist_render.h"
+#include "flatten/device_scene.h"
 #include "render/progressive.h"
 #include "render/renderer.h"
 
@@ -22,6 +23,7 @@ struct RenderArgs {
     uint64_t maxMemory = 0;  // --max-memory: cap on the estimated host peak and device memory (0: none)
     PixelSampler pixelSampler = PixelSampler::Stratified;  // --sampler
     RouletteRule rouletteRule = RouletteRule::Unbiased;    // --rr-rule
+    Instancing instancing = Instancing::Auto;              // --instancing
     std::string envStrategy;  // --env-sampling: overrides every environment light's env strategy ("" keeps the scene's)
     StopRule stop;            // --target-error, --time-limit (render/progressive.h)
     Pipeline pipeline = Pipeline::Auto;  // --pipeline

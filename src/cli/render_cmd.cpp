@@ -196,7 +196,9 @@ int renderScene(RenderArgs a) {
     checkMemory(a, scene, devs);
 
     t = std::chrono::steady_clock::now();
-    DeviceScene ds = flattenScene(scene);
+    FlattenOptions flattenOpts;
+    flattenOpts.instancing = a.instancing;
+    DeviceScene ds = flattenScene(scene, flattenOpts);
     times.flatten = secondsSince(t);
     if (a.allFeatures) {
         const int stack = ds.features.bvhStack;  // not a feature: the tree's own need

@@ -27,6 +27,7 @@ struct FeatureSet {
     bool spheres = false;
     bool motionBlur = false;        // a mesh, triangle or sphere has a MotionBlur translation
     bool pathTracing = false;       // a camera has <Renderer>PathTracing (cl_kernels/path.cl)
+    bool instances = false;         // a two-level BVH (dev::Instance; flatten_instances.cpp)
     int bvhStack = 0;  // traversal stack entries the scene's BVH needs (0: the header's default)
     void add(dev::LightKind k) { lightKinds |= 1u << k; }
     void add(dev::MaterialKind k) { materialKinds |= 1u << k; }
@@ -40,7 +41,7 @@ struct FeatureSet {
     static FeatureSet all() {
         FeatureSet f;
         f.lightKinds = f.materialKinds = f.brdfKinds = ~0u;
-        f.textures = f.normalMaps = f.bumpMaps = f.mipMaps = f.spheres = f.motionBlur = f.pathTracing = true;
+        f.textures = f.normalMaps = f.bumpMaps = f.mipMaps = f.spheres = f.motionBlur = f.pathTracing = f.instances = true;
         return f;
     }
 };
@@ -49,6 +50,7 @@ struct DeviceScene {
     std::vector<dev::Triangle> triangles;          // in BVH leaf order (bvh.primRefs still maps)
     std::vector<dev::TriangleShading> triangleShading;
     std::vector<dev::Sphere> spheres;
+    std::vector<dev::Instance> instances;         // two-level BVH: instances of meshes kept once (may be empty)
     std::vector<dev::Plane> planes;               // never empty (a dummy when the scene has none)
     std::vector<dev::Material> materials;
     std::vector<dev::TextureSet> textureSets;
@@ -67,7 +69,15 @@ struct DeviceScene {
     double imageSeconds = 0, envDistSeconds = 0;  // parts of flattenSeconds: reading images, env distributions
 };
 
-DeviceScene flattenScene(const Scene& scene);
+// How meshes with several instances are stored: Auto (two-level where that saves, see
+// instancedShapes), Flatten (every triangle in world space, one BVH), TwoLevel (every mesh that is
+// not an object light kept once, under its own BVH; for tests and measurements).
+enum class Instancing { Auto, Flatten, TwoLevel };
+struct FlattenOptions {
+    Instancing instancing = Instancing::Auto;
+};
+
+DeviceScene flattenScene(const Scene& scene, const FlattenOptions& opts = {});
 
 // Half4 texels (ImageInfo.format TEXELS_HALF4): the n texels src[0..n) packed two to a float4, each
 // channel (alpha included) a half of the same value; false, and nothing written, unless every value is

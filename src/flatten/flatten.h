@@ -51,13 +51,37 @@ void flattenTextures(const Scene& scene, DeviceScene& ds, ImageAtlas& atlas);
 // The texture set of shape `s` (appended to ds.textureSets), or CLRT_INVALID when it has none.
 int flattenTextureSet(const Scene& scene, const Shape& s, DeviceScene& ds);
 // Planes, spheres and mesh triangles, then the BVH over triangles and spheres with the triangles
-// stored in leaf order; sets the primitive counts of ds.params.
-void flattenGeometry(const Scene& scene, DeviceScene& ds);
+// stored in leaf order; meshes that instancedShapes(scene, instancing) picks go to flattenInstances.
+// Sets the primitive counts of ds.params.
+void flattenGeometry(const Scene& scene, DeviceScene& ds, Instancing instancing = Instancing::Auto);
 // Whether the transformation's linear part has a negative determinant (a mirror): the world-space
 // cross product of a triangle's edges then points against the transformed object-space normal, so
 // flattenGeometry (and the LightMesh sampling data, flatten_lights.cpp) take its corners as (a, c, b).
 bool mirrorsOrientation(const Mat4& m);
 void flattenLights(const Scene& scene, DeviceScene& ds, ImageAtlas& atlas);
+
+// ---- shared by flatten_geometry.cpp and flatten_instances.cpp ----
+// The triangles of one mesh shape in world space (or, with an identity transform, in object space), in
+// index order (degenerate and non-finite ones counted and left out).
+struct MeshTriangles {
+    std::vector<dev::Triangle> triangles;
+    std::vector<dev::TriangleShading> shading;
+    std::vector<Aabb> boxes;
+    size_t degenerate = 0, nonFinite = 0;
+};
+void flattenMesh(const Scene& scene, const Shape& s, int texSet, MeshTriangles& out);
+// The box a primitive sweeps over the shutter interval: moved by t·motion, t in [0, 1], it stays
+// inside the union of its boxes at both ends (the motion is a straight translation).
+Aabb sweptBox(const Aabb& rest, const Vec3& motion);
+void storeRows(dev::float4 rows[3], const Mat4& m);  // the first three rows of an affine map
+// Which shapes flattenInstances takes (a mesh kept once under its own BVH): per shape index.
+std::vector<bool> instancedShapes(const Scene& scene, Instancing mode);
+// The meshes of `jobs` (shape, texture set), each stored once in object space under its own bottom-level
+// BVH, and the top-level BVH over the shapes as instances; appended to ds's arrays after the world
+// BVH's (whose sphere references move past the appended triangles). Sets numTriangles, numInstances,
+// instanceRoot and the traversal's stack need. numWorldTriangles: the world BVH's triangles.
+void flattenInstances(const Scene& scene, const std::vector<std::pair<const Shape*, int>>& jobs, int numWorldTriangles,
+                      DeviceScene& ds);
 // The device fields of environment light `l` (index `lightIndex`), its importance distribution, and
 // the scene's miss radiance (ds.params env fields) from the first environment light.
 void flattenEnvironmentLight(const Scene& scene, const Light& l, int lightIndex, dev::Light& d, DeviceScene& ds,

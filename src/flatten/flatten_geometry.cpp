@@ -18,7 +18,6 @@
 #include "util/error.h"
 
 namespace clrt {
-namespace {
 
 // Where a run of triangles is written: the slots from `first` of the scene's arrays (triangles, their
 // shading and boxes), and what was left out (degenerate and non-finite triangles, counted).
@@ -117,10 +116,28 @@ void flattenTriangles(const Scene& scene, const Shape& s, int texSet, const Mesh
 }
 
 
+void flattenMesh(const Scene& scene, const Shape& s, int texSet, MeshTriangles& out) {
+    MeshVertices mv;
+    meshVertices(scene, s, mv);
+    const size_t n = scene.meshes.at(s.meshIndex).indices.size() / 3;
+    out.triangles.resize(n);
+    out.shading.resize(n);
+    out.boxes.resize(n);
+    TriangleSlots slots{out.triangles.data(), out.shading.data(), out.boxes.data()};
+    flattenTriangles(scene, s, texSet, mv, 0, n, slots);
+    out.triangles.resize(slots.kept);
+    out.shading.resize(slots.kept);
+    out.boxes.resize(slots.kept);
+    out.degenerate += slots.degenerate;
+    out.nonFinite += slots.nonFinite;
+}
+
 void storeRows(dev::float4 rows[3], const Mat4& m) {
     for (int r = 0; r < 3; ++r)
         rows[r] = {float(m.m[r][0]), float(m.m[r][1]), float(m.m[r][2]), float(m.m[r][3])};
 }
+
+namespace {
 
 // False (warned) when the plane is degenerate.
 bool flattenPlane(const Shape& s, int texSet, DeviceScene& ds) {
@@ -307,20 +324,23 @@ void buildDeviceBvh(std::vector<Aabb>&& boxes, DeviceScene& ds) {
 
 bool mirrorsOrientation(const Mat4& m) { return linearDeterminant(m) < 0; }
 
-void flattenGeometry(const Scene& scene, DeviceScene& ds) {
+void flattenGeometry(const Scene& scene, DeviceScene& ds, Instancing instancing) {
     std::vector<Aabb> boxes, sphereBoxes;
+    const std::vector<bool> instanced = instancedShapes(scene, instancing);
     size_t total = 0;
-    for (const Shape& s : scene.shapes)
-        if (s.type == ShapeType::Mesh) total += scene.meshes.at(s.meshIndex).indices.size() / 3;
+    for (size_t i = 0; i < scene.shapes.size(); ++i)
+        if (scene.shapes[i].type == ShapeType::Mesh && !instanced[i])
+            total += scene.meshes.at(scene.shapes[i].meshIndex).indices.size() / 3;
     ds.triangles.reserve(total);
     ds.triangleShading.reserve(total);
     boxes.reserve(total + scene.shapes.size());
-    std::vector<MeshJob> meshJobs;
-    for (const Shape& s : scene.shapes) {
+    std::vector<MeshJob> meshJobs, instanceJobs;
+    for (size_t i = 0; i < scene.shapes.size(); ++i) {
+        const Shape& s = scene.shapes[i];
         int texSet = flattenTextureSet(scene, s, ds);  // for every shape, in shape order
         if (s.type == ShapeType::Plane) flattenPlane(s, texSet, ds);
         else if (s.type == ShapeType::Sphere) flattenSphere(s, texSet, ds, sphereBoxes);
-        else meshJobs.push_back({&s, texSet});
+        else (instanced[i] ? instanceJobs : meshJobs).push_back({&s, texSet});
     }
     flattenMeshes(scene, meshJobs, ds, boxes);
     ds.features.spheres = !ds.spheres.empty();
@@ -329,12 +349,13 @@ void flattenGeometry(const Scene& scene, DeviceScene& ds) {
     const int numTriangles = int(boxes.size());
     boxes.insert(boxes.end(), sphereBoxes.begin(), sphereBoxes.end());
     buildDeviceBvh(std::move(boxes), ds);
+    ds.params.numTriangles = numTriangles;
+    if (!instanceJobs.empty()) flattenInstances(scene, instanceJobs, numTriangles, ds);
     // Never an empty buffer (the counts below stay those of the scene, except planes: see Plane).
     if (ds.triangles.empty()) { ds.triangles.push_back(dev::Triangle{}); ds.triangleShading.push_back(dev::TriangleShading{}); }
     if (ds.spheres.empty()) ds.spheres.push_back(dev::Sphere{});
     if (ds.planes.empty()) ds.planes.push_back(dev::Plane{});  // a zero normal: never hit, counted in numPlanes
     if (ds.textureSets.empty()) ds.textureSets.push_back(dev::TextureSet{{-1, -1, -1, -1}, {}});
-    ds.params.numTriangles = numTriangles;
     ds.params.numSpheres = int(sphereBoxes.size());
     ds.params.numPlanes = int(ds.planes.size());
 }

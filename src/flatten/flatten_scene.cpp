@@ -16,13 +16,13 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
 
 // The driver: one function per domain (flatten.h), in an order that fixes where images enter the
 // atlas (textures, then environment maps).
-DeviceScene flattenScene(const Scene& scene) {
+DeviceScene flattenScene(const Scene& scene, const FlattenOptions& opts) {
     auto t0 = std::chrono::steady_clock::now();
     DeviceScene ds;
     ImageAtlas atlas(scene, ds);
     flattenMaterials(scene, ds);
     flattenTextures(scene, ds, atlas);
-    flattenGeometry(scene, ds);
+    flattenGeometry(scene, ds, opts.instancing);
     flattenLights(scene, ds, atlas);
     dev::SceneParams& p = ds.params;
     p.background = toFloat4(scene.backgroundColor);

@@ -161,6 +161,23 @@ typedef struct Sphere {
     int pad1;
 } Sphere;
 
+/* An instance of a shared mesh (two-level BVH, docs/architecture.md "Instancing"): the mesh's triangles
+ * are stored once, in object space, under their own bottom-level BVH (rootNode); the top-level BVH's
+ * leaves (nodes from SceneParams.instanceRoot; leaf block lanes hold instance indices) lead here. A ray
+ * meets the instance where worldToObject·(org − time·motion), worldToObject·dir meets the mesh at rest
+ * (direction not renormalised: t is the world ray's parameter). Shading maps the hit triangle back
+ * with objectToWorld (points) and the transpose of worldToObject (normals); a mirroring transform
+ * (mirrored = 1) reverses the triangle's winding there, as flattening does. */
+typedef struct Instance {
+    float4 objectToWorld[3]; /* rows of the transform (3x4 affine) */
+    float4 worldToObject[3]; /* rows of its inverse */
+    float4 motion;           /* MotionBlur: world-space translation over the shutter [0, 1]; w unused */
+    int rootNode;            /* nodes index of the mesh's bottom-level root */
+    int material;
+    int textureSet;          /* index into textureSets, or CLRT_INVALID */
+    int mirrored;            /* det(transform) < 0 */
+} Instance;
+
 /* An infinite plane (2025 JSON scenes). Not in the BVH: every ray tests every plane. Primitive
  * references of planes follow those of triangles and spheres (firstPlaneRef = numTriangles + numSpheres). */
 typedef struct Plane {
@@ -302,7 +319,8 @@ typedef struct SceneParams {
     int pathMode;          /* 0: classic recursive ray tracing; else CLRT_PATH_* bits (cl_kernels/path.cl) */
     int pixelSampler;      /* CLRT_PIXEL_SAMPLER_*: how a pixel's camera, light and BSDF samples are drawn (common.cl) */
     float shadowEpsilon;   /* shadow rays start this far off the surface along its normal (at least the robust offset) */
-    int pixelSamplerPad[2]; /* explicit padding to the float4 alignment */
+    int numInstances;      /* instances of shared meshes (Instance); 0: every triangle is in world space */
+    int instanceRoot;      /* nodes index of the top-level BVH's root (over instances), when numInstances > 0 */
 } SceneParams;
 
 /* SceneParams.pixelSampler (set per render from RenderSettings::pixelSampler, clrt render --sampler). */
@@ -327,6 +345,8 @@ typedef struct Hit {
     float t;               /* < 0: miss */
     int prim;              /* primitive reference (see above) */
     float u, v;            /* triangle barycentrics */
+    int instance;          /* the Instance whose mesh prim belongs to, or CLRT_INVALID (world-space primitive) */
+    int hitPad[3];         /* explicit padding to the float4 alignment */
 } Hit;
 
 /* One path of the wavefront. */

@@ -15,14 +15,15 @@
 
 /* ---- parameter groups ------------------------------------------------------------------------ */
 
-/* What the intersection kernels traverse. */
+/* What the intersection kernels traverse (instances: the two-level BVH's, see Instance). */
 #define CLRT_PARAMS_GEOMETRY(P)                                                                    \
     P(IN, Bvh4Node, nodes) P(IN, Bvh4Leaf, leaves) P(IN, Triangle, tris) P(IN, Sphere, spheres)    \
-    P(IN, Plane, planes)
+    P(IN, Plane, planes) P(IN, Instance, instances)
 
 /* The surfaces as shading sees them (a hit's position, normals, uv, material). */
 #define CLRT_PARAMS_SURFACES(P)                                                                    \
-    P(IN, Triangle, tris) P(IN, TriangleShading, triShading) P(IN, Sphere, spheres) P(IN, Plane, planes)
+    P(IN, Triangle, tris) P(IN, TriangleShading, triShading) P(IN, Sphere, spheres) P(IN, Plane, planes) \
+    P(IN, Instance, instances)
 
 #define CLRT_PARAMS_MATERIALS(P) P(IN, Material, materials) P(IN, TextureSet, textureSets) P(IN, TextureMap, textures)
 

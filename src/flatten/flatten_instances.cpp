@@ -1,0 +1,194 @@
+// flatten_instances.cpp — meshes kept once for all their instances (the two-level BVH of
+// docs/architecture.md, "Instancing"): which mesh shapes go two-level (instancedShapes), each such
+// mesh's triangles in object space under its own bottom-level BVH, and a top-level BVH over the shapes
+// as dev::Instance records (transform, inverse, material, texture set, MotionBlur translation), all
+// appended to the arrays of the world BVH that flattenGeometry built. Reads Mesh/MeshInstance shapes
+// (Scene::shapes of type Mesh: meshIndex, transform, motion, smooth, material) and Scene::meshes.
+#include <algorithm>
+#include <map>
+
+#include "flatten/flatten.h"
+#include "scene/transforms.h"
+#include "util/error.h"
+
+namespace clrt {
+namespace {
+
+// Auto: a mesh goes two-level when it is placed at least twice and its placements together hold at
+// least this many triangles (provisional: docs/architecture.md, "Instancing", has the measurements).
+constexpr size_t kTwoLevelMinTriangles = size_t(1) << 20;
+
+// One bottom-level tree as the device reads it, before its indices move to their place in ds.
+struct BottomLevel {
+    MeshTriangles tris;  // object space, in leaf order
+    Bvh4 bvh4;
+    Aabb box;            // object-space box of the mesh
+    int rootNode = 0;    // nodes index once appended
+};
+
+// Appends b4's nodes and leaf blocks to ds.bvh4 with their child indices and triangle references
+// moved by the arrays' current sizes and triOffset; returns the root's new index.
+int appendBvh4(const Bvh4& b4, int triOffset, DeviceScene& ds) {
+    const int nodeOffset = int(ds.bvh4.nodes.size()), leafOffset = int(ds.bvh4.leaves.size());
+    for (dev::Bvh4Node n : b4.nodes) {
+        int* child = &n.child.x;
+        const int* count = &n.count.x;
+        for (int i = 0; i < 4; ++i)
+            if (child[i] != CLRT_INVALID) child[i] += count[i] > 0 ? leafOffset : nodeOffset;
+        ds.bvh4.nodes.push_back(n);
+    }
+    for (dev::Bvh4Leaf l : b4.leaves) {
+        int* prim = &l.prim.x;
+        for (int i = 0; i < 4; ++i)
+            if (prim[i] >= 0) prim[i] += triOffset;
+        ds.bvh4.leaves.push_back(l);
+    }
+    return nodeOffset;
+}
+
+// The mesh of shape s in object space (identity transform, no motion; material, texture set and light
+// belong to the instance), its BVH, triangles in leaf order.
+BottomLevel buildBottomLevel(const Scene& scene, const Shape& s) {
+    Shape objectSpace = s;
+    objectSpace.transform = Mat4::identity();
+    objectSpace.motion = Vec3(0, 0, 0);
+    objectSpace.materialIndex = CLRT_INVALID;
+    objectSpace.lightIndex = CLRT_INVALID;
+    BottomLevel b;
+    flattenMesh(scene, objectSpace, CLRT_INVALID, b.tris);
+    BvhBuildOptions opts;
+    opts.traversalCost = 2;  // as the world BVH's (flatten_geometry.cpp, buildDeviceBvh)
+    Bvh bvh = buildBvh(b.tris.boxes, opts);
+    MeshTriangles ordered;
+    for (int& ref : bvh.primRefs) {
+        ordered.triangles.push_back(b.tris.triangles[size_t(ref)]);
+        ordered.shading.push_back(b.tris.shading[size_t(ref)]);
+        ref = int(ordered.triangles.size()) - 1;
+    }
+    for (const Aabb& box : b.tris.boxes) b.box.grow(box);
+    ordered.degenerate = b.tris.degenerate;
+    ordered.nonFinite = b.tris.nonFinite;
+    b.tris = std::move(ordered);
+    b.bvh4 = collapseBvh4(bvh);
+    setLeafTriangles(b.bvh4, b.tris.triangles, int(b.tris.triangles.size()));
+    return b;
+}
+
+// Shape s as an instance of the bottom level b; false (warned) for a transform without inverse.
+bool makeInstance(const Shape& s, int texSet, const BottomLevel& b, dev::Instance& inst, Aabb& worldBox) {
+    Mat4 inv;
+    if (!s.transform.inverse(inv)) {
+        warn(s.source + ": singular transform; mesh skipped");
+        return false;
+    }
+    inst = dev::Instance{};
+    storeRows(inst.objectToWorld, s.transform);
+    storeRows(inst.worldToObject, inv);
+    inst.motion = toFloat4(s.motion);
+    inst.rootNode = b.rootNode;
+    inst.material = s.materialIndex;
+    inst.textureSet = texSet;
+    inst.mirrored = mirrorsOrientation(s.transform) ? 1 : 0;
+    Aabb box;
+    for (int c = 0; c < 8; ++c)
+        box.grow(s.transform.transformPoint(Vec3((c & 1) ? b.box.max.x : b.box.min.x, (c & 2) ? b.box.max.y : b.box.min.y,
+                                                 (c & 4) ? b.box.max.z : b.box.min.z)));
+    worldBox = sweptBox(box, s.motion);
+    return true;
+}
+
+// The top-level tree over the instances' world boxes, appended to ds.bvh4: each leaf lane becomes
+// the instance it holds (count 0, child ~((instance + 1) << 4), as intersect.cl's Entry_Instance
+// reads it). Returns its root's index; *maxStack its traversal stack need.
+int appendTopLevel(const std::vector<Aabb>& boxes, DeviceScene& ds, int* maxStack) {
+    BvhBuildOptions opts;
+    opts.traversalCost = 2;
+    opts.maxLeafSize = 1;  // one instance per leaf: entering it replaces the ray
+    Bvh top = buildBvh(boxes, opts);
+    Bvh4 b4 = collapseBvh4(top);
+    const int nodeOffset = int(ds.bvh4.nodes.size());
+    for (dev::Bvh4Node n : b4.nodes) {
+        int* child = &n.child.x;
+        int* count = &n.count.x;
+        for (int i = 0; i < 4; ++i) {
+            if (child[i] == CLRT_INVALID) continue;
+            if (count[i] > 0) {
+                const int instance = (&b4.leaves[size_t(child[i])].prim.x)[0];
+                child[i] = ~((instance + 1) << 4);
+                count[i] = 0;
+            } else {
+                child[i] += nodeOffset;
+            }
+        }
+        ds.bvh4.nodes.push_back(n);
+    }
+    *maxStack = b4.maxStack;
+    return nodeOffset;
+}
+
+}  // namespace
+
+std::vector<bool> instancedShapes(const Scene& scene, Instancing mode) {
+    std::vector<bool> out(scene.shapes.size(), false);
+    if (mode == Instancing::Flatten) return out;
+    std::map<int, size_t> placements;  // mesh index -> shapes that place it
+    auto eligible = [](const Shape& s) { return s.type == ShapeType::Mesh && s.lightIndex < 0; };
+    for (const Shape& s : scene.shapes)
+        if (eligible(s)) ++placements[s.meshIndex];
+    for (size_t i = 0; i < scene.shapes.size(); ++i) {
+        const Shape& s = scene.shapes[i];
+        if (!eligible(s)) continue;
+        const size_t k = placements[s.meshIndex], tris = scene.meshes.at(size_t(s.meshIndex)).indices.size() / 3;
+        out[i] = mode == Instancing::TwoLevel || (k >= 2 && k * tris >= kTwoLevelMinTriangles);
+    }
+    return out;
+}
+
+void flattenInstances(const Scene& scene, const std::vector<std::pair<const Shape*, int>>& jobs, int numWorldTriangles,
+                      DeviceScene& ds) {
+    const int numWorldLeaves = int(ds.bvh4.leaves.size());
+    const int worldStack = std::max(1, ds.bvh4.maxStack);
+    // One bottom level per (mesh, smooth): shapes of one mesh may shade it differently.
+    std::map<std::pair<int, bool>, BottomLevel> bottoms;
+    int bottomStack = 0;
+    for (const auto& job : jobs) {
+        auto key = std::make_pair(job.first->meshIndex, job.first->smooth);
+        if (bottoms.count(key)) continue;
+        BottomLevel& b = bottoms[key] = buildBottomLevel(scene, *job.first);
+        if (b.tris.triangles.empty()) continue;
+        b.rootNode = appendBvh4(b.bvh4, int(ds.triangles.size()), ds);
+        ds.triangles.insert(ds.triangles.end(), b.tris.triangles.begin(), b.tris.triangles.end());
+        ds.triangleShading.insert(ds.triangleShading.end(), b.tris.shading.begin(), b.tris.shading.end());
+        ds.skippedTriangles += b.tris.degenerate + b.tris.nonFinite;
+        bottomStack = std::max(bottomStack, b.bvh4.maxStack);
+        b.bvh4 = Bvh4{};
+    }
+    // The world tree's sphere references follow every triangle.
+    const int added = int(ds.triangles.size()) - numWorldTriangles;
+    for (int l = 0; l < numWorldLeaves; ++l)
+        for (int i = 0; i < 4; ++i) {
+            int& prim = (&ds.bvh4.leaves[size_t(l)].prim.x)[i];
+            if (prim >= numWorldTriangles) prim += added;
+        }
+    for (int& ref : ds.bvh.primRefs)
+        if (ref >= numWorldTriangles) ref += added;
+    std::vector<Aabb> boxes;
+    for (const auto& job : jobs) {
+        const BottomLevel& b = bottoms.at(std::make_pair(job.first->meshIndex, job.first->smooth));
+        dev::Instance inst;
+        Aabb box;
+        if (b.tris.triangles.empty() || !makeInstance(*job.first, job.second, b, inst, box)) continue;
+        ds.instances.push_back(inst);
+        boxes.push_back(box);
+    }
+    ds.params.numTriangles = int(ds.triangles.size());
+    if (ds.instances.empty()) return;
+    int topStack = 0;
+    ds.params.instanceRoot = appendTopLevel(boxes, ds, &topStack);
+    ds.params.numInstances = int(ds.instances.size());
+    ds.features.instances = true;
+    // The top root waits under the world traversal; an instance's tree above the top's entries.
+    ds.features.bvhStack = std::max(1 + worldStack, 1 + topStack + bottomStack);
+}
+
+}  // namespace clrt
