@@ -1,6 +1,6 @@
 // flatten_geometry.cpp — planes, spheres and mesh triangles in world space (meshes on all hardware
 // threads), then the BVH over triangles and spheres with the triangles stored in leaf order (see
-// flatten.h). Triangles keep flat or area-weighted smooth normals and uvs; spheres their affine maps.
+// flatten.h). Triangles keep flat or smooth normals (vertex_normals.h) and uvs; spheres their affine maps.
 // A mesh whose transformation mirrors (det < 0) has its winding reversed, as the course does, so its
 // geometric normal is the object-space one carried by the inverse transpose (see mirrorsOrientation).
 // Moving shapes (MotionBlur) keep their rest position; their motion rides in Triangle.v*.w and
@@ -14,6 +14,7 @@
 #include <utility>
 
 #include "flatten/flatten.h"
+#include "flatten/vertex_normals.h"
 #include "scene/transforms.h"
 #include "util/error.h"
 
@@ -52,23 +53,15 @@ void meshVertices(const Scene& scene, const Shape& s, MeshVertices& out) {
     std::vector<Vec3>& pw = out.pw;
     pw.resize(mesh.positions.size());
     for (size_t v = 0; v < pw.size(); ++v) pw[v] = s.transform.transformPoint(mesh.positions[v]);
-    // Smooth shading: given normals (transformed by the inverse transpose) or area-weighted ones.
+    // Smooth shading: the object-space vertex normals (vertex_normals.h) carried to world space by the
+    // inverse transpose; (0, 0, 0) where a vertex has none (the face normal is used there).
     std::vector<Vec3>& nw = out.nw;
     if (s.smooth) {
-        nw.assign(pw.size(), Vec3(0, 0, 0));
-        if (mesh.normals.size() == mesh.positions.size()) {
-            Mat4 inv;
-            Mat4 invT = s.transform.inverse(inv) ? inv.transposed() : Mat4::identity();
-            for (size_t v = 0; v < nw.size(); ++v) nw[v] = normalize(invT.transformVector(mesh.normals[v]));
-        } else {
-            for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
-                int a = mesh.indices[t], b = mesh.indices[t + kB], c = mesh.indices[t + kC];
-                Vec3 n = cross(pw[b] - pw[a], pw[c] - pw[a]);  // length = 2·area: area weighting
-                if (!isFinite(n)) continue;
-                nw[a] += n; nw[b] += n; nw[c] += n;
-            }
-            for (Vec3& n : nw) n = normalize(n);
-        }
+        nw = objectVertexNormals(mesh);
+        Mat4 inv;
+        const Mat4 invT = s.transform.inverse(inv) ? inv.transposed() : Mat4::identity();
+        for (Vec3& n : nw)
+            if (n != Vec3(0, 0, 0)) n = normalize(invT.transformVector(n));
     }
 }
 
