@@ -190,7 +190,9 @@ def run_scene(B, clrt, mi, a, sc, tmp):
     """References, agreement, and every (spp, run) of both renderers; returns (rows, runs_rows, meta)."""
     scene = make_scene(sc, tmp)
     B.log("%s (%dx%d, clrt depth %d, MIS, no roulette)" % (sc["name"], sc["res"][0], sc["res"][1], sc["depth"]))
-    ms = MitsubaPath(B, mi, scene, a.mitsuba_variant)
+    samplers = a.path_mi_samplers
+    mss = {smp: MitsubaPath(B, mi, scene, a.mitsuba_variant, smp) for smp in samplers}
+    ms = mss[samplers[0]]  # the reference's (any sampler is unbiased; the cache key names no sampler)
     cref, cmeta = B.reference(clrt, sc, scene, "default", a.refs, True, a.refresh_refs)
     mref, mfloor = floor_of(*mitsuba_reference(B, ms, sc, scene, a.refs, a.refresh_refs))
     ratio, agree = agreement(cref, mref)
@@ -199,14 +201,18 @@ def run_scene(B, clrt, mi, a, sc, tmp):
     meta = dict(scene=sc["name"], res="%dx%d" % sc["res"], clrt_depth=sc["depth"], mitsuba_max_depth=ms.max_depth,
                 ref_spp=sc["ref_spp"], clrt_floor=cmeta["relmse"], mitsuba_floor=mfloor, ratio=ratio, agree=agree,
                 refs_relmse=B.rel_mse(mref, cref, 1.0), warnings=ms.warnings)
-    ms.image(4, 0)  # warm-up (Dr.Jit compiles once per size)
+    for m in mss.values():
+        m.image(4, 0)  # warm-up (Dr.Jit compiles once per size)
     meta["clrt_setup_cpu"] = setup_cpu(B, clrt, scene, 3)
     spps = [s for s in (a.spp_list or SPP)]
     runs = []
     for spp in spps:
         for k in range(a.runs):  # run k of both back to back: drift hits both alike
-            for who in ("clrt", "mitsuba"):
-                t, img = clrt_render(B, clrt, scene, spp, k + 1) if who == "clrt" else ms.render(spp, k + 1)
+            for who in ["clrt"] + [mitsuba_label(smp) for smp in samplers]:
+                if who == "clrt":
+                    t, img = clrt_render(B, clrt, scene, spp, k + 1)
+                else:
+                    t, img = mss[who.split("-")[-1] if "-" in who else "independent"].render(spp, k + 1)
                 ref, floor = (cref, cmeta["relmse"]) if who == "clrt" else (mref, mfloor)
                 if who == "clrt":
                     t["cpu_render"] = max(t["cpu"] - meta["clrt_setup_cpu"], 1e-6)
@@ -217,17 +223,30 @@ def run_scene(B, clrt, mi, a, sc, tmp):
                                  cpu_s=t["cpu"], cpu_render_s=t["cpu_render"], relmse=e, relmse_net=max(e - floor, 1e-12)))
                 B.log("  %-7s spp %4d seed %d: %.3f s (wall %.3f, CPU %.3f)  relMSE %.4g" % (
                     who, spp, k + 1, t["t"], t["wall"], t["cpu_render"], e))
-    return summarize(B, sc, runs, spps), runs, meta
+    return summarize(B, sc, runs, spps, [mitsuba_label(smp) for smp in samplers]), runs, meta
 
 
-def summarize(B, sc, runs, spps):
+def mitsuba_label(sampler):
+    """The runs' renderer name of a Mitsuba sampler ("mitsuba" for its default, independent)."""
+    return "mitsuba" if sampler == "independent" else "mitsuba-" + sampler
+
+
+def summarize(B, sc, runs, spps, labels):
+    rows = []
+    for label in labels:
+        rows += summarize_one(B, sc, [r for r in runs if r["renderer"] in ("clrt", label)], spps, label)
+    return rows
+
+
+def summarize_one(B, sc, runs, spps, label):
     """One row per spp: medians of both renderers, efficiencies, the ratio and its two factors (wall and
     CPU), and the ratio's spread over run pairs of equal seed."""
     rows = []
     for spp in spps:
         c = [r for r in runs if r["renderer"] == "clrt" and r["spp"] == spp]
-        m = [r for r in runs if r["renderer"] == "mitsuba" and r["spp"] == spp]
-        row = dict(scene=sc["name"], spp=spp, runs=len(c))
+        m = [r for r in runs if r["renderer"] == label and r["spp"] == spp]
+        row = dict(scene=sc["name"], spp=spp, runs=len(c), mitsuba_sampler=label.split("-")[-1] if "-" in label
+                   else "independent")
         for who, rs in (("clrt", c), ("mitsuba", m)):
             for k in ("time_s", "wall_s", "cpu_render_s", "relmse", "relmse_net"):
                 row["%s_%s" % (who, k)] = B.med([r[k] for r in rs])
@@ -253,7 +272,7 @@ def plot(name, runs, meta, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(1, 2, figsize=(13, 4.8))
-    for who, col in (("clrt", "C0"), ("mitsuba", "C3")):
+    for who, col in zip(["clrt"] + sorted({r["renderer"] for r in runs} - {"clrt"}), ("C0", "C3", "C2", "C1")):
         rs = [r for r in runs if r["renderer"] == who]
         for i, key in enumerate(("time_s", "cpu_render_s")):
             ax[i].scatter([r[key] for r in rs], [r["relmse_net"] for r in rs], color=col, s=14, label=who)
@@ -288,12 +307,12 @@ def report(B, a, metas, rows, seconds):
         lines.append("| %s | %s | %d / %d | %d | %s | %s | %.3g |" % (
             m["scene"], m["res"], m["clrt_depth"], m["mitsuba_max_depth"], m["ref_spp"],
             " ".join("%.4f" % r for r in m["ratio"]), "yes" if m["agree"] else "**no**", m["refs_relmse"]))
-    lines += ["", "| scene | spp | clrt s (CPU) | Mitsuba s (CPU) | clrt relMSE | Mitsuba relMSE | time factor (CPU) | "
-              "noise factor | efficiency clrt/Mitsuba [min-max] | by CPU [min-max] |", "|---|---|---|---|---|---|---|---|---|---|"]
+    lines += ["", "| scene | spp | Mitsuba sampler | clrt s (CPU) | Mitsuba s (CPU) | clrt relMSE | Mitsuba relMSE | time factor (CPU) | "
+              "noise factor | efficiency clrt/Mitsuba [min-max] | by CPU [min-max] |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        lines.append("| %s | %d | %.3g (%.3g) | %.3g (%.3g) | %.3g | %.3g | %.2f (%.2f) | %.2f | **%.2f** [%.2f-%.2f] | "
+        lines.append("| %s | %d | %s | %.3g (%.3g) | %.3g (%.3g) | %.3g | %.3g | %.2f (%.2f) | %.2f | **%.2f** [%.2f-%.2f] | "
                      "**%.2f** [%.2f-%.2f] |" % (
-                         r["scene"], r["spp"], r["clrt_time_s"], r["clrt_cpu_render_s"], r["mitsuba_time_s"],
+                         r["scene"], r["spp"], r["mitsuba_sampler"], r["clrt_time_s"], r["clrt_cpu_render_s"], r["mitsuba_time_s"],
                          r["mitsuba_cpu_render_s"], r["clrt_relmse_net"], r["mitsuba_relmse_net"], r["time_factor"],
                          r["cpu_factor"], r["noise_factor"], r["eff_ratio"], r["eff_ratio_min"], r["eff_ratio_max"],
                          r["eff_ratio_cpu"], r["eff_ratio_cpu_min"], r["eff_ratio_cpu_max"]))
@@ -334,6 +353,7 @@ def main(B, clrt, a):
     dr.set_thread_count(a.threads)
     a.mi_version = mi.__version__
     a.spp_list = [int(x) for x in a.spp.split(",") if x] if a.spp else None
+    a.path_mi_samplers = [x for x in a.mitsuba_samplers.split(",") if x] or ["independent"]
     tmp = tempfile.mkdtemp(prefix="clrt-bench-mipath-")
     wanted = set(filter(None, a.scenes.split(",")))
     scenes = [s for s in SCENES if os.path.exists(s["path"]) and (not wanted or s["name"] in wanted)]
