@@ -67,6 +67,9 @@ def renderer_params(c):
 def integrator(c):
     """Mitsuba's path with clrt's depth (see the module comment) and no roulette."""
     params = renderer_params(c)
+    r = _camera(c).find("Renderer")
+    if r is None or (r.text or "").strip() != "PathTracing":
+        c.warn("the camera is not path traced in clrt (no <Renderer>PathTracing): the images will differ")
     nee = bool(params & {"NextEventEstimation", "MultipleImportanceSampling"})
     if "RussianRoulette" in params:
         c.warn("RussianRoulette: clrt's roulette lifts the depth cap; Mitsuba renders without roulette at the cap")
