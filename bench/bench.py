@@ -473,6 +473,11 @@ def parse_args(argv=None):
                     "least noisy at 16 and 64 spp on these scenes)")
     ap.add_argument("--path-only", action="store_true", help="only the path-traced scenes (bench/bench_path.py)")
     ap.add_argument("--no-path", action="store_true", help="skip the path-traced scenes")
+    ap.add_argument("--mitsuba-path", action="store_true", help="only the path-traced scenes against Mitsuba 3's path "
+                    "integrator (bench/bench_mitsuba_path.py; --scenes, --spp, --runs apply)")
+    ap.add_argument("--mitsuba-variant", default="llvm_ad_rgb", choices=["llvm_ad_rgb", "scalar_rgb"],
+                    help="Mitsuba variant for --mitsuba-path (default llvm_ad_rgb: the faster on 2 cores)")
+    ap.add_argument("--depth-check", action="store_true", help="with --mitsuba-path: also the depth-mapping test")
     ap.add_argument("--replot", metavar="DIR", help="only redraw the plots of DIR (a results folder) from its CSVs")
     return ap.parse_args(argv)
 
@@ -886,6 +891,9 @@ def main():
     if a.path_only:  # issue 16's strategies on the path-traced scenes alone
         import bench_path
         return bench_path.main_path_only(sys.modules[__name__], clrt, a)
+    if a.mitsuba_path:  # issue 32: the path tracer against Mitsuba's path integrator
+        import bench_mitsuba_path
+        return bench_mitsuba_path.main(sys.modules[__name__], clrt, a)
     mi, mi_version = mitsuba_module(a)
     strategies, pipelines, samplers = variant_options(a, help_text, strategies)
     scenes = select_scenes(a)

@@ -7,6 +7,9 @@ inline Faces; Transformations; shadingMode), Triangle, Sphere (Center, Radius, T
 Materials' DiffuseReflectance, Point/Directional/Area lights and SphericalDirectionalLight (lat-long,
 and probe maps resampled to lat-long). Drops, with a warning each: specular/mirror/dielectric/conductor
 terms, textures, spot and ambient lights, MeshInstance, LightMesh/LightSphere, degamma, thin lens.
+With path_tracing=True (bench/bench_mitsuba_path.py) it also converts what a path-traced course scene
+needs (to_mitsuba_path.py: mirrors, dielectrics, conductors, BRDF diffuse scaling, LightMesh,
+LightSphere, two-sided AreaLights, MeshInstance, the depth and roulette settings).
 
 Conventions (measured against clrt, see bench/README.md "Against Mitsuba 3"):
 - Radiance: the course's shading model has no 1/π in the diffuse term (L = kd·cosθ·E); Mitsuba's
@@ -45,7 +48,8 @@ def _mat_mul(a, b):
 
 
 class Converter:
-    def __init__(self, path, warn=None):
+    def __init__(self, path, warn=None, path_tracing=False):
+        self.path_tracing = path_tracing
         self.path = os.path.abspath(path)
         self.base = os.path.dirname(self.path)
         self.root = ET.parse(self.path).getroot()
@@ -122,6 +126,10 @@ class Converter:
     # ------------------------------------------------------------------------------------ materials
     def bsdf(self, mid):
         if mid in self.materials:
+            return self.materials[mid]
+        if self.path_tracing:
+            import to_mitsuba_path
+            self.materials[mid] = to_mitsuba_path.bsdf(self, mid)
             return self.materials[mid]
         mat = None
         mats = self.root.find("Materials")
@@ -223,6 +231,9 @@ class Converter:
                     self.warn("Sphere %s: textures dropped" % el.get("id"))
                 world = m @ np.array([[r, 0, 0, c[0]], [0, r, 0, c[1]], [0, 0, r, c[2]], [0, 0, 0, 1.0]])
                 out["sphere_" + el.get("id")] = {"type": "sphere", "to_world": world.tolist(), "bsdf": self.bsdf(el.find("Material").text.strip())}
+            elif self.path_tracing and el.tag in ("LightMesh", "LightSphere", "MeshInstance"):
+                import to_mitsuba_path
+                to_mitsuba_path.shape(self, el, out)
             else:
                 self.warn("%s dropped (not converted)" % el.tag)
         return out
@@ -281,6 +292,9 @@ class Converter:
             elif el.tag == "DirectionalLight":
                 out["dir_" + lid] = {"type": "directional", "direction": _nums(el.find("Direction")),
                                      "irradiance": {"type": "rgb", "value": _nums(el.find("Radiance"))}}
+            elif el.tag == "AreaLight" and self.path_tracing:
+                import to_mitsuba_path
+                out.update(to_mitsuba_path.area_light(self, el))
             elif el.tag == "AreaLight":
                 p, n, size = np.array(_nums(el.find("Position"))), np.array(_nums(el.find("Normal"))), float(el.find("Size").text)
                 n = n / np.linalg.norm(n)
@@ -346,11 +360,15 @@ def _look_at(origin, target, up):
     return m.tolist()
 
 
-def scene_dict(path, spp, res=None, warn=None):
+def scene_dict(path, spp, res=None, warn=None, path_tracing=False):
     """(scene, warnings): the Mitsuba scene dict whose image is the course's image of the scene's first
-    camera (see the module's comment)."""
-    c = Converter(path, warn)
-    scene = {"type": "scene", "integrator": {"type": "path", "max_depth": 2}, "sensor": c.sensor(spp, res)}
+    camera (see the module's comment). path_tracing: the camera's path tracer (to_mitsuba_path.py)."""
+    c = Converter(path, warn, path_tracing)
+    integrator = {"type": "path", "max_depth": 2}
+    if path_tracing:
+        import to_mitsuba_path
+        integrator = to_mitsuba_path.integrator(c)
+    scene = {"type": "scene", "integrator": integrator, "sensor": c.sensor(spp, res)}
     scene.update(c.shapes())
     scene.update(c.emitters())
     return scene, c.warnings

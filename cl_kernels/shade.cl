@@ -558,7 +558,9 @@ inline void Light_ShadowRays(SceneParams scene, PathState path, ShadingPoint sp,
                                 &wi, &dist);
         *sr = Shadow_Make(sp, materials, path.throughput.xyz, wi, dist, e, scene.shadowEpsilon);
 #ifdef CLRT_HAS_PATH_TRACING
-        sr->contribution *= Path_LightSampleWeight(scene.pathMode, &lights[l], sp, materials, envDist, lightData, wi, e);
+        /* at the last vertex (depth cap) no BSDF ray follows to take the other share: weight 1 */
+        if (path.depth < scene.maxDepth)
+            sr->contribution *= Path_LightSampleWeight(scene.pathMode, &lights[l], sp, materials, envDist, lightData, wi, e);
 #endif
 #ifdef CLRT_HAS_OBJECT_LIGHTS
         if (ObjectLight_IsShape(&lights[l])) ObjectLight_AimShadow(sr, sp.position.xyz + dist * wi);

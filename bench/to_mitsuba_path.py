@@ -1,0 +1,265 @@
+"""to_mitsuba_path.py — the path-tracing part of bench/to_mitsuba.py (Converter(..., path_tracing=True)):
+what a path-traced course scene (hw6) needs beyond the direct-lighting conversion. Used by
+bench/bench_mitsuba_path.py; reads the camera's MaxRecursionDepth and RendererParams, the scene's
+<BRDFs>, Materials (type mirror/conductor/dielectric, Transparency, MirrorReflectance, RefractionIndex,
+AbsorptionIndex, DiffuseReflectance, SpecularReflectance, degamma), LightMesh, LightSphere, MeshInstance
+and AreaLight.
+
+Conventions (clrt's, docs/scene-format.md "Path tracing" and cl_kernels/path.cl, and how they map):
+- Depth: clrt's MaxRecursionDepth d is the camera ray plus at most d bounces, and next-event estimation
+  (NEE, MIS) still samples the lights at the last vertex: the longest path has d + 2 segments. Mitsuba's
+  max_depth counts segments (1: emitters seen directly; 2: direct light), so max_depth = d + 2 with NEE
+  or MIS, d + 1 without (clrt's BSDF-only strategies end at the last vertex's emission).
+  bench/bench_mitsuba_path.py --depth-check measures it.
+- Russian roulette: clrt's (RussianRoulette) lifts the depth cap, which Mitsuba's rr_depth cannot
+  match; the comparison runs without it and Mitsuba's is disabled (rr_depth = max_depth + 1).
+- Diffuse: f = kd/π in normalized Modified(Blinn)Phong and TorranceSparrow (Mitsuba ρ = kd), kd in the
+  other BRDFs and in classic materials (ρ = π·kd). A ρ above 1 is a raw 1x1 bitmap (Mitsuba's rgb
+  reflectance refuses it).
+- Not mapped (warned, dropped on the Mitsuba side, so a benchmark scene should have none of them): the
+  specular lobe of every BRDF (SpecularReflectance: Phong, Blinn-Phong and Torrance-Sparrow as the
+  course defines them have no Mitsuba 3 plugin; Mitsuba 3 dropped Mitsuba 0.6's phong, and its
+  roughconductor/roughplastic are GGX/Beckmann microfacets with another shape and Fresnel); textures;
+  Roughness (clrt perturbs the mirror direction uniformly in a square, not a microfacet law); a
+  dielectric's AbsorptionCoefficient (Beer's law needs a medium, which `path` does not trace); a
+  LightSphere that is not a similarity (Mitsuba's sphere cannot be an ellipsoid).
+- Mirror: conductor material "none" times MirrorReflectance. Conductor: conductor with eta =
+  RefractionIndex, k = AbsorptionIndex (Mitsuba's exact complex Fresnel; clrt's formula is the course's
+  approximation, equal at normal incidence). Dielectric (and the older Transparency form): dielectric
+  int_ior = RefractionIndex, ext_ior = 1. A specular material that also has kd or ks is, in clrt, the
+  sum of its specular child and its non-specular part, each picked with probability 1/2: in Mitsuba a
+  blendbsdf of weight 0.5 of twice each. Opaque BSDFs are two-sided, as clrt's path tracer is.
+- Emission: clrt's LightMesh and AreaLight emit from both faces, Mitsuba's area emitter from the front
+  only. A closed LightMesh (every edge shared by two faces) gets each face turned to point away from the
+  mesh's centroid (exact for convex light boxes; the inside is closed off anyway); an open one is two
+  copies offset by ±1e-4 of its size, facing away from each other. An AreaLight (not geometry in clrt)
+  is two such rectangles with a black BSDF: in Mitsuba they occlude and the camera sees them (clrt's do
+  neither; no benchmark scene shows either). LightSphere: a sphere with an area emitter (outside).
+"""
+import math
+
+import numpy as np
+
+
+def _nums(el, default=None):
+    if el is None or el.text is None or not el.text.strip():
+        return default
+    return [float(x) for x in el.text.split()]
+
+
+def _camera(c):
+    return c.root.find("Cameras")[0]
+
+
+def clrt_depth(c):
+    """The first camera's MaxRecursionDepth (its own, else the scene's, else clrt's default 6)."""
+    for el in (_camera(c).find("MaxRecursionDepth"), c.root.find("MaxRecursionDepth")):
+        if el is not None and el.text and el.text.strip():
+            return min(256, int(el.text))
+    return 6
+
+
+def renderer_params(c):
+    el = _camera(c).find("RendererParams")
+    return set((el.text or "").split()) if el is not None else set()
+
+
+def integrator(c):
+    """Mitsuba's path with clrt's depth (see the module comment) and no roulette."""
+    params = renderer_params(c)
+    r = _camera(c).find("Renderer")
+    if r is None or (r.text or "").strip() != "PathTracing":
+        c.warn("the camera is not path traced in clrt (no <Renderer>PathTracing): the images will differ")
+    nee = bool(params & {"NextEventEstimation", "MultipleImportanceSampling"})
+    if "RussianRoulette" in params:
+        c.warn("RussianRoulette: clrt's roulette lifts the depth cap; Mitsuba renders without roulette at the cap")
+    if not params & {"MultipleImportanceSampling"}:
+        c.warn("RendererParams '%s': Mitsuba's path always uses MIS (same expectation %s)" % (
+            " ".join(sorted(params)), "as clrt's NEE" if nee else "only without point lights"))
+    max_depth = clrt_depth(c) + (2 if nee else 1)
+    return {"type": "path", "max_depth": max_depth, "rr_depth": max_depth + 1, "hide_emitters": False}
+
+
+# ------------------------------------------------------------------------------------------- materials
+def diffuse_scale(c, mat):
+    """1 where the material's diffuse term is kd/π (normalized Modified(Blinn)Phong, TorranceSparrow), π
+    where it is kd (the other BRDFs and classic materials)."""
+    bid = mat.get("BRDF")
+    brdfs = c.root.find("BRDFs")
+    for b in (brdfs if brdfs is not None and bid else []):
+        if b.get("id") == bid:
+            if b.tag == "TorranceSparrow":
+                return 1.0
+            if b.tag in ("ModifiedPhong", "ModifiedBlinnPhong") and b.get("normalized", "").lower() == "true":
+                return 1.0
+    return math.pi
+
+
+def value(c, name, rgb):
+    """An rgb spectrum, or a raw 1x1 bitmap when a component is above 1."""
+    rgb = [float(x) for x in rgb]
+    if max(rgb) <= 1.0:
+        return {"type": "rgb", "value": rgb}
+    return {"type": "bitmap", "filename": c._constant_exr(name, rgb), "raw": True, "filter_type": "nearest"}
+
+
+def _specular(c, mid, mat, kind, scale):
+    """The specular child of mirror/conductor/dielectric materials (times scale), or None."""
+    mirror = [scale * x for x in _nums(mat.find("MirrorReflectance"), [0, 0, 0])]
+    n = _nums(mat.find("RefractionIndex"), [1.0])[0]
+    if _nums(mat.find("Roughness"), [0])[0] > 0:
+        c.warn("material %s: Roughness dropped (clrt's perturbation is no microfacet law)" % mid)
+    if kind == "mirror":
+        return {"type": "conductor", "material": "none", "specular_reflectance": value(c, "mr_" + mid, mirror)}
+    if kind == "conductor":
+        k = _nums(mat.find("AbsorptionIndex"), [0.0])[0]
+        c.warn("material %s: conductor Fresnel exact in Mitsuba, the course's approximation in clrt" % mid)
+        return {"type": "conductor", "eta": n, "k": k, "specular_reflectance": value(c, "mr_" + mid, mirror)}
+    if kind == "dielectric" or mat.find("Transparency") is not None:
+        absorb = _nums(mat.find("AbsorptionCoefficient"), [0, 0, 0])
+        if mat.find("Transparency") is not None or max(absorb) > 0:
+            c.warn("material %s: the dielectric's absorption dropped (path traces no media)" % mid)
+        if scale != 1.0:
+            c.warn("material %s: a dielectric with kd/ks: its half weight is not mapped" % mid)
+        return {"type": "dielectric", "int_ior": n, "ext_ior": 1.0}
+    return None
+
+
+def bsdf(c, mid):
+    """Mitsuba's BSDF of material mid (see the module comment)."""
+    mat = next((m for m in (c.root.find("Materials") or []) if m.get("id") == mid), None)
+    if mat is None:
+        c.warn("material %s not found: black" % mid)
+        return {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0, 0.0, 0.0]}}
+    kd = _nums(mat.find("DiffuseReflectance"), [0, 0, 0])
+    ks = _nums(mat.find("SpecularReflectance"), [0, 0, 0])
+    if mat.get("degamma", "").lower() == "true":
+        kd, ks = [x ** 2.2 for x in kd], [x ** 2.2 for x in ks]
+    if max(ks) > 0:
+        c.warn("material %s: SpecularReflectance (the BRDF's specular lobe) dropped: no Mitsuba 3 equivalent" % mid)
+    kind = mat.get("type", "")
+    nonspec = max(kd) > 0 or max(ks) > 0  # clrt's pick between the two parts (path.cl) counts ks too
+    is_spec = kind in ("mirror", "conductor", "dielectric") or mat.find("Transparency") is not None
+    w = 2.0 if (is_spec and nonspec) else 1.0  # each part picked with probability 1/2: blend of twice each
+    rho = [w * diffuse_scale(c, mat) * x for x in kd]
+    diffuse = {"type": "diffuse", "reflectance": value(c, "kd_" + mid, rho)}
+    spec = _specular(c, mid, mat, kind, w) if is_spec else None
+    if spec is None:
+        return {"type": "twosided", "bsdf": diffuse}
+    if not nonspec:
+        return spec if spec["type"] == "dielectric" else {"type": "twosided", "bsdf": spec}
+    blend = {"type": "blendbsdf", "weight": 0.5, "a_diffuse": diffuse, "b_specular": spec}
+    return blend if spec["type"] == "dielectric" else {"type": "twosided", "bsdf": blend}
+
+
+# ---------------------------------------------------------------------------------------------- shapes
+def _inline_mesh(c, el):
+    """World-space (positions, faces) of an inline-faced (Light)Mesh."""
+    faces_el = el.find("Faces")
+    if faces_el.get("plyFile") or faces_el.get("binaryFile"):
+        raise ValueError("%s %s: only inline faces are converted for object lights" % (el.tag, el.get("id")))
+    idx = np.array(_nums(faces_el, []), dtype=np.int64).reshape(-1, 3)
+    idx = idx + int(faces_el.get("vertexOffset", "0")) - (0 if c.zero_based else 1)
+    used = np.unique(idx)
+    remap = -np.ones(len(c.vertices), dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    m = c.object_matrix(el)
+    pos = c.vertices[used] @ m[:3, :3].T + m[:3, 3]
+    return pos, remap[idx]
+
+
+def _is_closed(faces):
+    edges = {}
+    for f in faces:
+        for a, b in ((f[0], f[1]), (f[1], f[2]), (f[2], f[0])):
+            k = (min(a, b), max(a, b))
+            edges[k] = edges.get(k, 0) + 1
+    return all(v == 2 for v in edges.values())
+
+
+def _emitting_faces(pos, faces):
+    """(positions, faces) whose front faces emit where clrt's two-sided light mesh does."""
+    fn = np.cross(pos[faces[:, 1]] - pos[faces[:, 0]], pos[faces[:, 2]] - pos[faces[:, 0]])
+    if _is_closed(faces):  # turn each face away from the centroid
+        out = (pos[faces].mean(axis=1) - pos.mean(axis=0)) * fn
+        flip = out.sum(axis=1) < 0
+        faces = faces.copy()
+        faces[flip] = faces[flip][:, ::-1]
+        return pos, faces
+    eps = 1e-4 * float(np.linalg.norm(pos.max(0) - pos.min(0)))
+    n = fn / np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-30)
+    tri = pos[faces]  # (F, 3, 3): one copy per side, offset along its own normal
+    front = (tri + eps * n[:, None, :]).reshape(-1, 3)
+    back = (tri - eps * n[:, None, :])[:, ::-1, :].reshape(-1, 3)
+    allp = np.vstack([front, back])
+    return allp, np.arange(len(allp)).reshape(-1, 3)
+
+
+def _emitter(el):
+    return {"type": "area", "radiance": {"type": "rgb", "value": _nums(el.find("Radiance"))}}
+
+
+def shape(c, el, out):
+    """LightMesh, LightSphere or MeshInstance el into out (Mitsuba shapes by name)."""
+    mid = el.find("Material").text.strip() if el.find("Material") is not None else None
+    if el.tag == "LightMesh":
+        pos, faces = _emitting_faces(*_inline_mesh(c, el))
+        path = c._write_ply("LightMesh_%s" % el.get("id"), pos, faces)
+        out["lightmesh_" + el.get("id")] = {"type": "ply", "filename": path, "face_normals": True,
+                                            "bsdf": c.bsdf(mid), "emitter": _emitter(el)}
+    elif el.tag == "LightSphere":
+        ci = int(el.find("Center").text) - (0 if c.zero_based else 1)
+        r = float(el.find("Radius").text)
+        m = c.object_matrix(el)
+        s = np.linalg.svd(m[:3, :3], compute_uv=False)
+        if s.max() - s.min() > 1e-6 * s.max():
+            c.warn("LightSphere %s: not a similarity (an ellipsoid): Mitsuba renders a sphere" % el.get("id"))
+        world = m @ np.array([[r, 0, 0, c.vertices[ci][0]], [0, r, 0, c.vertices[ci][1]],
+                              [0, 0, r, c.vertices[ci][2]], [0, 0, 0, 1.0]])
+        out["lightsphere_" + el.get("id")] = {"type": "sphere", "to_world": world.tolist(), "bsdf": c.bsdf(mid),
+                                              "emitter": _emitter(el)}
+    else:
+        _instance(c, el, mid, out)
+
+
+def _instance(c, el, mid, out):
+    """A MeshInstance of a Mesh: the base's geometry, its own material and transformation (after the
+    base's unless resetTransform)."""
+    base = next((m for m in c.root.find("Objects") if m.tag == "Mesh" and m.get("id") == el.get("baseMeshId")), None)
+    if base is None:
+        c.warn("MeshInstance %s: base %s is no Mesh: dropped" % (el.get("id"), el.get("baseMeshId")))
+        return
+    tmp = {}
+    c._mesh(base, tmp, "Mesh")
+    if not tmp:
+        return
+    d = dict(next(iter(tmp.values())))
+    own = c.object_matrix(el)
+    d["to_world"] = (own if el.get("resetTransform", "").lower() == "true" else own @ c.object_matrix(base)).tolist()
+    d["bsdf"] = c.bsdf(mid or base.find("Material").text.strip())
+    if el.find("Textures") is not None:
+        c.warn("MeshInstance %s: textures dropped" % el.get("id"))
+    out["instance_" + el.get("id")] = d
+
+
+def area_light(c, el):
+    """clrt's two-sided AreaLight square: two Mitsuba rectangles back to back (see the module comment)."""
+    p, n = np.array(_nums(el.find("Position"))), np.array(_nums(el.find("Normal")))
+    size = float(el.find("Size").text)
+    n = n / np.linalg.norm(n)
+    a = np.cross(n, [1.0, 0, 0] if abs(n[0]) < 0.9 else [0, 1.0, 0])
+    a /= np.linalg.norm(a)
+    b = np.cross(n, a)
+    if el.find("Transformations") is not None:
+        c.warn("AreaLight %s: Transformations ignored" % el.get("id"))
+    black = {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0, 0.0, 0.0]}}
+    out = {}
+    for side, sgn in (("front", 1.0), ("back", -1.0)):
+        m = np.eye(4)  # rectangle: [-1,1]^2 in xy, normal +z; the back copy mirrored so that it faces -n
+        m[:3, 0], m[:3, 1], m[:3, 2] = a * size / 2, sgn * b * size / 2, sgn * n
+        m[:3, 3] = p + sgn * 1e-4 * size * n
+        out["area_%s_%s" % (el.get("id", "0"), side)] = {"type": "rectangle", "to_world": m.tolist(), "bsdf": black,
+                                                         "emitter": _emitter(el)}
+    c.warn("AreaLight %s: two back-to-back rectangles (they occlude and are visible in Mitsuba; clrt's is not geometry)"
+           % el.get("id"))
+    return out
