@@ -56,7 +56,7 @@ FEATURE_SCENES = ["cube_point", "veachAjar", "tt_pisa_courtyard"]
 RAY_BENCH_SCENES = ["cube_point", "veachAjar", "tt_pisa_courtyard"]
 ALL_STRATEGIES = ["uniform", "cosine", "importance", "mis"]
 REF_SEEDS = (1000001, 1000002)
-CLRT_SAMPLERS = ("stratified", "independent")  # clrt render --sampler
+CLRT_SAMPLERS = ("stratified", "independent", "zsobol")  # clrt render --sampler
 MITSUBA_SAMPLERS = ("independent", "stratified", "multijitter", "ldsampler", "orthogonal")
 EPS_REL = 1e-2
 

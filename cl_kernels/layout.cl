@@ -50,7 +50,7 @@
         M(SceneParams, maxDepth) M(SceneParams, backgroundTexture) M(SceneParams, envLight)       \
         M(SceneParams, seed) M(SceneParams, splitDepth) M(SceneParams, envScale)                  \
         M(SceneParams, envImage) M(SceneParams, envMapping) M(SceneParams, numPlanes)               \
-        M(SceneParams, pathMode) M(SceneParams, pixelSampler) M(SceneParams, shadowEpsilon) M(SceneParams, pixelSamplerPad)                                      \
+        M(SceneParams, pathMode) M(SceneParams, pixelSampler) M(SceneParams, shadowEpsilon) M(SceneParams, samplerWidth) M(SceneParams, samplerLog2Spp)\
     S(Ray) M(Ray, origin) M(Ray, direction)                                                       \
     S(Hit) M(Hit, t) M(Hit, prim) M(Hit, u) M(Hit, v)                                             \
     S(PathState) M(PathState, throughput) M(PathState, pixel) M(PathState, sample)                \

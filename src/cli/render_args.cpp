@@ -32,7 +32,9 @@ const char* const kRenderHelp =
     "  --seed N              random seed (default 0); the same seed gives the same image\n"
     "  --sampler S           stratified (default): camera jitter, light and BSDF samples stratified\n"
     "                        over a pixel's samples (scrambled (0,2)-sequence); independent: every\n"
-    "                        number drawn independently (the noise of a plain Monte Carlo renderer)\n"
+    "                        number drawn independently (the noise of a plain Monte Carlo renderer);\n"
+    "                        zsobol: every dimension (jitter, lens, time, picks, light, BSDF, roulette)\n"
+    "                        from one Owen-scrambled Sobol sequence in Z order over the pixels\n"
     "  --rr-rule R           Russian roulette of RussianRoulette cameras: unbiased (default), or course:\n"
     "                        the course's hw6 references' biased rule (a hit's own light is counted\n"
     "                        undivided when the path dies there; see docs/scene-format.md); ignored\n"
@@ -88,7 +90,7 @@ RenderArgs parseRenderArgs(int argc, char** argv, int start) {
         {{"--spp"}, true, [&](Str f, Str v) { a.spp = parseIntArg(f, v, 1, kMaxSamplesPerPixel); }},
         {{"--seed"}, true, [&](Str f, Str v) { a.seed = uint32_t(parseIntArg(f, v, 0, 2147483647)); }},
         {{"--sampler"}, true, [&](Str f, Str v) {
-             if (!parsePixelSampler(v, a.pixelSampler)) throwExpected(f, "stratified or independent", v);
+             if (!parsePixelSampler(v, a.pixelSampler)) throwExpected(f, "stratified, independent or zsobol", v);
          }},
         {{"--rr-rule"}, true, [&](Str f, Str v) {
              if (!parseRouletteRule(v, a.rouletteRule)) throwExpected(f, "unbiased or course", v);
