@@ -16,10 +16,11 @@ import bench_path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-REF_SPP = 1024
+REF_SPP = int(os.environ.get("CLRT_REF_SPP", "1024"))  # the reference: stratified, two halves
 
 
 def scenes(tmp):
+    """name -> (scene copy, white): the bench scenes at half resolution, the path scenes at 64x64 (MIS, NEE+RR)."""
     out = {}
     for sc in bench.SCENES:
         if sc["name"] == "tt_diffuse":
