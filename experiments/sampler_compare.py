@@ -4,7 +4,9 @@ path scenes (bench/bench_path.py: the hw6 path box and its glass variant, MIS an
 study docs/studies/2026-12-04-sobol-sampler.md. Reference per scene: `stratified` at REF_SPP as two
 independent halves; its own relMSE (relMSE(half a, half b) / 4) is subtracted from every point. Also the
 render time of each run (clrt's stats line: kernel seconds), so a sampler's cost shows separately.
-Writes CSV rows to stdout: scene, sampler, spp, seed, relmse, floor, seconds.
+Writes CSV rows to stdout: scene, sampler, spp, seed, relmse, floor, seconds, and relmse2: the relMSE
+after a 2x2 box downsample of image and reference (floor not subtracted), which credits error that
+cancels between neighbouring pixels (the Z order's blue noise) where per-pixel relMSE cannot.
 usage: python3 experiments/sampler_compare.py CLRT_EXE [scene ...] [--spp 4,16,64] [--runs 3]"""
 import os
 import sys
@@ -35,6 +37,13 @@ def scenes(tmp):
     return out
 
 
+def box2(a):
+    """a (h, w, 3) averaged over 2x2 pixel blocks (odd last row/column dropped)."""
+    h, w = a.shape[0] // 2 * 2, a.shape[1] // 2 * 2
+    a = a[:h, :w]
+    return 0.25 * (a[0::2, 0::2] + a[1::2, 0::2] + a[0::2, 1::2] + a[1::2, 1::2])
+
+
 def main():
     exe = sys.argv[1]
     args = sys.argv[2:]
@@ -47,7 +56,7 @@ def main():
     tmp = tempfile.mkdtemp(prefix="sampler-cmp-")
     all_scenes = scenes(tmp)
     names = args or list(all_scenes)
-    print("scene,sampler,spp,seed,relmse,floor,seconds", flush=True)
+    print("scene,sampler,spp,seed,relmse,floor,seconds,relmse2", flush=True)
     for name in names:
         path, white = all_scenes[name]
         _, a, _ = clrt.render(path, REF_SPP // 2, 1000001, "default+stratified")
@@ -59,7 +68,8 @@ def main():
                 for smp in ("stratified", "zsobol", "independent"):
                     st, img, _ = clrt.render(path, spp, seed, "default+" + smp)
                     e = bench.rel_mse(img, ref, white) - floor
-                    print("%s,%s,%d,%d,%.6g,%.3g,%.4f" % (name, smp, spp, seed, e, floor, st.get("render", st["wall"])),
+                    e2 = bench.rel_mse(box2(img), box2(ref), white)
+                    print("%s,%s,%d,%d,%.6g,%.3g,%.4f,%.6g" % (name, smp, spp, seed, e, floor, st.get("render", st["wall"]), e2),
                           flush=True)
 
 
