@@ -56,7 +56,7 @@ FEATURE_SCENES = ["cube_point", "veachAjar", "tt_pisa_courtyard"]
 RAY_BENCH_SCENES = ["cube_point", "veachAjar", "tt_pisa_courtyard"]
 ALL_STRATEGIES = ["uniform", "cosine", "importance", "mis"]
 REF_SEEDS = (1000001, 1000002)
-CLRT_SAMPLERS = ("stratified", "independent")  # clrt render --sampler
+CLRT_SAMPLERS = ("stratified", "independent", "zsobol")  # clrt render --sampler
 MITSUBA_SAMPLERS = ("independent", "stratified", "multijitter", "ldsampler", "orthogonal")
 EPS_REL = 1e-2
 
@@ -465,7 +465,7 @@ def parse_args(argv=None):
     ap.add_argument("--spp", default="", help="comma list: only these spp points of each scene (default: all)")
     ap.add_argument("--pipelines", default="", help="comma list of clrt --pipeline values (fused, wavefront), each run "
                     "as its own variant (strategy label 'mis+fused'), interleaved run by run; default: clrt's own choice")
-    ap.add_argument("--samplers", default="", help="comma list of clrt --sampler values (stratified, independent), each "
+    ap.add_argument("--samplers", default="", help="comma list of clrt --sampler values (stratified, independent, zsobol), each "
                     "run as its own variant (label 'mis+fused+independent'; the default sampler adds nothing); default: "
                     "clrt's own (stratified)")
     ap.add_argument("--mitsuba-samplers", default="independent,multijitter", help="comma list of Mitsuba samplers, "

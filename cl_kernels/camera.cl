@@ -1,7 +1,8 @@
 /* camera.cl — camera ray generation for samples [firstSample, firstSample + samples) of a range of
  * pixels, pixel-major (the samples of one pixel are adjacent). One sample per pixel: the
  * pixel centre (as the course does); more: jitter over the pixel (box filter), from the stratified
- * sampler (CLRT_PIXEL_SAMPLER_STRATIFIED: a scrambled (0,2)-net per pixel), else independent uniforms.
+ * sampler (CLRT_PIXEL_SAMPLER_STRATIFIED: a scrambled (0,2)-net per pixel; _ZSOBOL: Z-ordered Sobol),
+ * else independent uniforms.
  * ApertureSize > 0: thin lens focused at FocusDistance, square aperture as in the course (its 2D sample
  * stratified likewise). */
 #ifndef CLRT_CAMERA_CL
@@ -26,7 +27,12 @@ __attribute__((always_inline)) inline void Camera_GenerateAt(CameraParams cam, S
                                                              int y, int sample, PathState* path, Ray* ray) {
     RngKey key = Rng_Key(scene.seed, pixel, sample, 1u);
     float jx = 0.5f, jy = 0.5f;
-    if (cam.spp > 1 && scene.pixelSampler == CLRT_PIXEL_SAMPLER_STRATIFIED) {
+    if (cam.spp > 1 && scene.pixelSampler == CLRT_PIXEL_SAMPLER_ZSOBOL) {
+        /* dimensions (0, 1) of the camera's path id 1 (common.cl) */
+        const float2 j = ZSobol_2D(scene, pixel, sample, 1u, 0u);
+        jx = j.x;
+        jy = j.y;
+    } else if (cam.spp > 1 && scene.pixelSampler == CLRT_PIXEL_SAMPLER_STRATIFIED) {
         /* the pixel's samples spread over a (0,2)-net: stratified in x and y alone too (common.cl) */
         const float2 j = Rng_Stratified2D(key, sample, 0u);
         jx = j.x;
@@ -41,8 +47,9 @@ __attribute__((always_inline)) inline void Camera_GenerateAt(CameraParams cam, S
         float3 dn = normalize(dir);
         float tFocus = cam.focusDistance / dot(dn, -cam.w.xyz);
         float3 focus = org + tFocus * dn;
-        const float2 ab = scene.pixelSampler == CLRT_PIXEL_SAMPLER_STRATIFIED ? Rng_Stratified2D(key, sample, 2u)
-                                                                  : (float2)(Rng_Uniform(key, 2), Rng_Uniform(key, 3));
+        const float2 ab = scene.pixelSampler == CLRT_PIXEL_SAMPLER_ZSOBOL       ? ZSobol_2D(scene, pixel, sample, 1u, 2u)
+                          : scene.pixelSampler == CLRT_PIXEL_SAMPLER_STRATIFIED ? Rng_Stratified2D(key, sample, 2u)
+                                                                                : (float2)(Rng_Uniform(key, 2), Rng_Uniform(key, 3));
         float a = (ab.x - 0.5f) * cam.apertureSize;
         float b = (ab.y - 0.5f) * cam.apertureSize;
         org = org + a * cam.u.xyz + b * cam.v.xyz;
@@ -52,7 +59,7 @@ __attribute__((always_inline)) inline void Camera_GenerateAt(CameraParams cam, S
     Ray r;
     r.origin = (float4)(org, 0.0f);
 #ifdef CLRT_HAS_MOTION_BLUR
-    r.origin.w = MotionBlur_Time(scene.seed, pixel, sample);
+    r.origin.w = Sampler_Time(scene, pixel, sample);
 #endif
     r.direction = (float4)(dir, INFINITY);
     *ray = r;

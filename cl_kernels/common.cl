@@ -121,12 +121,75 @@ inline float2 Rng_Stratified2D(RngKey k, int sample, uint dim) {
     return (float2)((float)(x >> 8), (float)(y >> 8)) * (1.0f / 16777216.0f);
 }
 
-/* The 2D sample of dimensions (dim, dim + 1) at a shading point of `path`: stratified over the pixel's
- * samples or independent, by scene.pixelSampler. key = Rng_Key(scene.seed, path.pixel, path.sample, path.pathId). */
+/* ---- Z-ordered Sobol samples (CLRT_PIXEL_SAMPLER_ZSOBOL) ---------------------------------------------
+ * One Owen-scrambled (0,2)-sequence (Sobol's first two dimensions) for the whole image, its index laid
+ * out as [pixel's Morton code | sample], after Ahmed and Wonka 2020 ("Screen-space blue-noise diffusion of
+ * Monte Carlo sampling error via hierarchical ordering of pixels") as pbrt-v4's ZSobolSampler does; own
+ * construction. Per dimension pair (dim, pathId, seed — not the pixel) both parts of the index are shuffled
+ * by a nested top-down scramble of their bits (each bit flipped by a hash of the bits above it, Laine–
+ * Karras on the reversed bits), and the point is Owen-scrambled with one seed for the whole image:
+ * - a pixel's 2^L samples (L = scene.samplerLog2Spp) are the points of one aligned index block: a
+ *   (0,L,2)-net, any 2^m of them from a multiple of 2^m a (0,m,2)-net, as the stratified sampler's;
+ * - an aligned 2x2 (4^k) block of pixels holds an aligned index block too: together their points form
+ *   a (0,L+2k,2)-net, so neighbouring pixels' errors are anti-correlated (blue noise in screen space);
+ * - pairs of dimensions get independent shuffles of the sample part (padding), as with `stratified`.
+ * 1D dimensions take a pair's first coordinate. Index bits above 32 (images × samples beyond 2^32) and
+ * samples from 2^L on (progressive passes) select independent scrambles instead (an "epoch" hash).
+ * Host replica: tests/test_sampler.cpp. */
+
+/* The 16 low bits of v spread to the even bits. */
+inline uint Bits_Spread2(uint v) {
+    v &= 0x0000ffffu;
+    v = (v | (v << 8)) & 0x00ff00ffu;
+    v = (v | (v << 4)) & 0x0f0f0f0fu;
+    v = (v | (v << 2)) & 0x33333333u;
+    v = (v | (v << 1)) & 0x55555555u;
+    return v;
+}
+
+/* v with each bit flipped by a hash of (seed, the bits above it): a nested uniform scramble of the
+ * index, top-down, so aligned blocks of indices stay aligned blocks. */
+inline uint Bits_NestedTopDown(uint v, uint seed) { return Bits_Reverse(Bits_LaineKarras(Bits_Reverse(v), seed)); }
+
+/* The point of sample `sample` of pixel `pixel` for dimensions (dim, dim + 1) of path pathId. */
+inline float2 ZSobol_2D(SceneParams scene, int pixel, int sample, uint pathId, uint dim) {
+    const uint width = (uint)max(scene.samplerWidth, 1);
+    const uint log2Spp = (uint)clamp(scene.samplerLog2Spp, 0, 31);
+    const uint x = (uint)pixel % width, y = (uint)pixel / width;
+    const uint morton = (Bits_Spread2(y) << 1) | Bits_Spread2(x);
+    const uint dimSeed = Rng_Hash(Rng_Hash(scene.seed ^ 0x3c6ef372u) ^ Rng_Hash(pathId * 0x27d4eb2fu ^ Rng_Hash(dim + 0x1b873593u)));
+    const uint zPixel = Bits_NestedTopDown(morton, dimSeed);
+    const uint zSample = Bits_NestedTopDown((uint)sample, Rng_Hash(dimSeed ^ zPixel));
+    const uint mask = (1u << log2Spp) - 1u;
+    const uint idx = (log2Spp == 0u ? zPixel : zPixel << log2Spp) | (zSample & mask);
+    /* what the index cannot hold: Morton bits shifted out, samples past 2^L */
+    const uint epoch = Rng_Hash((log2Spp == 0u ? 0u : zPixel >> (32u - log2Spp)) ^ Rng_Hash(((uint)sample >> log2Spp) + 0x2545f491u));
+    const uint sX = Rng_Hash(dimSeed ^ epoch ^ 0xa54ff53au), sY = Rng_Hash(dimSeed ^ epoch ^ 0x510e527fu);
+    const uint px = Bits_Reverse(Bits_LaineKarras(idx, sX)); /* radical inverse of idx, Owen-scrambled */
+    const uint py = Bits_Reverse(Bits_LaineKarras(Sobol_Dim1Reversed(idx), sY));
+    return (float2)((float)(px >> 8), (float)(py >> 8)) * (1.0f / 16777216.0f);
+}
+
+/* The 2D sample of dimensions (dim, dim + 1) at a shading point of `path` for light and BSDF samples:
+ * stratified over the pixel's samples, Z-ordered Sobol or independent, by scene.pixelSampler.
+ * key = Rng_Key(scene.seed, path.pixel, path.sample, path.pathId). */
 inline float2 Sampler_2D(SceneParams scene, PathState path, RngKey key, uint dim) {
+    if (scene.pixelSampler == CLRT_PIXEL_SAMPLER_ZSOBOL) return ZSobol_2D(scene, path.pixel, path.sample, path.pathId, dim);
     if (scene.pixelSampler == CLRT_PIXEL_SAMPLER_STRATIFIED)
         return Rng_Stratified2D(key, path.sample, dim);
     return (float2)(Rng_Uniform(key, dim), Rng_Uniform(key, dim + 1u));
+}
+
+/* The dimensions the stratified sampler leaves independent (glossy perturbations, lobe and Fresnel
+ * picks, roulette): Z-ordered Sobol under CLRT_PIXEL_SAMPLER_ZSOBOL, else independent uniforms
+ * (Rng_Uniform of dim, and dim + 1 for the second coordinate). */
+inline float2 Sampler_Other2D(SceneParams scene, PathState path, RngKey key, uint dim) {
+    if (scene.pixelSampler == CLRT_PIXEL_SAMPLER_ZSOBOL) return ZSobol_2D(scene, path.pixel, path.sample, path.pathId, dim);
+    return (float2)(Rng_Uniform(key, dim), Rng_Uniform(key, dim + 1u));
+}
+inline float Sampler_Other1D(SceneParams scene, PathState path, RngKey key, uint dim) {
+    if (scene.pixelSampler == CLRT_PIXEL_SAMPLER_ZSOBOL) return ZSobol_2D(scene, path.pixel, path.sample, path.pathId, dim).x;
+    return Rng_Uniform(key, dim);
 }
 
 /* ---- Motion blur ------------------------------------------------------------------------------
@@ -136,6 +199,11 @@ inline float2 Sampler_2D(SceneParams scene, PathState path, RngKey key, uint dim
  * Rays carry it in Ray.origin.w and ShadowRay.direction.w. */
 inline float MotionBlur_Time(uint seed, int pixel, int sample) {
     return Rng_Uniform(Rng_Key(seed, pixel, sample, 0u), 0u);
+}
+/* The same under the scene's sampler: Z-ordered Sobol (path id 0, dimension 0) or MotionBlur_Time. */
+inline float Sampler_Time(SceneParams scene, int pixel, int sample) {
+    if (scene.pixelSampler == CLRT_PIXEL_SAMPLER_ZSOBOL) return ZSobol_2D(scene, pixel, sample, 0u, 0u).x;
+    return MotionBlur_Time(scene.seed, pixel, sample);
 }
 
 /* x^e for x >= 0 (Phong lobes). exp2(e·log2 x) instead of pow(): PoCL's one-value pow() costs about

@@ -53,7 +53,8 @@
         M(SceneParams, seed) M(SceneParams, splitDepth) M(SceneParams, envScale)                  \
         M(SceneParams, envImage) M(SceneParams, envMapping) M(SceneParams, numPlanes)               \
         M(SceneParams, pathMode) M(SceneParams, pixelSampler) M(SceneParams, shadowEpsilon)   \
-        M(SceneParams, numInstances) M(SceneParams, instanceRoot)                                 \
+        M(SceneParams, samplerWidth) M(SceneParams, samplerLog2Spp)                               \
+        M(SceneParams, numInstances) M(SceneParams, instanceRoot) M(SceneParams, sceneParamsPad)  \
     S(Ray) M(Ray, origin) M(Ray, direction)                                                       \
     S(Hit) M(Hit, t) M(Hit, prim) M(Hit, u) M(Hit, v) M(Hit, instance) M(Hit, hitPad)  \
     S(PathState) M(PathState, throughput) M(PathState, pixel) M(PathState, sample)                \

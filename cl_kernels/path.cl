@@ -272,7 +272,7 @@ inline void Path_ShadeHit(SceneParams scene, PathState path, Material m, float3 
     uint dim = 4u + 32u * (uint)path.depth;
     const int course = (mode & CLRT_PATH_RR_COURSE) != 0;
     float courseScale = 1.0f;
-    const int courseSurvives = course && Path_CourseRoulette(throughput, path.throughput.w, Rng_Uniform(key, dim + 4u),
+    const int courseSurvives = course && Path_CourseRoulette(throughput, path.throughput.w, Sampler_Other1D(scene, path, key, dim + 4u),
                                                              &courseScale);
     throughput *= courseScale;
     sp.wo.w = courseScale; /* sample_lights scales this hit's light samples by it (course rule only) */
@@ -284,12 +284,12 @@ inline void Path_ShadeHit(SceneParams scene, PathState path, Material m, float3 
     if (course && !courseSurvives) return;
     if (path.depth >= scene.maxDepth || (!specular && !diffuse)) return;
     float pSpecular = specular ? (diffuse ? 0.5f : 1.0f) : 0.0f;
-    int pickSpecular = Rng_Uniform(key, dim + 3u) < pSpecular;
+    int pickSpecular = Sampler_Other1D(scene, path, key, dim + 3u) < pSpecular;
     float3 weight, org, dir;
     float pdf = 0.0f;
     if (pickSpecular) {
-        float2 uGlossy = (float2)(Rng_Uniform(key, dim), Rng_Uniform(key, dim + 1u));
-        if (!Path_SpecularBounce(m, wo, ns, ng, pWorld, t, inside, Rng_Uniform(key, dim + 2u), uGlossy, &weight, &org,
+        float2 uGlossy = Sampler_Other2D(scene, path, key, dim);
+        if (!Path_SpecularBounce(m, wo, ns, ng, pWorld, t, inside, Sampler_Other1D(scene, path, key, dim + 2u), uGlossy, &weight, &org,
                                  &dir))
             return;
         weight /= pSpecular;
@@ -307,7 +307,7 @@ inline void Path_ShadeHit(SceneParams scene, PathState path, Material m, float3 
         float3 fVec = pickSpecular ? weight * pSpecular : weight * pdf * (1.0f - pSpecular) / dot(sp.normal.xyz, dir);
         childW = Path_CourseChildW(path.throughput.xyz, path.throughput.w, next, fVec, pickSpecular);
         if (childW == 0.0f) return;
-    } else if ((mode & CLRT_PATH_RR) && !Path_RussianRoulette(&next, Rng_Uniform(key, dim + 4u))) {
+    } else if ((mode & CLRT_PATH_RR) && !Path_RussianRoulette(&next, Sampler_Other1D(scene, path, key, dim + 4u))) {
         return;
     }
     PathState c = path;

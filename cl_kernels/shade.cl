@@ -301,7 +301,8 @@ inline void Shade_ClassicChildren(SceneParams scene, PathState path, Material m,
                                   float3 wo, float t, int insideDielectric, RngKey key, uint dim, ShadeResult* res) {
     float cosI = dot(wo, ns);
     float3 reflDir = normalize(2.0f * cosI * ns - wo);
-    reflDir = Glossy_Perturb(reflDir, m.roughness, Rng_Uniform(key, dim), Rng_Uniform(key, dim + 1));
+    const float2 uRefl = Sampler_Other2D(scene, path, key, dim);
+    reflDir = Glossy_Perturb(reflDir, m.roughness, uRefl.x, uRefl.y);
     float3 reflOrg = Ray_OffsetOrigin(p, ng);
     switch (m.kind) {
 #ifdef CLRT_HAS_MIRROR
@@ -332,14 +333,15 @@ inline void Shade_ClassicChildren(SceneParams scene, PathState path, Material m,
             fr = Fresnel_Dielectric(c, cosT, n1, n2);
         }
         float3 refrDir = normalize(-eta * wo + (eta * c - cosT) * ns);
-        refrDir = Glossy_Perturb(refrDir, m.roughness, Rng_Uniform(key, dim + 3), Rng_Uniform(key, dim + 4));
+        const float2 uRefr = Sampler_Other2D(scene, path, key, dim + 3u);
+        refrDir = Glossy_Perturb(refrDir, m.roughness, uRefr.x, uRefr.y);
         float3 refrOrg = Ray_OffsetOrigin(p, -ng);
         if (fr >= 1.0f) {
             Child_Make(res, 0, path, weight, 0u, reflOrg, reflDir);
         } else if (path.depth < scene.splitDepth) {
             Child_Make(res, 0, path, weight * fr, 0u, reflOrg, reflDir);
             Child_Make(res, 1, path, weight * (1.0f - fr), 1u, refrOrg, refrDir);
-        } else if (Rng_Uniform(key, dim + 2) < fr) {
+        } else if (Sampler_Other1D(scene, path, key, dim + 2u) < fr) {
             Child_Make(res, 0, path, weight, 0u, reflOrg, reflDir);
         } else {
             Child_Make(res, 1, path, weight, 1u, refrOrg, refrDir);
@@ -575,7 +577,7 @@ inline void Light_ShadowRays(SceneParams scene, PathState path, ShadingPoint sp,
 #endif
 #ifdef CLRT_HAS_MOTION_BLUR
     /* the shadow rays of a sample see the scene at the sample's time (camera.cl) */
-    sr->direction.w = sr2->direction.w = MotionBlur_Time(scene.seed, path.pixel, path.sample);
+    sr->direction.w = sr2->direction.w = Sampler_Time(scene, path.pixel, path.sample);
 #endif
 }
 

@@ -217,7 +217,7 @@ double imageMean(const ImageRGB& img) {
 
 }  // namespace
 
-TEST_CASE("stratified sampler: less noise than independent samples, the same expectation", "[sampler][render]") {
+TEST_CASE("stratified and zsobol samplers: less noise than independent samples, the same expectation", "[sampler][render]") {
     TempDir tmp;
     ImageRGB sky;
     sky.width = 64; sky.height = 32; sky.isHdr = true;
@@ -231,15 +231,19 @@ TEST_CASE("stratified sampler: less noise than independent samples, the same exp
     // Reference: 4096 independent samples; its own relMSE is ~1/256 of a 16-spp independent render's.
     const ImageRGB ref = renderCamera(scene, scene.cameras.at(0), 4096, 99, PixelSampler::Independent);
     const int spp = 16, runs = 8;
-    double errS = 0, errI = 0;
+    double errS = 0, errI = 0, errZ = 0;
     ImageRGB meanS = ref;
     std::fill(meanS.pixels.begin(), meanS.pixels.end(), 0.0f);
+    ImageRGB meanZ = meanS;
     for (int k = 0; k < runs; ++k) {
         const ImageRGB s = renderCamera(scene, scene.cameras.at(0), spp, uint32_t(k + 1), PixelSampler::Stratified);
         const ImageRGB i = renderCamera(scene, scene.cameras.at(0), spp, uint32_t(k + 1), PixelSampler::Independent);
         errS += relativeMse(s, ref) / runs;
         errI += relativeMse(i, ref) / runs;
+        const ImageRGB z = renderCamera(scene, scene.cameras.at(0), spp, uint32_t(k + 1), PixelSampler::ZSobol);
+        errZ += relativeMse(z, ref) / runs;
         for (size_t j = 0; j < s.pixels.size(); ++j) meanS.pixels[j] += s.pixels[j] / runs;
+        for (size_t j = 0; j < z.pixels.size(); ++j) meanZ.pixels[j] += z.pixels[j] / runs;
     }
     const double errMean = relativeMse(meanS, ref);
     WARN("sky scene, " << spp << " spp: relMSE stratified " << errS << ", independent " << errI << " (ratio " << errI / errS
@@ -250,9 +254,15 @@ TEST_CASE("stratified sampler: less noise than independent samples, the same exp
     // 0.25 leaves room for the reference's own noise.
     CHECK(errMean < 0.25 * errS);
     CHECK(imageMean(meanS) == Approx(imageMean(ref)).epsilon(0.003));
+    const double errMeanZ = relativeMse(meanZ, ref);
+    WARN("zsobol: relMSE " << errZ << " (independent / zsobol " << errI / errZ << "); mean of " << runs << " renders "
+                           << errMeanZ << "; image mean " << imageMean(meanZ));
+    CHECK(errI / errZ > 1.5);
+    CHECK(errMeanZ < 0.25 * errZ);
+    CHECK(imageMean(meanZ) == Approx(imageMean(ref)).epsilon(0.003));
 }
 
-TEST_CASE("clrt render --sampler: stratified by default, independent on request, anything else a usage error", "[sampler][cli]") {
+TEST_CASE("clrt render --sampler: stratified by default, independent or zsobol on request, anything else a usage error", "[sampler][cli]") {
     TempDir d;
     ImageRGB sky;
     sky.width = 8; sky.height = 4; sky.isHdr = true;
@@ -270,9 +280,14 @@ TEST_CASE("clrt render --sampler: stratified by default, independent on request,
     const std::vector<float> def = render(""), strat = render(" --sampler stratified"), indep = render(" --sampler independent");
     CHECK(def == strat);
     CHECK(def != indep);
+    const std::vector<float> z1 = render(" --sampler zsobol"), z2 = render(" --sampler zsobol");
+    CHECK(z1 == z2);  // deterministic per seed
+    CHECK(z1 != def);
+    CHECK(z1 != indep);
+    CHECK(render(" --sampler zsobol --seed 3") != z1);
     const int rc = runClrt(base + " --sampler sobol", d.file("log"));
     const CliResult r = cliResult(rc, readFileBytes(d.file("log")));
     CHECK(r.rc == 1);
     CHECK(r.errorLines == 1);
-    CHECK(readFileBytes(d.file("log")).find("--sampler: expected stratified or independent, got 'sobol'") != std::string::npos);
+    CHECK(readFileBytes(d.file("log")).find("--sampler: expected stratified, independent or zsobol, got 'sobol'") != std::string::npos);
 }

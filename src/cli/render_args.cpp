@@ -33,7 +33,9 @@ const char* const kRenderHelp =
     "  --seed N              random seed (default 0); the same seed gives the same image\n"
     "  --sampler S           stratified (default): camera jitter, light and BSDF samples stratified\n"
     "                        over a pixel's samples (scrambled (0,2)-sequence); independent: every\n"
-    "                        number drawn independently (the noise of a plain Monte Carlo renderer)\n"
+    "                        number drawn independently (the noise of a plain Monte Carlo renderer);\n"
+    "                        zsobol: every dimension (jitter, lens, time, picks, light, BSDF, roulette)\n"
+    "                        from one Owen-scrambled Sobol sequence in Z order over the pixels\n"
     "  --instancing M        how meshes placed several times are stored: auto (default: once, under\n"
     "                        their own BVH, where their placements hold >= 2^20 triangles), flatten\n"
     "                        (every triangle in world space), two-level (every mesh that is no light\n"
@@ -97,7 +99,7 @@ RenderArgs parseRenderArgs(int argc, char** argv, int start) {
         {{"--spp"}, true, [&](Str f, Str v) { a.spp = parseIntArg(f, v, 1, kMaxSamplesPerPixel); }},
         {{"--seed"}, true, [&](Str f, Str v) { a.seed = uint32_t(parseIntArg(f, v, 0, 2147483647)); }},
         {{"--sampler"}, true, [&](Str f, Str v) {
-             if (!parsePixelSampler(v, a.pixelSampler)) throwExpected(f, "stratified or independent", v);
+             if (!parsePixelSampler(v, a.pixelSampler)) throwExpected(f, "stratified, independent or zsobol", v);
          }},
         {{"--instancing"}, true, [&](Str f, Str v) {
              if (v == "auto") a.instancing = Instancing::Auto;

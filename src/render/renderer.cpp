@@ -216,10 +216,17 @@ const char* renderStageName(int stage) {
     return stage >= 0 && stage < STAGE_COUNT ? names[stage] : "?";
 }
 
+// The --sampler names, one row per PixelSampler.
+static const struct { PixelSampler kind; const char* name; } kPixelSamplers[] = {
+    {PixelSampler::Stratified, "stratified"}, {PixelSampler::Independent, "independent"}, {PixelSampler::ZSobol, "zsobol"}};
+
 bool parsePixelSampler(const std::string& name, PixelSampler& out) {
-    if (name != "stratified" && name != "independent") return false;
-    out = name == "stratified" ? PixelSampler::Stratified : PixelSampler::Independent;
-    return true;
+    for (const auto& row : kPixelSamplers)
+        if (name == row.name) {
+            out = row.kind;
+            return true;
+        }
+    return false;
 }
 
 bool parseRouletteRule(const std::string& name, RouletteRule& out) {
@@ -228,7 +235,11 @@ bool parseRouletteRule(const std::string& name, RouletteRule& out) {
     return true;
 }
 
-const char* pixelSamplerName(PixelSampler s) { return s == PixelSampler::Stratified ? "stratified" : "independent"; }
+const char* pixelSamplerName(PixelSampler s) {
+    for (const auto& row : kPixelSamplers)
+        if (s == row.kind) return row.name;
+    return "?";
+}
 
 Renderer::Renderer(DeviceContext& dc, const DeviceScene& scene) : impl_(new Impl(dc, scene)) {}
 Renderer::~Renderer() = default;
@@ -299,6 +310,9 @@ static BatchPlan planBatches(const DeviceScene& ds, size_t numPixels, const Rend
     plan.bounces = ds.features.bounces() || sp.pathMode != 0;
     sp.seed = settings.seed;
     sp.pixelSampler = int(settings.pixelSampler);
+    sp.samplerWidth = cp.width;  // the Z order and index width of CLRT_PIXEL_SAMPLER_ZSOBOL
+    sp.samplerLog2Spp = 0;
+    while (sp.samplerLog2Spp < 31 && (1 << sp.samplerLog2Spp) < cp.spp) ++sp.samplerLog2Spp;
     // Path tracing with Russian roulette has no depth cap (the course's references show none): the
     // roulette ends paths, kMaxRecursionDepth is the backstop.
     if (sp.pathMode & CLRT_PATH_RR) sp.maxDepth = kMaxRecursionDepth;

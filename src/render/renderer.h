@@ -24,9 +24,14 @@ namespace clrt {
 // How the numbers of a pixel's samples are drawn (clrt render --sampler, SceneParams.pixelSampler).
 // Stratified: camera jitter, lens, light and BSDF 2D samples stratified over a pixel's samples (a
 // scrambled (0,2)-sequence, cl_kernels/common.cl); Independent: every number independent, the noise of
-// renderers that sample so (tests/test_brdf.cpp).
-enum class PixelSampler { Independent = CLRT_PIXEL_SAMPLER_INDEPENDENT, Stratified = CLRT_PIXEL_SAMPLER_STRATIFIED };
-// "stratified", "independent" (the --sampler values); false for any other name.
+// renderers that sample so (tests/test_brdf.cpp); ZSobol: every dimension (camera, lens, time, picks,
+// light, BSDF, roulette) from one Owen-scrambled Sobol sequence in Z order over the pixels (common.cl).
+enum class PixelSampler {
+    Independent = CLRT_PIXEL_SAMPLER_INDEPENDENT,
+    Stratified = CLRT_PIXEL_SAMPLER_STRATIFIED,
+    ZSobol = CLRT_PIXEL_SAMPLER_ZSOBOL
+};
+// "stratified", "independent", "zsobol" (the --sampler values); false for any other name.
 bool parsePixelSampler(const std::string& name, PixelSampler& out);
 const char* pixelSamplerName(PixelSampler s);
 

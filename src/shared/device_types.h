@@ -319,13 +319,17 @@ typedef struct SceneParams {
     int pathMode;          /* 0: classic recursive ray tracing; else CLRT_PATH_* bits (cl_kernels/path.cl) */
     int pixelSampler;      /* CLRT_PIXEL_SAMPLER_*: how a pixel's camera, light and BSDF samples are drawn (common.cl) */
     float shadowEpsilon;   /* shadow rays start this far off the surface along its normal (at least the robust offset) */
+    int samplerWidth;      /* CLRT_PIXEL_SAMPLER_ZSOBOL: the image width (pixel = y·width + x, for the Z order) */
+    int samplerLog2Spp;    /* and ceil(log2(samples per pixel)): the bits of the sample in its Sobol index */
     int numInstances;      /* instances of shared meshes (Instance); 0: every triangle is in world space */
     int instanceRoot;      /* nodes index of the top-level BVH's root (over instances), when numInstances > 0 */
+    int sceneParamsPad[2]; /* explicit padding to the float4 alignment */
 } SceneParams;
 
 /* SceneParams.pixelSampler (set per render from RenderSettings::pixelSampler, clrt render --sampler). */
 #define CLRT_PIXEL_SAMPLER_INDEPENDENT 0 /* every number an independent uniform (Rng_Uniform) */
 #define CLRT_PIXEL_SAMPLER_STRATIFIED 1  /* light and BSDF 2D samples stratified over a pixel's samples */
+#define CLRT_PIXEL_SAMPLER_ZSOBOL 2      /* every dimension from an Owen-scrambled Sobol (0,2)-sequence in Z order over pixels */
 
 /* SceneParams.pathMode: the camera's <Renderer>PathTracing and its <RendererParams> (set per render). */
 #define CLRT_PATH_ON 1          /* <Renderer>PathTracing</Renderer> */
