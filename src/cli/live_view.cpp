@@ -20,7 +20,14 @@ std::unique_ptr<LiveView> LiveView::start(const RenderArgs& a) {
     if (!a.previewAddress.empty()) {
         const PreviewAddress addr = parsePreviewAddress("--preview", a.previewAddress);
         // Stop: exactly what Ctrl-C does (cli/interrupt.h's signal thread takes it; a second one exits).
-        lv->server_ = std::make_unique<PreviewServer>(lv->state_, [] { ::kill(::getpid(), SIGINT); });
+        // Raised 50 ms later, from a thread of its own, so that the page gets its answer first (after the
+        // render, with --preview-keep, the signal exits at once).
+        lv->server_ = std::make_unique<PreviewServer>(lv->state_, [] {
+            std::thread([] {
+                std::this_thread::sleep_for(std::chrono::milliseconds(50));
+                ::kill(::getpid(), SIGINT);
+            }).detach();
+        });
         lv->server_->start(addr);
         std::fprintf(stderr, "preview: %s\n", lv->server_->url().c_str());
         std::fflush(stderr);

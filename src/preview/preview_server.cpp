@@ -31,7 +31,7 @@ namespace clrt {
 
 namespace {
 
-constexpr size_t kWorkers = 8;         // connections served at once
+constexpr size_t kWorkers = 16;        // connections served at once
 constexpr size_t kWaiting = 64;        // accepted connections waiting for a worker
 constexpr size_t kMaxBody = 64;        // request bodies (Stop has none)
 constexpr int kThumbWidth = 160;
@@ -357,8 +357,8 @@ void PreviewServer::start(const PreviewAddress& addr, const std::string& flag) {
     s.set_payload_max_length(kMaxBody);
     s.set_read_timeout(5, 0);
     s.set_write_timeout(5, 0);
-    s.set_keep_alive_timeout(5);
-    s.set_keep_alive_max_count(100);
+    s.set_keep_alive_timeout(2);     // an idle keep-alive connection gives its worker back soon
+    s.set_keep_alive_max_count(8);   // and so does a busy one, after 8 requests
     s.set_default_headers({{"Cache-Control", "no-store"}, {"X-Content-Type-Options", "nosniff"},
                            {"Referrer-Policy", "no-referrer"}, {"X-Frame-Options", "DENY"},
                            {"Content-Security-Policy", "default-src 'self'; img-src 'self' blob: data:; "

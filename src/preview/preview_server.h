@@ -2,7 +2,8 @@
 // libcpp-httplib-dev) on threads of its own that serves the embedded page (page.html, page.js) and the
 // JSON and image endpoints of a PreviewState, behind a random 128-bit token in the URL path. Nothing
 // on the file system is served by request path. Limits: request bodies (64 bytes), headers and URIs
-// (cpp-httplib's 8 KiB), 5 s read/write timeouts, 8 worker threads and 64 waiting connections (then
+// (cpp-httplib's 8 KiB), 5 s read/write timeouts, 16 worker threads (a connection keeps one for at
+// most 8 requests or 2 s idle) and 64 waiting connections (then
 // the accept loop waits and the kernel's backlog holds the rest). See docs/preview.md.
 #pragma once
 #include <functional>
