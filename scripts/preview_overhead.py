@@ -3,7 +3,9 @@
 (scenes/preview_box.xml camera 1, a fixed number of passes: --target-error 1e-12 stops at the --spp cap)
 run alternately without the preview and with it and one viewer that polls like the page does
 (status.json 4 times a second, image.png of the current camera whenever a new image is published).
-Reports the median of the `render=` time of clrt's stats line per mode and the overhead in percent.
+Reports per mode the median of the `render=` time of clrt's stats line (wall time: on a shared machine
+its noise can exceed the effect) and of the process's CPU time (user + system, from wait4: what the
+preview's threads add, which on a CPU device is taken from the render), and the differences in percent.
 Usage: python3 scripts/preview_overhead.py [--clrt build/clrt] [--runs 5] [--resolution 160x120]
        [--spp 256] [--device cpu]"""
 import argparse
@@ -56,7 +58,8 @@ def run(args, out, preview):
             if url:
                 t = threading.Thread(target=viewer, args=(url, stop, counts))
                 t.start()
-        rc = p.wait()
+        _, status, usage = os.wait4(p.pid, 0)
+        rc = p.returncode = os.waitstatus_to_exitcode(status)
         stop.set()
         if t:
             t.join()
@@ -64,7 +67,7 @@ def run(args, out, preview):
     m = re.search(r"render=([0-9.]+)s", text)
     if rc != 0 or not m:
         sys.exit("clrt failed (exit %d):\n%s" % (rc, text))
-    return float(m.group(1)), counts
+    return float(m.group(1)), usage.ru_utime + usage.ru_stime, counts
 
 
 def main():
@@ -75,18 +78,21 @@ def main():
     ap.add_argument("--spp", type=int, default=256)
     ap.add_argument("--device", default="cpu")
     args = ap.parse_args()
-    times = {False: [], True: []}
+    times, cpu = {False: [], True: []}, {False: [], True: []}
     with tempfile.TemporaryDirectory() as out:
         run(args, out, False)  # warm-up: kernel cache
         for i in range(args.runs):
             for preview in (False, True) if i % 2 == 0 else (True, False):
-                t, counts = run(args, out, preview)
+                t, c, counts = run(args, out, preview)
                 times[preview].append(t)
-                print("run %d %-12s render %.3f s%s" % (i + 1, "preview" if preview else "no preview", t,
+                cpu[preview].append(c)
+                print("run %d %-12s render %.3f s, cpu %.3f s%s" % (i + 1, "preview" if preview else "no preview", t, c,
                       " (viewer: %d status, %d images)" % (counts["status"], counts["images"]) if preview else ""),
                       flush=True)
     a, b = statistics.median(times[False]), statistics.median(times[True])
     print("median render time: %.3f s without the preview, %.3f s with one viewer: %+.1f%%" % (a, b, 100 * (b - a) / a))
+    a, b = statistics.median(cpu[False]), statistics.median(cpu[True])
+    print("median CPU time:    %.3f s without the preview, %.3f s with one viewer: %+.1f%%" % (a, b, 100 * (b - a) / a))
 
 
 if __name__ == "__main__":

@@ -197,6 +197,8 @@ TevClient::TevClient(const std::string& hostPort) : impl_(std::make_unique<Impl>
         warn("--display-server " + hostPort + ": cannot connect (" + why + "; is tev running?); rendering without it");
         return;
     }
+    timeval tv{5, 0};  // a tev that stops reading: a send gives up after 5 s (then: connection lost)
+    setsockopt(impl_->fd, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof tv);
     impl_->thread = std::thread([this] {
         sigset_t set;
         sigemptyset(&set);
@@ -213,14 +215,15 @@ TevClient::~TevClient() {
             impl_->closing = true;
         }
         impl_->cv.notify_all();
-        timeval tv{5, 0};  // a tev that stopped reading: give up after 5 s
-        setsockopt(impl_->fd, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof tv);
         impl_->thread.join();
     }
     if (impl_->fd >= 0) close(impl_->fd);
 }
 
-bool TevClient::connected() const { return impl_->fd >= 0 && !impl_->failed; }
+bool TevClient::connected() const {
+    std::lock_guard<std::mutex> lk(impl_->mu);
+    return impl_->fd >= 0 && !impl_->failed;
+}
 
 void TevClient::createImage(const std::string& name, int width, int height) { impl_->push({name, width, height, nullptr}); }
 
