@@ -30,6 +30,7 @@ def viewer(url, stop, counts):
         try:
             s = json.load(urllib.request.urlopen(url + "status.json", timeout=5))
             counts["status"] += 1
+            counts["renderThread"], counts["server"] = s["renderThreadSeconds"], s["serverSeconds"]
             cur = s["current"]
             if cur >= 0 and s["cameras"][cur]["version"] != seen and s["cameras"][cur]["hasImage"]:
                 seen = s["cameras"][cur]["version"]
@@ -49,7 +50,7 @@ def run(args, out, preview):
     log = os.path.join(out, "log.txt")
     with open(log, "w") as f:
         p = subprocess.Popen(cmd, stdout=f, stderr=f)
-        stop, counts, t = threading.Event(), {"status": 0, "images": 0}, None
+        stop, counts, t = threading.Event(), {"status": 0, "images": 0, "renderThread": 0, "server": 0}, None
         if preview:
             url = None
             while url is None and p.poll() is None:
@@ -87,7 +88,8 @@ def main():
                 times[preview].append(t)
                 cpu[preview].append(c)
                 print("run %d %-12s render %.3f s, cpu %.3f s%s" % (i + 1, "preview" if preview else "no preview", t, c,
-                      " (viewer: %d status, %d images)" % (counts["status"], counts["images"]) if preview else ""),
+                      " (viewer: %d status, %d images; preview's own time: render thread %.4f s, server %.4f s)" %
+                      (counts["status"], counts["images"], counts["renderThread"], counts["server"]) if preview else ""),
                       flush=True)
     a, b = statistics.median(times[False]), statistics.median(times[True])
     print("median render time: %.3f s without the preview, %.3f s with one viewer: %+.1f%%" % (a, b, 100 * (b - a) / a))

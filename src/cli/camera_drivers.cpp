@@ -134,6 +134,7 @@ std::vector<std::pair<std::string, double>> deviceThroughput(const std::vector<D
 // only when the rate limit allows one.
 PassObserver livePassObserver(LiveView& live, int camIndex, const StopRule& rule, const std::vector<DeviceWork>& work) {
     return [&live, camIndex, rule, &work](const ProgressiveResult& r, const std::function<ImageRGB()>& mean) {
+        const auto t0 = std::chrono::steady_clock::now();
         PassFigures f;
         f.spp = r.spp;
         f.relMse = r.relMse;
@@ -148,6 +149,7 @@ PassObserver livePassObserver(LiveView& live, int camIndex, const StopRule& rule
         f.throughput = deviceThroughput(work, r.passSamples);
         if (live.imageDue(camIndex)) live.image(camIndex, f, std::make_shared<const ImageRGB>(mean()));
         else live.figures(camIndex, f);
+        live.addRenderThreadSeconds(secondsSince(t0));
     };
 }
 

@@ -69,9 +69,11 @@ void LiveView::image(int index, const PassFigures& f, std::shared_ptr<const Imag
 }
 
 void LiveView::endCamera(int index, const PassFigures& f, const ImageRGB& img) {
+    const auto t0 = std::chrono::steady_clock::now();
     auto shared = std::make_shared<const ImageRGB>(img);
     if (tev_ && size_t(index) < names_.size()) tev_->updateImage(names_[size_t(index)], shared);
     state_.endCamera(index, f, std::move(shared));
+    state_.addRenderThreadSeconds(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
 }
 
 void LiveView::finish(bool interrupted) {

@@ -30,6 +30,7 @@ public:
     // May an image be published for this camera now (the rate limit)?
     bool imageDue(int index) const { return state_.imageDue(index); }
     void figures(int index, const PassFigures& f) { state_.publishFigures(index, f); }
+    void addRenderThreadSeconds(double s) { state_.addRenderThreadSeconds(s); }
     void image(int index, const PassFigures& f, std::shared_ptr<const ImageRGB> img);
     void endCamera(int index, const PassFigures& f, const ImageRGB& img);
     // The render is over: the page is told so; then the server lingers until a page has seen it (at

@@ -211,7 +211,8 @@ void PreviewServer::Impl::statusJson(httplib::Response& res) {
     }
     const bool finished = state.finished();
     if (finished) finalSeen = true;
-    json j = {{"stage", state.stage()}, {"current", state.current()}, {"finished", finished}, {"cameras", cams}};
+    json j = {{"stage", state.stage()}, {"current", state.current()}, {"finished", finished}, {"cameras", cams},
+              {"renderThreadSeconds", state.renderThreadSeconds()}, {"serverSeconds", state.serverSeconds()}};
     res.set_content(j.dump(), "application/json");
 }
 
@@ -239,11 +240,13 @@ void PreviewServer::Impl::imagePng(const httplib::Request& req, httplib::Respons
                 res.status = 404;
                 return;
             }
+            const auto t0 = std::chrono::steady_clock::now();
             const bool ldr = ref ? !img->isHdr : c.ldrOutput;
             int w = 0, h = 0;
             std::vector<unsigned char> rgb = previewView(*img, ldr, c.hasTonemap, c.tonemap, v, w, h);
             png = std::make_shared<const std::string>(encodePng8("preview.png", w, h, rgb));
             remember(key, png);
+            state.addServerSeconds(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
         }
     }
     res.set_content(png->data(), png->size(), "image/png");

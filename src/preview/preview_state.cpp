@@ -78,6 +78,26 @@ void PreviewState::finish(const std::string& stage) {
     changed();
 }
 
+void PreviewState::addRenderThreadSeconds(double s) {
+    std::lock_guard<std::mutex> lk(mu_);
+    renderThreadSeconds_ += s;
+}
+
+void PreviewState::addServerSeconds(double s) {
+    std::lock_guard<std::mutex> lk(mu_);
+    serverSeconds_ += s;
+}
+
+double PreviewState::renderThreadSeconds() const {
+    std::lock_guard<std::mutex> lk(mu_);
+    return renderThreadSeconds_;
+}
+
+double PreviewState::serverSeconds() const {
+    std::lock_guard<std::mutex> lk(mu_);
+    return serverSeconds_;
+}
+
 std::vector<CameraView> PreviewState::cameras() const {
     std::lock_guard<std::mutex> lk(mu_);
     return cams_;

@@ -59,6 +59,12 @@ public:
     void publishImage(int index, const PassFigures& f, std::shared_ptr<const ImageRGB> img);
     void endCamera(int index, const PassFigures& f, std::shared_ptr<const ImageRGB> img);
     void finish(const std::string& stage);             // the render is over (done or stopped)
+    // Seconds the render thread spent on the preview (means, copies, publishing) and the preview's
+    // threads on encoding: the preview's cost, reported in status.json (scripts/preview_overhead.py).
+    void addRenderThreadSeconds(double s);
+    void addServerSeconds(double s);
+    double renderThreadSeconds() const;
+    double serverSeconds() const;
 
     // Reader side: copies under the lock.
     std::vector<CameraView> cameras() const;
@@ -82,6 +88,7 @@ private:
     bool finished_ = false;
     uint64_t changes_ = 0;
     double minInterval_;
+    double renderThreadSeconds_ = 0, serverSeconds_ = 0;
 };
 
 // The course reference of a camera: <scene folder>/_reference_outputs/<ImageName> when it is a
