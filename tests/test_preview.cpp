@@ -3,7 +3,7 @@
 // the server keeps answering), a port in use (exit 1 through the binary, before any work), tev's
 // protocol against a listener here that decodes its packets, and a bounded load test (50 viewers
 // and 1,000 malformed requests during a tiny progressive render whose image equals one rendered
-// without the preview). All [preview]; a few seconds in all on PoCL.
+// without the preview; the same render streams to a tev listener, whose last image is that image). All [preview]; a few seconds in all on PoCL.
 #include <catch.hpp>
 
 #include <arpa/inet.h>
@@ -289,8 +289,21 @@ TEST_CASE("preview under load: 50 viewers and 1,000 malformed requests during a 
     const std::string base = "render " + std::string(CLRT_SOURCE_DIR) + "/scenes/preview_box.xml --camera 1 " +
                              "--resolution 8x6 --spp 128 --target-error 1e-12 --seed 5" + deviceArg();  // 4 passes
     REQUIRE(runClrt(base + " -o " + d.file("a"), d.file("loga")) == 0);
+    Listener tev;  // --display-server on the same render: tev's packets, decoded below
+    std::string tevBytes;
+    std::thread tevThread([&] {
+        const int c = accept(tev.fd, nullptr, nullptr);
+        char buf[65536];
+        ssize_t n;
+        while ((n = recv(c, buf, sizeof buf, 0)) > 0) tevBytes.append(buf, size_t(n));
+        close(c);
+    });
     std::atomic<int> rc{-2};
-    std::thread render([&] { rc = runClrt(base + " -o " + d.file("b") + " --preview 127.0.0.1:0 --preview-keep", d.file("logb")); });
+    std::thread render([&] {
+        rc = runClrt(base + " -o " + d.file("b") + " --preview 127.0.0.1:0 --preview-keep --display-server 127.0.0.1:" +
+                         std::to_string(tev.port),
+                     d.file("logb"));
+    });
     std::string url;
     for (int i = 0; i < 600 && url.empty(); ++i) {  // the URL line, at most 30 s
         const std::string log = readFileBytes(d.file("logb"));
@@ -342,6 +355,7 @@ TEST_CASE("preview under load: 50 viewers and 1,000 malformed requests during a 
     auto stop = cli.Post((prefix + "stop").c_str(), "", "text/plain");  // ends --preview-keep, as Ctrl-C
     CHECK((stop && stop->status == 200));
     render.join();
+    tevThread.join();
     const std::string log = readFileBytes(d.file("logb"));
     INFO(log);
     CHECK(finished);
@@ -352,4 +366,17 @@ TEST_CASE("preview under load: 50 viewers and 1,000 malformed requests during a 
     const ImageRGB a = readImage(d.file("a/preview_box.exr")), b = readImage(d.file("b/preview_box.exr"));
     REQUIRE(a.pixels.size() == b.pixels.size());
     CHECK(std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(float)) == 0);
+    // tev got CreateImage, then updates; the last one is the image written.
+    const auto packets = decodeTevStream(tevBytes);
+    REQUIRE(packets.size() >= 2);
+    CHECK(packets.front().first == 4);
+    Reader last{packets.back().second};
+    CHECK(packets.back().first == 6);
+    last.num<uint8_t>();
+    CHECK(last.str() == "preview_box.exr");
+    REQUIRE(last.num<int32_t>() == 3);
+    last.str(), last.str(), last.str();
+    last.at += 4 * 4 + 6 * 8;  // x, y, width, height; offsets, strides (checked in the protocol test)
+    REQUIRE(last.at + a.pixels.size() * 4 == packets.back().second.size());
+    CHECK(std::memcmp(packets.back().second.data() + last.at, a.pixels.data(), a.pixels.size() * 4) == 0);
 }
