@@ -9,7 +9,8 @@ progressive render of scenes/preview_box.xml at a tiny resolution and checks tha
   * Stop writes the partial EXR (its header says so) and clrt exits with Ctrl-C's status, 130.
 Screenshots go to OUT (default build/preview-test/). Usage:
   build/venv-preview/bin/python scripts/preview_browser_test.py [--clrt build/clrt] [--out DIR]
-      [--resolution 96x72] [--device cpu] [--shot-only]
+      [--resolution 96x72] [--device cpu] [--window 1100,760] [--shot-only FILE.png]
+(docs/preview.png: --resolution 240x180 --time-limit 24 --window 960,660 --shot-only docs/preview.png)
 Exit 0 when every check passed; prints one line per check and the time taken."""
 import argparse
 import hashlib
@@ -59,9 +60,9 @@ def start_render(args, outdir, log):
     return proc, url.group(1)
 
 
-def browser():
+def browser(window):
     o = Options()
-    for a in ["--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--window-size=1100,760"]:
+    for a in ["--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--window-size=" + window]:
         o.add_argument(a)
     o.binary_location = "/usr/bin/chromium"
     return webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=o)
@@ -157,6 +158,7 @@ def main():
     ap.add_argument("--resolution", default="96x72")
     ap.add_argument("--time-limit", type=float, default=30)
     ap.add_argument("--device", default=os.environ.get("CLRT_TEST_DEVICE", "cpu"))
+    ap.add_argument("--window", default="1100,760", help="the browser window's size, W,H")
     ap.add_argument("--shot-only", help="only take a screenshot of the page into this file, after --time-limit/2 s")
     args = ap.parse_args()
     t0 = time.time()
@@ -175,7 +177,7 @@ def main():
         except urllib.error.HTTPError as e:
             code = e.code
         check(code == 403, "a wrong token gets 403 (got %s)" % code)
-        drv = browser()
+        drv = browser(args.window)
         if args.shot_only:
             drv.get(url)
             time.sleep(args.time_limit / 2)
