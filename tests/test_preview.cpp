@@ -82,12 +82,22 @@ struct ServedPreview {
         c.imageName = "x.exr";
         c.width = 4;
         c.height = 2;
-        state.setCameras({c});
+        CameraView big = c;  // camera 1: an EXR of 12 MB (noise), more than loopback's socket buffers hold
+        big.width = big.height = 1000;
+        state.setCameras({c, big});
         ImageRGB img;
         img.width = 4;
         img.height = 2;
         img.pixels.assign(24, 0.5f);
         state.publishImage(0, PassFigures{}, std::make_shared<const ImageRGB>(img));
+        img.width = img.height = 1000;
+        img.pixels.resize(1000 * 1000 * 3);
+        uint32_t x = 12345;
+        for (float& v : img.pixels) {
+            x ^= x << 13, x ^= x >> 17, x ^= x << 5;
+            v = float(x) * 0x1p-24f;
+        }
+        state.publishImage(1, PassFigures{}, std::make_shared<const ImageRGB>(img));
         server.start(parsePreviewAddress("--preview", "127.0.0.1:0"));
     }
     std::string path(const std::string& p) const { return "/" + server.token() + "/" + p; }
@@ -124,7 +134,7 @@ TEST_CASE("preview server: token, paths, malformed and oversized requests", "[pr
         CHECK(get(sp.path("page.html")) == 404);
         CHECK(get(sp.path("preview_server.cpp")) == 404);
         CHECK(get("/../" + sp.server.token() + "/../etc/passwd") != 200);
-        CHECK(get(sp.path("image.png?cam=1")) == 404);  // no such camera
+        CHECK(get(sp.path("image.png?cam=2")) == 404);  // no such camera
         CHECK(get(sp.path("image.png?cam=abc")) == 400);
         CHECK(get(sp.path("image.png?cam=0&tmo=../x")) == 400);
         CHECK(get(sp.path("image.png?cam=0&ev=nan")) == 400);
@@ -149,6 +159,30 @@ TEST_CASE("preview server: token, paths, malformed and oversized requests", "[pr
         CHECK((r && r->status == 200));
         CHECK(sp.stops == 1);
     }
+}
+
+// (cpp-httplib ignores SIGPIPE process-wide when it listens, so this checks that the server goes on
+// after write errors, not the SIGPIPE blocking of preview_server.cpp.)
+TEST_CASE("preview server: viewers that go away mid-answer; the server goes on", "[preview]") {
+    ServedPreview sp;
+    const std::string request = "GET " + sp.path("image.exr?cam=1") + " HTTP/1.1\r\nHost: x\r\n\r\n";
+    for (int i = 0; i < 3; ++i) {
+        const int fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+        sockaddr_in a{};
+        a.sin_family = AF_INET;
+        a.sin_port = htons(uint16_t(sp.server.port()));
+        a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+        REQUIRE(connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0);
+        send(fd, request.data(), request.size(), MSG_NOSIGNAL);
+        pollfd p{fd, POLLIN, 0};
+        poll(&p, 1, 5000);  // the answer has begun
+        close(fd);          // unread data: a reset; the server's next write fails
+    }
+    httplib::Client cli("127.0.0.1", sp.server.port());
+    auto r = cli.Get(sp.path("image.exr?cam=1").c_str());  // the process is alive and still serving
+    REQUIRE(r);
+    CHECK(r->status == 200);
+    CHECK(r->body.size() > 8000000);
 }
 
 TEST_CASE("preview: address parsing, a port in use exits 1 before any work", "[preview]") {
