@@ -93,7 +93,8 @@ function updateThumbs() {
     t.classList.toggle("done", c.phase === "done");
     t.lastChild.textContent = "camera " + c.id + ": " + c.phase + (c.spp ? ", " + c.spp + " spp" : "");
     // A rendering camera's thumbnail follows at most every 8th image; a done one shows its final image.
-    if (c.hasImage && (thumbVersion[i] === undefined || c.phase === "done" || c.version - thumbVersion[i] >= 8)) {
+    const last = thumbVersion[i];
+    if (c.hasImage && last !== c.version && (last === undefined || c.phase === "done" || c.version - last >= 8)) {
       thumbVersion[i] = c.version;
       t.firstChild.src = "image.png?" + viewQuery(i) + "&thumb=1&v=" + c.version;
     }
