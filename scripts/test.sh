@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
 # Sets up (scripts/setup.sh --test), runs the whole Catch2 test suite on the PoCL CPU device, then the
+# preview's browser test (scripts/preview_browser_test.py; skip with CLRT_NO_BROWSER_TEST=1), then the
 # OpenCL-implementation checks (scripts/test_implementations.sh: the device tests on Intel's CPU
 # runtime, the oclgrind suite, GPU-target compiles of every kernel variant), then the course check
 # (scripts/check_course --reduced against tests/course_expected_failures.txt: every course scene with a
@@ -35,6 +36,14 @@ else
   echo "tests: ${p:-0} passed, ${f:-1} failed"
 fi
 [ "$rc" -eq 0 ] || exit "$rc"
+# The live preview in a real browser (headless Chromium + Selenium; screenshots in build/preview-test/);
+# skip with CLRT_NO_BROWSER_TEST=1.
+if [ -z "${CLRT_NO_BROWSER_TEST:-}" ] && [ $# -eq 0 ]; then
+  echo "preview browser test (scripts/preview_browser_test.py):"
+  build/venv-preview/bin/python scripts/preview_browser_test.py > build/preview-browser-log.txt 2>&1 \
+    || { cat build/preview-browser-log.txt; echo "preview browser test: failed"; exit 1; }
+  tail -1 build/preview-browser-log.txt
+fi
 [ $# -eq 0 ] && { bash scripts/test_implementations.sh || exit 1; }
 if [ -z "${CLRT_NO_COURSE_CHECK:-}" ] && [ $# -eq 0 ] && [ -d ../shared/scenes ]; then
   # Reduced spp/size for sampled scenes; a listed failure is reported, a new one fails the run.

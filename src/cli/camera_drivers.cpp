@@ -6,6 +6,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <optional>
@@ -119,12 +121,44 @@ ImageRGB renderPass(const Camera& cam, RenderSettings rs, std::vector<std::uniqu
     return img;
 }
 
+// Samples per second of each device so far (its pixels x the samples each got, over its time).
+std::vector<std::pair<std::string, double>> deviceThroughput(const std::vector<DeviceWork>& work, int samplesPerPixel) {
+    std::vector<std::pair<std::string, double>> out;
+    for (const DeviceWork& w : work)
+        if (w.counters.seconds > 0) out.emplace_back(w.name, double(w.counters.pixels) * samplesPerPixel / w.counters.seconds);
+    return out;
+}
+
+// The progressive loop's observer for --preview/--display-server: figures after every pass (the time
+// left: toward --time-limit, and toward --target-error assuming relMSE falls as 1/spp), the mean image
+// only when the rate limit allows one.
+PassObserver livePassObserver(LiveView& live, int camIndex, const StopRule& rule, const std::vector<DeviceWork>& work) {
+    return [&live, camIndex, rule, &work](const ProgressiveResult& r, const std::function<ImageRGB()>& mean) {
+        const auto t0 = std::chrono::steady_clock::now();
+        PassFigures f;
+        f.spp = r.spp;
+        f.relMse = r.relMse;
+        f.elapsed = r.seconds;
+        double left = NAN;
+        if (rule.timeLimit >= 0) left = std::max(0.0, rule.timeLimit - r.seconds);
+        if (rule.targetError > 0 && std::isfinite(r.relMse) && r.relMse > 0) {
+            const double toTarget = std::max(0.0, r.seconds * (r.relMse / rule.targetError - 1.0));
+            left = std::isnan(left) ? toTarget : std::min(left, toTarget);
+        }
+        f.timeLeft = left;
+        f.throughput = deviceThroughput(work, r.passSamples);
+        if (live.imageDue(camIndex)) live.image(camIndex, f, std::make_shared<const ImageRGB>(mean()));
+        else live.figures(camIndex, f);
+        live.addRenderThreadSeconds(secondsSince(t0));
+    };
+}
+
 // One camera in sample passes until --target-error or --time-limit (render/progressive.h): prints
 // the estimate, spp and time (a line at 1, 2, 4, 8... pairs of passes, and one at the end) and puts
 // them into the outputs' options (EXR header attributes).
-ImageRGB renderCameraProgressive(const RenderArgs& a, const Camera& cam, const RenderSettings& rs,
+ImageRGB renderCameraProgressive(const RenderArgs& a, const Camera& cam, int camIndex, const RenderSettings& rs,
                                  std::vector<std::unique_ptr<Renderer>>& renderers, std::vector<DeviceWork>& work,
-                                 RenderCounters& counters, OutputOptions& oo) {
+                                 RenderCounters& counters, OutputOptions& oo, LiveView* live) {
     StopRule rule = a.stop;
     rule.maxSpp = a.spp > 0 ? a.spp : kMaxSamplesPerPixel;
     rule.white = lowerExtension(cam.imageName) == ".png" ? 255.0 : 1.0;
@@ -145,7 +179,8 @@ ImageRGB renderCameraProgressive(const RenderArgs& a, const Camera& cam, const R
     };
     const auto t0 = std::chrono::steady_clock::now();
     ProgressiveResult r = renderProgressive(size_t(cam.width) * size_t(cam.height), rule, pass,
-                                            [] { return stopRequested().load(); }, onPair);
+                                            [] { return stopRequested().load(); }, onPair,
+                                            live ? livePassObserver(*live, camIndex, rule, work) : PassObserver{});
     if (renderers.size() > 1) counters.seconds += secondsSince(t0);  // one device: its counters have it
     const auto number = [](const char* format, double x) {
         char buf[64];
@@ -168,7 +203,7 @@ ImageRGB renderCameraProgressive(const RenderArgs& a, const Camera& cam, const R
 }  // namespace
 
 int renderAndWriteCamera(const RenderArgs& a, const Camera& cam, int camIndex, std::vector<std::unique_ptr<Renderer>>& renderers,
-                         std::vector<DeviceWork>& work, RenderCounters& counters, double& tOutput) {
+                         std::vector<DeviceWork>& work, RenderCounters& counters, double& tOutput, LiveView* live) {
     RenderSettings rs;
     rs.spp = a.spp > 0 ? a.spp : cam.numSamples;
     rs.seed = a.seed;
@@ -184,20 +219,29 @@ int renderAndWriteCamera(const RenderArgs& a, const Camera& cam, int camIndex, s
     ImageRGB img;
     OutputOptions oo;
     auto tr = std::chrono::steady_clock::now();
+    if (live) live->beginCamera(camIndex, cam);
+    const auto progress = [&](size_t d, size_t n) {
+        prog->update(d, n);
+        if (!live) return;
+        PassFigures f;
+        f.fraction = n ? double(d) / double(n) : 1.0;
+        f.elapsed = secondsSince(tr);
+        live->figures(camIndex, f);
+    };
     if (distActive(a.dist, MpiJob::get())) {
         auto w0 = std::chrono::steady_clock::now();
         const bool write = renderCameraDist(a, cam, camIndex, rs, renderers, work, prog, img);
         counters.seconds += secondsSince(w0);
         if (!write) return rs.spp;  // another rank, or a part (an interrupted one is not written: nothing partial)
     } else if (a.stop.active()) {
-        img = renderCameraProgressive(a, cam, rs, renderers, work, counters, oo);
+        img = renderCameraProgressive(a, cam, camIndex, rs, renderers, work, counters, oo, live);
     } else if (renderers.size() == 1) {
-        img = renderers.front()->render(cam, rs, work[0].counters, [&](size_t d, size_t n) { prog->update(d, n); });
+        img = renderers.front()->render(cam, rs, work[0].counters, progress);
     } else {
         std::vector<Renderer*> rp;
         for (auto& r : renderers) rp.push_back(r.get());
         auto w0 = std::chrono::steady_clock::now();
-        img = renderOnDevices(rp, cam, rs, work, [&](size_t d, size_t n) { prog->update(d, n); });
+        img = renderOnDevices(rp, cam, rs, work, progress);
         counters.seconds += secondsSince(w0);
     }
     const double camSeconds = secondsSince(tr);
@@ -215,6 +259,14 @@ int renderAndWriteCamera(const RenderArgs& a, const Camera& cam, int camIndex, s
     }
     oo.renderSeconds = camSeconds;
     for (auto& r : renderers) oo.deviceName += (oo.deviceName.empty() ? "" : ", ") + r->context().info().name;
+    if (live) {
+        PassFigures f;
+        f.spp = oo.spp;
+        f.elapsed = camSeconds;
+        f.fraction = 1;
+        if (oo.attributes.count("relMseEstimate")) f.relMse = std::strtod(oo.attributes["relMseEstimate"].c_str(), nullptr);
+        live->endCamera(camIndex, f, img);
+    }
     std::vector<std::string> written = writeCameraOutputs(cam, img, oo, renderers.front()->context());
     tOutput += secondsSince(to);
     for (const std::string& w : written)

@@ -77,6 +77,16 @@ const char* const kRenderHelp =
     "                        memory per device exceeds SIZE (e.g. 512M, 4G; K/M/G/T = powers of\n"
     "                        1024); without it the limits are the devices' own and the machine's\n"
     "                        available memory; -v prints the estimate\n"
+    "  --preview [ADDR:]PORT serve a live preview page while rendering (default address 127.0.0.1;\n"
+    "                        PORT 0: any free port); the URL, with its access token, is printed on\n"
+    "                        stderr. The page shows each camera's image as passes complete (with\n"
+    "                        --target-error/--time-limit; otherwise when a camera is done), tone-map\n"
+    "                        controls, and Stop (= Ctrl-C). A port in use: exit 1 before rendering.\n"
+    "                        See docs/preview.md (SSH port forwarding, security)\n"
+    "  --preview-keep        after the render, keep serving the preview until Ctrl-C (default: the\n"
+    "                        process ends as without --preview, once an open page has the final state)\n"
+    "  --display-server H:P  stream each camera's image to the tev viewer at H:P (tev's protocol, as\n"
+    "                        pbrt-v4 speaks it); tev not running: one warning, the render goes on\n"
     "  -v, --verbose         print the kernel build flags and other details\n"
     "  -h, --help            this text\n"
     "\n"
@@ -119,6 +129,9 @@ RenderArgs parseRenderArgs(int argc, char** argv, int start) {
              a.height = parseIntArg(f, wh.second, 1, 1 << 16);
          }},
         flagOption({"-v", "--verbose"}, a.verbose),
+        textOption({"--preview"}, a.previewAddress),
+        flagOption({"--preview-keep"}, a.previewKeep),
+        textOption({"--display-server"}, a.displayServer),
         flagOption({"--exr-half"}, a.exrHalf),
         textOption({"--checkpoint"}, a.dist.checkpointDir),
         {{"--tile-pixels"}, true, [&](Str f, Str v) { a.dist.tilePixels = size_t(parseIntArg(f, v, 1, 1 << 24)); }},

@@ -28,6 +28,9 @@ struct RenderArgs {
     StopRule stop;            // --target-error, --time-limit (render/progressive.h)
     Pipeline pipeline = Pipeline::Auto;  // --pipeline
     DistSettings dist;        // --part, --checkpoint, --tile-pixels (src/dist/)
+    std::string previewAddress;  // --preview [ADDR:]PORT ("" : none); --preview-keep
+    bool previewKeep = false;
+    std::string displayServer;   // --display-server HOST:PORT (tev)
 };
 
 // argv[start..): the options and the scene file; throws clrt::Error (ExitCode::Usage) on a bad one.

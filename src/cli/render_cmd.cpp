@@ -175,6 +175,9 @@ int renderScene(RenderArgs a) {
     setVerbose(a.verbose);
     MpiJob& job = MpiJob::get();
     if (job.rank() == 0) checkOutputDirectory(a.outDir);  // exists and accepts a new file: exit 4 before any work
+    if ((!a.previewAddress.empty() || !a.displayServer.empty()) && (job.distributed() || a.dist.parts > 0))
+        throw Error("--preview/--display-server: not with --part or MPI ranks", ExitCode::Usage);
+    std::unique_ptr<LiveView> live = LiveView::start(a);  // binds the preview's port: in use -> exit 1 here
 
     StageTimes times;
     auto t = std::chrono::steady_clock::now();
@@ -191,6 +194,7 @@ int renderScene(RenderArgs a) {
     if (a.stop.active() && a.spp > 0 && a.spp < 4)
         throw Error("--target-error/--time-limit: --spp caps the samples and must be at least 4 (one pair of "
                     "2-sample passes), got " + std::to_string(a.spp), ExitCode::Usage);
+    if (live) live->setCameras(cams, a.positional[0]);
     std::vector<DeviceInfo> devs = selectDevices(a.device);
     checkImagesFit(a, cams, devs);
     checkMemory(a, scene, devs);
@@ -206,6 +210,7 @@ int renderScene(RenderArgs a) {
         ds.features.bvhStack = stack;
     }
     t = std::chrono::steady_clock::now();
+    if (live) live->setStage("building the kernels");
     DeviceRenderers dr = makeRenderers(devs, ds);
     std::vector<std::unique_ptr<Renderer>>& renderers = dr.renderers;
     times.build = secondsSince(t);
@@ -226,7 +231,7 @@ int renderScene(RenderArgs a) {
             continue;
         }
         const int asked = a.stop.active() ? 0 : a.spp > 0 ? a.spp : cam->numSamples;  // progressive: no target spp
-        const int reached = renderAndWriteCamera(a, *cam, camIndex++, renderers, work, counters, times.output);
+        const int reached = renderAndWriteCamera(a, *cam, camIndex++, renderers, work, counters, times.output, live.get());
         if (reached < asked || (a.stop.active() && stopRequested().load())) anyPartial = true;
         if (statsSpp < 0) statsSpp = reached;  // the stats line reports the first camera's
     }
@@ -234,6 +239,7 @@ int renderScene(RenderArgs a) {
     if (job.rank() != 0) return 0;
     sumDeviceCounters(work, counters);
     printTimes(times, ds, *renderers.front(), counters, work, std::max(statsSpp, 0));
+    if (live) live->finish(stopRequested().load());
     if (stopRequested().load()) {
         std::fprintf(stderr, "clrt: interrupted (%s)%s%s%s\n", stopSignal() == SIGTERM ? "SIGTERM" : stopSignal() == SIGHUP ? "SIGHUP" : "SIGINT",
                      anyPartial ? ": partial images written (see above)" : "",

@@ -46,7 +46,8 @@ double secondsSince(std::chrono::steady_clock::time_point t) {
 
 ProgressiveResult renderProgressive(size_t numPixels, const StopRule& rule, const PassRenderer& pass,
                                     const std::function<bool()>& stopped,
-                                    const std::function<void(const ProgressiveResult&)>& onPair) {
+                                    const std::function<void(const ProgressiveResult&)>& onPair,
+                                    const PassObserver& onPass) {
     const auto t0 = std::chrono::steady_clock::now();
     ProgressiveResult r;
     const int P = r.passSamples = passSamples(numPixels, rule.maxSpp);
@@ -67,6 +68,10 @@ ProgressiveResult renderProgressive(size_t numPixels, const StopRule& rule, cons
         if (k == 0) shape = img;
         half[k & 1].add(img);
         r.spp = (k + 1) * P;
+        if (onPass) {
+            r.seconds = secondsSince(t0);
+            onPass(r, [&] { return meanOf(half[0], half[1], shape); });
+        }
         if ((k & 1) == 0) {
             if (!stopped()) continue;
             r.stopReason = "interrupted";

@@ -44,9 +44,16 @@ int passSamples(size_t numPixels, int maxSpp);
 // samples every pixel got (fewer than count only when the render was stopped).
 using PassRenderer = std::function<ImageRGB(int first, int count, int& reached)>;
 
-// The render loop (see above); onPair(result so far) after each pair, for progress lines.
+// After each complete pass: the result so far (spp, the last pair's relMSE, seconds) and a function
+// that computes the mean of every complete pass so far (the image a stop would write), for a live
+// preview; called on the render thread, which pays for the mean only when the observer asks for it.
+using PassObserver = std::function<void(const ProgressiveResult& soFar, const std::function<ImageRGB()>& meanSoFar)>;
+
+// The render loop (see above); onPair(result so far) after each pair, for progress lines; onPass
+// after each pass (PassObserver). Neither changes the image.
 ProgressiveResult renderProgressive(size_t numPixels, const StopRule& rule, const PassRenderer& pass,
                                     const std::function<bool()>& stopped,
-                                    const std::function<void(const ProgressiveResult&)>& onPair = {});
+                                    const std::function<void(const ProgressiveResult&)>& onPair = {},
+                                    const PassObserver& onPass = {});
 
 }  // namespace clrt
