@@ -76,6 +76,10 @@ void checkMemory(const RenderArgs& a, const Scene& scene, const std::vector<Devi
     plan.width = a.width;
     plan.height = a.height;
     plan.residentNow = residentBytes();
+    const std::vector<bool> instanced = instancedShapes(scene, a.instancing);  // as flattenScene will store them
+    plan.meshInstanced.assign(scene.meshes.size(), false);
+    for (size_t i = 0; i < scene.shapes.size(); ++i)
+        if (instanced[i]) plan.meshInstanced[size_t(scene.shapes[i].meshIndex)] = true;
     const MemoryEstimate e = estimateMemory(scene, plan);
     MemoryLimits lim;
     lim.cap = a.maxMemory;

@@ -78,6 +78,8 @@ struct FlattenOptions {
 };
 
 DeviceScene flattenScene(const Scene& scene, const FlattenOptions& opts = {});
+// Which shapes go two-level under `mode` (their mesh kept once under its own BVH), per shape index.
+std::vector<bool> instancedShapes(const Scene& scene, Instancing mode);
 
 // Half4 texels (ImageInfo.format TEXELS_HALF4): the n texels src[0..n) packed two to a float4, each
 // channel (alpha included) a half of the same value; false, and nothing written, unless every value is

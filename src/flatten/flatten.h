@@ -74,8 +74,6 @@ void flattenMesh(const Scene& scene, const Shape& s, int texSet, MeshTriangles& 
 // inside the union of its boxes at both ends (the motion is a straight translation).
 Aabb sweptBox(const Aabb& rest, const Vec3& motion);
 void storeRows(dev::float4 rows[3], const Mat4& m);  // the first three rows of an affine map
-// Which shapes flattenInstances takes (a mesh kept once under its own BVH): per shape index.
-std::vector<bool> instancedShapes(const Scene& scene, Instancing mode);
 // The meshes of `jobs` (shape, texture set), each stored once in object space under its own bottom-level
 // BVH, and the top-level BVH over the shapes as instances; appended to ds's arrays after the world
 // BVH's (whose sphere references move past the appended triangles). Sets numTriangles, numInstances,
