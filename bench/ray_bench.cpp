@@ -8,6 +8,8 @@
 // clrt/Embree, and how often the two agree on hit/miss (and on the primitive hit).
 //
 // usage: ray_bench SCENE [--runs 5] [--device SPEC] [--threads 2] [--dump FILE] [--embree-config STR]
+//                  [--instancing flatten|two-level|auto]   (clrt's layout; Embree always gets the flattened scene;
+//                  with two-level the "prim" agreement column compares different numberings: read the hit column)
 //   --threads T: Embree's thread count, and the whole process (so the OpenCL runtime's workers too) is
 //   pinned to the first T CPUs it may run on; PoCL is also told T workers (POCL_MAX_PTHREAD_COUNT,
 //   unless already set). Without --threads, Embree gets 2 threads and nothing is pinned.
@@ -85,6 +87,7 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
 
 struct Options {
     std::string scenePath, deviceSpec = "cpu", dumpPath, embreeConfig;
+    Instancing instancing = Instancing::Flatten;  // --instancing: how clrt stores instanced meshes
     int runs = 5, threads = 2;
     bool threadsGiven = false;
 };
@@ -99,6 +102,11 @@ Options parseArgs(int argc, char** argv) {
         else if (a == "--threads") o.threads = std::max(1, std::atoi(argv[i + 1])), o.threadsGiven = true;
         else if (a == "--dump") o.dumpPath = argv[i + 1];
         else if (a == "--embree-config") o.embreeConfig = argv[i + 1];
+        else if (a == "--instancing") {
+            const std::string v = argv[i + 1];
+            if (v != "flatten" && v != "two-level" && v != "auto") throw Error("--instancing: flatten, two-level or auto");
+            o.instancing = v == "flatten" ? Instancing::Flatten : v == "two-level" ? Instancing::TwoLevel : Instancing::Auto;
+        }
     }
     return o;
 }
@@ -361,14 +369,21 @@ int main(int argc, char** argv) {
         FILE* dump = opt.dumpPath.empty() ? nullptr : std::fopen(opt.dumpPath.c_str(), "wb");
         if (!opt.dumpPath.empty() && !dump) throw Error("cannot write " + opt.dumpPath);
         Scene scene = loadScene(opt.scenePath);
-        DeviceScene ds = flattenScene(scene);
+        // Embree and the ray sets always see the flattened scene; clrt traverses its own layout (--instancing).
+        FlattenOptions flat;
+        flat.instancing = Instancing::Flatten;
+        DeviceScene ds = flattenScene(scene, flat);
+        FlattenOptions own;
+        own.instancing = opt.instancing;
+        DeviceScene dsClrt = opt.instancing == Instancing::Flatten ? DeviceScene{} : flattenScene(scene, own);
         if (ds.params.numSpheres > 0) std::fprintf(stderr, "note: spheres are ignored by this benchmark\n");
         EmbreeTracer embree(ds, opt.threads, opt.embreeConfig);
-        ClrtTracer clrt(ds, opt.deviceSpec, dump);
+        ClrtTracer clrt(opt.instancing == Instancing::Flatten ? ds : dsClrt, opt.deviceSpec, dump);
 
         RaySet camera = cameraRays(scene.cameras.at(0));
         std::vector<int> camPrim;
         clrt.trace(camera.rays, false, camPrim);  // also warms up the kernel
+        if (opt.instancing != Instancing::Flatten) embree.trace(camera.rays, false, camPrim);  // ds's numbering
         RaySet shadow{"shadow", {}}, diffuse{"diffuse", {}};
         secondaryRays(ds, camera, camPrim, shadowTarget(ds), shadow, diffuse);
 
