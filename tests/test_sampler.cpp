@@ -18,6 +18,7 @@
 #include "image/image_compare.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
+#include "sampler_reference.h"
 #include "test_helpers.h"
 
 using namespace clrt;
@@ -25,34 +26,7 @@ using namespace clrt::test;
 
 namespace {
 
-uint32_t hashPcg(uint32_t v) {  // Rng_Hash
-    uint32_t state = v * 747796405u + 2891336453u;
-    uint32_t word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
-    return (word >> 22u) ^ word;
-}
-uint32_t reverseBits(uint32_t v) {
-    uint32_t r = 0;
-    for (int i = 0; i < 32; ++i) r |= ((v >> i) & 1u) << (31 - i);
-    return r;
-}
-uint32_t laineKarras(uint32_t x, uint32_t seed) {
-    x += seed;
-    x ^= x * 0x6c50b47cu;
-    x ^= x * 0xb82f1e52u;
-    x ^= x * 0xc7afe638u;
-    x ^= x * 0x8d22f6e6u;
-    return x;
-}
-// Sobol's second dimension from its generator matrix (Pascal's triangle mod 2), as a 32-bit fraction.
-uint32_t sobol1(uint32_t index) {
-    uint32_t v = 1u << 31, r = 0;
-    for (; index; index >>= 1, v ^= v >> 1)
-        if (index & 1u) r ^= v;
-    return r;
-}
-uint32_t owen(uint32_t fraction, uint32_t seed) { return reverseBits(laineKarras(reverseBits(fraction), seed)); }
 
-struct Point { uint32_t x, y; };
 
 // The host replica of Rng_Stratified2D, written from the definitions (radical inverse, the matrix
 // above, nested uniform scrambling as reverse ∘ Laine–Karras ∘ reverse) rather than the device's
@@ -67,20 +41,7 @@ Point stratified2D(uint32_t seed, int pixel, int sample, uint32_t pathId, uint32
     const uint32_t idx = owen(uint32_t(sample), shuffleDim ? hashPcg(h ^ *shuffleDim * 0x9e3779b1u) : sIdx);
     return {owen(reverseBits(idx), sX), owen(sobol1(idx), sY)};
 }
-float toFloat(uint32_t v) { return float(v >> 8) * (1.0f / 16777216.0f); }
 
-// Whether points [0, n) (n = 2^m) put one point in every elementary interval 2^-a x 2^-(m-a).
-bool isNet(const std::vector<Point>& p, int m) {
-    const size_t n = size_t(1) << m;
-    for (int a = 0; a <= m; ++a) {
-        std::vector<int> count(n, 0);
-        for (size_t i = 0; i < n; ++i) {
-            const uint32_t cx = a == 0 ? 0 : p[i].x >> (32 - a), cy = (m - a) == 0 ? 0 : p[i].y >> (32 - (m - a));
-            if (++count[(cx << (m - a)) | cy] > 1) return false;
-        }
-    }
-    return true;
-}
 
 // Mean over 4096 pixels of r^2, r = the correlation over 16 samples of x in (path 1, dimA) with x in
 // (pathB, dimB); sharedShuffle: B's point taken at A's shuffled index (what padding avoids).

@@ -19,6 +19,7 @@
 #include "image/image_compare.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
+#include "sampler_reference.h"
 #include "test_helpers.h"
 
 using namespace clrt;
@@ -26,32 +27,6 @@ using namespace clrt::test;
 
 namespace {
 
-uint32_t hashPcg(uint32_t v) {  // Rng_Hash
-    uint32_t state = v * 747796405u + 2891336453u;
-    uint32_t word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
-    return (word >> 22u) ^ word;
-}
-uint32_t reverseBits(uint32_t v) {
-    uint32_t r = 0;
-    for (int i = 0; i < 32; ++i) r |= ((v >> i) & 1u) << (31 - i);
-    return r;
-}
-uint32_t laineKarras(uint32_t x, uint32_t seed) {
-    x += seed;
-    x ^= x * 0x6c50b47cu;
-    x ^= x * 0xb82f1e52u;
-    x ^= x * 0xc7afe638u;
-    x ^= x * 0x8d22f6e6u;
-    return x;
-}
-uint32_t sobol1(uint32_t index) {  // Sobol's second dimension (Pascal's triangle mod 2), a 32-bit fraction
-    uint32_t v = 1u << 31, r = 0;
-    for (; index; index >>= 1, v ^= v >> 1)
-        if (index & 1u) r ^= v;
-    return r;
-}
-// Nested uniform scramble of a fraction's bits (each flipped by a hash of the bits above it in the fraction).
-uint32_t owen(uint32_t fraction, uint32_t seed) { return reverseBits(laineKarras(reverseBits(fraction), seed)); }
 // The same on an integer index, top-down (each bit flipped by a hash of the more significant bits).
 uint32_t nestedTopDown(uint32_t v, uint32_t seed) { return reverseBits(laineKarras(reverseBits(v), seed)); }
 uint32_t morton(uint32_t x, uint32_t y) {
@@ -60,7 +35,6 @@ uint32_t morton(uint32_t x, uint32_t y) {
     return m;
 }
 
-struct Point { uint32_t x, y; };
 struct Params { uint32_t seed; int width; int log2Spp; };
 enum class Mutation { None, PixelSeededScramble, NoDimensionHash };
 
@@ -79,21 +53,7 @@ Point zsobol2D(const Params& p, int pixel, int sample, uint32_t pathId, uint32_t
     const uint32_t sX = hashPcg(dimSeed ^ epoch ^ 0xa54ff53au), sY = hashPcg(dimSeed ^ epoch ^ 0x510e527fu);
     return {owen(reverseBits(index), sX), owen(sobol1(index), sY)};
 }
-float toFloat(uint32_t v) { return float(v >> 8) * (1.0f / 16777216.0f); }
 
-// Whether points [0, n) (n = 2^m) put one point in every elementary interval 2^-a x 2^-(m-a).
-bool isNet(const std::vector<Point>& p, int m) {
-    const size_t n = size_t(1) << m;
-    if (p.size() != n) return false;
-    for (int a = 0; a <= m; ++a) {
-        std::vector<int> count(n, 0);
-        for (size_t i = 0; i < n; ++i) {
-            const uint32_t cx = a == 0 ? 0 : p[i].x >> (32 - a), cy = (m - a) == 0 ? 0 : p[i].y >> (32 - (m - a));
-            if (++count[(cx << (m - a)) | cy] > 1) return false;
-        }
-    }
-    return true;
-}
 
 // The points of samples [0, 2^L) of the pixels (x0 + i, y0 + j), i, j < side.
 std::vector<Point> blockPoints(const Params& p, int x0, int y0, int side, uint32_t dim, Mutation mut = Mutation::None) {
