@@ -218,20 +218,23 @@ TEST_CASE("memory: a scene over --max-memory exits 2 with one line, before flatt
     CHECK(r.errorLine.find("--max-memory") != std::string::npos);
 }
 
-TEST_CASE("memory: a scene needing terabytes is refused in seconds, never killed", "[memory][cli]") {
+TEST_CASE("memory: a scene needing terabytes is refused before flattening, never killed; two-level it renders", "[memory][cli]") {
     // 10,000 placements of a 180,000-triangle field: 1.8 billion triangles as seen, ~860 GB flattened.
     TempDir d;
     writeHeightField(d.file("field.ply"), 300);
     writeFileBytes(d.file("s.xml"), instancedScene("field.ply", 10000));
-    auto t0 = std::chrono::steady_clock::now();
-    const int rc = runClrt("render " + d.file("s.xml") + " -o " + d.path.string() + deviceArg(), d.file("log"));
+    const std::string base = "render " + d.file("s.xml") + " -o " + d.path.string() + deviceArg();
+    const int rc = runClrt(base + " --instancing flatten", d.file("log"));
     const CliResult r = cliResult(rc, readFileBytes(d.file("log")));
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    INFO(r.log << "\n" << seconds << " s");
+    INFO(r.log);
     CHECK(r.rc == 2);
     CHECK(r.errorLines == 1);
     CHECK(r.errorLine.find("1800000000 triangles as seen") != std::string::npos);
     CHECK(r.errorLine.find(" of host memory") != std::string::npos);
     CHECK(r.errorLine.find("more than what the machine has available") != std::string::npos);
-    CHECK(seconds < 30);
+    // The default (--instancing auto) keeps the mesh once under its own BVH: the estimate fits, it renders.
+    const int rc2 = runClrt(base, d.file("log2"));
+    const CliResult r2 = cliResult(rc2, readFileBytes(d.file("log2")));
+    INFO(r2.log);
+    CHECK(r2.rc == 0);
 }
