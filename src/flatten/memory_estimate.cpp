@@ -133,8 +133,10 @@ uint64_t renderBytes(const Scene& scene, const MemoryPlan& plan, const Camera& c
     uint64_t capacity = batch * group;
     bool dielectric = false;
     for (const Material& m : scene.materials) dielectric |= m.type == dev::MATERIAL_DIELECTRIC;
+    // As planBatches: at most one doubling per bounce (MaxRecursionDepth, the camera's or the scene's).
+    const int maxDepth = std::min(kMaxRecursionDepth, cam.maxRecursionDepth >= 0 ? cam.maxRecursionDepth : scene.maxRecursionDepth);
     if (dielectric && spp <= 4 && cam.pathMode == 0)
-        while ((capacity << 1) <= (uint64_t(1) << 21)) capacity <<= 1;
+        for (int split = 0; split < maxDepth && (capacity << 1) <= (uint64_t(1) << 21); ++split) capacity <<= 1;
     const uint64_t perPath = 3 * sizeof(dev::PathState) + 3 * sizeof(dev::Ray) + sizeof(dev::Hit) +
                              sizeof(dev::ShadingPoint) + sizeof(dev::float4) + 4 * sizeof(int);
     uint64_t bytes = capacity * perPath;
