@@ -11,7 +11,13 @@
 # Usage: bash scripts/test.sh [catch2 args...]
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# Wall time of each part, one line each at the end ("time: setup 212 s, ..."): the CI budget is 25 min.
+times=(); t0=$SECONDS
+lap() { times+=("$1 $((SECONDS - t0)) s"); t0=$SECONDS; }
+report_times() { [ ${#times[@]} -gt 0 ] && (IFS=,; echo "time:${times[*]/#/ }"); }
+trap report_times EXIT
 bash scripts/setup.sh --test
+lap setup
 # Intel's OpenCL CPU runtime beside PoCL when scripts/setup_intel_ocl.sh installed it; "cpu" is PoCL.
 [ -f build/opencl-env.sh ] && . build/opencl-env.sh
 # Tests run on PoCL's CPU device; a private kernel-binary cache keeps reruns fast.
@@ -35,6 +41,7 @@ else
   p=$(echo "$line" | sed -n 's/.*| *\([0-9]*\) passed.*/\1/p'); f=$(echo "$line" | sed -n 's/.*| *\([0-9]*\) failed.*/\1/p')
   echo "tests: ${p:-0} passed, ${f:-1} failed"
 fi
+lap catch2
 [ "$rc" -eq 0 ] || exit "$rc"
 # The live preview in a real browser (headless Chromium + Selenium; screenshots in build/preview-test/);
 # skip with CLRT_NO_BROWSER_TEST=1.
@@ -43,14 +50,16 @@ if [ -z "${CLRT_NO_BROWSER_TEST:-}" ] && [ $# -eq 0 ]; then
   build/venv-preview/bin/python scripts/preview_browser_test.py > build/preview-browser-log.txt 2>&1 \
     || { cat build/preview-browser-log.txt; echo "preview browser test: failed"; exit 1; }
   tail -1 build/preview-browser-log.txt
+  lap browser
 fi
-[ $# -eq 0 ] && { bash scripts/test_implementations.sh || exit 1; }
+[ $# -eq 0 ] && { bash scripts/test_implementations.sh || exit 1; lap implementations; }
 if [ -z "${CLRT_NO_COURSE_CHECK:-}" ] && [ $# -eq 0 ] && [ -d ../shared/scenes ]; then
   # Reduced spp/size for sampled scenes; a listed failure is reported, a new one fails the run.
   echo "course check (scripts/check_course --reduced --expected tests/course_expected_failures.txt):"
   bash scripts/check_course --reduced --expected tests/course_expected_failures.txt > build/course-check-log.txt 2>&1 \
     || { cat build/course-check-log.txt; echo "course check: a camera failed that tests/course_expected_failures.txt does not list"; exit 1; }
   grep -E "^check_course:" build/course-check-log.txt
+  lap course
 fi
 if [ -z "${CLRT_NO_FUZZ:-}" ] && [ $# -eq 0 ]; then
   command -v clang++ >/dev/null || { [ "$(id -u)" -eq 0 ] && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq clang >/dev/null; }
@@ -58,4 +67,5 @@ if [ -z "${CLRT_NO_FUZZ:-}" ] && [ $# -eq 0 ]; then
   # The same inputs on every machine and every run; time-limited exploration: bash scripts/fuzz.sh SECONDS.
   bash scripts/fuzz.sh --gate > build/fuzz-log.txt 2>&1 || { tail -40 build/fuzz-log.txt; echo "fuzz: the gate found a problem"; exit 1; }
   grep -E "^==|DONE" build/fuzz-log.txt
+  lap fuzz
 fi

@@ -27,21 +27,22 @@ platforms=$(build/clrt devices | sed -n 's/^\[[0-9]*\] *CPU .*(platform: \(.*\))
 while read -r plat; do
   [ -n "$plat" ] || continue
   log=build/test-log-$(echo "$plat" | tr -c 'A-Za-z0-9\n' '_').txt
+  t0=$SECONDS
   (cd build && CLRT_TEST_DEVICE="platform:$plat" ./clrt_tests "$DEVICE_TAGS") > "$log" 2>&1
   r=$?
   sum=$(grep -E "^(All tests passed|test cases:)" "$log" | tail -1)
-  echo "implementations: device tests $DEVICE_TAGS on \"$plat\": ${sum:-no summary} (log $log)"
+  echo "implementations: device tests $DEVICE_TAGS on \"$plat\": ${sum:-no summary} (log $log, $((SECONDS - t0)) s)"
   if [ $r -ne 0 ]; then grep -B3 -A12 "FAILED:" "$log" | head -60; rc=1; fi
 done <<< "$platforms"
 [ -n "$platforms" ] || echo "implementations: no CPU OpenCL implementation besides PoCL (scripts/setup_intel_ocl.sh installs Intel's)"
 
 # 2. oclgrind.
 if [ -n "${CLRT_NO_OCLGRIND:-}" ]; then echo "implementations: oclgrind suite SKIPPED (CLRT_NO_OCLGRIND set)"
-else bash scripts/oclgrind_suite.sh > build/oclgrind-log.txt 2>&1 || { tail -40 build/oclgrind-log.txt; rc=1; }
-     tail -2 build/oclgrind-log.txt | head -1; fi
+else t0=$SECONDS; bash scripts/oclgrind_suite.sh > build/oclgrind-log.txt 2>&1 || { tail -40 build/oclgrind-log.txt; rc=1; }
+     echo "$(tail -2 build/oclgrind-log.txt | head -1) ($((SECONDS - t0)) s)"; fi
 
 # 3. GPU-target compiles.
 if [ -n "${CLRT_NO_GPU_COMPILE:-}" ]; then echo "implementations: GPU-target compile SKIPPED (CLRT_NO_GPU_COMPILE set)"
-else bash scripts/gpu_compile_check.sh > build/gpu-compile-log.txt 2>&1 || { tail -30 build/gpu-compile-log.txt; rc=1; }
-     tail -2 build/gpu-compile-log.txt | head -1; fi
+else t0=$SECONDS; bash scripts/gpu_compile_check.sh > build/gpu-compile-log.txt 2>&1 || { tail -30 build/gpu-compile-log.txt; rc=1; }
+     echo "$(tail -2 build/gpu-compile-log.txt | head -1) ($((SECONDS - t0)) s)"; fi
 exit $rc
