@@ -6,11 +6,17 @@ run alternately without the preview and with it and one viewer that polls like t
 Reports per mode the median of the `render=` time of clrt's stats line (wall time: on a shared machine
 its noise can exceed the effect) and of the process's CPU time (user + system, from wait4: what the
 preview's threads add, which on a CPU device is taken from the render), and the differences in percent.
+Runs come in pairs (one of each mode, back to back, alternating which goes first), so a slow drift of the
+machine's load cancels in each pair's ratio; the script prints the median of the pairs' ratios with a
+bootstrap 95% interval (10,000 resamples, fixed seed), and the preview's own time as clrt measures it
+(status.json: the render thread's time spent on the preview, the server threads' time) as a share of
+the process's CPU time.
 Usage: python3 scripts/preview_overhead.py [--clrt build/clrt] [--runs 5] [--resolution 160x120]
        [--spp 256] [--device cpu]"""
 import argparse
 import json
 import os
+import random
 import re
 import statistics
 import subprocess
@@ -44,7 +50,7 @@ def viewer(url, stop, counts):
 def run(args, out, preview):
     cmd = [args.clrt, "render", os.path.join(ROOT, "scenes", "preview_box.xml"), "--camera", "1", "-o", out,
            "--resolution", args.resolution, "--spp", str(args.spp), "--target-error", "1e-12", "--seed", "1",
-           "--device", args.device]
+           "--device", args.device, "-v"]
     if preview:
         cmd += ["--preview", "127.0.0.1:0"]
     log = os.path.join(out, "log.txt")
@@ -66,6 +72,9 @@ def run(args, out, preview):
             t.join()
     text = open(log).read()
     m = re.search(r"render=([0-9.]+)s", text)
+    own = re.search(r"preview: render thread ([0-9.]+) s, server threads ([0-9.]+) s", text)
+    if own:  # the final figures (status.json's were the last the viewer polled)
+        counts["renderThread"], counts["server"] = float(own.group(1)), float(own.group(2))
     if rc != 0 or not m:
         sys.exit("clrt failed (exit %d):\n%s" % (rc, text))
     return float(m.group(1)), usage.ru_utime + usage.ru_stime, counts
@@ -79,7 +88,7 @@ def main():
     ap.add_argument("--spp", type=int, default=256)
     ap.add_argument("--device", default="cpu")
     args = ap.parse_args()
-    times, cpu = {False: [], True: []}, {False: [], True: []}
+    times, cpu, own = {False: [], True: []}, {False: [], True: []}, []
     with tempfile.TemporaryDirectory() as out:
         run(args, out, False)  # warm-up: kernel cache
         for i in range(args.runs):
@@ -87,15 +96,29 @@ def main():
                 t, c, counts = run(args, out, preview)
                 times[preview].append(t)
                 cpu[preview].append(c)
+                if preview:
+                    own.append(counts["renderThread"] + counts["server"])
                 print("run %d %-12s render %.3f s, cpu %.3f s%s" % (i + 1, "preview" if preview else "no preview", t, c,
                       " (viewer: %d status, %d images; preview's own time: render thread %.4f s, server %.4f s)" %
                       (counts["status"], counts["images"], counts["renderThread"], counts["server"]) if preview else ""),
                       flush=True)
-    a, b = statistics.median(times[False]), statistics.median(times[True])
-    print("median render time: %.3f s without the preview, %.3f s with one viewer: %+.1f%%" % (a, b, 100 * (b - a) / a))
-    a, b = statistics.median(cpu[False]), statistics.median(cpu[True])
-    print("median CPU time:    %.3f s without the preview, %.3f s with one viewer: %+.1f%%" % (a, b, 100 * (b - a) / a))
+    for name, v in (("render time", times), ("CPU time   ", cpu)):
+        a, b = statistics.median(v[False]), statistics.median(v[True])
+        ratios = [y / x for x, y in zip(v[False], v[True])]
+        lo, hi = bootstrap_median(ratios)
+        print("median %s: %.3f s without the preview, %.3f s with one viewer: %+.1f%%; median of the %d pairs' "
+              "ratios %+.1f%% (95%% interval %+.1f%% .. %+.1f%%)" % (name, a, b, 100 * (b - a) / a, len(ratios),
+              100 * (statistics.median(ratios) - 1), 100 * (lo - 1), 100 * (hi - 1)))
+    share = [o / c for o, c in zip(own, cpu[True])]
+    print("the preview's own time (render thread + server) as a share of the process's CPU time: median %.2f%%, "
+          "max %.2f%%" % (100 * statistics.median(share), 100 * max(share)))
 
+
+def bootstrap_median(xs, n=10000):
+    """95% interval of the median of xs by resampling (fixed seed: the same figures for the same runs)."""
+    rng = random.Random(1)
+    meds = sorted(statistics.median(rng.choices(xs, k=len(xs))) for _ in range(n))
+    return meds[int(0.025 * n)], meds[int(0.975 * n) - 1]
 
 if __name__ == "__main__":
     main()

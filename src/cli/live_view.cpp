@@ -17,6 +17,7 @@ std::unique_ptr<LiveView> LiveView::start(const RenderArgs& a) {
     if (a.previewAddress.empty() && a.displayServer.empty()) return nullptr;
     std::unique_ptr<LiveView> lv(new LiveView());
     lv->keep_ = a.previewKeep;
+    lv->verbose_ = a.verbose;
     if (!a.previewAddress.empty()) {
         const PreviewAddress addr = parsePreviewAddress("--preview", a.previewAddress);
         // Stop: exactly what Ctrl-C does (cli/interrupt.h's signal thread takes it; a second one exits).
@@ -81,6 +82,10 @@ void LiveView::finish(bool interrupted) {
     if (!server_) return;
     if (!keep_ || interrupted) {
         server_->linger(3.0);
+        // -v: what the preview cost (scripts/preview_overhead.py reads this line).
+        if (verbose_)
+            std::fprintf(stderr, "preview: render thread %.4f s, server threads %.4f s\n", state_.renderThreadSeconds(),
+                         state_.serverSeconds());
         return;
     }
     std::fprintf(stderr, "preview: the render is over; still serving %s (--preview-keep) until Ctrl-C\n",

@@ -44,7 +44,7 @@ private:
     std::unique_ptr<PreviewServer> server_;
     std::unique_ptr<TevClient> tev_;
     std::vector<std::string> names_;  // tev image names, per camera index
-    bool keep_ = false;
+    bool keep_ = false, verbose_ = false;
 };
 
 }  // namespace clrt
