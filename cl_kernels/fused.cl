@@ -82,7 +82,7 @@ __kernel CLRT_KERNEL_VEC_HINT void render_fused(CLRT_KERNEL_PARAMS(render_fused)
     /* One path per depth: add each as it comes; else per-depth sums (levels <= CLRT_FUSED_MAX_LEVELS). */
     const int direct = samples == 1 && scene.splitDepth == 0;
 #ifdef CLRT_FUSED_BOUNCES
-    const int levels = min(scene.maxDepth + 1, CLRT_FUSED_MAX_LEVELS);
+    const int levels = min(CLRT_LAST_DEPTH(scene.maxDepth, scene.pathMode) + 1, CLRT_FUSED_MAX_LEVELS);
 #else
     const int levels = 1;
 #endif

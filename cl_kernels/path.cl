@@ -12,6 +12,10 @@
  *     (Path_CourseRoulette, played at every hit before its radiance is counted),
  *   - makes ONE child (ShadeResult child 0; the wavefront's slot 2i): the sampled direction with
  *     throughput · f·cosθ / pdf.
+ *     At the depth cap it makes none, except under MIS: there the non-specular BSDF sample still goes
+ *     out, as an emission-only segment (depth maxDepth + 1: MIS-weighted emission of an object or
+ *     environment light, no light samples, no child), so the last vertex's light samples keep their
+ *     power-heuristic weight (as Mitsuba's path; docs/studies/2026-12-04-mitsuba-path.md, addendum).
  * PathState.throughput.w: the solid-angle pdf of the BSDF sample that made the path (0: a camera ray
  * or a specular bounce); under CLRT_PATH_RR_COURSE instead ±sigma (Path_CourseSigma): + after a BSDF
  * bounce, − after a specular one, 0 for a camera ray (sigma 1).
@@ -69,7 +73,8 @@ inline float Path_EnvLightPdf(const __global Light* light, const __global float*
 /* The weight of what a ray that leaves the scene brings back (the environment light, if any). */
 inline float Path_MissWeight(SceneParams scene, PathState path, const __global Light* lights,
                              const __global float* envDist, float3 dirWorld) {
-    if (scene.envLight == CLRT_INVALID) return 1.0f; /* a background colour is no light: never sampled */
+    /* a background colour is no light: never sampled; beyond the depth cap (MIS's emission-only segment) unseen */
+    if (scene.envLight == CLRT_INVALID) return path.depth > scene.maxDepth ? 0.0f : 1.0f;
     float l = length(dirWorld);
     if (!(l > 0.0f)) return 0.0f;
     float lightPdf = (scene.pathMode & CLRT_PATH_MIS) ? Path_EnvLightPdf(&lights[scene.envLight], envDist, dirWorld / l) : -1.0f;
@@ -279,12 +284,18 @@ inline void Path_ShadeHit(SceneParams scene, PathState path, Material m, float3 
     res->radiance = (float4)(finiteOrZero(throughput * emitted * Path_EmissionWeight(mode, path.throughput.w, lightPdf)), 0.0f);
     int specular = m.kind == MATERIAL_MIRROR || m.kind == MATERIAL_CONDUCTOR || m.kind == MATERIAL_DIELECTRIC;
     int diffuse = !inside && (maxComponent(sp.kd.xyz) > 0.0f || maxComponent(sp.ks.xyz) > 0.0f);
-    if (!Path_UsesNee(mode) || !diffuse) sp.position.w = 0.0f;
+    /* Under MIS the last vertex (depth cap) still draws its BSDF sample, whose hit (depth maxDepth + 1) is
+     * emission-only: it adds the MIS-weighted emission of a light it reaches, samples no light, has no child.
+     * Only the non-specular sample: it is the other share of the last vertex's light samples. */
+    const int emissionOnly = path.depth > scene.maxDepth;
+    const int lastVertex = path.depth >= scene.maxDepth;
+    if (!Path_UsesNee(mode) || !diffuse || emissionOnly) sp.position.w = 0.0f;
     res->sp = sp;
     if (course && !courseSurvives) return;
-    if (path.depth >= scene.maxDepth || (!specular && !diffuse)) return;
+    if (emissionOnly || (lastVertex && !(mode & CLRT_PATH_MIS)) || (!specular && !diffuse)) return;
     float pSpecular = specular ? (diffuse ? 0.5f : 1.0f) : 0.0f;
     int pickSpecular = Sampler_Other1D(scene, path, key, dim + 3u) < pSpecular;
+    if (pickSpecular && lastVertex) return;
     float3 weight, org, dir;
     float pdf = 0.0f;
     if (pickSpecular) {

@@ -417,6 +417,9 @@ inline void Shade_Hit(SceneParams scene, CameraParams cam, PathState path, Ray r
 #ifdef CLRT_HAS_OBJECT_LIGHTS
     radiance += ObjectLight_Emission(h.prim, s.frontFacing, scene.numTriangles, scene.numSpheres, triShading, spheres, lights);
 #endif
+#ifdef CLRT_HAS_PATH_TRACING
+    if (scene.pathMode != 0 && path.depth > scene.maxDepth) replaceAll = 0; /* an emission-only segment */
+#endif
     if (replaceAll) {
         res->radiance = (float4)(throughput * radiance, 0.0f);
         return;
@@ -560,9 +563,8 @@ inline void Light_ShadowRays(SceneParams scene, PathState path, ShadingPoint sp,
                                 &wi, &dist);
         *sr = Shadow_Make(sp, materials, path.throughput.xyz, wi, dist, e, scene.shadowEpsilon);
 #ifdef CLRT_HAS_PATH_TRACING
-        /* at the last vertex (depth cap) no BSDF ray follows to take the other share: weight 1 */
-        if (path.depth < scene.maxDepth)
-            sr->contribution *= Path_LightSampleWeight(scene.pathMode, &lights[l], sp, materials, envDist, lightData, wi, e);
+        /* at the last vertex (depth cap) too: its BSDF sample is traced for emission only (Path_ShadeHit) */
+        sr->contribution *= Path_LightSampleWeight(scene.pathMode, &lights[l], sp, materials, envDist, lightData, wi, e);
 #endif
 #ifdef CLRT_HAS_OBJECT_LIGHTS
         if (ObjectLight_IsShape(&lights[l])) ObjectLight_AimShadow(sr, sp.position.xyz + dist * wi);

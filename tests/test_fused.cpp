@@ -62,6 +62,7 @@ TEST_CASE("fused path: the wavefront's image bit for bit, and the same ray count
         const char* file;
         int w, h, spp;
         int camera;  // index into the scene's cameras
+        int pathMode = -1;  // >= 0: replaces the camera's (dev CLRT_PATH_* bits)
     };
     // Images under 65,536 pixels take several samples per group (per-depth sums in fused.cl);
     // dielectrics at <= 4 spp split into both children (the explicit stack).
@@ -83,6 +84,9 @@ TEST_CASE("fused path: the wavefront's image bit for bit, and the same ray count
         {"hw6/cornellbox_jaroslav_glossy_area_sphere.xml", 40, 40, 2, 0},  // LightSphere, BRDFs
         {"hw6/cornellbox_jaroslav_path_diffuse.xml", 32, 32, 2, 0},  // path tracing + NEE, depth 3, per-depth sums
         {"hw6/cornellbox_jaroslav_path_diffuse.xml", 256, 256, 1, 1},  // NEE + Russian roulette: no depth cap, one group
+        // MIS, depth 3: the emission-only segment at depth 4 (per-depth sums; one path per depth)
+        {"hw6/cornellbox_jaroslav_path_diffuse.xml", 32, 32, 2, 0, CLRT_PATH_ON | CLRT_PATH_MIS},
+        {"hw6/cornellbox_jaroslav_path_diffuse.xml", 32, 32, 1, 0, CLRT_PATH_ON | CLRT_PATH_MIS},
         {"json2025/spheres_with_plane.json", 48, 32, 1, 0},          // infinite planes
     };
     for (const Case& c : cases) {
@@ -92,7 +96,8 @@ TEST_CASE("fused path: the wavefront's image bit for bit, and the same ray count
         Scene scene = loadScene(path);
         DeviceScene ds = flattenScene(scene);
         Renderer r(testContext(), ds);
-        const Camera& cam = scene.cameras.at(c.camera);
+        Camera cam = scene.cameras.at(c.camera);
+        if (c.pathMode >= 0) cam.pathMode = c.pathMode;
         Rendered f = renderWith(r, cam, c.w, c.h, c.spp, 3, Pipeline::Fused);
         Rendered w = renderWith(r, cam, c.w, c.h, c.spp, 3, Pipeline::Wavefront);
         CHECK(differingFloats(f.image, w.image) == 0);

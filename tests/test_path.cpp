@@ -375,9 +375,9 @@ TEST_CASE("Path tracing: interior white furnace gives Le/(1-a) for every option 
 // What MaxRecursionDepth d does (no RussianRoulette): the camera ray plus d bounces, so a path without
 // light sampling collects Le·Σ_{k=0..d} a^k; with next-event estimation the last vertex still samples
 // the light, one more term: Le·Σ_{k=0..d+1} a^k. Measured at d = 2, a = 0.5 (1.75 and 1.875). MIS as
-// NEE: at the last vertex no BSDF ray follows, so its light samples keep weight 1 (before 2026-12-04 they
-// kept the power-heuristic weight and the term a^(d+1) lost the BSDF share: 5.6% dark on the hw6 box at
-// depth 0, Mitsuba's path as the check, bench/bench_mitsuba_path.py).
+// NEE: the last vertex's light samples keep their power-heuristic weight and its BSDF sample is traced
+// for emission only (path.cl); without that segment the term a^(d+1) loses the BSDF share (5.6% dark on
+// the hw6 box at depth 0 before 2026-12-04, Mitsuba's path as the check, bench/bench_mitsuba_path.py).
 TEST_CASE("Path tracing: MaxRecursionDepth truncates the interior furnace's series", "[path][render]") {
     TempDir tmp;
     const float a = 0.5f;

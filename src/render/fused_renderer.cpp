@@ -52,8 +52,9 @@ std::string fusedUnsupported(const dev::SceneParams& sp, const FusedPlan& plan) 
     if (sp.splitDepth > CLRT_FUSED_STACK_SIZE)
         return "dielectric split depth " + std::to_string(sp.splitDepth) + " > " + std::to_string(CLRT_FUSED_STACK_SIZE);
     const bool perDepthSums = plan.group > 1 || sp.splitDepth > 0;  // as render_fused's `direct`
-    if (perDepthSums && sp.maxDepth + 1 > CLRT_FUSED_MAX_LEVELS)
-        return "per-depth sums of " + std::to_string(sp.maxDepth + 1) + " depths > " + std::to_string(CLRT_FUSED_MAX_LEVELS);
+    const int depths = CLRT_LAST_DEPTH(sp.maxDepth, sp.pathMode) + 1;
+    if (perDepthSums && depths > CLRT_FUSED_MAX_LEVELS)
+        return "per-depth sums of " + std::to_string(depths) + " depths > " + std::to_string(CLRT_FUSED_MAX_LEVELS);
     return "";
 }
 

@@ -405,7 +405,7 @@ void Renderer::Impl::traceBatch(int n, const BatchPlan& plan, RenderCounters& co
     for (int depth = 0;; ++depth) {
         depthBin = std::min(depth, RenderCounters::kDepthBins - 1);
         enqueueBounce(bound, plan);
-        const bool last = !plan.bounces || depth >= scene.maxDepth;
+        const bool last = !plan.bounces || depth >= CLRT_LAST_DEPTH(scene.maxDepth, scene.pathMode);
         if (!last) enqueueCompaction(depth, bound);
         if (depth > 0 && !exactBounds) length = queueLength(depth, counters);
         countBounce(depth, length, plan, counters);

@@ -338,6 +338,9 @@ typedef struct SceneParams {
 #define CLRT_PATH_RR 8          /* RussianRoulette (q = max throughput, C = 0, no depth cap) */
 #define CLRT_PATH_MIS 16        /* MultipleImportanceSampling (clrt's): NEE + BSDF sampling, power heuristic */
 #define CLRT_PATH_RR_COURSE 32  /* with RR, clrt render --rr-rule course: the course references' biased roulette */
+/* The deepest queue depth a path reaches: maxDepth, and under MIS one more, the emission-only segment of
+ * the last vertex's BSDF sample (cl_kernels/path.cl, Path_ShadeHit). Host and device. */
+#define CLRT_LAST_DEPTH(maxDepth, pathMode) ((maxDepth) + (((pathMode) & CLRT_PATH_MIS) ? 1 : 0))
 
 /* Ray and hit record of the wavefront. */
 typedef struct Ray {
