@@ -11,6 +11,7 @@
 // instance) against brute force over the world-space triangles that flattening makes.
 #include <catch.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <cstring>
@@ -243,6 +244,40 @@ TEST_CASE("instancing: hw2 grass_desert (instances of instances) matches the cou
     const double p2 = psnr8(quantize(twoLevel, true), ref);
     WARN("grass_desert two-level: PSNR " << p2 << " dB (truncated)");
     CHECK(p2 >= 50.0);
+}
+
+// instancedShapes under auto (flatten_instances.cpp; the bounds are measured in
+// docs/studies/2026-12-04-instancing-threshold.md). Counts only: the meshes hold index triples, no
+// geometry.
+TEST_CASE("instancing: auto keeps a mesh once from 2^20 triangles as seen, and every instanced mesh from 2^23 in all", "[instancing][scene]") {
+    auto addMesh = [](Scene& s, size_t triangles, int placements, int light = -1) {
+        s.meshes.emplace_back();
+        s.meshes.back().indices.assign(3 * triangles, 0);
+        for (int k = 0; k < placements; ++k) {
+            Shape sh;
+            sh.type = ShapeType::Mesh;
+            sh.meshIndex = int(s.meshes.size()) - 1;
+            sh.lightIndex = light;
+            s.shapes.push_back(sh);
+        }
+    };
+    auto count = [](const std::vector<bool>& v) { return std::count(v.begin(), v.end(), true); };
+    Scene s;
+    addMesh(s, size_t(1) << 19, 2);        // 2^20 as seen: two-level
+    addMesh(s, (size_t(1) << 19) - 1, 2);  // just under: flattened
+    addMesh(s, size_t(1) << 21, 1);        // placed once: flattened
+    addMesh(s, size_t(1) << 20, 2, 0);     // an object light: flattened
+    std::vector<bool> autoShapes = instancedShapes(s, Instancing::Auto);
+    CHECK(autoShapes == std::vector<bool>{true, true, false, false, false, false, false});
+    CHECK(count(instancedShapes(s, Instancing::Flatten)) == 0);
+    CHECK(count(instancedShapes(s, Instancing::TwoLevel)) == 5);  // every mesh shape but the light's
+    // Many meshes, each under 2^20 as seen: 2^16 triangles placed 15 times (983,040 each).
+    Scene many;
+    for (int m = 0; m < 8; ++m) addMesh(many, size_t(1) << 16, 15);
+    CHECK(count(instancedShapes(many, Instancing::Auto)) == 0);  // 7.9M as seen in all: flattened
+    addMesh(many, size_t(1) << 16, 15);
+    addMesh(many, 100, 1);                                          // placed once: stays flattened
+    CHECK(count(instancedShapes(many, Instancing::Auto)) == 9 * 15);  // 8.8M >= 2^23: all kept once
 }
 
 namespace {
