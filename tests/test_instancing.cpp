@@ -394,9 +394,7 @@ WalkWork countWalkWork(const Bvh& flat, const std::vector<Vec3>& world, const Tw
         });
     }
     const double n = double(std::max<size_t>(1, dirs.size()));
-    w.flatTests /= n;
-    w.twoEntries /= n;
-    w.twoTests /= n;
+    for (double* v : {&w.flatTests, &w.twoEntries, &w.twoTests}) *v /= n;
     return w;
 }
 
@@ -488,8 +486,7 @@ TEST_CASE("instancing: flattened against two-level on the host (bench)", "[.inst
 // renders in well under a second; the process starts and kernel builds are most of its time.
 namespace {
 
-// The scene of "the device's two-level BVH renders what flattening renders" in dir/nested.xml
-// (writes i.exr); returns its path.
+// The scene of "the device's two-level BVH renders what flattening renders" (writes i.exr) as dir/nested.xml.
 std::string writeNestedScene(const TempDir& dir) {
     const std::string mirrored = R"(<MeshInstance id="8" baseMeshId="1"><Transformations>s3 t3</Transformations></MeshInstance>
 <MeshInstance id="9" baseMeshId="2" shadingMode="smooth"><Transformations>t2 s2</Transformations></MeshInstance>)";
@@ -561,8 +558,7 @@ TEST_CASE("instancing: --time-limit 0 (progressive passes) two-level against fla
     const std::string flatLog = readFileBytes(dir.file("log.txt"));
     std::smatch a, b;
     const std::regex stop("stopped \\(time limit\\) at (\\d+) spp");
-    REQUIRE(std::regex_search(twoLog, a, stop));
-    REQUIRE(std::regex_search(flatLog, b, stop));
+    REQUIRE((std::regex_search(twoLog, a, stop) && std::regex_search(flatLog, b, stop)));
     CHECK(a[1] == b[1]);
     checkTwoLevelNearFlat(two, flat);
 }
@@ -573,7 +569,6 @@ TEST_CASE("instancing: two PoCL devices render the two-level scene as one device
     const std::string env = "POCL_DEVICES='pthread pthread'";
     CliResult list = runIn(dir, env, "devices");
     std::vector<std::string> pocl;
-    std::smatch m;
     const std::regex line("\\[(\\d+)\\][^\\n]*\\(platform: Portable Computing Language\\)");
     for (auto it = std::sregex_iterator(list.log.begin(), list.log.end(), line); it != std::sregex_iterator(); ++it)
         pocl.push_back((*it)[1]);
