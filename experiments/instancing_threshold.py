@@ -92,7 +92,7 @@ def measure(a, scene):
 
 def report(label, seen, m):
     cells = ["%.2f / %.2f (%.2f; %.2f)" % m[kind] for kind in KINDS]
-    print("| %s | %d | %s |" % (label, seen, " | ".join(cells)), flush=True)
+    print("| %s | %s | %s |" % (label, "{:,}".format(seen) if seen else "(see ray_bench)", " | ".join(cells)), flush=True)
 
 
 def main():
@@ -112,7 +112,7 @@ def main():
     print("| scene | triangles as seen | camera: Mrays/s flat / two-level (two/flat; two/flat of clrt/Embree) | shadow | diffuse |")
     print("|---|---|---|---|---|")
     for scene in a.extra:
-        report(os.path.basename(scene), 0, measure(a, scene))
+        report(os.path.basename(scene), None, measure(a, scene))
     for n in [int(x) for x in a.sizes.split(",")]:
         ply = os.path.join(a.work, "field%d.ply" % n)
         if not os.path.exists(ply):
