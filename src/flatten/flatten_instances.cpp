@@ -15,8 +15,12 @@ namespace clrt {
 namespace {
 
 // Auto: a mesh goes two-level when it is placed at least twice and its placements together hold at
-// least this many triangles (provisional: docs/architecture.md, "Instancing", has the measurements).
+// least kTwoLevelMinTriangles; and every mesh placed at least twice does when such meshes together hold
+// at least kTwoLevelSceneTriangles as seen (many meshes, each under the first bound: flattened, ~4 GB
+// of host memory at ~500 B a triangle). Constants, not the machine's memory: every machine (--part,
+// MPI ranks) stores a scene alike. docs/studies/2026-12-04-instancing-threshold.md has the measurements.
 constexpr size_t kTwoLevelMinTriangles = size_t(1) << 20;
+constexpr size_t kTwoLevelSceneTriangles = size_t(1) << 23;
 
 // One bottom-level tree as the device reads it, before its indices move to their place in ds.
 struct BottomLevel {
@@ -135,11 +139,16 @@ std::vector<bool> instancedShapes(const Scene& scene, Instancing mode) {
     auto eligible = [](const Shape& s) { return s.type == ShapeType::Mesh && s.lightIndex < 0; };
     for (const Shape& s : scene.shapes)
         if (eligible(s)) ++placements[s.meshIndex];
+    auto triangles = [&](int mesh) { return scene.meshes.at(size_t(mesh)).indices.size() / 3; };
+    size_t placedSeveralTimes = 0;  // triangles as seen of the meshes placed at least twice
+    for (const auto& mk : placements)
+        if (mk.second >= 2) placedSeveralTimes += mk.second * triangles(mk.first);
+    const bool wholeScene = placedSeveralTimes >= kTwoLevelSceneTriangles;
     for (size_t i = 0; i < scene.shapes.size(); ++i) {
         const Shape& s = scene.shapes[i];
         if (!eligible(s)) continue;
-        const size_t k = placements[s.meshIndex], tris = scene.meshes.at(size_t(s.meshIndex)).indices.size() / 3;
-        out[i] = mode == Instancing::TwoLevel || (k >= 2 && k * tris >= kTwoLevelMinTriangles);
+        const size_t k = placements[s.meshIndex];
+        out[i] = mode == Instancing::TwoLevel || (k >= 2 && (wholeScene || k * triangles(s.meshIndex) >= kTwoLevelMinTriangles));
     }
     return out;
 }
