@@ -438,7 +438,7 @@ TEST_CASE("half4 environment texels: packed only when exact, and the device look
     REQUIRE(packHalf4Exact(tex.data(), tex.size(), packed));
     CHECK(packed.size() == (tex.size() + 1) / 2);
     DeviceScene ds;
-    ds.texels = tex;
+    ds.texels.assign(tex.begin(), tex.end());
     ds.texels.insert(ds.texels.end(), packed.begin(), packed.end());
     ds.images = {dev::ImageInfo{0, w, h, dev::TEXELS_FLOAT4}, dev::ImageInfo{int(tex.size()), w, h, dev::TEXELS_HALF4}};
     const std::vector<dev::float4> back = imageTexels(ds, 1);

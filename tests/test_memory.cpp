@@ -20,7 +20,7 @@ using namespace clrt::test;
 
 namespace {
 
-template <class T> uint64_t bytesOf(const std::vector<T>& v) { return uint64_t(v.size()) * sizeof(T); }
+template <class V> uint64_t bytesOf(const V& v) { return uint64_t(v.size()) * sizeof(typename V::value_type); }
 
 // The device arrays of a flattened scene by the estimate's families.
 struct Actual {

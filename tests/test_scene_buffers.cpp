@@ -107,3 +107,36 @@ TEST_CASE("scene buffers: huge-page blocks are 2 MiB aligned whole pages, advise
 #endif
     }
 }
+
+TEST_CASE("scene buffers: a HostArray in huge pages is the buffer's memory (no copy); small ones are copied",
+          "[cl][scene_buffers]") {
+    DeviceContext& dc = testContext();
+    SceneBufferUploader up(dc.context(), true);
+    const size_t counts[] = {1000, kHugeMinBytes / 4 - 1, kHugeMinBytes / 4, (size_t(5) << 20) / 4 + 3};
+    std::vector<HostArray<uint32_t>> arrays;
+    std::vector<cl::Buffer> buffers;
+    size_t expectInPlace = 0, expectCopied = 0;
+    for (size_t n : counts) {
+        std::vector<uint32_t> p = pattern(n, uint32_t(n));
+        arrays.emplace_back(p.begin(), p.end());
+        const bool big = n * 4 >= kHugeMinBytes;
+        CHECK(inHugePages(arrays.back()) == big);
+        if (big) CHECK(reinterpret_cast<uintptr_t>(arrays.back().data()) % kHugePageBytes == 0);
+        buffers.push_back(up.upload(arrays.back()));
+        const bool inPlace = up.hugePages() && big;
+        (inPlace ? expectInPlace : expectCopied) += n * 4;
+        // In place: the buffer's host pointer is the array's own storage.
+        void* host = buffers.back().getInfo<CL_MEM_HOST_PTR>();
+        CHECK((host == static_cast<void*>(arrays.back().data())) == inPlace);
+    }
+    CHECK(up.inPlaceBytes() == expectInPlace);
+    CHECK(up.copiedBytes() == expectCopied);
+    CHECK(up.hugeBytes() == 0);
+    for (size_t i = 0; i < arrays.size(); ++i) {
+        INFO(arrays[i].size() << " uints");
+        const std::vector<uint32_t> seen = readThroughKernel(buffers[i], arrays[i].size());
+        size_t differ = 0;
+        for (size_t j = 0; j < seen.size(); ++j) differ += seen[j] != arrays[i][j];
+        CHECK(differ == 0);
+    }
+}

@@ -18,8 +18,8 @@ double halfArea(const BvhNode& n) {
 
 struct Collapser {
     const Bvh& bin;
-    std::vector<dev::Bvh4Node>& out;
-    std::vector<dev::Bvh4Leaf>& leaves;
+    HostArray<dev::Bvh4Node>& out;
+    HostArray<dev::Bvh4Leaf>& leaves;
     int depth = 0;
 
     // Appends the blocks of binary leaf c (its primRefs, four to a block); returns the first block.
@@ -117,7 +117,11 @@ Bvh4 collapseBvh4(const Bvh& bvh) {
         r.depth = 1;
         return r;
     }
-    r.nodes.reserve(bvh.nodes.size() / 2 + 1);
+    r.nodes.reserve(bvh.nodes.size() / 2 + 1);  // an upper bound: pages past the end are never touched
+    size_t blocks = 0;  // exactly: each binary leaf's primitives, four to a block (no growth, no copies)
+    for (const BvhNode& n : bvh.nodes)
+        if (n.count > 0) blocks += size_t(n.count + 3) / 4;
+    r.leaves.reserve(blocks);
     Collapser c{bvh, r.nodes, r.leaves};
     r.maxStack = c.emit(0, 1).second;
     r.depth = c.depth;
@@ -127,7 +131,7 @@ Bvh4 collapseBvh4(const Bvh& bvh) {
     return r;
 }
 
-void setLeafTriangles(Bvh4& b4, const std::vector<dev::Triangle>& tris, int numTriangles) {
+void setLeafTriangles(Bvh4& b4, const dev::Triangle* tris, int numTriangles) {
     for (dev::Bvh4Leaf& block : b4.leaves) {
         const int* prim = &block.prim.x;
         for (int i = 0; i < 4; ++i) {

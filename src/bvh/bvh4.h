@@ -9,12 +9,13 @@
 
 #include "bvh/bvh.h"
 #include "shared/device_types.h"
+#include "util/huge_pages.h"
 
 namespace clrt {
 
 struct Bvh4 {
-    std::vector<dev::Bvh4Node> nodes;  // nodes[0] is the root; never empty
-    std::vector<dev::Bvh4Leaf> leaves;  // the leaves' primitives, four to a block (vertices: setLeafTriangles)
+    HostArray<dev::Bvh4Node> nodes;  // nodes[0] is the root; never empty
+    HostArray<dev::Bvh4Leaf> leaves;  // the leaves' primitives, four to a block (vertices: setLeafTriangles)
     int maxStack = 0;  // most entries the device's near-first traversal can have on its stack
     int depth = 0;     // node levels on the longest root-to-leaf path
 };
@@ -26,6 +27,10 @@ struct Bvh4 {
 Bvh4 collapseBvh4(const Bvh& bvh);
 
 // Copies each triangle lane's world-space vertices (prim < numTriangles) from tris into its block.
-void setLeafTriangles(Bvh4& b4, const std::vector<dev::Triangle>& tris, int numTriangles);
+void setLeafTriangles(Bvh4& b4, const dev::Triangle* tris, int numTriangles);
+template <class Triangles>  // std::vector or HostArray
+void setLeafTriangles(Bvh4& b4, const Triangles& tris, int numTriangles) {
+    setLeafTriangles(b4, tris.data(), numTriangles);
+}
 
 }  // namespace clrt

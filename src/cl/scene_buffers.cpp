@@ -17,20 +17,14 @@
 namespace clrt {
 
 HugePageBlock::HugePageBlock(size_t bytes) {
-    size_ = (bytes + kPage - 1) / kPage * kPage;
-    if (size_ == 0) size_ = kPage;
-    if (posix_memalign(&data_, kPage, size_) != 0) throw std::bad_alloc();
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-    // Before the first touch, so that the pages are allocated huge rather than collapsed later.
-    advised_ = madvise(data_, size_, MADV_HUGEPAGE) == 0;
-#endif
+    size_ = std::max((bytes + kPage - 1) / kPage * kPage, kPage);
+    data_ = hugeAlloc(bytes, &advised_);
 }
 
-HugePageBlock::~HugePageBlock() { std::free(data_); }
+HugePageBlock::~HugePageBlock() { hugeFree(data_); }
 
 SceneBufferUploader::SceneBufferUploader(cl::Context ctx, bool cpuDevice) : ctx_(std::move(ctx)) {
-    const char* env = std::getenv("CLRT_HUGE_PAGES");
-    useHuge_ = cpuDevice && !(env && std::string(env) == "0");
+    useHuge_ = cpuDevice && hugePagesWanted();
 }
 
 cl::Buffer SceneBufferUploader::upload(const void* src, size_t bytes, size_t emptyBytes) {
@@ -50,11 +44,17 @@ cl::Buffer SceneBufferUploader::upload(const void* src, size_t bytes, size_t emp
     return CL_CPP(cl::Buffer(ctx_, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, bytes, const_cast<void*>(src)));
 }
 
+cl::Buffer SceneBufferUploader::useInPlace(const void* data, size_t bytes) {
+    inPlaceBytes_ += bytes;
+    return CL_CPP(cl::Buffer(ctx_, CL_MEM_READ_ONLY | CL_MEM_USE_HOST_PTR, bytes, const_cast<void*>(data)));
+}
+
 std::string SceneBufferUploader::summary() const {
-    char buf[160];
+    char buf[256];
     bool allAdvised = true;
     for (const auto& b : blocks_) allAdvised = allAdvised && b->advised();
-    std::snprintf(buf, sizeof buf, "%.1f MB in huge-page host memory%s, %.1f MB copied%s", hugeBytes_ / 1e6,
+    std::snprintf(buf, sizeof buf, "%.1f MB of huge-page host memory used in place, %.1f MB copied into huge pages%s, "
+                  "%.1f MB copied%s", inPlaceBytes_ / 1e6, hugeBytes_ / 1e6,
                   blocks_.empty() || allAdvised ? "" : " (madvise refused: 4 KiB pages)", copiedBytes_ / 1e6,
                   useHuge_ ? "" : " (huge pages off: not a CPU device, or CLRT_HUGE_PAGES=0)");
     return buf;

@@ -47,8 +47,8 @@ struct FeatureSet {
 };
 
 struct DeviceScene {
-    std::vector<dev::Triangle> triangles;          // in BVH leaf order (bvh.primRefs still maps)
-    std::vector<dev::TriangleShading> triangleShading;
+    HostArray<dev::Triangle> triangles;          // in BVH leaf order (bvh.primRefs still maps)
+    HostArray<dev::TriangleShading> triangleShading;
     std::vector<dev::Sphere> spheres;
     std::vector<dev::Instance> instances;         // two-level BVH: instances of meshes kept once (may be empty)
     std::vector<dev::Plane> planes;               // never empty (a dummy when the scene has none)
@@ -56,10 +56,10 @@ struct DeviceScene {
     std::vector<dev::TextureSet> textureSets;
     std::vector<dev::TextureMap> textures;
     std::vector<dev::ImageInfo> images;
-    std::vector<dev::float4> texels;
+    HostArray<dev::float4> texels;
     std::vector<dev::Light> lights;
-    std::vector<float> envDistribution;  // importance distributions of env lights (env_distribution.h)
-    std::vector<dev::float4> lightData;  // object lights' triangles and spheres (layout: device_types.h, Light)
+    HostArray<float> envDistribution;  // importance distributions of env lights (env_distribution.h)
+    HostArray<dev::float4> lightData;  // object lights' triangles and spheres (layout: device_types.h, Light)
     Bvh bvh;    // binary tree (host reference, statistics)
     Bvh4 bvh4;  // what the device traverses
     dev::SceneParams params{};

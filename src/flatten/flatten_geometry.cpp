@@ -291,14 +291,14 @@ void buildDeviceBvh(std::vector<Aabb>&& boxes, DeviceScene& ds) {
     std::vector<Aabb>().swap(boxes);
     const int numTris = int(ds.triangles.size());
     {
-        std::vector<dev::Triangle> tris(ds.triangles.size());
+        HostArray<dev::Triangle> tris(ds.triangles.size());
         size_t next = 0;
         for (int ref : ds.bvh.primRefs)
             if (ref < numTris) tris[next++] = ds.triangles[size_t(ref)];  // spheres keep their indices
         ds.triangles.swap(tris);
     }
     {
-        std::vector<dev::TriangleShading> shading(ds.triangleShading.size());
+        HostArray<dev::TriangleShading> shading(ds.triangleShading.size());
         int next = 0;
         for (int& ref : ds.bvh.primRefs) {
             if (ref >= numTris) continue;

@@ -6,6 +6,8 @@
 // four triangles and fill a 4-wide leaf block 2.5 to 4 triangles deep.
 #include "flatten/memory_estimate.h"
 
+#include "util/huge_pages.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -28,7 +30,7 @@ constexpr double kLeafBlocksPerPrim = 1.0 / 2.2;
 constexpr double kNodesPerPrim = 1.0 / 6.0;
 constexpr double kBinaryNodesPerPrim = 0.8;  // ~2·leaves, leaves of >= 2.5 primitives
 // What the BVH build holds per primitive at its peak beyond the result: its box, its builder item,
-// the primRefs, and the leaf-order copies of Triangle + TriangleShading made while the old ones live.
+// the primRefs.
 constexpr uint64_t kBuildPerPrim = sizeof(Aabb) + 32 + sizeof(int);
 constexpr uint64_t kTrianglePair = sizeof(dev::Triangle) + sizeof(dev::TriangleShading);
 
@@ -79,8 +81,8 @@ void addImages(const Scene& scene, MemoryEstimate& e) {
     for (int i : mip) texels += imageTexels(scene, i) / 3 + 1;
     for (int i : env) envTexels += imageTexels(scene, i);
     e.texels = texels;
-    e.textures.add(std::max<uint64_t>(texels, 1) * sizeof(dev::float4) + envTexels * 8);  // never empty
-    if (envTexels) e.lights.add(envTexels * 6 * sizeof(float));
+    e.addHostArray(e.textures, std::max<uint64_t>(texels, 1) * sizeof(dev::float4) + envTexels * 8);  // never empty
+    if (envTexels) e.addHostArray(e.lights, envTexels * 6 * sizeof(float));
 }
 
 // Triangles, spheres and planes; returns the primitives the (top or only) BVH is built over.
@@ -107,17 +109,18 @@ uint64_t addGeometry(const Scene& scene, const MemoryPlan& plan, MemoryEstimate&
                 lightTriangles += scene.meshes[size_t(s.meshIndex)].indices.size() / 3;
         }
     e.trianglesStored += flatTris;
-    e.geometry.add(std::max<uint64_t>(1, e.trianglesStored) * sizeof(dev::Triangle));
-    e.geometry.add(std::max<uint64_t>(1, e.trianglesStored) * sizeof(dev::TriangleShading));
-    e.geometry.add(std::max<uint64_t>(1, spheres) * sizeof(dev::Sphere));
-    e.geometry.add(std::max<uint64_t>(1, planes) * sizeof(dev::Plane));
-    if (e.instances) e.geometry.add(e.instances * kInstanceBytes);
+    e.trianglesFlattened = flatTris;
+    e.addHostArray(e.geometry, std::max<uint64_t>(1, e.trianglesStored) * sizeof(dev::Triangle));
+    e.addHostArray(e.geometry, std::max<uint64_t>(1, e.trianglesStored) * sizeof(dev::TriangleShading));
+    e.addCopied(e.geometry, std::max<uint64_t>(1, spheres) * sizeof(dev::Sphere));
+    e.addCopied(e.geometry, std::max<uint64_t>(1, planes) * sizeof(dev::Plane));
+    if (e.instances) e.addCopied(e.geometry, e.instances * kInstanceBytes);
     return e.trianglesStored + spheres;
 }
 
 void addBvh(uint64_t prims, MemoryEstimate& e) {
-    e.bvh.add(uint64_t(std::ceil(double(prims) * kNodesPerPrim) + 1) * sizeof(dev::Bvh4Node));
-    e.bvh.add(uint64_t(std::ceil(double(prims) * kLeafBlocksPerPrim) + 1) * sizeof(dev::Bvh4Leaf));
+    e.addHostArray(e.bvh, uint64_t(std::ceil(double(prims) * kNodesPerPrim) + 1) * sizeof(dev::Bvh4Node));
+    e.addHostArray(e.bvh, uint64_t(std::ceil(double(prims) * kLeafBlocksPerPrim) + 1) * sizeof(dev::Bvh4Leaf));
 }
 
 // The renderer's per-render buffers for one camera (renderer.cpp's planBatches and ensureQueues, the
@@ -153,6 +156,11 @@ uint64_t renderBytes(const Scene& scene, const MemoryPlan& plan, const Camera& c
 
 }  // namespace
 
+void MemoryEstimate::addHostArray(BufferFamily& f, uint64_t bytes) {
+    f.add(bytes);
+    if (bytes < kHugeMinBytes) copiedOnCpu += bytes;
+}
+
 uint64_t MemoryEstimate::largestBuffer() const {
     return std::max({geometry.largest, bvh.largest, textures.largest, lights.largest, render.largest});
 }
@@ -162,7 +170,10 @@ uint64_t MemoryEstimate::hostPeak(const MemoryPlan& plan) const {
     const uint64_t prims = trianglesStored + instances;
     const uint64_t binaryTree = uint64_t(double(prims) * kBinaryNodesPerPrim) * sizeof(BvhNode);
     const uint64_t kept = deviceScene() + binaryTree;  // DeviceScene, alive through the render
-    const uint64_t rendering = kept + copies * devicePeak() + hostImages +
+    // A CPU device uses the DeviceScene's HostArrays of >= 1 MiB in place (util/huge_pages.h); it copies
+    // the rest (copiedOnCpu), or everything with CLRT_HUGE_PAGES=0.
+    const uint64_t scenePerCopy = hugePagesWanted() ? copiedOnCpu : deviceScene();
+    const uint64_t rendering = kept + copies * (scenePerCopy + render.bytes) + hostImages +
                                uint64_t(std::max(plan.devices, 1)) * kRuntimeBytesPerDevice;
     return std::max(sceneModel, plan.residentNow) + std::max(flattenTransient + deviceScene(), rendering);
 }
@@ -176,19 +187,22 @@ MemoryEstimate estimateMemory(const Scene& scene, const MemoryPlan& plan) {
     const uint64_t prims = addGeometry(scene, plan, e, lightTriangles);
     addBvh(prims + e.instances, e);
     addImages(scene, e);
-    e.lights.add(std::max<size_t>(1, scene.lights.size()) * sizeof(dev::Light));
-    e.lights.add(lightTriangles * 3 * sizeof(dev::float4) + scene.lights.size() * 7 * sizeof(dev::float4));
+    e.addCopied(e.lights, std::max<size_t>(1, scene.lights.size()) * sizeof(dev::Light));
+    e.addHostArray(e.lights, lightTriangles * 3 * sizeof(dev::float4) + scene.lights.size() * 7 * sizeof(dev::float4));
     for (const Camera& c : scene.cameras) {
         uint64_t pixels = 0;
         const uint64_t bytes = renderBytes(scene, plan, c, pixels);
         if (bytes > e.render.bytes) e.render = BufferFamily{"render", bytes, pixels * sizeof(dev::float4)};
         e.hostImages = std::max<uint64_t>(e.hostImages, pixels * (2 * 3 * sizeof(float) + 4));
     }
-    // Flattening's peak beyond the arrays it returns: the per-shape world-space results and boxes
-    // (while they are concatenated), then the BVH build's boxes, items and leaf-order copies.
+    // Flattening's peak beyond the arrays it returns: the boxes, and the two-level meshes' own
+    // object-space arrays while they are appended (flattened meshes are written straight into their
+    // slots); then the BVH build's boxes, items and primRefs, or (the boxes freed) the leaf-order copy
+    // of one array at a time, the larger being TriangleShading.
     const uint64_t boxes = (prims + e.instances) * sizeof(Aabb);
-    const uint64_t perShape = e.trianglesStored * (kTrianglePair + sizeof(Aabb));
-    const uint64_t build = (prims + e.instances) * kBuildPerPrim + e.trianglesStored * kTrianglePair + boxes;
+    const uint64_t perShape = (e.trianglesStored - e.trianglesFlattened) * (kTrianglePair + sizeof(Aabb));
+    const uint64_t build = std::max((prims + e.instances) * kBuildPerPrim + boxes,
+                                    e.trianglesStored * uint64_t(sizeof(dev::TriangleShading)));
     e.flattenTransient = std::max(perShape + boxes, build);
     return e;
 }

@@ -22,7 +22,7 @@ struct MemoryPlan {
     // false (or missing) = flattened, its triangles copied into world space for every shape placing it.
     std::vector<bool> meshInstanced;
     int devices = 1;           // each device holds the scene once
-    bool cpuDevices = true;    // device buffers live in host memory (PoCL, Intel CPU): they count twice there
+    bool cpuDevices = true;    // device buffers live in host memory (PoCL, Intel CPU): copied ones count twice there
     int spp = 0;               // --spp (0: each camera's NumSamples)
     int width = 0, height = 0; // --resolution (0: each camera's own)
     // What the process holds before flattening (the parsed scene, the OpenCL runtime's libraries);
@@ -41,6 +41,7 @@ struct BufferFamily {
 struct MemoryEstimate {
     uint64_t trianglesSeen = 0;    // triangles as the renderer sees them (every instance counted)
     uint64_t trianglesStored = 0;  // triangles stored on the device (an instanced mesh once)
+    uint64_t trianglesFlattened = 0;  // of those, the ones flattened into world space
     uint64_t instances = 0;        // shapes placing an instanced mesh (top-level entries)
     uint64_t texels = 0;           // texels of every image loaded (mip levels included)
     // Device arrays of the scene (on each device), by family.
@@ -52,13 +53,19 @@ struct MemoryEstimate {
     uint64_t sceneModel = 0;       // the parsed scene (mesh arrays), resident before flattening
     uint64_t flattenTransient = 0; // what flattening and the BVH build hold at their peak, beyond the result
     uint64_t hostImages = 0;       // host copies of the largest camera's image and outputs
+    uint64_t copiedOnCpu = 0;      // device arrays a CPU device copies: std::vectors, HostArrays under 1 MiB
+
+    // A DeviceScene HostArray (used in place by CPU devices from kHugeMinBytes up) / any other array.
+    void addHostArray(BufferFamily& f, uint64_t bytes);
+    void addCopied(BufferFamily& f, uint64_t bytes) { f.add(bytes); copiedOnCpu += bytes; }
 
     uint64_t deviceScene() const { return geometry.bytes + bvh.bytes + textures.bytes + lights.bytes; }
     uint64_t devicePeak() const { return deviceScene() + render.bytes; }  // on each device
     uint64_t largestBuffer() const;
     // Host resident peak: what the process holds before flattening (plan.residentNow, at least the
     // scene model) plus the larger of the flattening's peak and the render's
-    // (the DeviceScene arrays kept for the render, with every device's copy on CPU devices).
+    // (the DeviceScene arrays kept for the render, with every device's copies on CPU devices: its render
+    // buffers, and the scene arrays too small to be used in place, or all of them with CLRT_HUGE_PAGES=0).
     uint64_t hostPeak(const MemoryPlan& plan) const;
 };
 
