@@ -117,22 +117,34 @@ TEST_CASE("a rough dielectric blurs its refracted ray by the course's perturbati
 // hw1 bunny (no epsilon given, a 0.15-unit model) has points on faces that face the light whose shadow
 // rays, started closer, are blocked by their neighbouring faces; the course's reference lights them.
 // 36.4 dB with the robust offset alone (313 pixels off by more than 8 levels), 58.6 dB with the epsilon.
-TEST_CASE("hw1 bunny: shadow rays start ShadowRayEpsilon off the surface (course pixel reference)",
-          "[surface][render][shared]") {
-    if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
+namespace {
+
+// PSNR (8-bit, truncated) of hw1 NAME.xml's first camera against the course's PNG.
+double hw1Psnr(const std::string& name, Scene* loaded = nullptr) {
     std::string dir = sharedDir() + "/scenes/hw1/";
-    Scene scene = loadScene(dir + "bunny.xml");
-    CHECK(scene.shadowRayEpsilon == 1e-3f);
+    Scene scene = loadScene(dir + name + ".xml");
     DeviceScene ds = flattenScene(scene);
     Renderer r(testContext(), ds);
     RenderSettings rs;
     rs.spp = scene.cameras.at(0).numSamples;
     RenderCounters counters;
     ImageRGB img = r.render(scene.cameras.at(0), rs, counters);
-    ImageRGB ref = readImage(dir + "_reference_outputs/bunny.png");
+    ImageRGB ref = readImage(dir + "_reference_outputs/" + name + ".png");
     REQUIRE(img.width == ref.width);
-    double p = psnr8(quantize(img, true), ref);
-    WARN("hw1 bunny: PSNR " << p << " dB (truncated)");
+    if (loaded) *loaded = scene;
+    const double p = psnr8(quantize(img, true), ref);
+    WARN("hw1 " << name << ": PSNR " << p << " dB (truncated)");
+    return p;
+}
+
+}  // namespace
+
+TEST_CASE("hw1 bunny: shadow rays start ShadowRayEpsilon off the surface (course pixel reference)",
+          "[surface][render][shared]") {
+    if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
+    Scene scene;
+    const double p = hw1Psnr("bunny", &scene);
+    CHECK(scene.shadowRayEpsilon == 1e-3f);
     CHECK(p >= 55.0);
 }
 
@@ -144,17 +156,5 @@ TEST_CASE("hw1 bunny: shadow rays start ShadowRayEpsilon off the surface (course
 TEST_CASE("hw1 cornellbox: a wall through the shadow ray's origin blocks it (course pixel reference)",
           "[surface][render][shared]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
-    std::string dir = sharedDir() + "/scenes/hw1/";
-    Scene scene = loadScene(dir + "cornellbox.xml");
-    DeviceScene ds = flattenScene(scene);
-    Renderer r(testContext(), ds);
-    RenderSettings rs;
-    rs.spp = scene.cameras.at(0).numSamples;
-    RenderCounters counters;
-    ImageRGB img = r.render(scene.cameras.at(0), rs, counters);
-    ImageRGB ref = readImage(dir + "_reference_outputs/cornellbox.png");
-    REQUIRE(img.width == ref.width);
-    double p = psnr8(quantize(img, true), ref);
-    WARN("hw1 cornellbox: PSNR " << p << " dB (truncated)");
-    CHECK(p >= 40.5);
+    CHECK(hw1Psnr("cornellbox") >= 40.5);
 }
