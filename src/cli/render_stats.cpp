@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "dist/mpi_job.h"
+#include "flatten/memory_estimate.h"
 #include "util/error.h"
 
 namespace clrt {
@@ -138,6 +139,7 @@ void printTimes(const StageTimes& t, const DeviceScene& ds, const Renderer& rend
     std::fprintf(stderr, "times: parse %.3fs, bvh %.3fs (flatten %.3fs), kernel build %.3fs%s, render %.3fs, output %.3fs; %.2f Mrays/s\n",
                  t.parse, ds.bvhSeconds, t.flatten - ds.bvhSeconds, t.build, renderer.buildInfo().cacheHit ? " (cached)" : "",
                  counters.seconds, t.output, rays / secs * 1e-6);
+    if (verbose()) std::fprintf(stderr, "memory: peak resident %.1f MB so far\n", double(peakResidentBytes()) / (1 << 20));
     std::printf("stats: parse=%.3fs flatten=%.3fs bvh=%.3fs build=%.3fs render=%.3fs output=%.3fs camera_mrays=%.2f "
                 "shadow_mrays=%.2f secondary_mrays=%.2f path_segments_mps=%.2f%s spp=%d\n",
                 t.parse, t.flatten - ds.bvhSeconds, ds.bvhSeconds, t.build, counters.seconds, t.output,

@@ -243,6 +243,7 @@ uint64_t procField(const char* file, const char* key) {
 
 uint64_t availableHostMemory() { return procField("/proc/meminfo", "MemAvailable:"); }
 uint64_t residentBytes() { return procField("/proc/self/status", "VmRSS:"); }
+uint64_t peakResidentBytes() { return procField("/proc/self/status", "VmHWM:"); }
 
 bool parseByteSize(const std::string& s, uint64_t& bytes) {
     size_t used = 0;

@@ -86,6 +86,9 @@ std::string memoryProblem(const MemoryEstimate& e, const MemoryPlan& plan, const
 // MemAvailable of /proc/meminfo and this process's resident bytes (VmRSS), 0 where unknown.
 uint64_t availableHostMemory();
 uint64_t residentBytes();
+// This process's peak resident bytes so far (VmHWM: since its exec, unlike getrusage's ru_maxrss, which
+// also counts the image of a parent that forked it), 0 where unknown.
+uint64_t peakResidentBytes();
 
 // "512M", "4G", "1.5T", "1000000" (bytes; K/M/G/T are powers of 1024, an optional trailing B);
 // false when malformed or zero.
