@@ -25,6 +25,8 @@ import sys
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
 import make_height_field  # noqa: E402
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from ray_bench_ab import parse_rates  # noqa: E402
 
 KINDS = ("camera", "shadow", "diffuse")
 
@@ -67,12 +69,7 @@ def ray_bench(exe, scene, mode, runs):
     p = subprocess.run([exe, scene, "--runs", str(runs), "--instancing", mode], capture_output=True, text=True)
     if p.returncode != 0:
         sys.exit("ray_bench %s %s failed: %s" % (scene, mode, p.stderr.strip()))
-    out = {}
-    for line in p.stdout.splitlines():
-        f = line.split()
-        if f and f[0] in KINDS and len(f) >= 4:
-            out[f[0]] = (float(f[2]), float(f[3]))
-    return out
+    return parse_rates(p.stdout)
 
 
 def measure(a, scene):

@@ -30,8 +30,13 @@ def run(exe, scene, threads, device, runs):
                        capture_output=True, text=True)
     if p.returncode != 0:
         sys.exit("%s failed: %s" % (exe, p.stderr.strip()))
+    return parse_rates(p.stdout)
+
+
+def parse_rates(stdout):
+    """ray_bench's per-kind lines as {kind: (clrt Mrays/s, embree Mrays/s)}."""
     out = {}
-    for line in p.stdout.splitlines():
+    for line in stdout.splitlines():
         f = line.split()
         if f and f[0] in KINDS and len(f) >= 4:
             out[f[0]] = (float(f[2]), float(f[3]))
