@@ -3,21 +3,15 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <cstdlib>
 #include <cstring>
-#include <new>
 #include <string>
-
-#if defined(__linux__)
-#include <sys/mman.h>
-#endif
 
 #include "cl/check.h"
 
 namespace clrt {
 
 HugePageBlock::HugePageBlock(size_t bytes) {
-    size_ = std::max((bytes + kPage - 1) / kPage * kPage, kPage);
+    size_ = hugeAllocSize(bytes);
     data_ = hugeAlloc(bytes, &advised_);
 }
 

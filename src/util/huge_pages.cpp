@@ -19,8 +19,7 @@ bool hugePagesWanted() {
 }
 
 void* hugeAlloc(size_t bytes, bool* advised) {
-    size_t size = (bytes + kHugePageBytes - 1) / kHugePageBytes * kHugePageBytes;
-    if (size == 0) size = kHugePageBytes;
+    const size_t size = hugeAllocSize(bytes);
     void* p = nullptr;
     if (posix_memalign(&p, kHugePageBytes, size) != 0) throw std::bad_alloc();
     bool ok = false;

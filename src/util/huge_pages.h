@@ -20,6 +20,9 @@ constexpr size_t kHugeMinBytes = size_t(1) << 20;  // smaller arrays: plain heap
 // `bytes` rounded up to whole 2 MiB pages, 2 MiB aligned, advised for huge pages unless
 // CLRT_HUGE_PAGES=0 (*advised: whether madvise accepted it). Throws std::bad_alloc. Free with hugeFree.
 void* hugeAlloc(size_t bytes, bool* advised = nullptr);
+inline size_t hugeAllocSize(size_t bytes) {  // what hugeAlloc(bytes) reserves: whole 2 MiB pages, at least one
+    return bytes == 0 ? kHugePageBytes : (bytes + kHugePageBytes - 1) / kHugePageBytes * kHugePageBytes;
+}
 void hugeFree(void* p) noexcept;
 bool hugePagesWanted();  // CLRT_HUGE_PAGES is not "0"
 
