@@ -105,6 +105,39 @@ struct ServedPreview {
 
 }  // namespace
 
+TEST_CASE("preview state: the rate limit keeps the preview's own time within its budget", "[preview]") {
+    PreviewState st(0.25);
+    CameraView c;
+    c.width = c.height = 2;
+    st.setCameras({c});
+    auto img = std::make_shared<const ImageRGB>();
+    CHECK(st.imageInterval() == 0.25);  // nothing published yet
+    CHECK(st.imageDue(0));
+    st.publishImage(0, PassFigures{}, img);
+    CHECK_FALSE(st.imageDue(0));        // just published: wait minInterval
+    st.addServerSeconds(0.001);         // a cheap image: the minimum interval holds
+    CHECK(st.imageInterval() == 0.25);
+    st.addServerSeconds(0.029);         // 30 ms per image in all: 30 ms / 2% = 1.5 s between images
+    st.addRenderThreadSeconds(0.0);
+    CHECK(st.imageInterval() == Approx(0.030 / PreviewState::kTimeBudget));
+    st.publishImage(0, PassFigures{}, img);  // two images, 30 ms for both: back to 0.75 s each
+    CHECK(st.imageInterval() == Approx(0.015 / PreviewState::kTimeBudget));
+    st.addRenderThreadSeconds(0.01);    // the render thread's share counts too
+    CHECK(st.imageInterval() == Approx(0.020 / PreviewState::kTimeBudget));
+}
+
+TEST_CASE("threadCpuSeconds counts this thread's work, not its sleep", "[preview]") {
+    const double t0 = threadCpuSeconds();
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    const double slept = threadCpuSeconds() - t0;
+    CHECK(slept >= 0);
+    CHECK(slept < 0.1);
+    volatile double x = 0;
+    const double t1 = threadCpuSeconds();
+    while (threadCpuSeconds() - t1 < 0.02) x = x + 1;  // busy: its CPU time grows (ends, however slow)
+    CHECK(threadCpuSeconds() - t1 >= 0.02);
+}
+
 TEST_CASE("preview server: token, paths, malformed and oversized requests", "[preview]") {
     ServedPreview sp;
     httplib::Client cli("127.0.0.1", sp.server.port());

@@ -33,7 +33,10 @@ std::unique_ptr<LiveView> LiveView::start(const RenderArgs& a) {
         std::fprintf(stderr, "preview: %s\n", lv->server_->url().c_str());
         std::fflush(stderr);
     }
-    if (!a.displayServer.empty()) lv->tev_ = std::make_unique<TevClient>(a.displayServer);
+    if (!a.displayServer.empty()) {
+        PreviewState* state = &lv->state_;  // declared before tev_: outlives its thread
+        lv->tev_ = std::make_unique<TevClient>(a.displayServer, [state](double s) { state->addServerSeconds(s); });
+    }
     lv->state_.setStage("loading the scene");
     return lv;
 }

@@ -242,13 +242,13 @@ void PreviewServer::Impl::imagePng(const httplib::Request& req, httplib::Respons
                 res.status = 404;
                 return;
             }
-            const auto t0 = std::chrono::steady_clock::now();
+            const double t0 = threadCpuSeconds();
             const bool ldr = ref ? !img->isHdr : c.ldrOutput;
             int w = 0, h = 0;
             std::vector<unsigned char> rgb = previewView(*img, ldr, c.hasTonemap, c.tonemap, v, w, h);
             png = std::make_shared<const std::string>(encodePng8("preview.png", w, h, rgb));
             remember(key, png);
-            state.addServerSeconds(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+            state.addServerSeconds(threadCpuSeconds() - t0);
         }
     }
     res.set_content(png->data(), png->size(), "image/png");

@@ -2,6 +2,8 @@
 // (for _reference_outputs/) only.
 #include "preview/preview_state.h"
 
+#include <algorithm>
+#include <ctime>
 #include <filesystem>
 #include <system_error>
 
@@ -36,7 +38,20 @@ void PreviewState::beginCamera(int index) {
 bool PreviewState::imageDue(int index) const {
     std::lock_guard<std::mutex> lk(mu_);
     if (index < 0 || size_t(index) >= cams_.size()) return false;
-    return std::chrono::duration<double>(Clock::now() - lastImage_[size_t(index)]).count() >= minInterval_;
+    return std::chrono::duration<double>(Clock::now() - lastImage_[size_t(index)]).count() >= intervalLocked();
+}
+
+double PreviewState::imageInterval() const {
+    std::lock_guard<std::mutex> lk(mu_);
+    return intervalLocked();
+}
+
+// The preview's own seconds per published image so far, over the budget: images then cost at most
+// kTimeBudget of the time between them. Before any image is published (or viewed) it is minInterval.
+double PreviewState::intervalLocked() const {
+    if (imagesPublished_ == 0) return minInterval_;
+    const double perImage = (renderThreadSeconds_ + serverSeconds_) / double(imagesPublished_);
+    return std::max(minInterval_, perImage / kTimeBudget);
 }
 
 void PreviewState::publishFigures(int index, const PassFigures& f) {
@@ -53,6 +68,7 @@ void PreviewState::publishImage(int index, const PassFigures& f, std::shared_ptr
     c.figures = f;
     c.image = std::move(img);
     ++c.version;
+    ++imagesPublished_;
     lastImage_[size_t(index)] = Clock::now();
     changed();
 }
@@ -141,6 +157,12 @@ std::string courseReferencePath(const std::string& sceneFile, const std::string&
     std::error_code ec;
     const fs::path p = fs::path(sceneFile).parent_path() / "_reference_outputs" / imageName;
     return fs::is_regular_file(p, ec) ? p.string() : std::string();
+}
+
+double threadCpuSeconds() {
+    timespec ts{};
+    if (clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts) != 0) return 0;
+    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
 }
 
 }  // namespace clrt

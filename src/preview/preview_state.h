@@ -3,7 +3,10 @@
 // ImageName, first Tonemap block, course reference, progress figures and the latest HDR image. The
 // render thread only copies figures and hands over an image it already has (a shared_ptr; tone
 // mapping and PNG encoding happen on the readers' threads), at most every `minInterval` seconds per
-// camera. Reads the scene's cameras (id, size, ImageName, Tonemap blocks).
+// camera, and no more often than keeps the preview's own time (publishing plus encoding, per image
+// published) within `kTimeBudget` of the time between images: a large image that takes long to encode
+// is published less often, so the preview never takes more than that share of one core from the render.
+// Reads the scene's cameras (id, size, ImageName, Tonemap blocks).
 #pragma once
 #include <chrono>
 #include <cmath>
@@ -48,6 +51,8 @@ struct CameraView {
 
 class PreviewState {
 public:
+    static constexpr double kTimeBudget = 0.02;  // the preview's own seconds per second of render, at most
+
     explicit PreviewState(double minInterval = 0.25) : minInterval_(minInterval) {}
 
     // Render side.
@@ -55,12 +60,14 @@ public:
     void setCameras(std::vector<CameraView> cams);
     void beginCamera(int index);
     bool imageDue(int index) const;                    // the rate limit: may an image be published now?
+    double imageInterval() const;                      // its interval now: minInterval, or more (kTimeBudget)
     void publishFigures(int index, const PassFigures& f);
     void publishImage(int index, const PassFigures& f, std::shared_ptr<const ImageRGB> img);
     void endCamera(int index, const PassFigures& f, std::shared_ptr<const ImageRGB> img);
     void finish(const std::string& stage);             // the render is over (done or stopped)
     // Seconds the render thread spent on the preview (means, copies, publishing) and the preview's
-    // threads on encoding: the preview's cost, reported in status.json (scripts/preview_overhead.py).
+    // threads on encoding (their CPU time: threadCpuSeconds()): the preview's cost, reported in
+    // status.json (scripts/preview_overhead.py), and what the rate limit keeps within kTimeBudget.
     void addRenderThreadSeconds(double s);
     void addServerSeconds(double s);
     double renderThreadSeconds() const;
@@ -89,7 +96,13 @@ private:
     uint64_t changes_ = 0;
     double minInterval_;
     double renderThreadSeconds_ = 0, serverSeconds_ = 0;
+    uint64_t imagesPublished_ = 0;
+    double intervalLocked() const;  // under mu_
 };
+
+// CPU seconds the calling thread has used (CLOCK_THREAD_CPUTIME_ID): what an encode takes from the
+// render, which wall time on a loaded CPU device would overstate.
+double threadCpuSeconds();
 
 // The course reference of a camera: <scene folder>/_reference_outputs/<ImageName> when it is a
 // regular file (as scripts/check_course.py finds them), else "".

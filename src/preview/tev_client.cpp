@@ -16,6 +16,7 @@
 #include <thread>
 #include <unistd.h>
 
+#include "preview/preview_state.h"
 #include "util/error.h"
 
 namespace clrt {
@@ -134,6 +135,7 @@ struct TevClient::Impl {
     };
     std::deque<Job> jobs;
     bool closing = false, failed = false;
+    std::function<void(double)> onCost;
     std::thread thread;
 
     bool sendAll(const std::string& bytes) {
@@ -157,10 +159,12 @@ struct TevClient::Impl {
                 jobs.pop_front();
             }
             bool ok = true;
+            const double t0 = threadCpuSeconds();
             if (!job.img) ok = sendAll(tevCreateImagePacket(job.name, job.width, job.height, {"R", "G", "B"}));
             else
                 for (const std::string& p : tevUpdateImagePackets(job.name, *job.img))
                     if (!(ok = sendAll(p))) break;
+            if (onCost) onCost(threadCpuSeconds() - t0);
             if (!ok) {
                 warn("--display-server " + where + ": connection lost (" + std::strerror(errno) + "); no more images sent");
                 std::lock_guard<std::mutex> lk(mu);
@@ -184,7 +188,8 @@ struct TevClient::Impl {
     }
 };
 
-TevClient::TevClient(const std::string& hostPort) : impl_(std::make_unique<Impl>()) {
+TevClient::TevClient(const std::string& hostPort, std::function<void(double)> onCost) : impl_(std::make_unique<Impl>()) {
+    impl_->onCost = std::move(onCost);
     const size_t colon = hostPort.rfind(':');
     if (colon == std::string::npos || colon == 0 || colon + 1 == hostPort.size())
         throw Error("--display-server: expected HOST:PORT, got '" + hostPort + "'", ExitCode::Usage);

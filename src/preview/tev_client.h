@@ -4,8 +4,10 @@
 // per-channel offsets and strides, float32 little-endian) of 128x128 tiles after each published pass.
 // Packets are written from tev's documentation (its ipc.py), not from its code. Sending happens on a
 // thread of its own; an update waiting to be sent is replaced by a newer one. tev not running: one
-// warning, and the render goes on; a connection lost later: one warning, no more sending.
+// warning, and the render goes on; a connection lost later: one warning, no more sending. The sending
+// thread's CPU time per image goes to `onCost` (the preview's time budget, preview_state.h).
 #pragma once
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -23,7 +25,7 @@ std::vector<std::string> tevUpdateImagePackets(const std::string& name, const Im
 class TevClient {
 public:
     // "HOST:PORT" (throws clrt::Error (Usage) when malformed); connects at once, with a 2 s timeout.
-    explicit TevClient(const std::string& hostPort);
+    explicit TevClient(const std::string& hostPort, std::function<void(double)> onCost = {});
     ~TevClient();  // sends what is queued (at most 5 s more), then closes
     TevClient(const TevClient&) = delete;
     TevClient& operator=(const TevClient&) = delete;
