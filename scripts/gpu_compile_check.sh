@@ -43,22 +43,30 @@ while read -r scene args; do
   fi
 done <<< "$list"
 
-n=0; errors=0; warnings=0
-for src in "$OUT"/programs/*.cl; do
+# compile SRC TARGET: one program for one GPU target; the verdict ("ok" or the errors) in SRC.TARGET.verdict.
+compile() {
+  local src=$1 target=$2 t=${2%% *}
+  local opts log=${src%.cl}.$t.log
   opts="$GPU_QUIRK_DEFINES $(cat "${src%.cl}.options")"
+  # shellcheck disable=SC2086  # options are a space-separated list of -D flags and -cl-std; target has flags
+  if "$CLANG" -x cl -cl-std=CL1.2 -target $target -Xclang -finclude-default-header $opts -S \
+        -o "${src%.cl}.$t.s" "$src" > "$log" 2>&1; then echo ok
+  else echo "gpu_compile_check: $t: $(basename "$src") ($opts) fails:"; grep -m5 "error:" "$log" | sed 's/^/    /'
+  fi > "${src%.cl}.$t.verdict"
+}
+# The compiles, CLRT_GPU_COMPILE_JOBS at a time (default: the number of cores; clang uses one each).
+JOBS=${CLRT_GPU_COMPILE_JOBS:-$(nproc)}
+for src in "$OUT"/programs/*.cl; do
   for target in nvptx64-nvidia-nvcl "amdgcn-amd-amdhsa -nogpulib"; do
-    t=${target%% *}
-    log=${src%.cl}.$t.log
-    # shellcheck disable=SC2086  # options are a space-separated list of -D flags and -cl-std
-    if ! "$CLANG" -x cl -cl-std=CL1.2 -target $target -Xclang -finclude-default-header $opts -S \
-          -o "${src%.cl}.$t.s" "$src" > "$log" 2>&1; then
-      errors=$((errors + 1))
-      echo "gpu_compile_check: $t: $(basename "$src") ($opts) fails:"; grep -m5 "error:" "$log" | sed 's/^/    /'
-    fi
-    warnings=$((warnings + $(grep -c "warning:" "$log")))
-    n=$((n + 1))
+    while [ "$(jobs -rp | wc -l)" -ge "$JOBS" ]; do wait -n; done
+    compile "$src" "$target" &
   done
 done
+wait
+n=$(ls "$OUT"/programs/*.verdict | wc -l)
+errors=$(grep -L -x ok "$OUT"/programs/*.verdict | wc -l)
+grep -h -v -x ok "$OUT"/programs/*.verdict
+warnings=$(cat "$OUT"/programs/*.log | grep -c "warning:")
 np=$(ls "$OUT"/programs/*.cl | wc -l)
 echo "gpu_compile_check: $np distinct programs (source + options), $n compiles for nvptx64 and amdgcn: $errors failed, $warnings warnings ($("$CLANG" --version | head -1)); $skipped scenes skipped"
 [ "$np" -gt 0 ] || fail "no program was dumped"

@@ -18,6 +18,8 @@
 # report, on a clrt failure, on a render that did not run on the Oclgrind device, or when oclgrind is
 # missing. A negative control runs first: tests/oclgrind/oob_probe.c (an out-of-bounds read and an
 # uninitialised value) must be reported in each pass. Logs: build/oclgrind/.
+# Runs go CLRT_OCLGRIND_JOBS at a time (default: the number of cores; oclgrind's compile and simulation of
+# one run keep one core busy). Each run's verdict goes to build/oclgrind/<run>.verdict; the summary counts them.
 # Usage: bash scripts/oclgrind_suite.sh [--quick]   (--quick: pass 1 only)
 set -uo pipefail
 cd "$(dirname "$0")/.."
@@ -42,27 +44,36 @@ if [ ! -x "$PROBE" ] || [ tests/oclgrind/oob_probe.c -nt "$PROBE" ]; then
   cc -O1 -o "$PROBE" tests/oclgrind/oob_probe.c -lOpenCL || fail "cannot build $PROBE"
 fi
 
-runs=0; bad=0
-# check NAME PASS COMMAND...: runs COMMAND on oclgrind; fails on a non-zero exit or any oclgrind report.
+JOBS=${CLRT_OCLGRIND_JOBS:-$(nproc)}
+# check NAME PASS [--pipeline-of PIPE] CMD...: runs CMD on oclgrind and writes NAME.PASS.verdict: "ok", or
+# the problem (a non-zero exit or any oclgrind report, with the first lines of the log). With --pipeline-of,
+# the run must also say it ran on Oclgrind with that pipeline.
 check() {
-  local name=$1 pass=$2; shift 2
-  local log=$OUT/$name.$pass.oclgrind.log out=$OUT/$name.$pass.out
+  local name=$1 pass=$2 pipe=""; shift 2
+  [ "$1" = --pipeline-of ] && { pipe=$2; shift 2; }
+  local log=$OUT/$name.$pass.oclgrind.log out=$OUT/$name.$pass.out verdict=$OUT/$name.$pass.verdict
   local -a env=(LD_PRELOAD="$SHIM:$RT" OCLGRIND_LOG="$log" OCLGRIND_CHECK_API=1 OCLGRIND_GLOBAL_MEM_SIZE=1073741824
                 CLRT_NO_CACHE=1 CLRT_NO_PROFILE=1)
   if [ "$pass" = races ]; then env+=(OCLGRIND_DATA_RACES=1)
   else env+=(OCLGRIND_UNINITIALIZED=1 OCLGRIND_BUILD_OPTIONS=-cl-opt-disable CLRT_HUGE_PAGES=0); fi
   : > "$log"
-  env "${env[@]}" "$@" > "$out" 2>&1
+  env "${env[@]}" "$@" < /dev/null > "$out" 2>&1
   local rc=$?
-  runs=$((runs + 1))
-  if [ $rc -ne 0 ] || [ -s "$log" ] || grep -q "OCLGRIND\|Oclgrind - " "$out"; then
-    bad=$((bad + 1))
-    echo "oclgrind_suite: $name ($pass): rc $rc, $(grep -c "Kernel:" "$log") reports; first lines:"
-    { head -12 "$log"; grep -v "^$" "$out" | grep -v "^wrote\|^times:\|^stats:\|done$" | head -6; } | sed 's/^/    /'
-  fi
+  {
+    if [ $rc -ne 0 ] || [ -s "$log" ] || grep -q "OCLGRIND\|Oclgrind - " "$out"; then
+      echo "oclgrind_suite: $name ($pass): rc $rc, $(grep -c "Kernel:" "$log") reports; first lines:"
+      { head -12 "$log"; grep -v "^$" "$out" | grep -v "^wrote\|^times:\|^stats:\|done$" | head -6; } | sed 's/^/    /'
+    elif [ -n "$pipe" ] && ! grep -q "(Oclgrind)" "$out"; then echo "oclgrind_suite: $name did not run on Oclgrind"
+    elif [ -n "$pipe" ] && ! grep -q "pipeline $pipe" "$out"; then echo "oclgrind_suite: $name did not render with the $pipe pipeline"
+    else echo ok; fi
+  } > "$verdict"
+}
+# check in the background, at most JOBS at a time.
+spawn() {
+  while [ "$(jobs -rp | wc -l)" -ge "$JOBS" ]; do wait -n; done
+  check "$@" &
 }
 
-# Negative control: the probe's faults must be reported in every pass.
 for pass in $PASSES; do
   check probe "$pass" "$PROBE" > /dev/null
   grep -q "Invalid read" "$OUT/probe.$pass.oclgrind.log" ||
@@ -70,7 +81,7 @@ for pass in $PASSES; do
   if [ "$pass" = uninit ]; then grep -qi "uninitiali" "$OUT/probe.$pass.oclgrind.log" ||
     fail "oclgrind did not report the probe's uninitialised value"; fi
 done
-runs=0; bad=0; skipped=0
+rm -f "$OUT"/*.verdict; skipped=0
 
 # Scenes left out of the races pass (kept in the uninit pass, which checks memory too): oclgrind's race
 # detector adds a cost per kernel launch that grows with the scene's buffers. Measured on 2 cores: veachAjar
@@ -90,25 +101,30 @@ while read -r scene args; do
            { [ "$pipe" = wavefront ] && [[ "$RACES_FUSED_ONLY" == *" $scene "* ]]; }; }; then
         skipped=$((skipped + 1)); continue
       fi
-      check "$name-$pipe" "$pass" build/clrt render "$SCENES/$scene" --resolution 8x8 --spp 1 -o "$OUT/img" -v \
-        --pipeline $pipe $args
-      grep -q "(Oclgrind)" "$OUT/$name-$pipe.$pass.out" || { bad=$((bad + 1)); echo "oclgrind_suite: $name-$pipe did not run on Oclgrind"; }
-      grep -q "pipeline $pipe" "$OUT/$name-$pipe.$pass.out" || { bad=$((bad + 1)); echo "oclgrind_suite: $name did not render with the $pipe pipeline"; }
+      mkdir -p "$OUT/img/$name-$pipe-$pass"
+      # shellcheck disable=SC2086  # $args: the variant's extra options, space-separated
+      spawn "$name-$pipe" "$pass" --pipeline-of $pipe build/clrt render "$SCENES/$scene" --resolution 8x8 --spp 1 \
+        -o "$OUT/img/$name-$pipe-$pass" -v --pipeline $pipe $args
     done
   done
 done < scripts/kernel_variants.txt
+wait
 
 # Tone mapping: every operator, 8-bit and float output, on the tiny HDR render of cube_point_hdr.
-exr=$OUT/img/cube_point_hdr.exr
-[ -f "$exr" ] || fail "$exr was not rendered"
+exr=$(ls "$OUT"/img/*/cube_point_hdr.exr 2>/dev/null | head -1)
+[ -n "$exr" ] || fail "cube_point_hdr.exr was not rendered"
 for tmo in photographic aces filmic; do
   for pass in $PASSES; do
-    check "tonemap-$tmo" "$pass" build/clrt tonemap "$exr" --tmo "$tmo" -o "$OUT/img/tm-$tmo.png"
-    check "tonemap-$tmo-float" "$pass" build/clrt tonemap "$exr" --tmo "$tmo" -o "$OUT/img/tm-$tmo.exr"
+    spawn "tonemap-$tmo" "$pass" build/clrt tonemap "$exr" --tmo "$tmo" -o "$OUT/img/tm-$tmo-$pass.png"
+    spawn "tonemap-$tmo-float" "$pass" build/clrt tonemap "$exr" --tmo "$tmo" -o "$OUT/img/tm-$tmo-$pass.exr"
   done
 done
 # The struct-layout kernel (cl_kernels/layout.cl) through its test.
-for pass in $PASSES; do check "layout" "$pass" build/clrt_tests "[layout]" --use-colour no; done
+for pass in $PASSES; do spawn "layout" "$pass" build/clrt_tests "[layout]" --use-colour no; done
+wait
+runs=$(ls "$OUT"/*.verdict | wc -l)
+bad=$(grep -L -x ok "$OUT"/*.verdict | wc -l)
+grep -h -v -x ok "$OUT"/*.verdict
 
 echo "oclgrind_suite: $runs runs on oclgrind ($PASSES), $bad with reports or failures, $skipped left out of the races pass (RACES_NONE, RACES_FUSED_ONLY); logs in build/oclgrind"
 [ $bad -eq 0 ] || fail "$bad runs reported problems"

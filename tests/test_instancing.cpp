@@ -221,7 +221,7 @@ TEST_CASE("instancing: the device's two-level BVH renders what flattening render
     CHECK(db >= 60.0);
 }
 
-TEST_CASE("instancing: hw2 grass_desert (instances of instances) matches the course's PNG, flattened and two-level", "[instancing][render][shared]") {
+TEST_CASE("instancing: hw2 grass_desert (instances of instances) matches the course's PNG, flattened and two-level", "[instancing][render][shared][one-implementation]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
     const std::string dir = sharedDir() + "/scenes/hw2/grass/";
     Scene scene = loadScene(dir + "grass_desert.xml");

@@ -418,7 +418,7 @@ TEST_CASE("json: every shared XML scene and its mechanical JSON transliteration 
 
 TEST_CASE("json: classic scenes with a json2025 twin: XML and transliterated JSON render identically; "
           "the shared twin differs only in the listed values and renders",
-          "[json][shared][render]") {
+          "[json][shared][render][one-implementation]") {
     if (!haveShared() || !fs::is_directory(scenesDir() / "json2025")) {
         WARN("../shared/scenes/json2025 is not present: skipped");
         return;

@@ -202,7 +202,7 @@ ImageRGB renderPathCamera(const Scene& scene, int cam, int size, int spp, uint32
 // their references are heavy-tailed and brighter than any unbiased estimate (README, Known quirks), so
 // their means are reported, and checked against clrt's own unbiased answer instead: the same camera
 // without roulette at MaxRecursionDepth 40 (per-channel means within 2%).
-TEST_CASE("hw6 path_diffuse: the eight path-tracing cameras against the course's references", "[path][render][shared][hw6]") {
+TEST_CASE("hw6 path_diffuse: the eight path-tracing cameras against the course's references", "[path][render][shared][hw6][one-implementation]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
     Scene scene = loadScene(sharedDir() + "/scenes/hw6/cornellbox_jaroslav_path_diffuse.xml");
     if (flattenScene(scene).params.numLights < 2) {
