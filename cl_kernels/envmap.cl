@@ -144,10 +144,11 @@ inline float2 Env_RetryUniforms(float u1, float u2, uint k) {
     return (float2)((float)(h1 >> 8) * (1.0f / 16777216.0f), (float)(h2 >> 8) * (1.0f / 16777216.0f));
 }
 
-/* Largest k in [0, n-1] with cdf[k] <= x (cdf[0] = 0 <= x < cdf[n] = 1). Branch-free: the loop runs
- * ceil(log2 n) times whatever x is and the comparison only selects (a conditional move), where the
- * bisection's data-dependent branch was mispredicted about half the time (perf: a third of
- * EnvDist_SampleUv's samples on that branch). */
+/* Largest k in [0, n-1] with cdf[k] <= x (cdf[0] = 0 <= x < cdf[n] = 1). The loop runs ceil(log2 n) times
+ * whatever x is. The `?:` is a select in the source, but on x86 LLVM turns it back into a branch (PoCL 3.1:
+ * a jump on the comparison of the loaded cdf); a truly branch-free step (sign bit of x - cdf as a shift)
+ * was slower on the TT, the mispredicted branch letting the next probe's load start early
+ * (docs/studies/2026-12-04-time-per-sample-candidates.md). Kept as it is. */
 inline int EnvDist_FindInterval(const __global float* cdf, int n, float x) {
     int lo = 0;
     for (int len = n; len > 1;) {
