@@ -1,5 +1,6 @@
-// render_cmd.cpp — `clrt render` (see render_cmd.h): the pipeline load -> output checks -> flatten/BVH
-// -> kernel build -> one camera at a time (cli/camera_drivers.cpp) -> stats, and the refusals made
+// render_cmd.cpp — `clrt render` (see render_cmd.h): the pipeline load -> output checks -> device
+// contexts -> memory check -> flatten/BVH, with the kernel build on another thread from the moment the
+// BVH fixes the feature set (while the lights are flattened) -> one camera at a time (cli/camera_drivers.cpp) -> stats, and the refusals made
 // before any work (unknown camera, outputs that are inputs, an image no device can hold, options that
 // do not go together). Reads the scene's cameras (id, size) and its input files.
 #include "cli/render_cmd.h"
@@ -8,7 +9,9 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <filesystem>
+#include <future>
 #include <memory>
 #include <string>
 #include <vector>
@@ -26,6 +29,7 @@
 #include "flatten/device_scene.h"
 #include "flatten/memory_estimate.h"
 #include "output/output.h"
+#include "render/renderer.h"
 #include "scene/scene_loader.h"
 #include "util/error.h"
 
@@ -103,22 +107,82 @@ void checkMemory(const RenderArgs& a, const Scene& scene, const std::vector<Devi
     if (!problem.empty()) throw Error(a.positional[0] + ": " + problem, ExitCode::BadInput);
 }
 
-// One context and renderer (program) per device; a device whose setup fails is dropped while others
-// remain.
+// One context per device, made before the memory check so that the resident memory it starts from
+// holds what the OpenCL runtimes allocate for them; a device whose context fails is dropped while
+// others remain.
+std::vector<std::unique_ptr<DeviceContext>> makeContexts(const std::vector<DeviceInfo>& devs) {
+    std::vector<std::unique_ptr<DeviceContext>> out;
+    for (const DeviceInfo& d : devs) {
+        try {
+            out.push_back(std::make_unique<DeviceContext>(d, /*profiling=*/!std::getenv("CLRT_NO_PROFILE")));  // per-kernel times for stats
+        } catch (const Error& e) {
+            if (devs.size() == 1) throw;
+            warn("device [" + std::to_string(d.index) + "] " + d.name + " dropped: " + e.what());
+        }
+    }
+    if (out.empty()) throw Error("no selected device could build the renderer", ExitCode::Device);
+    return out;
+}
+
+std::vector<DeviceInfo> contextInfos(const std::vector<std::unique_ptr<DeviceContext>>& contexts) {
+    std::vector<DeviceInfo> out;
+    for (const auto& c : contexts) out.push_back(c->info());
+    return out;
+}
+
+// The render programs of every context, built on another thread (start()) from the defines the
+// flattening reports once its feature set is final (FlattenOptions::onFeaturesKnown); a device's
+// build error is kept for makeRenderers.
+struct ProgramBuilds {
+    struct Result {
+        BuiltProgram built;
+        std::exception_ptr error;
+    };
+    std::vector<std::string> defines;
+    std::future<std::vector<Result>> pending;
+
+    void start(std::vector<std::unique_ptr<DeviceContext>>& contexts, std::vector<std::string> flags) {
+        defines = std::move(flags);
+        pending = std::async(std::launch::async, [&contexts, this] {
+            std::vector<Result> out(contexts.size());
+            for (size_t i = 0; i < contexts.size(); ++i) try {
+                    out[i].built.program = buildProgram(*contexts[i], KernelProgram::Render, defines, &out[i].built.info);
+                } catch (...) {
+                    out[i].error = std::current_exception();
+                }
+            return out;
+        });
+    }
+    // The results, when they were built for `flags`; else none (the renderers build their own).
+    std::vector<Result> take(const std::vector<std::string>& flags) {
+        if (!pending.valid()) return {};
+        std::vector<Result> out = pending.get();
+        if (flags == defines) return out;
+        if (verbose()) info("kernel flags changed after the early build; building again");
+        return {};
+    }
+};
+
+// One renderer per context, on the program built early where there is one; a device whose setup
+// fails is dropped while others remain.
 struct DeviceRenderers {
     std::vector<std::unique_ptr<DeviceContext>> contexts;
     std::vector<std::unique_ptr<Renderer>> renderers;
 };
-DeviceRenderers makeRenderers(const std::vector<DeviceInfo>& devs, const DeviceScene& ds) {
+DeviceRenderers makeRenderers(std::vector<std::unique_ptr<DeviceContext>>& contexts, const DeviceScene& ds,
+                              ProgramBuilds& builds) {
+    const std::vector<ProgramBuilds::Result> early = builds.take(ds.features.defines());  // the build thread is done
     DeviceRenderers out;
-    for (const DeviceInfo& d : devs) {
+    const size_t n = contexts.size();
+    for (size_t i = 0; i < n; ++i) {
+        const DeviceInfo& d = contexts[i]->info();
         try {
-            auto dc = std::make_unique<DeviceContext>(d, /*profiling=*/!std::getenv("CLRT_NO_PROFILE"));  // per-kernel times for stats
-            auto r = std::make_unique<Renderer>(*dc, ds);
-            out.contexts.push_back(std::move(dc));
+            if (i < early.size() && early[i].error) std::rethrow_exception(early[i].error);
+            auto r = std::make_unique<Renderer>(*contexts[i], ds, i < early.size() ? &early[i].built : nullptr);
+            out.contexts.push_back(std::move(contexts[i]));
             out.renderers.push_back(std::move(r));
         } catch (const Error& e) {
-            if (devs.size() == 1) throw;
+            if (n == 1) throw;
             warn("device [" + std::to_string(d.index) + "] " + d.name + " dropped: " + e.what());
         }
     }
@@ -199,23 +263,28 @@ int renderScene(RenderArgs a) {
         throw Error("--target-error/--time-limit: --spp caps the samples and must be at least 4 (one pair of "
                     "2-sample passes), got " + std::to_string(a.spp), ExitCode::Usage);
     if (live) live->setCameras(cams, a.positional[0]);
-    std::vector<DeviceInfo> devs = selectDevices(a.device);
+    const std::vector<DeviceInfo> devs = selectDevices(a.device);
     checkImagesFit(a, cams, devs);
-    checkMemory(a, scene, devs);
+    std::vector<std::unique_ptr<DeviceContext>> contexts = makeContexts(devs);
+    checkMemory(a, scene, contextInfos(contexts));
 
     t = std::chrono::steady_clock::now();
+    auto programFeatures = [&a](FeatureSet f) {
+        if (!a.allFeatures) return f;
+        FeatureSet all = FeatureSet::all();
+        all.bvhStack = f.bvhStack;  // not a feature: the tree's own need
+        return all;
+    };
+    ProgramBuilds builds;
     FlattenOptions flattenOpts;
     flattenOpts.instancing = a.instancing;
+    flattenOpts.onFeaturesKnown = [&](const FeatureSet& f) { builds.start(contexts, programFeatures(f).defines()); };
     DeviceScene ds = flattenScene(scene, flattenOpts);
     times.flatten = secondsSince(t);
-    if (a.allFeatures) {
-        const int stack = ds.features.bvhStack;  // not a feature: the tree's own need
-        ds.features = FeatureSet::all();
-        ds.features.bvhStack = stack;
-    }
+    ds.features = programFeatures(ds.features);
     t = std::chrono::steady_clock::now();
     if (live) live->setStage("building the kernels");
-    DeviceRenderers dr = makeRenderers(devs, ds);
+    DeviceRenderers dr = makeRenderers(contexts, ds, builds);
     std::vector<std::unique_ptr<Renderer>>& renderers = dr.renderers;
     times.build = secondsSince(t);
     if (verbose()) printSetup(ds, renderers);

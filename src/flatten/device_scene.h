@@ -4,6 +4,7 @@
 // textures and environment lights are loaded here into one float4 texel atlas.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -75,6 +76,10 @@ struct DeviceScene {
 enum class Instancing { Auto, Flatten, TwoLevel };
 struct FlattenOptions {
     Instancing instancing = Instancing::Auto;
+    // Called once, as soon as the feature set (the kernel -D flags, BVH stack included) is final: after
+    // the BVH, before the lights and their environment distributions, so that clrt render compiles
+    // the program on another thread while the rest is flattened. The DeviceScene's features equal it.
+    std::function<void(const FeatureSet&)> onFeaturesKnown;
 };
 
 DeviceScene flattenScene(const Scene& scene, const FlattenOptions& opts = {});

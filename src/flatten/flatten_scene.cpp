@@ -15,7 +15,7 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
 }
 
 // The driver: one function per domain (flatten.h), in an order that fixes where images enter the
-// atlas (textures, then environment maps).
+// atlas (textures, then environment maps); opts.onFeaturesKnown between the BVH and the lights.
 DeviceScene flattenScene(const Scene& scene, const FlattenOptions& opts) {
     auto t0 = std::chrono::steady_clock::now();
     DeviceScene ds;
@@ -23,13 +23,17 @@ DeviceScene flattenScene(const Scene& scene, const FlattenOptions& opts) {
     flattenMaterials(scene, ds);
     flattenTextures(scene, ds, atlas);
     flattenGeometry(scene, ds, opts.instancing);
+    // The last features (light kinds as flattenLights marks them, path tracing) before the lights,
+    // whose environment distributions take a while: the program can build meanwhile.
+    for (const Light& l : scene.lights) ds.features.add(l.type);
+    for (const Camera& c : scene.cameras) ds.features.pathTracing = ds.features.pathTracing || c.pathMode != 0;
+    if (opts.onFeaturesKnown) opts.onFeaturesKnown(ds.features);
     flattenLights(scene, ds, atlas);
     dev::SceneParams& p = ds.params;
     p.background = toFloat4(scene.backgroundColor);
     p.ambient = toFloat4(scene.ambientLight);
     p.maxDepth = std::max(0, scene.maxRecursionDepth);
     p.shadowEpsilon = std::isfinite(scene.shadowRayEpsilon) ? std::max(0.0f, scene.shadowRayEpsilon) : 0.0f;
-    for (const Camera& c : scene.cameras) ds.features.pathTracing = ds.features.pathTracing || c.pathMode != 0;
     ds.flattenSeconds = secondsSince(t0) - ds.bvhSeconds;
     return ds;
 }

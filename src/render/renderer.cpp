@@ -54,12 +54,17 @@ struct Renderer::Impl {
         raysPerPath = 0;
     int sampleBase = 0;  // RenderSettings::firstSample of the render in progress
 
-    Impl(DeviceContext& d, const DeviceScene& s)
+    Impl(DeviceContext& d, const DeviceScene& s, const BuiltProgram* prebuilt)
         : dc(d), ds(s), uploader(d.context(), (d.info().type & CL_DEVICE_TYPE_CPU) != 0) {
         cl_command_queue_properties qp = 0;
         CL_CHECK(clGetCommandQueueInfo(dc.queue()(), CL_QUEUE_PROPERTIES, sizeof qp, &qp, nullptr));
         profiling = (qp & CL_QUEUE_PROFILING_ENABLE) != 0;
-        program = buildProgram(dc, KernelProgram::Render, ds.features.defines(), &build);
+        if (prebuilt && prebuilt->program()) {
+            program = prebuilt->program;
+            build = prebuilt->info;
+        } else {
+            program = buildProgram(dc, KernelProgram::Render, ds.features.defines(), &build);
+        }
         kGenerate = KernelArgs(program, "generate_camera_rays");
         kIntersect = KernelArgs(program, "intersect_closest");
         kShadow = KernelArgs(program, "intersect_shadow");
@@ -241,7 +246,8 @@ const char* pixelSamplerName(PixelSampler s) {
     return "?";
 }
 
-Renderer::Renderer(DeviceContext& dc, const DeviceScene& scene) : impl_(new Impl(dc, scene)) {}
+Renderer::Renderer(DeviceContext& dc, const DeviceScene& scene, const BuiltProgram* prebuilt)
+    : impl_(new Impl(dc, scene, prebuilt)) {}
 Renderer::~Renderer() = default;
 const BuildInfo& Renderer::buildInfo() const { return impl_->build; }
 DeviceContext& Renderer::context() { return impl_->dc; }

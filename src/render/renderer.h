@@ -59,9 +59,17 @@ struct RenderSettings {
     Pipeline pipeline = Pipeline::Auto;
 };
 
+// A render program built beforehand (clrt render builds it while the scene is still being flattened):
+// it must have been built on the same context with scene.features.defines().
+struct BuiltProgram {
+    cl::Program program;
+    BuildInfo info;
+};
+
 class Renderer {
 public:
-    Renderer(DeviceContext& dc, const DeviceScene& scene);
+    // Builds the render program for scene.features, or takes `prebuilt` when it holds one.
+    Renderer(DeviceContext& dc, const DeviceScene& scene, const BuiltProgram* prebuilt = nullptr);
     ~Renderer();
     const BuildInfo& buildInfo() const;
     // Renders one camera; `progress(doneBatches, totalBatches)` is called after each batch.
