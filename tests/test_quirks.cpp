@@ -98,6 +98,10 @@ TEST_CASE("Quirks: each implementation gets its defines and host settings", "[qu
             CHECK(q.implementation == bit);
             CHECK(q.host.workGroupSize == 64);
             CHECK(hasQuirk(q, "FIXED_WORK_GROUP"));
+            // Programs built on the context's thread only: Oclgrind alone (its uninit plugin crashes
+            // otherwise); everyone else may build while the scene is flattened.
+            CHECK(q.host.buildOnContextThread == (bit == kImplOclgrind));
+            CHECK(hasQuirk(q, "BUILD_ON_CONTEXT_THREAD") == (bit == kImplOclgrind));
         }
 }
 

@@ -21,6 +21,7 @@ std::string lowered(std::string s) {
 bool has(const std::string& lowerText, const char* part) { return lowerText.find(part) != std::string::npos; }
 
 void fixedWorkGroup64(HostSettings& h) { h.workGroupSize = 64; }
+void buildOnContextThread(HostSettings& h) { h.buildOnContextThread = true; }
 
 }  // namespace
 
@@ -72,6 +73,13 @@ const std::vector<Quirk>& quirkTable() {
          "tests/test_quirks.cpp [quirks] (every implementation gets 64); "
          "CLRT_QUIRKS=-FIXED_WORK_GROUP clrt render ... --device cpu shows PoCL's recompiles in the render time",
          fixedWorkGroup64},
+        {"BUILD_ON_CONTEXT_THREAD", kImplOclgrind, CL_DEVICE_TYPE_ALL, false,
+         "oclgrind 21.10 with its uninitialised-value plugin (OCLGRIND_UNINITIALIZED) crashes (SIGSEGV in "
+         "MemoryPool::alloc from ShadowContext::getCleanValue, under clBuildProgram's allocateProgramScopeVars) "
+         "when a program is built on a thread other than the one that made the context: clrt render's early "
+         "build, overlapping the flattening, runs on the context's thread there",
+         "scripts/oclgrind_suite.sh's uninit pass (every render exits 139 with CLRT_QUIRKS=-BUILD_ON_CONTEXT_THREAD)",
+         buildOnContextThread},
     };
     return table;
 }

@@ -43,6 +43,9 @@ struct HostSettings {
     // Local work size of the renderer's, the fused path's and the tone mapper's launches (global sizes
     // are rounded up to it). 0: no row fixed one, the runtime chooses (cl::NullRange), no rounding.
     size_t workGroupSize = 0;
+    // Programs are built on the thread that made the context only (no build on another thread while the
+    // scene is flattened: src/cli/render_cmd.cpp).
+    bool buildOnContextThread = false;
 };
 
 // One row of the quirk table.

@@ -142,6 +142,8 @@ struct ProgramBuilds {
     std::future<std::vector<Result>> pending;
 
     void start(std::vector<std::unique_ptr<DeviceContext>>& contexts, std::vector<std::string> flags) {
+        for (const auto& c : contexts)
+            if (c->quirks().host.buildOnContextThread) return;  // the renderers build on this thread
         defines = std::move(flags);
         pending = std::async(std::launch::async, [&contexts, this] {
             std::vector<Result> out(contexts.size());
