@@ -298,9 +298,7 @@ Vec3 shadowTarget(const DeviceScene& ds) {
     for (const dev::Light& l : ds.lights)
         if (l.kind == dev::LIGHT_POINT || l.kind == dev::LIGHT_SPOT || l.kind == dev::LIGHT_AREA)
             return Vec3(l.position.x, l.position.y, l.position.z);
-    Aabb world;
-    world.min = Vec3(ds.bvh.nodes[0].boundsMin.x, ds.bvh.nodes[0].boundsMin.y, ds.bvh.nodes[0].boundsMin.z);
-    world.max = Vec3(ds.bvh.nodes[0].boundsMax.x, ds.bvh.nodes[0].boundsMax.y, ds.bvh.nodes[0].boundsMax.z);
+    const Aabb& world = ds.bvh.bounds;
     return Vec3(world.centroid().x, world.max.y + length(world.max - world.min), world.centroid().z);
 }
 
@@ -391,7 +389,7 @@ int main(int argc, char** argv) {
                     opt.scenePath.c_str(), ds.params.numTriangles, clrt.device().name.c_str(), opt.threads,
                     embree.buildSeconds, opt.threadsGiven ? "; process pinned to that many CPUs" : "");
         std::printf("clrt BVH: %zu 4-wide nodes, %zu leaf blocks (%.2f primitives per block)\n", ds.bvh4.nodes.size(),
-                    ds.bvh4.leaves.size(), double(ds.bvh.primRefs.size()) / double(std::max<size_t>(1, ds.bvh4.leaves.size())));
+                    ds.bvh4.leaves.size(), double(ds.bvh.primitives) / double(std::max<size_t>(1, ds.bvh4.leaves.size())));
         std::printf("%-8s %10s %12s %12s %8s %10s %10s\n", "rays", "count", "clrt Mray/s", "embree Mray/s", "ratio",
                     "hit agree", "prim agree");
         for (const RaySet* set : {&camera, &shadow, &diffuse}) compareRaySet(*set, set == &shadow, opt.runs, clrt, embree);

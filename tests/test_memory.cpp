@@ -118,7 +118,8 @@ TEST_CASE("memory: the estimate against the arrays of a real flattening", "[memo
 TEST_CASE("memory: the host peak estimate against the peak RSS of a render", "[memory][cli]") {
     // Calibration (PoCL, the 2-core VM, /usr/bin/time), with the scene arrays used in place (session 14):
     // height fields of 320k triangles 183 MB estimated / 182 MB measured, 4M 1.4 / 1.25 GB; every array
-    // copied (CLRT_HUGE_PAGES=0) 320k 256 / 247 MB.
+    // copied (CLRT_HUGE_PAGES=0) 320k 256 / 247 MB. Session 15 (binary tree freed before the leaf blocks,
+    // clrt -v): 320k 179.0 / 167.6 MB (before: 190.6 / 176.4), 1M 345.7 / 341.0 MB, 4M 1.1 / 1.07 GB.
     TempDir d;
     writeHeightField(d.file("field.ply"), 400);  // 320,000 triangles
     writeFileBytes(d.file("s.xml"), instancedScene("field.ply", 1));

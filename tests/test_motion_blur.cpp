@@ -168,9 +168,9 @@ TEST_CASE("motion blur: the feature flag, the flattened motion and the swept BVH
     CHECK(dsMoving.spheres[0].motion.y == 0.5f);
     CHECK(dsStill.spheres[0].motion.x == 0.0f);
     // The root box holds the sphere at both ends of its motion: x in [-2.5, 2.5], y up to 1.5.
-    const BvhNode& root = dsMoving.bvh.nodes.at(0);
-    CHECK(root.boundsMin.x <= -2.5f);
-    CHECK(root.boundsMax.y >= 1.5f - 1e-6f);
+    const Aabb& root = dsMoving.bvh.bounds;
+    CHECK(root.min.x <= -2.5f);
+    CHECK(root.max.y >= 1.5f - 1e-6f);
     // Triangles carry their motion in the w of their vertices.
     std::string triXml = movingSphereScene("");
     triXml.replace(triXml.find("<Faces>"), 7, "<MotionBlur>1 2 3</MotionBlur><Faces>");

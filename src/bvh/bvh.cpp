@@ -582,4 +582,18 @@ Bvh buildBvh(const std::vector<Aabb>& primBounds, const BvhBuildOptions& opts) {
     return bvh;
 }
 
+BvhSummary summarizeBvh(const Bvh& bvh) {
+    BvhSummary s;
+    if (!bvh.nodes.empty() && !bvh.primRefs.empty()) {
+        const BvhNode& root = bvh.nodes[0];
+        s.bounds.min = Vec3(root.boundsMin.x, root.boundsMin.y, root.boundsMin.z);
+        s.bounds.max = Vec3(root.boundsMax.x, root.boundsMax.y, root.boundsMax.z);
+    }
+    s.sahCost = bvh.sahCost;
+    s.depth = bvh.depth;
+    s.nodes = bvh.nodes.size();
+    s.primitives = bvh.primRefs.size();
+    return s;
+}
+
 }  // namespace clrt

@@ -51,6 +51,16 @@ struct Bvh {
                                       // always <= CLRT_BVH_STACK_SIZE - 8
 };
 
+// What a caller keeps of a binary tree once it has been collapsed for the device (bvh4.h): its
+// figures for -v and benches, not its nodes (~30 B per primitive, freed; flatten_geometry.cpp).
+struct BvhSummary {
+    Aabb bounds;             // the root's box (inverted when there are no primitives)
+    float sahCost = 0;
+    int depth = 0;
+    size_t nodes = 0, primitives = 0;  // binary nodes, primRefs
+};
+BvhSummary summarizeBvh(const Bvh& bvh);
+
 // Builds over the given primitive boxes (one per primitive; index = primitive reference).
 // Empty input gives a single node with count 0 and inverted bounds and no primRefs: callers must
 // not traverse it (check primRefs.empty()). Boxes that are non-finite or inverted are still

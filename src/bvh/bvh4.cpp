@@ -19,18 +19,18 @@ double halfArea(const BvhNode& n) {
 struct Collapser {
     const Bvh& bin;
     HostArray<dev::Bvh4Node>& out;
-    HostArray<dev::Bvh4Leaf>& leaves;
+    std::vector<dev::int4>& blockPrims;  // each leaf block's primitives (the blocks are made afterwards)
     int depth = 0;
 
     // Appends the blocks of binary leaf c (its primRefs, four to a block); returns the first block.
     int emitLeaf(const BvhNode& c) {
-        const int firstBlock = int(leaves.size());
+        const int firstBlock = int(blockPrims.size());
         for (int k = 0; k < c.count; k += 4) {
-            dev::Bvh4Leaf block{};
-            int* prim = &block.prim.x;
+            dev::int4 prims;
+            int* prim = &prims.x;
             for (int i = 0; i < 4; ++i)
                 prim[i] = k + i < c.count ? bin.primRefs[size_t(c.first + k + i)] : CLRT_INVALID;
-            leaves.push_back(block);
+            blockPrims.push_back(prims);
         }
         return firstBlock;
     }
@@ -103,10 +103,9 @@ struct Collapser {
     }
 };
 
-}  // namespace
-
-Bvh4 collapseBvh4(const Bvh& bvh) {
-    Bvh4 r;
+// The 4-wide nodes of `bvh` into r.nodes, and its leaf blocks' primitives into blockPrims; false for
+// an empty tree (r then holds the one empty node).
+bool collapseNodes(const Bvh& bvh, Bvh4& r, std::vector<dev::int4>& blockPrims) {
     if (bvh.primRefs.empty() || bvh.nodes.empty()) {
         dev::Bvh4Node empty;
         empty.minX = empty.minY = empty.minZ = {INFINITY, INFINITY, INFINITY, INFINITY};
@@ -115,19 +114,47 @@ Bvh4 collapseBvh4(const Bvh& bvh) {
         empty.count = {0, 0, 0, 0};
         r.nodes.push_back(empty);
         r.depth = 1;
-        return r;
+        return false;
     }
     r.nodes.reserve(bvh.nodes.size() / 2 + 1);  // an upper bound: pages past the end are never touched
     size_t blocks = 0;  // exactly: each binary leaf's primitives, four to a block (no growth, no copies)
     for (const BvhNode& n : bvh.nodes)
         if (n.count > 0) blocks += size_t(n.count + 3) / 4;
-    r.leaves.reserve(blocks);
-    Collapser c{bvh, r.nodes, r.leaves};
+    blockPrims.reserve(blocks);
+    Collapser c{bvh, r.nodes, blockPrims};
     r.maxStack = c.emit(0, 1).second;
     r.depth = c.depth;
     if (r.maxStack > CLRT_BVH4_STACK_SIZE)
         throw std::logic_error("collapseBvh4: traversal stack need " + std::to_string(r.maxStack) +
                                " exceeds CLRT_BVH4_STACK_SIZE");
+    return true;
+}
+
+// The leaf blocks from their primitives (vertices zero until setLeafTriangles).
+void makeLeaves(const std::vector<dev::int4>& blockPrims, Bvh4& r) {
+    r.leaves.reserve(blockPrims.size());
+    for (const dev::int4& prims : blockPrims) {
+        dev::Bvh4Leaf block{};
+        block.prim = prims;
+        r.leaves.push_back(block);
+    }
+}
+
+}  // namespace
+
+Bvh4 collapseBvh4(const Bvh& bvh) {
+    Bvh4 r;
+    std::vector<dev::int4> blockPrims;
+    if (collapseNodes(bvh, r, blockPrims)) makeLeaves(blockPrims, r);
+    return r;
+}
+
+Bvh4 collapseBvh4(Bvh&& bvh) {
+    Bvh4 r;
+    std::vector<dev::int4> blockPrims;
+    const bool any = collapseNodes(bvh, r, blockPrims);
+    bvh = Bvh{};  // freed before the leaf blocks are allocated
+    if (any) makeLeaves(blockPrims, r);
     return r;
 }
 

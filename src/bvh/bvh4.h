@@ -25,6 +25,9 @@ struct Bvh4 {
 // Leaf lanes point at blocks of `leaves` whose prim holds the binary tree's primRefs (in leaf order);
 // their vertices are zero until setLeafTriangles.
 Bvh4 collapseBvh4(const Bvh& bvh);
+// The same, freeing the binary tree (left empty) before the leaf blocks are allocated, so the two are
+// never held together: what flattening does, since nothing reads its binary tree afterwards.
+Bvh4 collapseBvh4(Bvh&& bvh);
 
 // Copies each triangle lane's world-space vertices (prim < numTriangles) from tris into its block.
 void setLeafTriangles(Bvh4& b4, const dev::Triangle* tris, int numTriangles);

@@ -48,7 +48,7 @@ struct FeatureSet {
 };
 
 struct DeviceScene {
-    HostArray<dev::Triangle> triangles;          // in BVH leaf order (bvh.primRefs still maps)
+    HostArray<dev::Triangle> triangles;          // in BVH leaf order
     HostArray<dev::TriangleShading> triangleShading;
     std::vector<dev::Sphere> spheres;
     std::vector<dev::Instance> instances;         // two-level BVH: instances of meshes kept once (may be empty)
@@ -61,7 +61,7 @@ struct DeviceScene {
     std::vector<dev::Light> lights;
     HostArray<float> envDistribution;  // importance distributions of env lights (env_distribution.h)
     HostArray<dev::float4> lightData;  // object lights' triangles and spheres (layout: device_types.h, Light)
-    Bvh bvh;    // binary tree (host reference, statistics)
+    BvhSummary bvh;  // the binary tree's figures (the tree itself is freed once collapsed into bvh4)
     Bvh4 bvh4;  // what the device traverses
     dev::SceneParams params{};
     FeatureSet features;

@@ -275,11 +275,33 @@ void flattenMeshes(const Scene& scene, const std::vector<MeshJob>& meshJobs, Dev
     ds.skippedTriangles += nanSkipped;
 }
 
+// Puts a[i] = a[src[i]] and b[i] = b[src[i]] (the values before the call) for every i < src.size(), in
+// place: each cycle of the permutation is followed once, with one element of each array held aside,
+// so no copy of either array is made (src is spent: every entry ends as -1).
+template <class A, class B>
+void gatherInPlace(A* a, B* b, std::vector<int>& src) {
+    for (size_t start = 0; start < src.size(); ++start) {
+        if (src[start] < 0) continue;  // moved in an earlier cycle
+        const A heldA = a[start];
+        const B heldB = b[start];
+        size_t j = start;
+        for (;;) {
+            const size_t k = size_t(src[j]);
+            src[j] = -1;
+            if (k == start) { a[j] = heldA; b[j] = heldB; break; }
+            a[j] = a[k];
+            b[j] = b[k];
+            j = k;
+        }
+    }
+}
+
 // The BVH over `boxes` (triangles, then spheres); the triangles are stored in leaf order so a leaf's
 // triangles are contiguous in memory, then the tree is collapsed to 4-wide nodes with the leaves'
-// triangles copied into their struct-of-arrays blocks.
-// The boxes are released once the tree is built, and the leaf-order copies are made one array at a
-// time, so the peak holds one extra array rather than boxes and both copies.
+// triangles copied into their struct-of-arrays blocks. The boxes are released once the tree is built,
+// the triangles and their shading are put in leaf order in place (no copies), and the binary tree is
+// freed once its 4-wide nodes are made, before the leaf blocks (only its figures stay: ds.bvh), so the
+// binary tree and the leaf blocks are never held together.
 void buildDeviceBvh(std::vector<Aabb>&& boxes, DeviceScene& ds) {
     auto tb = std::chrono::steady_clock::now();
     // The device tests a leaf's triangles four at a time (Bvh4Leaf), so a leaf of up to four costs
@@ -287,27 +309,21 @@ void buildDeviceBvh(std::vector<Aabb>&& boxes, DeviceScene& ds) {
     // leaves (Audi TT: 2.1 -> 3.0 primitives per block) and fewer nodes (86k -> 61k).
     BvhBuildOptions opts;
     opts.traversalCost = 2;
-    ds.bvh = buildBvh(boxes, opts);
+    Bvh bvh = buildBvh(boxes, opts);
     std::vector<Aabb>().swap(boxes);
     const int numTris = int(ds.triangles.size());
     {
-        HostArray<dev::Triangle> tris(ds.triangles.size());
-        size_t next = 0;
-        for (int ref : ds.bvh.primRefs)
-            if (ref < numTris) tris[next++] = ds.triangles[size_t(ref)];  // spheres keep their indices
-        ds.triangles.swap(tris);
-    }
-    {
-        HostArray<dev::TriangleShading> shading(ds.triangleShading.size());
-        int next = 0;
-        for (int& ref : ds.bvh.primRefs) {
+        std::vector<int> src;  // leaf-order slot -> the triangle's slot now; spheres keep their indices
+        src.reserve(size_t(numTris));
+        for (int& ref : bvh.primRefs) {
             if (ref >= numTris) continue;
-            shading[size_t(next)] = ds.triangleShading[size_t(ref)];
-            ref = next++;
+            src.push_back(ref);
+            ref = int(src.size()) - 1;
         }
-        ds.triangleShading.swap(shading);
+        gatherInPlace(ds.triangles.data(), ds.triangleShading.data(), src);
     }
-    ds.bvh4 = collapseBvh4(ds.bvh);
+    ds.bvh = summarizeBvh(bvh);
+    ds.bvh4 = collapseBvh4(std::move(bvh));  // frees the binary tree before making the leaf blocks
     setLeafTriangles(ds.bvh4, ds.triangles, numTris);
     ds.features.bvhStack = std::max(1, ds.bvh4.maxStack);
     ds.bvhSeconds = secondsSince(tb);

@@ -73,7 +73,7 @@ BottomLevel buildBottomLevel(const Scene& scene, const Shape& s) {
     ordered.degenerate = b.tris.degenerate;
     ordered.nonFinite = b.tris.nonFinite;
     b.tris = std::move(ordered);
-    b.bvh4 = collapseBvh4(bvh);
+    b.bvh4 = collapseBvh4(std::move(bvh));
     setLeafTriangles(b.bvh4, b.tris.triangles, int(b.tris.triangles.size()));
     return b;
 }
@@ -179,8 +179,6 @@ void flattenInstances(const Scene& scene, const std::vector<std::pair<const Shap
             int& prim = (&ds.bvh4.leaves[size_t(l)].prim.x)[i];
             if (prim >= numWorldTriangles) prim += added;
         }
-    for (int& ref : ds.bvh.primRefs)
-        if (ref >= numWorldTriangles) ref += added;
     std::vector<Aabb> boxes;
     for (const auto& job : jobs) {
         const BottomLevel& b = bottoms.at(std::make_pair(job.first->meshIndex, job.first->smooth));

@@ -25,13 +25,13 @@ namespace {
 
 // Per stored triangle (or sphere): 4-wide leaf blocks (2.2 primitives each, at least: small meshes
 // fill them least) and nodes (one
-// per 6 primitives, at most); the binary tree kept on the host beside them.
+// per 6 primitives, at most); the binary tree, held while the BVH is built and collapsed (then freed).
 constexpr double kLeafBlocksPerPrim = 1.0 / 2.2;
 constexpr double kNodesPerPrim = 1.0 / 6.0;
 constexpr double kBinaryNodesPerPrim = 0.8;  // ~2·leaves, leaves of >= 2.5 primitives
-// What the BVH build holds per primitive at its peak beyond the result: its box, its builder item,
-// the primRefs.
-constexpr uint64_t kBuildPerPrim = sizeof(Aabb) + 32 + sizeof(int);
+// What the BVH build holds per primitive beyond its box and the binary tree (nodes, primRefs): its
+// builder item.
+constexpr uint64_t kBuildPerPrim = 32;
 constexpr uint64_t kTrianglePair = sizeof(dev::Triangle) + sizeof(dev::TriangleShading);
 
 // One placed instance of a two-level mesh: its record (two 3x4 rows, offsets, material...) and its
@@ -118,9 +118,28 @@ uint64_t addGeometry(const Scene& scene, const MemoryPlan& plan, MemoryEstimate&
     return e.trianglesStored + spheres;
 }
 
+uint64_t leafBlocks(uint64_t prims) { return uint64_t(std::ceil(double(prims) * kLeafBlocksPerPrim) + 1); }
+
 void addBvh(uint64_t prims, MemoryEstimate& e) {
     e.addHostArray(e.bvh, uint64_t(std::ceil(double(prims) * kNodesPerPrim) + 1) * sizeof(dev::Bvh4Node));
-    e.addHostArray(e.bvh, uint64_t(std::ceil(double(prims) * kLeafBlocksPerPrim) + 1) * sizeof(dev::Bvh4Leaf));
+    e.addHostArray(e.bvh, leafBlocks(prims) * sizeof(dev::Bvh4Leaf));
+}
+
+// What the flattening holds at its peak beyond the DeviceScene arrays it returns (flatten_geometry.cpp):
+// the meshes' phase (the boxes, the two-level meshes' own arrays while they are appended; flattened
+// meshes are written straight into their slots), the build's (boxes, items, primRefs and binary
+// nodes, before any 4-wide array exists), the collapse's (the binary tree and the blocks' primitives
+// beside the 4-wide nodes, before the leaf blocks) and the blocks' primitives beside the leaf blocks.
+// The triangles are put in leaf order in place (an int per triangle).
+uint64_t flattenExcess(const MemoryEstimate& e, uint64_t prims) {
+    const uint64_t leaves = leafBlocks(prims) * sizeof(dev::Bvh4Leaf);
+    const uint64_t blockPrims = leafBlocks(prims) * sizeof(dev::int4);
+    const uint64_t binaryTree = uint64_t(double(prims) * kBinaryNodesPerPrim) * sizeof(BvhNode) + prims * sizeof(int);
+    const uint64_t boxes = prims * sizeof(Aabb);
+    const uint64_t perShape = (e.trianglesStored - e.trianglesFlattened) * (kTrianglePair + sizeof(Aabb));
+    auto beyond = [](uint64_t held, uint64_t notYet) { return held > notYet ? held - notYet : 0; };
+    return std::max({perShape + boxes, beyond(boxes + prims * kBuildPerPrim + binaryTree, e.bvh.bytes),
+                     beyond(binaryTree + blockPrims, leaves), blockPrims});
 }
 
 // The renderer's per-render buffers for one camera (renderer.cpp's planBatches and ensureQueues, the
@@ -167,9 +186,7 @@ uint64_t MemoryEstimate::largestBuffer() const {
 
 uint64_t MemoryEstimate::hostPeak(const MemoryPlan& plan) const {
     const uint64_t copies = plan.cpuDevices ? uint64_t(std::max(plan.devices, 1)) : 0;
-    const uint64_t prims = trianglesStored + instances;
-    const uint64_t binaryTree = uint64_t(double(prims) * kBinaryNodesPerPrim) * sizeof(BvhNode);
-    const uint64_t kept = deviceScene() + binaryTree;  // DeviceScene, alive through the render
+    const uint64_t kept = deviceScene();  // DeviceScene, alive through the render (no binary tree)
     // A CPU device uses the DeviceScene's HostArrays of >= 1 MiB in place (util/huge_pages.h); it copies
     // the rest (copiedOnCpu), or everything with CLRT_HUGE_PAGES=0.
     const uint64_t scenePerCopy = hugePagesWanted() ? copiedOnCpu : deviceScene();
@@ -195,15 +212,7 @@ MemoryEstimate estimateMemory(const Scene& scene, const MemoryPlan& plan) {
         if (bytes > e.render.bytes) e.render = BufferFamily{"render", bytes, pixels * sizeof(dev::float4)};
         e.hostImages = std::max<uint64_t>(e.hostImages, pixels * (2 * 3 * sizeof(float) + 4));
     }
-    // Flattening's peak beyond the arrays it returns: the boxes, and the two-level meshes' own
-    // object-space arrays while they are appended (flattened meshes are written straight into their
-    // slots); then the BVH build's boxes, items and primRefs, or (the boxes freed) the leaf-order copy
-    // of one array at a time, the larger being TriangleShading.
-    const uint64_t boxes = (prims + e.instances) * sizeof(Aabb);
-    const uint64_t perShape = (e.trianglesStored - e.trianglesFlattened) * (kTrianglePair + sizeof(Aabb));
-    const uint64_t build = std::max((prims + e.instances) * kBuildPerPrim + boxes,
-                                    e.trianglesStored * uint64_t(sizeof(dev::TriangleShading)));
-    e.flattenTransient = std::max(perShape + boxes, build);
+    e.flattenTransient = flattenExcess(e, prims + e.instances);
     return e;
 }
 

@@ -4,12 +4,15 @@
 // the pages are allocated huge; Linux's default THP mode "madvise" gives them only to advised ranges).
 // On a CPU device the kernels read these arrays at random in place (cl/scene_buffers.h uses their memory
 // as the buffer, CL_MEM_USE_HOST_PTR): with 2 MiB pages the TLB reaches the whole scene, and nothing is
-// copied at upload. CLRT_HUGE_PAGES=0 leaves out the advice (the alignment stays).
+// copied at upload. CLRT_HUGE_PAGES=0 leaves out the advice (the alignment stays). Unlike a std::vector,
+// resize() leaves new trivial elements unwritten (HugePageAllocator::construct).
 #pragma once
 #include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <new>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace clrt {
@@ -40,6 +43,17 @@ struct HugePageAllocator {
     void deallocate(T* p, size_t n) noexcept {
         if (n * sizeof(T) >= kHugeMinBytes) hugeFree(p);
         else std::allocator<T>().deallocate(p, n);
+    }
+    // resize(n) and emplace_back() default-initialise (a trivial element is left unwritten): every caller
+    // writes the elements it makes (flatten_geometry's slots, the texel atlas, bvh4's nodes), and a fresh
+    // page is zeroed by the kernel at its first touch, so value-initialising wrote it twice, on one thread.
+    template <class U>
+    void construct(U* p) noexcept(std::is_nothrow_default_constructible<U>::value) {
+        ::new (static_cast<void*>(p)) U;
+    }
+    template <class U, class... Args>
+    void construct(U* p, Args&&... args) {
+        ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
     }
     friend bool operator==(const HugePageAllocator&, const HugePageAllocator&) { return true; }
     friend bool operator!=(const HugePageAllocator&, const HugePageAllocator&) { return false; }
