@@ -18,8 +18,8 @@
 # report, on a clrt failure, on a render that did not run on the Oclgrind device, or when oclgrind is
 # missing. A negative control runs first: tests/oclgrind/oob_probe.c (an out-of-bounds read and an
 # uninitialised value) must be reported in each pass. Logs: build/oclgrind/.
-# Runs go CLRT_OCLGRIND_JOBS at a time (default: the number of cores; oclgrind's compile and simulation of
-# one run keep one core busy). Each run's verdict goes to build/oclgrind/<run>.verdict; the summary counts them.
+# Runs go CLRT_OCLGRIND_JOBS at a time (default: the number of cores, at most one per 6 GB of available
+# memory; oclgrind's compile and simulation of one run keep one core busy). Each run's verdict goes to build/oclgrind/<run>.verdict; the summary counts them.
 # Usage: bash scripts/oclgrind_suite.sh [--quick]   (--quick: pass 1 only)
 set -uo pipefail
 cd "$(dirname "$0")/.."
@@ -44,7 +44,11 @@ if [ ! -x "$PROBE" ] || [ tests/oclgrind/oob_probe.c -nt "$PROBE" ]; then
   cc -O1 -o "$PROBE" tests/oclgrind/oob_probe.c -lOpenCL || fail "cannot build $PROBE"
 fi
 
+# One run per core, and at most one per 6 GB of available memory (the largest run left in, the TT's
+# fused races pass, peaks at 5.3 GB).
+mem_jobs=$(( $(awk '/^MemAvailable:/ {print $2}' /proc/meminfo 2>/dev/null || echo 0) / (6 * 1024 * 1024) ))
 JOBS=${CLRT_OCLGRIND_JOBS:-$(nproc)}
+[ -n "${CLRT_OCLGRIND_JOBS:-}" ] || [ "$JOBS" -le "$mem_jobs" ] || JOBS=$(( mem_jobs > 1 ? mem_jobs : 1 ))
 # check NAME PASS [--pipeline-of PIPE] CMD...: runs CMD on oclgrind and writes NAME.PASS.verdict: "ok", or
 # the problem (a non-zero exit or any oclgrind report, with the first lines of the log). With --pipeline-of,
 # the run must also say it ran on Oclgrind with that pipeline.
