@@ -280,6 +280,9 @@ int renderScene(RenderArgs a) {
     ProgramBuilds builds;
     FlattenOptions flattenOpts;
     flattenOpts.instancing = a.instancing;
+    flattenOpts.leafOrderTriangles = false;  // only for GPUs (FlattenOptions)
+    for (const DeviceInfo& d : contextInfos(contexts))
+        flattenOpts.leafOrderTriangles = flattenOpts.leafOrderTriangles || (d.type & CL_DEVICE_TYPE_CPU) == 0;
     flattenOpts.onFeaturesKnown = [&](const FeatureSet& f) { builds.start(contexts, programFeatures(f).defines()); };
     DeviceScene ds = flattenScene(scene, flattenOpts);
     times.flatten = secondsSince(t);

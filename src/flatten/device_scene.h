@@ -80,6 +80,12 @@ struct FlattenOptions {
     // the BVH, before the lights and their environment distributions, so that clrt render compiles
     // the program on another thread while the rest is flattened. The DeviceScene's features equal it.
     std::function<void(const FeatureSet&)> onFeaturesKnown;
+    // Renumber the triangles (and their shading records) into BVH leaf order, so that rays hitting
+    // neighbouring leaves read neighbouring records (a GPU coalesces such reads). The leaf blocks name
+    // each triangle by index, so the images are the same either way. clrt render turns it off when
+    // every device is a CPU device: there it measured no faster and its random-access pass costs
+    // ~0.2 us per triangle of setup (docs/architecture.md, pipeline step 3).
+    bool leafOrderTriangles = true;
 };
 
 DeviceScene flattenScene(const Scene& scene, const FlattenOptions& opts = {});

@@ -53,7 +53,7 @@ int flattenTextureSet(const Scene& scene, const Shape& s, DeviceScene& ds);
 // Planes, spheres and mesh triangles, then the BVH over triangles and spheres with the triangles
 // stored in leaf order; meshes that instancedShapes(scene, instancing) picks go to flattenInstances.
 // Sets the primitive counts of ds.params.
-void flattenGeometry(const Scene& scene, DeviceScene& ds, Instancing instancing = Instancing::Auto);
+void flattenGeometry(const Scene& scene, DeviceScene& ds, const FlattenOptions& opts = {});
 // Whether the transformation's linear part has a negative determinant (a mirror): the world-space
 // cross product of a triangle's edges then points against the transformed object-space normal, so
 // flattenGeometry (and the LightMesh sampling data, flatten_lights.cpp) take its corners as (a, c, b).

@@ -296,13 +296,13 @@ void gatherInPlace(A* a, B* b, std::vector<int>& src) {
     }
 }
 
-// The BVH over `boxes` (triangles, then spheres); the triangles are stored in leaf order so a leaf's
-// triangles are contiguous in memory, then the tree is collapsed to 4-wide nodes with the leaves'
-// triangles copied into their struct-of-arrays blocks. The boxes are released once the tree is built,
-// the triangles and their shading are put in leaf order in place (no copies), and the binary tree is
-// freed once its 4-wide nodes are made, before the leaf blocks (only its figures stay: ds.bvh), so the
-// binary tree and the leaf blocks are never held together.
-void buildDeviceBvh(std::vector<Aabb>&& boxes, DeviceScene& ds) {
+// The BVH over `boxes` (triangles, then spheres); with leafOrder the triangles are stored in leaf order
+// so a leaf's triangles are contiguous in memory (FlattenOptions::leafOrderTriangles), then the tree is
+// collapsed to 4-wide nodes with the leaves' triangles copied into their struct-of-arrays blocks. The
+// boxes are released once the tree is built, the triangles and their shading are put in leaf order in
+// place (no copies), and the binary tree is freed once its 4-wide nodes are made, before the leaf
+// blocks (only its figures stay: ds.bvh), so the binary tree and the leaf blocks are never held together.
+void buildDeviceBvh(std::vector<Aabb>&& boxes, DeviceScene& ds, bool leafOrder) {
     auto tb = std::chrono::steady_clock::now();
     // The device tests a leaf's triangles four at a time (Bvh4Leaf), so a leaf of up to four costs
     // about what one triangle test did: a node is costed as two triangle tests, which gives fuller
@@ -312,7 +312,7 @@ void buildDeviceBvh(std::vector<Aabb>&& boxes, DeviceScene& ds) {
     Bvh bvh = buildBvh(boxes, opts);
     std::vector<Aabb>().swap(boxes);
     const int numTris = int(ds.triangles.size());
-    {
+    if (leafOrder) {
         std::vector<int> src;  // leaf-order slot -> the triangle's slot now; spheres keep their indices
         src.reserve(size_t(numTris));
         for (int& ref : bvh.primRefs) {
@@ -333,9 +333,9 @@ void buildDeviceBvh(std::vector<Aabb>&& boxes, DeviceScene& ds) {
 
 bool mirrorsOrientation(const Mat4& m) { return linearDeterminant(m) < 0; }
 
-void flattenGeometry(const Scene& scene, DeviceScene& ds, Instancing instancing) {
+void flattenGeometry(const Scene& scene, DeviceScene& ds, const FlattenOptions& opts) {
     std::vector<Aabb> boxes, sphereBoxes;
-    const std::vector<bool> instanced = instancedShapes(scene, instancing);
+    const std::vector<bool> instanced = instancedShapes(scene, opts.instancing);
     size_t total = 0;
     for (size_t i = 0; i < scene.shapes.size(); ++i)
         if (scene.shapes[i].type == ShapeType::Mesh && !instanced[i])
@@ -357,7 +357,7 @@ void flattenGeometry(const Scene& scene, DeviceScene& ds, Instancing instancing)
         if (s.type != ShapeType::Plane && s.motion != Vec3(0, 0, 0)) ds.features.motionBlur = true;
     const int numTriangles = int(boxes.size());
     boxes.insert(boxes.end(), sphereBoxes.begin(), sphereBoxes.end());
-    buildDeviceBvh(std::move(boxes), ds);
+    buildDeviceBvh(std::move(boxes), ds, opts.leafOrderTriangles);
     ds.params.numTriangles = numTriangles;
     if (!instanceJobs.empty()) flattenInstances(scene, instanceJobs, numTriangles, ds);
     // Never an empty buffer (the counts below stay those of the scene, except planes: see Plane).

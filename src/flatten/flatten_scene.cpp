@@ -22,7 +22,7 @@ DeviceScene flattenScene(const Scene& scene, const FlattenOptions& opts) {
     ImageAtlas atlas(scene, ds);
     flattenMaterials(scene, ds);
     flattenTextures(scene, ds, atlas);
-    flattenGeometry(scene, ds, opts.instancing);
+    flattenGeometry(scene, ds, opts);
     // The last features (light kinds as flattenLights marks them, path tracing) before the lights,
     // whose environment distributions take a while: the program can build meanwhile.
     for (const Light& l : scene.lights) ds.features.add(l.type);
