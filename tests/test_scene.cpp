@@ -672,9 +672,14 @@ TEST_CASE("scene: errors name file:line:col", "[scene]") {
         expectErrorAt("dup.xml", xml, "<Material id=\"2\"/>", "duplicate Material id 2");
         expectErrorAt("dup_tr.xml", sceneWith("<Transformations><Scaling id=\"1\">1 1 1</Scaling>\n<Scaling id=\"1\">2 2 2</Scaling></Transformations>"),
                       "<Scaling id=\"1\">2", "duplicate Scaling id 1");
-        expectErrorAt("dup_mesh.xml", sceneWith("<Objects><Mesh id=\"4\"><Material>1</Material><Faces>1 2 3</Faces></Mesh>\n"
-                                                "  <Mesh id=\"4\"><Material>2</Material><Faces>1 2 3</Faces></Mesh></Objects>"),
-                      "<Mesh id=\"4\"><Material>2", "duplicate Mesh id 4");
+        // A repeated Mesh id is only a warning (the course's reader took any ids) until a MeshInstance names it.
+        const std::string twoMeshes = "<Objects><Mesh id=\"4\"><Material>1</Material><Faces>1 2 3</Faces></Mesh>\n"
+                                      "  <Mesh id=\"4\"><Material>2</Material><Faces>1 2 3</Faces></Mesh>\n";
+        Scene both = loadScene(writeText("dup_mesh.xml", sceneWith(twoMeshes + "</Objects>")));
+        REQUIRE(both.shapes.size() == 2);
+        CHECK(both.shapes[0].materialIndex != both.shapes[1].materialIndex);
+        expectErrorAt("dup_mesh_named.xml", sceneWith(twoMeshes + "  <MeshInstance id=\"5\" baseMeshId=\"4\"/></Objects>"),
+                      "<MeshInstance id=\"5\"", "references Mesh 4, which 2 Meshes share as id");
     }
     SECTION("bad enum values") {
         expectErrorAt("badtype.xml", sceneWith("<Materials><Material id=\"3\" type=\"glass\"/></Materials>"), "<Material id=\"3\"", "glass");

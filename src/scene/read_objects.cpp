@@ -24,6 +24,7 @@ namespace {
 // first use (an instance may name another instance, defined before or after it).
 struct ObjectsContext {
     std::map<int, Shape> meshById;  // what MeshInstance baseMeshId names first
+    std::map<int, std::vector<std::string>> meshIdLocations;  // Mesh id -> where each Mesh with it is
     std::vector<Shape> meshes;      // in document order
     size_t nextMesh = 0;            // the next one to place
     // Instances are keyed by location(): node wrappers are made afresh by each children() call.
@@ -260,7 +261,13 @@ std::string idCycle(const std::vector<std::pair<std::string, int>>& chain, const
 // id (resolved first: its transforms, material and textures are those it ends up with).
 Shape baseOf(Walker& w, const SceneNode& n, ObjectsContext& objects, int baseId) {
     std::string who = describe(n);
-    if (auto it = objects.meshById.find(baseId); it != objects.meshById.end()) return it->second;
+    if (auto it = objects.meshById.find(baseId); it != objects.meshById.end()) {
+        const std::vector<std::string>& where = objects.meshIdLocations[baseId];
+        if (where.size() > 1)
+            fail(n, who + " references Mesh " + std::to_string(baseId) + ", which " + std::to_string(where.size()) +
+                        " Meshes share as id (" + where.front() + ", " + where[1] + ")");
+        return it->second;
+    }
     auto inst = objects.instanceNodes.find(baseId);
     if (inst == objects.instanceNodes.end())
         fail(n, who + " references undefined Mesh " + std::to_string(baseId) + " (no Mesh or MeshInstance has that id)");
@@ -356,14 +363,19 @@ const std::vector<ObjectReader>& objectReaders() {
     return table;
 }
 
-// Reads every Mesh of n ahead (Mesh ids, which instances name, must be unique; shared scenes repeat
-// Sphere ids, so other kinds are not checked).
+// Reads every Mesh of n ahead. Mesh ids only name meshes for MeshInstance's baseMeshId: a repeated one
+// warns (edited copies of course scenes repeat them: a student's hw6 box whose ceiling became a second
+// Mesh 1), and only an instance that names it is an error (baseOf). Other kinds are not checked
+// (shared scenes repeat Sphere ids).
 void readMeshesAhead(Walker& w, const SceneNode& n, ObjectsContext& objects) {
-    std::set<int> seen;
     for (auto& c : n.children("Mesh")) {
         if (c->attribute("id")) {
             int v = intAttribute(*c, "id", 0);
-            if (!seen.insert(v).second) fail(*c, "duplicate Mesh id " + std::to_string(v));
+            std::vector<std::string>& where = objects.meshIdLocations[v];
+            where.push_back(c->location());
+            if (where.size() == 2)
+                warn(where[1] + ": Mesh id " + std::to_string(v) + " is also the id of the Mesh at " + where[0] +
+                     " (allowed while no MeshInstance names it)");
         }
         Shape s = readMesh(w, *c, false);
         objects.meshById.emplace(s.id, s);
