@@ -272,7 +272,7 @@ TEST_CASE("BVH4 structure on random, degenerate and deep trees", "[bvh4]") {
     }
 }
 
-TEST_CASE("BVH4 appended after another tree equals its own collapse, moved", "[bvh4]") {
+TEST_CASE("BVH4 appended after another tree equals its own collapse moved by the arrays before it", "[bvh4]") {
     // appendBvh4 (the two-level BVH's bottom levels, flatten_instances.cpp) writes a tree into arrays
     // that already hold one: node for node it must be collapseBvh4's, interior children moved by the
     // nodes before it, leaf children by the blocks before it, primitives by primOffset.
