@@ -11,6 +11,7 @@
 #include <cfloat>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <random>
 #include <vector>
 
@@ -269,6 +270,59 @@ TEST_CASE("BVH4 structure on random, degenerate and deep trees", "[bvh4]") {
         std::printf("exponential input: binary depth %d, 4-wide depth %d, stack need %d (default %d)\n", bin.depth,
                     b4.depth, b4.maxStack, CLRT_BVH4_STACK_SIZE);
     }
+}
+
+TEST_CASE("BVH4 appended after another tree equals its own collapse moved by the arrays before it", "[bvh4]") {
+    // appendBvh4 (the two-level BVH's bottom levels, flatten_instances.cpp) writes a tree into arrays
+    // that already hold one: node for node it must be collapseBvh4's, interior children moved by the
+    // nodes before it, leaf children by the blocks before it, primitives by primOffset.
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> pos(-10, 10), unit(-1, 1);
+    auto soup = [&](int n) {
+        std::vector<Tri> tris;
+        for (int i = 0; i < n; ++i) {
+            Vec3 c(pos(rng), pos(rng), pos(rng));
+            tris.push_back({c, c + Vec3(unit(rng), unit(rng), unit(rng)), c + Vec3(unit(rng), unit(rng), unit(rng))});
+        }
+        return triBoxes(tris);
+    };
+    const std::vector<Aabb> first = soup(3000), second = soup(5000);
+    Bvh4 into = collapseBvh4(buildBvh(first));
+    const Bvh4 before = into;
+    const Bvh4 alone = collapseBvh4(buildBvh(second));
+    const int primOffset = 3000;
+    int stack = -1;
+    const int root = appendBvh4(buildBvh(second), primOffset, into, &stack);
+    REQUIRE(root == int(before.nodes.size()));
+    CHECK(stack == alone.maxStack);
+    CHECK((into.maxStack == before.maxStack && into.depth == before.depth));
+    REQUIRE(into.nodes.size() == before.nodes.size() + alone.nodes.size());
+    REQUIRE(into.leaves.size() == before.leaves.size() + alone.leaves.size());
+    for (size_t n = 0; n < before.nodes.size(); ++n) CHECK(std::memcmp(&into.nodes[n], &before.nodes[n], sizeof(dev::Bvh4Node)) == 0);
+    for (size_t l = 0; l < before.leaves.size(); ++l) CHECK(std::memcmp(&into.leaves[l], &before.leaves[l], sizeof(dev::Bvh4Leaf)) == 0);
+    int mismatches = 0;
+    for (size_t n = 0; n < alone.nodes.size(); ++n) {
+        dev::Bvh4Node want = alone.nodes[n];
+        int* child = &want.child.x;
+        const int* count = &want.count.x;
+        for (int i = 0; i < 4; ++i)
+            if (child[i] != CLRT_INVALID) child[i] += count[i] > 0 ? int(before.leaves.size()) : root;
+        mismatches += std::memcmp(&into.nodes[size_t(root) + n], &want, sizeof want) != 0;
+    }
+    for (size_t l = 0; l < alone.leaves.size(); ++l) {
+        dev::Bvh4Leaf want = alone.leaves[l];
+        int* prim = &want.prim.x;
+        for (int i = 0; i < 4; ++i)
+            if (prim[i] >= 0) prim[i] += primOffset;
+        mismatches += std::memcmp(&into.leaves[before.leaves.size() + l], &want, sizeof want) != 0;
+    }
+    CHECK(mismatches == 0);
+    // An empty tree appends one empty node and no block.
+    const size_t nodes = into.nodes.size(), leaves = into.leaves.size();
+    CHECK(appendBvh4(buildBvh({}), 0, into) == int(nodes));
+    CHECK(into.nodes.size() == nodes + 1);
+    CHECK(into.leaves.size() == leaves);
+    CHECK(into.nodes.back().child.x == CLRT_INVALID);
 }
 
 TEST_CASE("BVH4 leaf packing limits are enforced", "[bvh4]") {

@@ -103,40 +103,56 @@ struct Collapser {
     }
 };
 
-// The 4-wide nodes of `bvh` into r.nodes, and its leaf blocks' primitives into blockPrims; false for
-// an empty tree (r then holds the one empty node).
-bool collapseNodes(const Bvh& bvh, Bvh4& r, std::vector<dev::int4>& blockPrims) {
+// Makes room for `more` elements past a's end: exactly when a holds nothing yet (one tree: no unused
+// tail), else at least half again (bottom levels appended one after another: amortised copies). A
+// HostArray's pages past the end are never touched, so unused capacity costs no resident memory.
+template <class T>
+void reserveMore(HostArray<T>& a, size_t more) {
+    const size_t need = a.size() + more;
+    if (need > a.capacity()) a.reserve(a.empty() ? need : std::max(need, a.capacity() + a.capacity() / 2));
+}
+
+// The 4-wide nodes of `bvh` appended to `nodes` (child indices of interior lanes are indices of
+// `nodes`, leaf lanes index blockPrims), and its leaf blocks' primitives into blockPrims; *maxStack and
+// *depth its figures. False for an empty tree (then one empty node is appended).
+bool collapseNodes(const Bvh& bvh, HostArray<dev::Bvh4Node>& nodes, std::vector<dev::int4>& blockPrims, int* maxStack,
+                   int* depth) {
     if (bvh.primRefs.empty() || bvh.nodes.empty()) {
         dev::Bvh4Node empty;
         empty.minX = empty.minY = empty.minZ = {INFINITY, INFINITY, INFINITY, INFINITY};
         empty.maxX = empty.maxY = empty.maxZ = {-INFINITY, -INFINITY, -INFINITY, -INFINITY};
         empty.child = {CLRT_INVALID, CLRT_INVALID, CLRT_INVALID, CLRT_INVALID};
         empty.count = {0, 0, 0, 0};
-        r.nodes.push_back(empty);
-        r.depth = 1;
+        nodes.push_back(empty);
+        *maxStack = 0;
+        *depth = 1;
         return false;
     }
-    r.nodes.reserve(bvh.nodes.size() / 2 + 1);  // an upper bound: pages past the end are never touched
+    reserveMore(nodes, bvh.nodes.size() / 2 + 1);  // an upper bound: pages past the end are never touched
     size_t blocks = 0;  // exactly: each binary leaf's primitives, four to a block (no growth, no copies)
     for (const BvhNode& n : bvh.nodes)
         if (n.count > 0) blocks += size_t(n.count + 3) / 4;
     blockPrims.reserve(blocks);
-    Collapser c{bvh, r.nodes, blockPrims};
-    r.maxStack = c.emit(0, 1).second;
-    r.depth = c.depth;
-    if (r.maxStack > CLRT_BVH4_STACK_SIZE)
-        throw std::logic_error("collapseBvh4: traversal stack need " + std::to_string(r.maxStack) +
+    Collapser c{bvh, nodes, blockPrims};
+    *maxStack = c.emit(0, 1).second;
+    *depth = c.depth;
+    if (*maxStack > CLRT_BVH4_STACK_SIZE)
+        throw std::logic_error("collapseBvh4: traversal stack need " + std::to_string(*maxStack) +
                                " exceeds CLRT_BVH4_STACK_SIZE");
     return true;
 }
 
-// The leaf blocks from their primitives (vertices zero until setLeafTriangles).
-void makeLeaves(const std::vector<dev::int4>& blockPrims, Bvh4& r) {
-    r.leaves.reserve(blockPrims.size());
+// The leaf blocks from their primitives, moved by primOffset, appended to `leaves` (vertices zero
+// until setLeafTriangles).
+void makeLeaves(const std::vector<dev::int4>& blockPrims, int primOffset, HostArray<dev::Bvh4Leaf>& leaves) {
+    reserveMore(leaves, blockPrims.size());
     for (const dev::int4& prims : blockPrims) {
         dev::Bvh4Leaf block{};
         block.prim = prims;
-        r.leaves.push_back(block);
+        int* prim = &block.prim.x;
+        for (int i = 0; i < 4; ++i)
+            if (prim[i] >= 0) prim[i] += primOffset;
+        leaves.push_back(block);
     }
 }
 
@@ -145,21 +161,40 @@ void makeLeaves(const std::vector<dev::int4>& blockPrims, Bvh4& r) {
 Bvh4 collapseBvh4(const Bvh& bvh) {
     Bvh4 r;
     std::vector<dev::int4> blockPrims;
-    if (collapseNodes(bvh, r, blockPrims)) makeLeaves(blockPrims, r);
+    if (collapseNodes(bvh, r.nodes, blockPrims, &r.maxStack, &r.depth)) makeLeaves(blockPrims, 0, r.leaves);
     return r;
 }
 
 Bvh4 collapseBvh4(Bvh&& bvh) {
     Bvh4 r;
     std::vector<dev::int4> blockPrims;
-    const bool any = collapseNodes(bvh, r, blockPrims);
+    const bool any = collapseNodes(bvh, r.nodes, blockPrims, &r.maxStack, &r.depth);
     bvh = Bvh{};  // freed before the leaf blocks are allocated
-    if (any) makeLeaves(blockPrims, r);
+    if (any) makeLeaves(blockPrims, 0, r.leaves);
     return r;
 }
 
-void setLeafTriangles(Bvh4& b4, const dev::Triangle* tris, int numTriangles) {
-    for (dev::Bvh4Leaf& block : b4.leaves) {
+int appendBvh4(Bvh&& bvh, int primOffset, Bvh4& into, int* maxStack) {
+    const size_t root = into.nodes.size(), leafOffset = into.leaves.size();
+    std::vector<dev::int4> blockPrims;
+    int stack = 0, depth = 0;
+    const bool any = collapseNodes(bvh, into.nodes, blockPrims, &stack, &depth);
+    bvh = Bvh{};  // freed before the leaf blocks are allocated
+    for (size_t n = root; n < into.nodes.size(); ++n) {
+        dev::Bvh4Node& node = into.nodes[n];
+        int* child = &node.child.x;
+        const int* count = &node.count.x;
+        for (int i = 0; i < 4; ++i)
+            if (child[i] != CLRT_INVALID && count[i] > 0) child[i] += int(leafOffset);
+    }
+    if (any) makeLeaves(blockPrims, primOffset, into.leaves);
+    if (maxStack) *maxStack = stack;
+    return int(root);
+}
+
+void setLeafTriangles(Bvh4& b4, const dev::Triangle* tris, int numTriangles, size_t firstLeaf) {
+    for (size_t l = firstLeaf; l < b4.leaves.size(); ++l) {
+        dev::Bvh4Leaf& block = b4.leaves[l];
         const int* prim = &block.prim.x;
         for (int i = 0; i < 4; ++i) {
             if (prim[i] < 0 || prim[i] >= numTriangles) continue;

@@ -29,11 +29,19 @@ Bvh4 collapseBvh4(const Bvh& bvh);
 // never held together: what flattening does, since nothing reads its binary tree afterwards.
 Bvh4 collapseBvh4(Bvh&& bvh);
 
-// Copies each triangle lane's world-space vertices (prim < numTriangles) from tris into its block.
-void setLeafTriangles(Bvh4& b4, const dev::Triangle* tris, int numTriangles);
+// collapseBvh4(Bvh&&) appended to `into` after the trees it already holds (the two-level BVH's bottom
+// levels, flatten_instances.cpp): the 4-wide nodes are written straight into into.nodes and the leaf
+// blocks into into.leaves, child indices pointing into those arrays and primitive references moved by
+// primOffset, so neither array is made twice. Returns the root's index in into.nodes, *maxStack its
+// traversal stack need (into.maxStack and depth stay the caller's). The binary tree is left empty.
+int appendBvh4(Bvh&& bvh, int primOffset, Bvh4& into, int* maxStack = nullptr);
+
+// Copies each triangle lane's world-space vertices (prim < numTriangles) from tris into its block, for
+// the blocks from firstLeaf on.
+void setLeafTriangles(Bvh4& b4, const dev::Triangle* tris, int numTriangles, size_t firstLeaf = 0);
 template <class Triangles>  // std::vector or HostArray
-void setLeafTriangles(Bvh4& b4, const Triangles& tris, int numTriangles) {
-    setLeafTriangles(b4, tris.data(), numTriangles);
+void setLeafTriangles(Bvh4& b4, const Triangles& tris, int numTriangles, size_t firstLeaf = 0) {
+    setLeafTriangles(b4, tris.data(), numTriangles, firstLeaf);
 }
 
 }  // namespace clrt

@@ -61,15 +61,22 @@ bool mirrorsOrientation(const Mat4& m);
 void flattenLights(const Scene& scene, DeviceScene& ds, ImageAtlas& atlas);
 
 // ---- shared by flatten_geometry.cpp and flatten_instances.cpp ----
-// The triangles of one mesh shape in world space (or, with an identity transform, in object space), in
-// index order (degenerate and non-finite ones counted and left out).
-struct MeshTriangles {
-    std::vector<dev::Triangle> triangles;
-    std::vector<dev::TriangleShading> shading;
-    std::vector<Aabb> boxes;
-    size_t degenerate = 0, nonFinite = 0;
+// Where a run of triangles is written: the slots from `first` of the scene's arrays (triangles, their
+// shading and boxes), and what was left out (degenerate and non-finite triangles, counted).
+struct TriangleSlots {
+    dev::Triangle* triangles;
+    dev::TriangleShading* shading;
+    Aabb* boxes;
+    size_t kept = 0, degenerate = 0, nonFinite = 0;
 };
-void flattenMesh(const Scene& scene, const Shape& s, int texSet, MeshTriangles& out);
+// The triangles of one mesh shape in world space (or, with an identity transform, in object space), in
+// index order, written into out's slots (room for every triangle of the mesh; degenerate and non-finite
+// ones counted and left out, out.kept the rest).
+void flattenMesh(const Scene& scene, const Shape& s, int texSet, TriangleSlots& out);
+// Puts the triangles [0, numTriangles) of tris and shading in the leaf order of `bvh` (built over their
+// boxes, then maybe others: references from numTriangles on, spheres, keep their indices) in place, no
+// copy of either array made, and makes bvh's triangle references those new positions.
+void putInLeafOrder(Bvh& bvh, dev::Triangle* tris, dev::TriangleShading* shading, int numTriangles);
 // The box a primitive sweeps over the shutter interval: moved by t·motion, t in [0, 1], it stays
 // inside the union of its boxes at both ends (the motion is a straight translation).
 Aabb sweptBox(const Aabb& rest, const Vec3& motion);
@@ -78,6 +85,9 @@ void storeRows(dev::float4 rows[3], const Mat4& m);  // the first three rows of 
 // BVH, and the top-level BVH over the shapes as instances; appended to ds's arrays after the world
 // BVH's (whose sphere references move past the appended triangles). Sets numTriangles, numInstances,
 // instanceRoot and the traversal's stack need. numWorldTriangles: the world BVH's triangles.
+// The triangles the bottom levels of the shapes marked in `instanced` (instancedShapes) will store at
+// most: each (mesh, flat or smooth) once. flattenGeometry reserves them, so no array grows by copying.
+size_t bottomLevelTriangles(const Scene& scene, const std::vector<bool>& instanced);
 void flattenInstances(const Scene& scene, const std::vector<std::pair<const Shape*, int>>& jobs, int numWorldTriangles,
                       DeviceScene& ds);
 // The device fields of environment light `l` (index `lightIndex`), its importance distribution, and

@@ -20,15 +20,6 @@
 
 namespace clrt {
 
-// Where a run of triangles is written: the slots from `first` of the scene's arrays (triangles, their
-// shading and boxes), and what was left out (degenerate and non-finite triangles, counted).
-struct TriangleSlots {
-    dev::Triangle* triangles;
-    dev::TriangleShading* shading;
-    Aabb* boxes;
-    size_t kept = 0, degenerate = 0, nonFinite = 0;
-};
-
 // A mesh shape's vertices in world space, and its smooth normals: what its triangles are made from.
 struct MeshVertices {
     std::vector<Vec3> pw, nw;
@@ -109,20 +100,46 @@ void flattenTriangles(const Scene& scene, const Shape& s, int texSet, const Mesh
 }
 
 
-void flattenMesh(const Scene& scene, const Shape& s, int texSet, MeshTriangles& out) {
+void flattenMesh(const Scene& scene, const Shape& s, int texSet, TriangleSlots& out) {
     MeshVertices mv;
     meshVertices(scene, s, mv);
-    const size_t n = scene.meshes.at(s.meshIndex).indices.size() / 3;
-    out.triangles.resize(n);
-    out.shading.resize(n);
-    out.boxes.resize(n);
-    TriangleSlots slots{out.triangles.data(), out.shading.data(), out.boxes.data()};
-    flattenTriangles(scene, s, texSet, mv, 0, n, slots);
-    out.triangles.resize(slots.kept);
-    out.shading.resize(slots.kept);
-    out.boxes.resize(slots.kept);
-    out.degenerate += slots.degenerate;
-    out.nonFinite += slots.nonFinite;
+    flattenTriangles(scene, s, texSet, mv, 0, scene.meshes.at(s.meshIndex).indices.size() / 3, out);
+}
+
+namespace {
+
+// Puts a[i] = a[src[i]] and b[i] = b[src[i]] (the values before the call) for every i < src.size(), in
+// place: each cycle of the permutation is followed once, with one element of each array held aside,
+// so no copy of either array is made (src is spent: every entry ends as -1).
+template <class A, class B>
+void gatherInPlace(A* a, B* b, std::vector<int>& src) {
+    for (size_t start = 0; start < src.size(); ++start) {
+        if (src[start] < 0) continue;  // moved in an earlier cycle
+        const A heldA = a[start];
+        const B heldB = b[start];
+        size_t j = start;
+        for (;;) {
+            const size_t k = size_t(src[j]);
+            src[j] = -1;
+            if (k == start) { a[j] = heldA; b[j] = heldB; break; }
+            a[j] = a[k];
+            b[j] = b[k];
+            j = k;
+        }
+    }
+}
+
+}  // namespace
+
+void putInLeafOrder(Bvh& bvh, dev::Triangle* tris, dev::TriangleShading* shading, int numTriangles) {
+    std::vector<int> src;  // leaf-order slot -> the triangle's slot now; spheres keep their indices
+    src.reserve(size_t(numTriangles));
+    for (int& ref : bvh.primRefs) {
+        if (ref >= numTriangles) continue;
+        src.push_back(ref);
+        ref = int(src.size()) - 1;
+    }
+    gatherInPlace(tris, shading, src);
 }
 
 void storeRows(dev::float4 rows[3], const Mat4& m) {
@@ -275,27 +292,6 @@ void flattenMeshes(const Scene& scene, const std::vector<MeshJob>& meshJobs, Dev
     ds.skippedTriangles += nanSkipped;
 }
 
-// Puts a[i] = a[src[i]] and b[i] = b[src[i]] (the values before the call) for every i < src.size(), in
-// place: each cycle of the permutation is followed once, with one element of each array held aside,
-// so no copy of either array is made (src is spent: every entry ends as -1).
-template <class A, class B>
-void gatherInPlace(A* a, B* b, std::vector<int>& src) {
-    for (size_t start = 0; start < src.size(); ++start) {
-        if (src[start] < 0) continue;  // moved in an earlier cycle
-        const A heldA = a[start];
-        const B heldB = b[start];
-        size_t j = start;
-        for (;;) {
-            const size_t k = size_t(src[j]);
-            src[j] = -1;
-            if (k == start) { a[j] = heldA; b[j] = heldB; break; }
-            a[j] = a[k];
-            b[j] = b[k];
-            j = k;
-        }
-    }
-}
-
 // The BVH over `boxes` (triangles, then spheres); with leafOrder the triangles are stored in leaf order
 // so a leaf's triangles are contiguous in memory (FlattenOptions::leafOrderTriangles), then the tree is
 // collapsed to 4-wide nodes with the leaves' triangles copied into their struct-of-arrays blocks. The
@@ -312,16 +308,7 @@ void buildDeviceBvh(std::vector<Aabb>&& boxes, DeviceScene& ds, bool leafOrder) 
     Bvh bvh = buildBvh(boxes, opts);
     std::vector<Aabb>().swap(boxes);
     const int numTris = int(ds.triangles.size());
-    if (leafOrder) {
-        std::vector<int> src;  // leaf-order slot -> the triangle's slot now; spheres keep their indices
-        src.reserve(size_t(numTris));
-        for (int& ref : bvh.primRefs) {
-            if (ref >= numTris) continue;
-            src.push_back(ref);
-            ref = int(src.size()) - 1;
-        }
-        gatherInPlace(ds.triangles.data(), ds.triangleShading.data(), src);
-    }
+    if (leafOrder) putInLeafOrder(bvh, ds.triangles.data(), ds.triangleShading.data(), numTris);
     ds.bvh = summarizeBvh(bvh);
     ds.bvh4 = collapseBvh4(std::move(bvh));  // frees the binary tree before making the leaf blocks
     setLeafTriangles(ds.bvh4, ds.triangles, numTris);
@@ -340,8 +327,9 @@ void flattenGeometry(const Scene& scene, DeviceScene& ds, const FlattenOptions& 
     for (size_t i = 0; i < scene.shapes.size(); ++i)
         if (scene.shapes[i].type == ShapeType::Mesh && !instanced[i])
             total += scene.meshes.at(scene.shapes[i].meshIndex).indices.size() / 3;
-    ds.triangles.reserve(total);
-    ds.triangleShading.reserve(total);
+    const size_t bottomTotal = bottomLevelTriangles(scene, instanced);  // appended by flattenInstances
+    ds.triangles.reserve(total + bottomTotal);
+    ds.triangleShading.reserve(total + bottomTotal);
     boxes.reserve(total + scene.shapes.size());
     std::vector<MeshJob> meshJobs, instanceJobs;
     for (size_t i = 0; i < scene.shapes.size(); ++i) {

@@ -6,6 +6,7 @@
 // (Scene::shapes of type Mesh: meshIndex, transform, motion, smooth, material) and Scene::meshes.
 #include <algorithm>
 #include <map>
+#include <set>
 
 #include "flatten/flatten.h"
 #include "scene/transforms.h"
@@ -22,59 +23,49 @@ namespace {
 constexpr size_t kTwoLevelMinTriangles = size_t(1) << 20;
 constexpr size_t kTwoLevelSceneTriangles = size_t(1) << 23;
 
-// One bottom-level tree as the device reads it, before its indices move to their place in ds.
+// What an instance needs of its bottom-level tree, once that is in ds's arrays.
 struct BottomLevel {
-    MeshTriangles tris;  // object space, in leaf order
-    Bvh4 bvh4;
-    Aabb box;            // object-space box of the mesh
-    int rootNode = 0;    // nodes index once appended
+    Aabb box;              // object-space box of the mesh
+    int rootNode = 0;      // nodes index
+    size_t triangles = 0;  // stored (none: the mesh has no triangle to hit, its shapes are left out)
 };
 
-// Appends b4's nodes and leaf blocks to ds.bvh4 with their child indices and triangle references
-// moved by the arrays' current sizes and triOffset; returns the root's new index.
-int appendBvh4(const Bvh4& b4, int triOffset, DeviceScene& ds) {
-    const int nodeOffset = int(ds.bvh4.nodes.size()), leafOffset = int(ds.bvh4.leaves.size());
-    for (dev::Bvh4Node n : b4.nodes) {
-        int* child = &n.child.x;
-        const int* count = &n.count.x;
-        for (int i = 0; i < 4; ++i)
-            if (child[i] != CLRT_INVALID) child[i] += count[i] > 0 ? leafOffset : nodeOffset;
-        ds.bvh4.nodes.push_back(n);
-    }
-    for (dev::Bvh4Leaf l : b4.leaves) {
-        int* prim = &l.prim.x;
-        for (int i = 0; i < 4; ++i)
-            if (prim[i] >= 0) prim[i] += triOffset;
-        ds.bvh4.leaves.push_back(l);
-    }
-    return nodeOffset;
-}
+// The key of a bottom level: shapes of one mesh may shade it differently (flat or smooth normals).
+std::pair<int, bool> bottomKey(const Shape& s) { return {s.meshIndex, s.smooth}; }
 
 // The mesh of shape s in object space (identity transform, no motion; material, texture set and light
-// belong to the instance), its BVH, triangles in leaf order.
-BottomLevel buildBottomLevel(const Scene& scene, const Shape& s) {
+// belong to the instance) appended to ds: its triangles and their shading written in place after
+// ds's (room reserved by flattenGeometry), its BVH built over their boxes, the triangles put in leaf
+// order in place, the binary tree freed before its leaf blocks are appended to ds.bvh4 (as the world
+// tree, flatten_geometry.cpp's buildDeviceBvh). *maxStack: its traversal stack need.
+BottomLevel appendBottomLevel(const Scene& scene, const Shape& s, DeviceScene& ds, int* maxStack) {
     Shape objectSpace = s;
     objectSpace.transform = Mat4::identity();
     objectSpace.motion = Vec3(0, 0, 0);
     objectSpace.materialIndex = CLRT_INVALID;
     objectSpace.lightIndex = CLRT_INVALID;
+    const size_t base = ds.triangles.size(), n = scene.meshes.at(size_t(s.meshIndex)).indices.size() / 3;
+    ds.triangles.resize(base + n);
+    ds.triangleShading.resize(base + n);
+    std::vector<Aabb> boxes(n);
+    TriangleSlots slots{ds.triangles.data() + base, ds.triangleShading.data() + base, boxes.data()};
+    flattenMesh(scene, objectSpace, CLRT_INVALID, slots);
+    ds.triangles.resize(base + slots.kept);
+    ds.triangleShading.resize(base + slots.kept);
+    boxes.resize(slots.kept);
+    ds.skippedTriangles += slots.degenerate + slots.nonFinite;
     BottomLevel b;
-    flattenMesh(scene, objectSpace, CLRT_INVALID, b.tris);
+    b.triangles = slots.kept;
+    if (b.triangles == 0) return b;
+    for (const Aabb& box : boxes) b.box.grow(box);
     BvhBuildOptions opts;
     opts.traversalCost = 2;  // as the world BVH's (flatten_geometry.cpp, buildDeviceBvh)
-    Bvh bvh = buildBvh(b.tris.boxes, opts);
-    MeshTriangles ordered;
-    for (int& ref : bvh.primRefs) {
-        ordered.triangles.push_back(b.tris.triangles[size_t(ref)]);
-        ordered.shading.push_back(b.tris.shading[size_t(ref)]);
-        ref = int(ordered.triangles.size()) - 1;
-    }
-    for (const Aabb& box : b.tris.boxes) b.box.grow(box);
-    ordered.degenerate = b.tris.degenerate;
-    ordered.nonFinite = b.tris.nonFinite;
-    b.tris = std::move(ordered);
-    b.bvh4 = collapseBvh4(std::move(bvh));
-    setLeafTriangles(b.bvh4, b.tris.triangles, int(b.tris.triangles.size()));
+    Bvh bvh = buildBvh(boxes, opts);
+    std::vector<Aabb>().swap(boxes);
+    putInLeafOrder(bvh, ds.triangles.data() + base, ds.triangleShading.data() + base, int(b.triangles));
+    const size_t firstLeaf = ds.bvh4.leaves.size();
+    b.rootNode = appendBvh4(std::move(bvh), int(base), ds.bvh4, maxStack);
+    setLeafTriangles(ds.bvh4, ds.triangles, int(ds.triangles.size()), firstLeaf);
     return b;
 }
 
@@ -153,24 +144,26 @@ std::vector<bool> instancedShapes(const Scene& scene, Instancing mode) {
     return out;
 }
 
+size_t bottomLevelTriangles(const Scene& scene, const std::vector<bool>& instanced) {
+    std::set<std::pair<int, bool>> keys;
+    size_t total = 0;
+    for (size_t i = 0; i < scene.shapes.size(); ++i)
+        if (instanced[i] && keys.insert(bottomKey(scene.shapes[i])).second)
+            total += scene.meshes.at(size_t(scene.shapes[i].meshIndex)).indices.size() / 3;
+    return total;
+}
+
 void flattenInstances(const Scene& scene, const std::vector<std::pair<const Shape*, int>>& jobs, int numWorldTriangles,
                       DeviceScene& ds) {
     const int numWorldLeaves = int(ds.bvh4.leaves.size());
     const int worldStack = std::max(1, ds.bvh4.maxStack);
-    // One bottom level per (mesh, smooth): shapes of one mesh may shade it differently.
     std::map<std::pair<int, bool>, BottomLevel> bottoms;
     int bottomStack = 0;
     for (const auto& job : jobs) {
-        auto key = std::make_pair(job.first->meshIndex, job.first->smooth);
-        if (bottoms.count(key)) continue;
-        BottomLevel& b = bottoms[key] = buildBottomLevel(scene, *job.first);
-        if (b.tris.triangles.empty()) continue;
-        b.rootNode = appendBvh4(b.bvh4, int(ds.triangles.size()), ds);
-        ds.triangles.insert(ds.triangles.end(), b.tris.triangles.begin(), b.tris.triangles.end());
-        ds.triangleShading.insert(ds.triangleShading.end(), b.tris.shading.begin(), b.tris.shading.end());
-        ds.skippedTriangles += b.tris.degenerate + b.tris.nonFinite;
-        bottomStack = std::max(bottomStack, b.bvh4.maxStack);
-        b.bvh4 = Bvh4{};
+        if (bottoms.count(bottomKey(*job.first))) continue;
+        int stack = 0;
+        bottoms[bottomKey(*job.first)] = appendBottomLevel(scene, *job.first, ds, &stack);
+        bottomStack = std::max(bottomStack, stack);
     }
     // The world tree's sphere references follow every triangle.
     const int added = int(ds.triangles.size()) - numWorldTriangles;
@@ -181,10 +174,10 @@ void flattenInstances(const Scene& scene, const std::vector<std::pair<const Shap
         }
     std::vector<Aabb> boxes;
     for (const auto& job : jobs) {
-        const BottomLevel& b = bottoms.at(std::make_pair(job.first->meshIndex, job.first->smooth));
+        const BottomLevel& b = bottoms.at(bottomKey(*job.first));
         dev::Instance inst;
         Aabb box;
-        if (b.tris.triangles.empty() || !makeInstance(*job.first, job.second, b, inst, box)) continue;
+        if (b.triangles == 0 || !makeInstance(*job.first, job.second, b, inst, box)) continue;
         ds.instances.push_back(inst);
         boxes.push_back(box);
     }

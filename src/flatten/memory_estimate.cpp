@@ -125,21 +125,27 @@ void addBvh(uint64_t prims, MemoryEstimate& e) {
     e.addHostArray(e.bvh, leafBlocks(prims) * sizeof(dev::Bvh4Leaf));
 }
 
-// What the flattening holds at its peak beyond the DeviceScene arrays it returns (flatten_geometry.cpp):
-// the meshes' phase (the boxes, the two-level meshes' own arrays while they are appended; flattened
-// meshes are written straight into their slots), the build's (boxes, items, primRefs and binary
-// nodes, before any 4-wide array exists), the collapse's (the binary tree and the blocks' primitives
-// beside the 4-wide nodes, before the leaf blocks) and the blocks' primitives beside the leaf blocks.
-// The triangles are put in leaf order in place (an int per triangle).
+// What the flattening holds at its peak beyond the DeviceScene arrays it returns (flatten_geometry.cpp,
+// flatten_instances.cpp): the meshes' phase (the boxes; every triangle, flattened or of a bottom level,
+// is written straight into its slot), the build's (boxes, items, primRefs and binary nodes, before any
+// 4-wide array exists), the collapse's (the binary tree and the blocks' primitives beside the 4-wide
+// nodes, before the leaf blocks) and the blocks' primitives beside the leaf blocks. The triangles are
+// put in leaf order in place (an int per triangle). A bottom level is built the same way after the world
+// tree, its phases bounded by the same terms (its triangles are among `prims`), and appended to the
+// world tree's arrays, which then move once (worldTree: their old copy, beside the new one).
 uint64_t flattenExcess(const MemoryEstimate& e, uint64_t prims) {
     const uint64_t leaves = leafBlocks(prims) * sizeof(dev::Bvh4Leaf);
     const uint64_t blockPrims = leafBlocks(prims) * sizeof(dev::int4);
     const uint64_t binaryTree = uint64_t(double(prims) * kBinaryNodesPerPrim) * sizeof(BvhNode) + prims * sizeof(int);
     const uint64_t boxes = prims * sizeof(Aabb);
-    const uint64_t perShape = (e.trianglesStored - e.trianglesFlattened) * (kTrianglePair + sizeof(Aabb));
+    const uint64_t worldPrims = prims - (e.trianglesStored - e.trianglesFlattened) - e.instances;
+    uint64_t worldTree = 0;
+    if (e.instances)
+        worldTree = leafBlocks(worldPrims) * sizeof(dev::Bvh4Leaf) +
+                    uint64_t(std::ceil(double(worldPrims) * kNodesPerPrim) + 1) * sizeof(dev::Bvh4Node);
     auto beyond = [](uint64_t held, uint64_t notYet) { return held > notYet ? held - notYet : 0; };
-    return std::max({perShape + boxes, beyond(boxes + prims * kBuildPerPrim + binaryTree, e.bvh.bytes),
-                     beyond(binaryTree + blockPrims, leaves), blockPrims});
+    return std::max({boxes, beyond(boxes + prims * kBuildPerPrim + binaryTree, e.bvh.bytes),
+                     beyond(binaryTree + blockPrims, leaves) + worldTree, blockPrims + worldTree});
 }
 
 // The renderer's per-render buffers for one camera (renderer.cpp's planBatches and ensureQueues, the
