@@ -6,6 +6,7 @@
 #include <catch.hpp>
 
 #include "flatten/device_scene.h"
+#include "flatten/flatten.h"
 #include "flatten/vertex_normals.h"
 #include "scene/scene_loader.h"
 #include "scene/transforms.h"
@@ -83,13 +84,13 @@ TEST_CASE("flattened smooth normals are the object-space ones by the inverse tra
         CHECK(near(normalize((cross(e1, e2) + cross(e3, e4)) * det), expectWorld, 1e-5f));
         for (size_t t = 0; t < ds.triangles.size(); ++t) {
             const dev::Triangle& tri = ds.triangles[t];
-            const dev::TriangleShading& sh = ds.triangleShading[t];
+            const TriangleCorners corners = triangleCorners(ds, t);
             const dev::float4* v[3] = {&tri.v0, &tri.v1, &tri.v2};
-            const dev::float4* n[3] = {&sh.n0, &sh.n1, &sh.n2};
+            const Vec3* n = corners.normal;
             for (int k = 0; k < 3; ++k) {
                 if (!near(Vec3(v[k]->x, v[k]->y, v[k]->z), cornerWorld, 1e-5f)) continue;
                 INFO("shape " << s.source << ", triangle " << t);
-                CHECK(near(Vec3(n[k]->x, n[k]->y, n[k]->z), expectWorld, 1e-5f));
+                CHECK(near(n[k], expectWorld, 1e-5f));
                 ++checked;
             }
         }

@@ -66,10 +66,23 @@ void flattenLights(const Scene& scene, DeviceScene& ds, ImageAtlas& atlas);
 struct MeshTriangles {
     std::vector<dev::Triangle> triangles;
     std::vector<dev::TriangleShading> shading;
+    std::vector<float> attributes;  // corner normals and uvs (TriangleShading.attributes: offsets from 0)
     std::vector<Aabb> boxes;
     size_t degenerate = 0, nonFinite = 0;
 };
 void flattenMesh(const Scene& scene, const Shape& s, int texSet, MeshTriangles& out);
+// The TriangleShading.attributes flags of a mesh shape's triangles (CLRT_TRI_NORMALS when smooth,
+// CLRT_TRI_UVS when its mesh has a uv per vertex) and the floats of triAttributes each such triangle takes.
+uint32_t meshAttributeFlags(const Scene& scene, const Shape& s);
+size_t attributeFloats(uint32_t flags);
+// Stored triangle t's corners as shading reads them (cl_kernels/shade.cl, HitTriangle_Load): its vertex
+// normals (stored, or its face normal thrice) and uvs (stored, or (0, 0)), in the triangle's own space
+// (world; object space for a two-level mesh's). For host references and tests.
+struct TriangleCorners {
+    Vec3 normal[3];
+    float uv[3][2];
+};
+TriangleCorners triangleCorners(const DeviceScene& ds, size_t t);
 // The box a primitive sweeps over the shutter interval: moved by t·motion, t in [0, 1], it stays
 // inside the union of its boxes at both ends (the motion is a straight translation).
 Aabb sweptBox(const Aabb& rest, const Vec3& motion);

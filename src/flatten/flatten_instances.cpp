@@ -70,6 +70,7 @@ BottomLevel buildBottomLevel(const Scene& scene, const Shape& s) {
         ref = int(ordered.triangles.size()) - 1;
     }
     for (const Aabb& box : b.tris.boxes) b.box.grow(box);
+    ordered.attributes = std::move(b.tris.attributes);  // the records keep their offsets into it
     ordered.degenerate = b.tris.degenerate;
     ordered.nonFinite = b.tris.nonFinite;
     b.tris = std::move(ordered);
@@ -167,7 +168,14 @@ void flattenInstances(const Scene& scene, const std::vector<std::pair<const Shap
         if (b.tris.triangles.empty()) continue;
         b.rootNode = appendBvh4(b.bvh4, int(ds.triangles.size()), ds);
         ds.triangles.insert(ds.triangles.end(), b.tris.triangles.begin(), b.tris.triangles.end());
+        // The mesh's corner attributes follow those already stored; its records' offsets move with them.
+        const size_t attributeBase = ds.triangleAttributes.size();
+        if (attributeBase + b.tris.attributes.size() > CLRT_TRI_OFFSET_MASK)
+            throw Error("scene too large: more triangle normals and uvs than TriangleShading.attributes can address");
+        for (dev::TriangleShading& sh : b.tris.shading)
+            if (sh.attributes) sh.attributes += uint32_t(attributeBase);
         ds.triangleShading.insert(ds.triangleShading.end(), b.tris.shading.begin(), b.tris.shading.end());
+        ds.triangleAttributes.insert(ds.triangleAttributes.end(), b.tris.attributes.begin(), b.tris.attributes.end());
         ds.skippedTriangles += b.tris.degenerate + b.tris.nonFinite;
         bottomStack = std::max(bottomStack, b.bvh4.maxStack);
         b.bvh4 = Bvh4{};

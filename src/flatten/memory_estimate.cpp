@@ -16,6 +16,7 @@
 #include <sstream>
 
 #include "bvh/bvh.h"
+#include "flatten/flatten.h"
 #include "image/image.h"  // kMaxImageTexels
 #include "image/image_size.h"
 #include "shared/device_types.h"
@@ -97,9 +98,10 @@ uint64_t addGeometry(const Scene& scene, const MemoryPlan& plan, MemoryEstimate&
         const uint64_t tris = scene.meshes[size_t(s.meshIndex)].indices.size() / 3;
         e.trianglesSeen += tris;
         const bool instanced = size_t(s.meshIndex) < plan.meshInstanced.size() && plan.meshInstanced[size_t(s.meshIndex)];
-        if (!instanced) { flatTris += tris; continue; }
+        const uint64_t floats = tris * attributeFloats(meshAttributeFlags(scene, s));
+        if (!instanced) { flatTris += tris; e.attributeFloatsFlattened += floats; continue; }
         ++e.instances;
-        if (!storedOnce[size_t(s.meshIndex)]) e.trianglesStored += tris;
+        if (!storedOnce[size_t(s.meshIndex)]) { e.trianglesStored += tris; e.attributeFloats += floats; }
         storedOnce[size_t(s.meshIndex)] = true;
     }
     for (const Light& l : scene.lights)
@@ -112,6 +114,8 @@ uint64_t addGeometry(const Scene& scene, const MemoryPlan& plan, MemoryEstimate&
     e.trianglesFlattened = flatTris;
     e.addHostArray(e.geometry, std::max<uint64_t>(1, e.trianglesStored) * sizeof(dev::Triangle));
     e.addHostArray(e.geometry, std::max<uint64_t>(1, e.trianglesStored) * sizeof(dev::TriangleShading));
+    e.attributeFloats += e.attributeFloatsFlattened;
+    e.addHostArray(e.geometry, std::max<uint64_t>(1, e.attributeFloats) * sizeof(float));
     e.addCopied(e.geometry, std::max<uint64_t>(1, spheres) * sizeof(dev::Sphere));
     e.addCopied(e.geometry, std::max<uint64_t>(1, planes) * sizeof(dev::Plane));
     if (e.instances) e.addCopied(e.geometry, e.instances * kInstanceBytes);
@@ -136,7 +140,8 @@ uint64_t flattenExcess(const MemoryEstimate& e, uint64_t prims) {
     const uint64_t blockPrims = leafBlocks(prims) * sizeof(dev::int4);
     const uint64_t binaryTree = uint64_t(double(prims) * kBinaryNodesPerPrim) * sizeof(BvhNode) + prims * sizeof(int);
     const uint64_t boxes = prims * sizeof(Aabb);
-    const uint64_t perShape = (e.trianglesStored - e.trianglesFlattened) * (kTrianglePair + sizeof(Aabb));
+    const uint64_t perShape = (e.trianglesStored - e.trianglesFlattened) * (kTrianglePair + sizeof(Aabb)) +
+                              (e.attributeFloats - e.attributeFloatsFlattened) * sizeof(float);
     auto beyond = [](uint64_t held, uint64_t notYet) { return held > notYet ? held - notYet : 0; };
     return std::max({perShape + boxes, beyond(boxes + prims * kBuildPerPrim + binaryTree, e.bvh.bytes),
                      beyond(binaryTree + blockPrims, leaves), blockPrims});
