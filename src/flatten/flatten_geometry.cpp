@@ -1,6 +1,8 @@
 // flatten_geometry.cpp — planes, spheres and mesh triangles in world space (meshes on all hardware
 // threads), then the BVH over triangles and spheres with the triangles stored in leaf order (see
-// flatten.h). Triangles keep flat or smooth normals (vertex_normals.h) and uvs; spheres their affine maps.
+// flatten.h). Triangles keep smooth normals (vertex_normals.h) and uvs in triAttributes, only where their
+// mesh has them (TriangleShading.attributes; a flat triangle's normal is recomputed by the kernel from
+// its vertices, flattenTriangles and triangleCorners use the same formula); spheres their affine maps.
 // A mesh whose transformation mirrors (det < 0) has its winding reversed, as the course does, so its
 // geometric normal is the object-space one carried by the inverse transpose (see mirrorsOrientation).
 // Moving shapes (MotionBlur) keep their rest position; their motion rides in Triangle.v*.w and

@@ -144,7 +144,7 @@ typedef struct Triangle {
  * world-space vertex normals (9 floats: n0.xyz n1.xyz n2.xyz), then with CLRT_TRI_UVS (a mesh with
  * texture coordinates) its three uvs (6 floats: u0 v0 u1 v1 u2 v2). Without CLRT_TRI_NORMALS the shading
  * normal is the face normal of the stored vertices (Triangle_FaceNormal, cl_kernels/intersect.cl, the
- * flattener's faceNormal); without CLRT_TRI_UVS the uvs are (0, 0). 0: a flat triangle without uvs. */
+ * face normal flattenTriangles computes); without CLRT_TRI_UVS the uvs are (0, 0). 0: a flat triangle without uvs. */
 #define CLRT_TRI_NORMALS 0x40000000u
 #define CLRT_TRI_UVS 0x80000000u
 #define CLRT_TRI_OFFSET_MASK 0x3FFFFFFFu
