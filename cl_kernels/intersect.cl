@@ -135,6 +135,17 @@ inline int Sphere_Intersect(const __global Sphere* sp, float3 orgW, float3 dirW,
  * −t·motion meets the primitive at rest. The BVH boxes are swept over [0, 1] on the host. */
 inline float3 Triangle_Motion(const __global Triangle* tri) { return (float3)(tri->v0.w, tri->v1.w, tri->v2.w); }
 
+/* The unit face normal of a flat triangle, cross(v1 - v0, v2 - v0) / its length: the same float
+ * operations in the same order as flattenTriangles' face normal (src/flatten/flatten_geometry.cpp; this
+ * file's FP_CONTRACT OFF), so shading gets, bit for bit, the normal flattening once stored (the course
+ * scenes' images unchanged). The flattener drops triangles whose length is not > 0. */
+inline float3 Triangle_FaceNormal(float3 v0, float3 v1, float3 v2) {
+    const float3 a = v1 - v0, b = v2 - v0;
+    const float3 c = (float3)(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+    const float len = sqrt(c.x * c.x + c.y * c.y + c.z * c.z);
+    return c / len;
+}
+
 /* The ray origin in the rest frame of a primitive moving by `motion`, at shutter time `time`. */
 inline float3 MotionBlur_RestOrigin(float3 org, float time, float3 motion) {
 #ifdef CLRT_HAS_MOTION_BLUR

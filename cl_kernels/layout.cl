@@ -18,9 +18,8 @@
         M(Bvh4Node, minZ) M(Bvh4Node, maxZ) M(Bvh4Node, child) M(Bvh4Node, count)                 \
     S(Bvh4Leaf) M(Bvh4Leaf, vertex) M(Bvh4Leaf, prim)                                            \
     S(Triangle) M(Triangle, v0) M(Triangle, v1) M(Triangle, v2)                                   \
-    S(TriangleShading) M(TriangleShading, n0) M(TriangleShading, n1) M(TriangleShading, n2)       \
-        M(TriangleShading, uv01) M(TriangleShading, uv2) M(TriangleShading, material)             \
-        M(TriangleShading, textureSet) M(TriangleShading, light) M(TriangleShading, pad1)          \
+    S(TriangleShading) M(TriangleShading, material) M(TriangleShading, textureSet)                 \
+        M(TriangleShading, light) M(TriangleShading, attributes)                                   \
     S(Instance) M(Instance, objectToWorld) M(Instance, worldToObject) M(Instance, motion)                \
         M(Instance, rootNode) M(Instance, material) M(Instance, textureSet) M(Instance, mirrored)   \
     S(Sphere) M(Sphere, centerRadius) M(Sphere, worldToObject) M(Sphere, objectToWorld)           \

@@ -55,12 +55,25 @@ typedef struct {
 } HitTriangle;
 
 inline void HitTriangle_Load(Hit h, const __global Triangle* tris, const __global TriangleShading* shading,
-                             const __global Instance* instances, HitTriangle* ht) {
+                             const __global float* triAttributes, const __global Instance* instances, HitTriangle* ht) {
     const __global Triangle* tri = &tris[h.prim];
     const __global TriangleShading* sh = &shading[h.prim];
     ht->v0 = tri->v0.xyz; ht->v1 = tri->v1.xyz; ht->v2 = tri->v2.xyz;
-    ht->n0 = sh->n0.xyz; ht->n1 = sh->n1.xyz; ht->n2 = sh->n2.xyz;
-    ht->uv0 = sh->uv01.xy; ht->uv1 = sh->uv01.zw; ht->uv2 = sh->uv2.xy;
+    /* Corner data (TriangleShading.attributes): stored vertex normals, or the face normal thrice, as
+     * the flattener stored it before session 16; stored uvs, or (0, 0). */
+    const uint attributes = sh->attributes;
+    const __global float* corner = triAttributes + (attributes & CLRT_TRI_OFFSET_MASK);
+    if (attributes & CLRT_TRI_NORMALS) {
+        ht->n0 = vload3(0, corner); ht->n1 = vload3(1, corner); ht->n2 = vload3(2, corner);
+        corner += CLRT_TRI_NORMAL_FLOATS;
+    } else {
+        ht->n0 = ht->n1 = ht->n2 = Triangle_FaceNormal(ht->v0, ht->v1, ht->v2);
+    }
+    if (attributes & CLRT_TRI_UVS) {
+        ht->uv0 = vload2(0, corner); ht->uv1 = vload2(1, corner); ht->uv2 = vload2(2, corner);
+    } else {
+        ht->uv0 = ht->uv1 = ht->uv2 = (float2)(0.0f);
+    }
     ht->b1 = h.u; ht->b2 = h.v;
     ht->motion = Triangle_Motion(tri);
     ht->material = sh->material; ht->textureSet = sh->textureSet; ht->light = sh->light;
@@ -359,7 +372,7 @@ inline void Shade_ClassicChildren(SceneParams scene, PathState path, Material m,
  * background or environment on a miss, object-light emission, replace_all) and the children. */
 inline void Shade_Hit(SceneParams scene, CameraParams cam, PathState path, Ray ray, Hit h,
                       const __global Triangle* tris, const __global TriangleShading* triShading,
-                      const __global Sphere* spheres, const __global Plane* planes, const __global Instance* instances,
+                      const __global float* triAttributes, const __global Sphere* spheres, const __global Plane* planes, const __global Instance* instances,
                       const __global Material* materials, const __global TextureSet* textureSets, const __global TextureMap* textures,
                       const __global ImageInfo* images, const __global float4* texels, const __global Light* lights,
                       const __global float* envDist, ShadeResult* res) {
@@ -379,7 +392,7 @@ inline void Shade_Hit(SceneParams scene, CameraParams cam, PathState path, Ray r
         return;
     }
     HitTriangle ht;
-    if (h.prim < scene.numTriangles) HitTriangle_Load(h, tris, triShading, instances, &ht);
+    if (h.prim < scene.numTriangles) HitTriangle_Load(h, tris, triShading, triAttributes, instances, &ht);
 #ifdef CLRT_HAS_MOTION_BLUR
     const float3 motionShift = MotionBlur_HitShift(h, ray, &ht, spheres, scene.numTriangles, scene.numSpheres);
     ray.origin.xyz -= motionShift;  /* the ray in the rest frame of the primitive it hit */
@@ -473,7 +486,7 @@ __kernel CLRT_KERNEL_VEC_HINT void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
     int i = get_global_id(0);
     if (i >= *queueCount) return;
     ShadeResult res;
-    Shade_Hit(scene, cam, paths[i], rays[i], hits[i], tris, triShading, spheres, planes, instances, materials, textureSets,
+    Shade_Hit(scene, cam, paths[i], rays[i], hits[i], tris, triShading, triAttributes, spheres, planes, instances, materials, textureSets,
               textures, images, texels, lights, envDist, &res);
     /* Whole structs go to global memory from plain locals: oclgrind 21.10's uninitialised-value check
      * (-cl-opt-disable) reports a struct copied straight from a member of res, initialised or not. */

@@ -409,7 +409,7 @@ TEST_CASE("instancing: flattened against two-level on the host (bench)", "[.inst
     Scene s = loadScene(path);
     using clock = std::chrono::steady_clock;
     auto secs = [](clock::time_point t0) { return std::chrono::duration<double>(clock::now() - t0).count(); };
-    // Flattened: world-space triangles (48 B + 96 B of shading each, as dev::Triangle/TriangleShading).
+    // Flattened: world-space triangles (48 B + 96 B of shading each, as dev::Triangle and the TriangleShading of before session 16).
     auto t0 = clock::now();
     std::vector<Vec3> world;
     std::vector<Aabb> boxes;

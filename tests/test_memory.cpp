@@ -29,7 +29,7 @@ struct Actual {
 };
 Actual actualBytes(const DeviceScene& ds) {
     Actual a{};
-    a.geometry = bytesOf(ds.triangles) + bytesOf(ds.triangleShading) + bytesOf(ds.spheres) + bytesOf(ds.planes);
+    a.geometry = bytesOf(ds.triangles) + bytesOf(ds.triangleShading) + bytesOf(ds.triangleAttributes) + bytesOf(ds.spheres) + bytesOf(ds.planes);
     a.bvh = bytesOf(ds.bvh4.nodes) + bytesOf(ds.bvh4.leaves);
     a.textures = bytesOf(ds.texels);
     a.lights = bytesOf(ds.lights) + bytesOf(ds.lightData) + bytesOf(ds.envDistribution);

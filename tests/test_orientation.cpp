@@ -9,6 +9,7 @@
 #include <cstring>
 
 #include "flatten/device_scene.h"
+#include "flatten/flatten.h"
 #include "scene/scene_loader.h"
 #include "test_helpers.h"
 
@@ -58,7 +59,7 @@ TEST_CASE("a mirroring transformation (det < 0) keeps the object-space orientati
     int plusZ = 0, plusX = 0;
     for (int i = 0; i < 5; ++i) {
         const Vec3 n = faceNormal(ds.triangles[size_t(i)]);
-        const Vec3 shading = normalize(xyz(ds.triangleShading[size_t(i)].n0));
+        const Vec3 shading = normalize(triangleCorners(ds, size_t(i)).normal[0]);
         INFO("triangle " << i << ": geometric normal " << n.x << " " << n.y << " " << n.z);
         plusZ += length(n - Vec3(0, 0, 1)) < 1e-5f;
         // Mesh 5: mirrored, then turned 90° about y: +z goes to +x. Its smooth (area-weighted)

@@ -3,9 +3,17 @@
 // that tell it from the other candidates (unweighted, angle-weighted, shared by position), and the
 // flattened world-space normals: the object-space ones by the inverse transpose, for a mesh and an
 // instance of it under non-uniform scalings, which for area weighting equals averaging in world space.
+// And where they are stored (TriangleShading.attributes): only for smooth meshes, uvs only for meshes
+// with texture coordinates, a flat triangle's normal recomputed by the kernel bit for bit.
 #include <catch.hpp>
 
+#include <cmath>
+#include <cstring>
+
+#include "cl/check.h"
+#include "cl/program.h"
 #include "flatten/device_scene.h"
+#include "flatten/flatten.h"
 #include "flatten/vertex_normals.h"
 #include "scene/scene_loader.h"
 #include "scene/transforms.h"
@@ -83,16 +91,124 @@ TEST_CASE("flattened smooth normals are the object-space ones by the inverse tra
         CHECK(near(normalize((cross(e1, e2) + cross(e3, e4)) * det), expectWorld, 1e-5f));
         for (size_t t = 0; t < ds.triangles.size(); ++t) {
             const dev::Triangle& tri = ds.triangles[t];
-            const dev::TriangleShading& sh = ds.triangleShading[t];
+            const TriangleCorners corners = triangleCorners(ds, t);
             const dev::float4* v[3] = {&tri.v0, &tri.v1, &tri.v2};
-            const dev::float4* n[3] = {&sh.n0, &sh.n1, &sh.n2};
+            const Vec3* n = corners.normal;
             for (int k = 0; k < 3; ++k) {
                 if (!near(Vec3(v[k]->x, v[k]->y, v[k]->z), cornerWorld, 1e-5f)) continue;
                 INFO("shape " << s.source << ", triangle " << t);
-                CHECK(near(Vec3(n[k]->x, n[k]->y, n[k]->z), expectWorld, 1e-5f));
+                CHECK(near(n[k], expectWorld, 1e-5f));
                 ++checked;
             }
         }
     }
     CHECK(checked == 4);  // the shared corner of both faces, in the mesh and in the instance
+}
+
+namespace {
+
+// Runs Triangle_FaceNormal (cl_kernels/intersect.cl) over every stored triangle of ds.
+std::vector<dev::float4> faceNormalsOnDevice(const DeviceScene& ds) {
+    static const char* kFaceNormalKernel = R"CLC(
+__kernel void face_normal_test(const __global Triangle* tris, __global float4* out, int n) {
+    int i = get_global_id(0);
+    if (i >= n) return;
+    out[i] = (float4)(Triangle_FaceNormal(tris[i].v0.xyz, tris[i].v1.xyz, tris[i].v2.xyz), 0.0f);
+}
+)CLC";
+    DeviceContext& dc = testContext();
+    auto sources = loadKernelSources(KernelProgram::Intersect);
+    sources.push_back({"face_normal_test.cl", kFaceNormalKernel});
+    cl::Program program = buildProgramFromSources(dc, sources, {});
+    cl::Kernel k = CL_CPP(cl::Kernel(program, "face_normal_test"));
+    const int n = int(ds.triangles.size());
+    cl::Buffer tris = CL_CPP(cl::Buffer(dc.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, ds.triangles.size() * sizeof(dev::Triangle),
+                                        const_cast<dev::Triangle*>(ds.triangles.data())));
+    std::vector<dev::float4> out(static_cast<size_t>(n));
+    cl::Buffer ob = CL_CPP(cl::Buffer(dc.context(), CL_MEM_WRITE_ONLY, out.size() * sizeof(dev::float4)));
+    k.setArg(0, tris); k.setArg(1, ob); k.setArg(2, n);
+    CL_CPP(dc.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(size_t(n))));
+    CL_CPP(dc.queue().enqueueReadBuffer(ob, CL_TRUE, 0, out.size() * sizeof(dev::float4), out.data()));
+    return out;
+}
+
+}  // namespace
+
+TEST_CASE("triangle corner attributes: stored only where a mesh has them; flat normals recomputed bit for bit",
+          "[flatten][smooth][cl]") {
+    TempDir dir;
+    // Four meshes over the same irregular vertices: flat, smooth, flat with uvs (one under a mirroring
+    // transform), smooth with uvs. Vertices at odd float values, so the face normal's roundings matter.
+    const std::string xml = R"(<Scene><BackgroundColor>0 0 0</BackgroundColor>
+<Cameras><Camera id="1"><Position>0 0 10</Position><Gaze>0 0 -1</Gaze><Up>0 1 0</Up>
+<NearPlane>-1 1 -1 1</NearPlane><NearDistance>1</NearDistance><ImageResolution>4 4</ImageResolution>
+<ImageName>v.png</ImageName></Camera></Cameras>
+<Lights><AmbientLight>1 1 1</AmbientLight></Lights>
+<Materials><Material id="1"><DiffuseReflectance>1 1 1</DiffuseReflectance></Material></Materials>
+<Transformations><Scaling id="1">-1.3 0.7 1.1</Scaling><Rotation id="1">33 0.3 1 0.2</Rotation></Transformations>
+<VertexData>0.1 0.2 0.3  1.37 0.01 -0.2  0.33 1.91 0.07  -0.71 0.93 1.13  0.57 -1.01 0.77</VertexData>
+<TexCoordData>0 0  1 0  1 1  0 1  0.5 0.5</TexCoordData>
+<Objects>
+<Mesh id="1"><Material>1</Material><Faces>1 2 3  1 3 4  2 5 3</Faces></Mesh>
+<Mesh id="2" shadingMode="smooth"><Material>1</Material><Transformations>r1</Transformations><Faces>1 2 3  1 3 4  2 5 3</Faces></Mesh>
+<Mesh id="3"><Material>1</Material><Transformations>s1 r1</Transformations><Faces>1 2 3  1 3 4  2 5 3</Faces></Mesh>
+<Mesh id="4" shadingMode="smooth"><Material>1</Material><Transformations>s1</Transformations><Faces>1 2 3  1 3 4  2 5 3</Faces></Mesh>
+</Objects></Scene>)";
+    const std::string path = dir.file("corners.xml");
+    writeFileBytes(path, xml);
+    const Scene scene = loadScene(path);
+    const DeviceScene ds = flattenScene(scene);
+    REQUIRE(ds.params.numTriangles == 12);
+    CHECK(sizeof(dev::TriangleShading) == 16);
+    // The scene's uvs are per vertex, so every mesh has them: 6 floats per triangle, 9 more when smooth.
+    size_t floats = 0, smooth = 0;
+    for (size_t t = 0; t < 12; ++t) {
+        const uint32_t word = ds.triangleShading[t].attributes;
+        CHECK((word & CLRT_TRI_UVS) != 0);
+        smooth += (word & CLRT_TRI_NORMALS) != 0;
+        floats += attributeFloats(word & ~CLRT_TRI_OFFSET_MASK);
+        CHECK((word & CLRT_TRI_OFFSET_MASK) + attributeFloats(word & ~CLRT_TRI_OFFSET_MASK) <= ds.triangleAttributes.size());
+    }
+    CHECK(smooth == 6);
+    CHECK(floats == 6 * CLRT_TRI_NORMAL_FLOATS + 12 * CLRT_TRI_UV_FLOATS);
+    CHECK(ds.triangleAttributes.size() == floats);
+    // Flat triangles: the kernel's face normal is the host's, bit for bit (the course scenes' images
+    // stay those of the stored normals before session 16), and it is the geometric normal.
+    const std::vector<dev::float4> device = faceNormalsOnDevice(ds);
+    for (size_t t = 0; t < 12; ++t) {
+        INFO("triangle " << t);
+        const TriangleCorners c = triangleCorners(ds, t);
+        const dev::Triangle& tri = ds.triangles[t];
+        const Vec3 e1(tri.v1.x - tri.v0.x, tri.v1.y - tri.v0.y, tri.v1.z - tri.v0.z);
+        const Vec3 e2(tri.v2.x - tri.v0.x, tri.v2.y - tri.v0.y, tri.v2.z - tri.v0.z);
+        const Vec3 host = normalize(cross(e1, e2));
+        CHECK(std::memcmp(&device[t], &host, sizeof(Vec3)) == 0);
+        if (!(ds.triangleShading[t].attributes & CLRT_TRI_NORMALS))
+            for (int k = 0; k < 3; ++k) CHECK(std::memcmp(&c.normal[k], &host, sizeof(Vec3)) == 0);
+        else  // stored vertex normals (checked against their object-space rule above): unit length
+            for (int k = 0; k < 3; ++k) CHECK(std::fabs(length(c.normal[k]) - 1.0f) < 1e-5f);
+    }
+}
+
+TEST_CASE("triangle corner attributes: a flat mesh without uvs stores none", "[flatten][smooth]") {
+    TempDir dir;
+    const std::string xml = R"(<Scene><Cameras><Camera id="1"><Position>0 0 10</Position><Gaze>0 0 -1</Gaze><Up>0 1 0</Up>
+<NearPlane>-1 1 -1 1</NearPlane><NearDistance>1</NearDistance><ImageResolution>4 4</ImageResolution>
+<ImageName>v.png</ImageName></Camera></Cameras>
+<Materials><Material id="1"><DiffuseReflectance>1 1 1</DiffuseReflectance></Material></Materials>
+<VertexData>0 0 0  1 0 0  0 1 0  1 1 0</VertexData>
+<Objects><Mesh id="1"><Material>1</Material><Faces>1 2 3  2 4 3</Faces></Mesh>
+<Mesh id="2" shadingMode="smooth"><Material>1</Material><Faces>1 2 3</Faces></Mesh></Objects></Scene>)";
+    const std::string path = dir.file("flat.xml");
+    writeFileBytes(path, xml);
+    const DeviceScene ds = flattenScene(loadScene(path));
+    REQUIRE(ds.params.numTriangles == 3);
+    int flat = 0;
+    for (size_t t = 0; t < 3; ++t) {
+        flat += ds.triangleShading[t].attributes == 0;
+        const TriangleCorners c = triangleCorners(ds, t);
+        for (int k = 0; k < 3; ++k) CHECK((c.uv[k][0] == 0.0f && c.uv[k][1] == 0.0f));
+    }
+    CHECK(flat == 2);
+    CHECK(ds.triangleAttributes.size() == CLRT_TRI_NORMAL_FLOATS);  // the smooth triangle's normals only
 }

@@ -50,6 +50,7 @@ struct FeatureSet {
 struct DeviceScene {
     HostArray<dev::Triangle> triangles;          // in BVH leaf order
     HostArray<dev::TriangleShading> triangleShading;
+    HostArray<float> triangleAttributes;  // the triangles' optional vertex normals and uvs (TriangleShading.attributes)
     std::vector<dev::Sphere> spheres;
     std::vector<dev::Instance> instances;         // two-level BVH: instances of meshes kept once (may be empty)
     std::vector<dev::Plane> planes;               // never empty (a dummy when the scene has none)

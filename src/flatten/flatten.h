@@ -62,21 +62,37 @@ void flattenLights(const Scene& scene, DeviceScene& ds, ImageAtlas& atlas);
 
 // ---- shared by flatten_geometry.cpp and flatten_instances.cpp ----
 // Where a run of triangles is written: the slots from `first` of the scene's arrays (triangles, their
-// shading and boxes), and what was left out (degenerate and non-finite triangles, counted).
+// shading and boxes; their corner attributes from `attributes`, which is triAttributes[attributeBase]),
+// and what was left out (degenerate and non-finite triangles, counted).
 struct TriangleSlots {
     dev::Triangle* triangles;
     dev::TriangleShading* shading;
     Aabb* boxes;
+    float* attributes;
+    size_t attributeBase;
     size_t kept = 0, degenerate = 0, nonFinite = 0;
 };
 // The triangles of one mesh shape in world space (or, with an identity transform, in object space), in
-// index order, written into out's slots (room for every triangle of the mesh; degenerate and non-finite
-// ones counted and left out, out.kept the rest).
+// index order, written into out's slots (room for every triangle of the mesh and its attribute floats;
+// degenerate and non-finite ones counted and left out, out.kept the rest).
 void flattenMesh(const Scene& scene, const Shape& s, int texSet, TriangleSlots& out);
 // Puts the triangles [0, numTriangles) of tris and shading in the leaf order of `bvh` (built over their
 // boxes, then maybe others: references from numTriangles on, spheres, keep their indices) in place, no
-// copy of either array made, and makes bvh's triangle references those new positions.
+// copy of either array made, and makes bvh's triangle references those new positions. The shading
+// records carry their attribute offsets, so triAttributes stays where it is.
 void putInLeafOrder(Bvh& bvh, dev::Triangle* tris, dev::TriangleShading* shading, int numTriangles);
+// The TriangleShading.attributes flags of a mesh shape's triangles (CLRT_TRI_NORMALS when smooth,
+// CLRT_TRI_UVS when its mesh has a uv per vertex) and the floats of triAttributes each such triangle takes.
+uint32_t meshAttributeFlags(const Scene& scene, const Shape& s);
+size_t attributeFloats(uint32_t flags);
+// Stored triangle t's corners as shading reads them (cl_kernels/shade.cl, HitTriangle_Load): its vertex
+// normals (stored, or its face normal thrice) and uvs (stored, or (0, 0)), in the triangle's own space
+// (world; object space for a two-level mesh's). For host references and tests.
+struct TriangleCorners {
+    Vec3 normal[3];
+    float uv[3][2];
+};
+TriangleCorners triangleCorners(const DeviceScene& ds, size_t t);
 // The box a primitive sweeps over the shutter interval: moved by t·motion, t in [0, 1], it stays
 // inside the union of its boxes at both ends (the motion is a straight translation).
 Aabb sweptBox(const Aabb& rest, const Vec3& motion);
@@ -86,8 +102,9 @@ void storeRows(dev::float4 rows[3], const Mat4& m);  // the first three rows of 
 // BVH's (whose sphere references move past the appended triangles). Sets numTriangles, numInstances,
 // instanceRoot and the traversal's stack need. numWorldTriangles: the world BVH's triangles.
 // The triangles the bottom levels of the shapes marked in `instanced` (instancedShapes) will store at
-// most: each (mesh, flat or smooth) once. flattenGeometry reserves them, so no array grows by copying.
-size_t bottomLevelTriangles(const Scene& scene, const std::vector<bool>& instanced);
+// most: each (mesh, flat or smooth) once; *attributeFloats their triAttributes floats. flattenGeometry
+// reserves them, so no array grows by copying.
+size_t bottomLevelTriangles(const Scene& scene, const std::vector<bool>& instanced, size_t* attributeFloats = nullptr);
 void flattenInstances(const Scene& scene, const std::vector<std::pair<const Shape*, int>>& jobs, int numWorldTriangles,
                       DeviceScene& ds);
 // The device fields of environment light `l` (index `lightIndex`), its importance distribution, and

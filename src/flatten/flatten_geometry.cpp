@@ -1,6 +1,8 @@
 // flatten_geometry.cpp — planes, spheres and mesh triangles in world space (meshes on all hardware
 // threads), then the BVH over triangles and spheres with the triangles stored in leaf order (see
-// flatten.h). Triangles keep flat or smooth normals (vertex_normals.h) and uvs; spheres their affine maps.
+// flatten.h). Triangles keep smooth normals (vertex_normals.h) and uvs in triAttributes, only where their
+// mesh has them (TriangleShading.attributes; a flat triangle's normal is recomputed by the kernel from
+// its vertices, flattenTriangles and triangleCorners use the same formula); spheres their affine maps.
 // A mesh whose transformation mirrors (det < 0) has its winding reversed, as the course does, so its
 // geometric normal is the object-space one carried by the inverse transpose (see mirrorsOrientation).
 // Moving shapes (MotionBlur) keep their rest position; their motion rides in Triangle.v*.w and
@@ -19,6 +21,23 @@
 #include "util/error.h"
 
 namespace clrt {
+
+uint32_t meshAttributeFlags(const Scene& scene, const Shape& s) {
+    const MeshData& mesh = scene.meshes.at(s.meshIndex);
+    return (s.smooth ? CLRT_TRI_NORMALS : 0u) | (mesh.uvs.size() == mesh.positions.size() ? CLRT_TRI_UVS : 0u);
+}
+
+size_t attributeFloats(uint32_t flags) {
+    return ((flags & CLRT_TRI_NORMALS) ? CLRT_TRI_NORMAL_FLOATS : 0) + ((flags & CLRT_TRI_UVS) ? CLRT_TRI_UV_FLOATS : 0);
+}
+
+// The attributes word of a triangle whose corner data starts at `offset` floats into triAttributes
+// (0 for a triangle with none); throws when the offset does not fit below the flags.
+uint32_t attributeWord(uint32_t flags, size_t offset) {
+    if (!flags) return 0;
+    if (offset > CLRT_TRI_OFFSET_MASK) throw Error("scene too large: more triangle normals and uvs than TriangleShading.attributes can address");
+    return flags | uint32_t(offset);
+}
 
 // A mesh shape's vertices in world space, and its smooth normals: what its triangles are made from.
 struct MeshVertices {
@@ -64,11 +83,14 @@ void flattenTriangles(const Scene& scene, const Shape& s, int texSet, const Mesh
     const MeshData& mesh = scene.meshes.at(s.meshIndex);
     const std::vector<Vec3>&pw = mv.pw, &nw = mv.nw;
     const int kB = mv.kB, kC = mv.kC;
-    bool hasUv = mesh.uvs.size() == mesh.positions.size();
+    const uint32_t flags = meshAttributeFlags(scene, s);
+    const size_t floats = attributeFloats(flags);
     for (size_t t = 3 * tBegin; t < 3 * tEnd; t += 3) {
         int a = mesh.indices[t], b = mesh.indices[t + kB], c = mesh.indices[t + kC];
         const Vec3 &p0 = pw[a], &p1 = pw[b], &p2 = pw[c];
         if (!isFinite(p0) || !isFinite(p1) || !isFinite(p2)) { ++out.nonFinite; continue; }
+        // The face normal (the kernels' Triangle_FaceNormal recomputes it, bit for bit, for a triangle
+        // without CLRT_TRI_NORMALS: keep the two the same operations in the same order).
         Vec3 n = cross(p1 - p0, p2 - p0);
         float len = length(n);
         if (p0 == p1 || p1 == p2 || p0 == p2 || !(len > 0) || !std::isfinite(len)) {
@@ -79,14 +101,17 @@ void flattenTriangles(const Scene& scene, const Shape& s, int texSet, const Mesh
         // w of the three vertices: the motion's x, y, z (0, 0, 0 for a static mesh).
         dev::Triangle tri{toFloat4(p0, s.motion.x), toFloat4(p1, s.motion.y), toFloat4(p2, s.motion.z)};
         dev::TriangleShading sh{};
-        auto normalAt = [&](int v) { return (s.smooth && nw[v] != Vec3(0, 0, 0) && isFinite(nw[v])) ? nw[v] : n; };
-        sh.n0 = toFloat4(normalAt(a));
-        sh.n1 = toFloat4(normalAt(b));
-        sh.n2 = toFloat4(normalAt(c));
-        if (hasUv) {
-            sh.uv01 = {mesh.uvs[a].x, mesh.uvs[a].y, mesh.uvs[b].x, mesh.uvs[b].y};
-            sh.uv2 = {mesh.uvs[c].x, mesh.uvs[c].y, 0, 0};
+        float* corner = out.attributes + out.kept * floats;
+        if (flags & CLRT_TRI_NORMALS) {  // a corner without a vertex normal takes the face normal
+            auto normalAt = [&](int v) { return (nw[v] != Vec3(0, 0, 0) && isFinite(nw[v])) ? nw[v] : n; };
+            for (int v : {a, b, c}) {
+                const Vec3 nv = normalAt(v);
+                *corner++ = nv.x; *corner++ = nv.y; *corner++ = nv.z;
+            }
         }
+        if (flags & CLRT_TRI_UVS)
+            for (int v : {a, b, c}) { *corner++ = mesh.uvs[v].x; *corner++ = mesh.uvs[v].y; }
+        sh.attributes = attributeWord(flags, out.attributeBase + out.kept * floats);
         sh.material = s.materialIndex;
         sh.textureSet = texSet;
         sh.light = s.lightIndex;  // LightMesh: its light, else CLRT_INVALID (-1)
@@ -231,30 +256,35 @@ constexpr size_t kTrianglesPerTask = 16384;  // a big mesh is cut into runs of t
 void flattenMeshes(const Scene& scene, const std::vector<MeshJob>& meshJobs, DeviceScene& ds, std::vector<Aabb>& boxes) {
     struct Task {
         size_t job, tBegin, tEnd, slot;  // triangles [tBegin, tEnd) of job, written from slot
+        size_t attributeSlot, floats;    // their corner attributes from there, `floats` per triangle
         TriangleSlots out;
     };
     std::vector<Task> tasks;
     std::vector<size_t> smallJobs, bigJobs;
-    const size_t base = ds.triangles.size(), boxBase = boxes.size();
-    size_t slot = 0;
+    const size_t base = ds.triangles.size(), boxBase = boxes.size(), attributeBase = ds.triangleAttributes.size();
+    size_t slot = 0, attributeSlot = 0;
     for (size_t j = 0; j < meshJobs.size(); ++j) {
         const size_t n = scene.meshes.at(meshJobs[j].first->meshIndex).indices.size() / 3;
+        const size_t floats = attributeFloats(meshAttributeFlags(scene, *meshJobs[j].first));
         if (n <= kTrianglesPerTask) {
             smallJobs.push_back(j);
-            tasks.push_back({j, 0, n, slot, {}});
+            tasks.push_back({j, 0, n, slot, attributeSlot, floats, {}});
         } else {
             bigJobs.push_back(j);
             for (size_t t = 0; t < n; t += kTrianglesPerTask)
-                tasks.push_back({j, t, std::min(n, t + kTrianglesPerTask), slot + t, {}});
+                tasks.push_back({j, t, std::min(n, t + kTrianglesPerTask), slot + t, attributeSlot + t * floats, floats, {}});
         }
         slot += n;
+        attributeSlot += n * floats;
     }
     ds.triangles.resize(base + slot);
     ds.triangleShading.resize(base + slot);
+    ds.triangleAttributes.resize(attributeBase + attributeSlot);
     boxes.resize(boxBase + slot);
     auto run = [&](Task& k, const MeshVertices& mv) {
         k.out = TriangleSlots{ds.triangles.data() + base + k.slot, ds.triangleShading.data() + base + k.slot,
-                              boxes.data() + boxBase + k.slot};
+                              boxes.data() + boxBase + k.slot, ds.triangleAttributes.data() + attributeBase + k.attributeSlot,
+                              attributeBase + k.attributeSlot};
         flattenTriangles(scene, *meshJobs[k.job].first, meshJobs[k.job].second, mv, k.tBegin, k.tEnd, k.out);
     };
     std::vector<size_t> taskOfJob(meshJobs.size());
@@ -271,8 +301,9 @@ void flattenMeshes(const Scene& scene, const std::vector<MeshJob>& meshJobs, Dev
         while (first + count < tasks.size() && tasks[first + count].job == j) ++count;
         parallelFor(count, [&](size_t k) { run(tasks[first + k], mv); });
     }
-    // Close up: each run's kept triangles move down to follow the previous run's.
-    size_t to = 0, nanSkipped = 0;
+    // Close up: each run's kept triangles (and their corner attributes, whose offsets follow) move down
+    // to follow the previous run's.
+    size_t to = 0, attributeTo = 0, nanSkipped = 0;
     for (Task& k : tasks) {
         if (to != k.slot)
             for (size_t i = 0; i < k.out.kept; ++i) {
@@ -280,12 +311,23 @@ void flattenMeshes(const Scene& scene, const std::vector<MeshJob>& meshJobs, Dev
                 ds.triangleShading[base + to + i] = ds.triangleShading[base + k.slot + i];
                 boxes[boxBase + to + i] = boxes[boxBase + k.slot + i];
             }
+        if (attributeTo != k.attributeSlot && k.floats) {
+            std::copy(ds.triangleAttributes.begin() + std::ptrdiff_t(attributeBase + k.attributeSlot),
+                      ds.triangleAttributes.begin() + std::ptrdiff_t(attributeBase + k.attributeSlot + k.out.kept * k.floats),
+                      ds.triangleAttributes.begin() + std::ptrdiff_t(attributeBase + attributeTo));
+            for (size_t i = 0; i < k.out.kept; ++i) {
+                uint32_t& word = ds.triangleShading[base + to + i].attributes;
+                word = (word & ~CLRT_TRI_OFFSET_MASK) | uint32_t(attributeBase + attributeTo + i * k.floats);
+            }
+        }
         to += k.out.kept;
+        attributeTo += k.out.kept * k.floats;
         ds.skippedTriangles += k.out.degenerate;
         nanSkipped += k.out.nonFinite;
     }
     ds.triangles.resize(base + to);
     ds.triangleShading.resize(base + to);
+    ds.triangleAttributes.resize(attributeBase + attributeTo);
     boxes.resize(boxBase + to);
     if (ds.skippedTriangles) warn(scene.path + ": skipped " + std::to_string(ds.skippedTriangles) + " degenerate triangles");
     if (nanSkipped) warn(scene.path + ": skipped " + std::to_string(nanSkipped) + " triangles with NaN/Inf vertices");
@@ -318,18 +360,43 @@ void buildDeviceBvh(std::vector<Aabb>&& boxes, DeviceScene& ds, bool leafOrder) 
 
 }  // namespace
 
+TriangleCorners triangleCorners(const DeviceScene& ds, size_t t) {
+    const dev::Triangle& tri = ds.triangles.at(t);
+    const uint32_t word = ds.triangleShading.at(t).attributes;
+    const float* corner = ds.triangleAttributes.data() + (word & CLRT_TRI_OFFSET_MASK);
+    TriangleCorners c{};
+    for (int k = 0; k < 3; ++k) {
+        if (word & CLRT_TRI_NORMALS) {
+            c.normal[k] = Vec3(corner[3 * k], corner[3 * k + 1], corner[3 * k + 2]);
+        } else {  // as flattenTriangles computes it (and Triangle_FaceNormal)
+            const Vec3 p0(tri.v0.x, tri.v0.y, tri.v0.z), p1(tri.v1.x, tri.v1.y, tri.v1.z), p2(tri.v2.x, tri.v2.y, tri.v2.z);
+            const Vec3 n = cross(p1 - p0, p2 - p0);
+            c.normal[k] = n / length(n);
+        }
+    }
+    if (word & CLRT_TRI_NORMALS) corner += CLRT_TRI_NORMAL_FLOATS;
+    if (word & CLRT_TRI_UVS)
+        for (int k = 0; k < 3; ++k) { c.uv[k][0] = corner[2 * k]; c.uv[k][1] = corner[2 * k + 1]; }
+    return c;
+}
+
 bool mirrorsOrientation(const Mat4& m) { return linearDeterminant(m) < 0; }
 
 void flattenGeometry(const Scene& scene, DeviceScene& ds, const FlattenOptions& opts) {
     std::vector<Aabb> boxes, sphereBoxes;
     const std::vector<bool> instanced = instancedShapes(scene, opts.instancing);
-    size_t total = 0;
+    size_t total = 0, floats = 0;
     for (size_t i = 0; i < scene.shapes.size(); ++i)
-        if (scene.shapes[i].type == ShapeType::Mesh && !instanced[i])
-            total += scene.meshes.at(scene.shapes[i].meshIndex).indices.size() / 3;
-    const size_t bottomTotal = bottomLevelTriangles(scene, instanced);  // appended by flattenInstances
+        if (scene.shapes[i].type == ShapeType::Mesh && !instanced[i]) {
+            const size_t n = scene.meshes.at(scene.shapes[i].meshIndex).indices.size() / 3;
+            total += n;
+            floats += n * attributeFloats(meshAttributeFlags(scene, scene.shapes[i]));
+        }
+    size_t bottomFloats = 0;
+    const size_t bottomTotal = bottomLevelTriangles(scene, instanced, &bottomFloats);  // appended by flattenInstances
     ds.triangles.reserve(total + bottomTotal);
     ds.triangleShading.reserve(total + bottomTotal);
+    ds.triangleAttributes.reserve(floats + bottomFloats);
     boxes.reserve(total + scene.shapes.size());
     std::vector<MeshJob> meshJobs, instanceJobs;
     for (size_t i = 0; i < scene.shapes.size(); ++i) {
@@ -350,6 +417,7 @@ void flattenGeometry(const Scene& scene, DeviceScene& ds, const FlattenOptions& 
     if (!instanceJobs.empty()) flattenInstances(scene, instanceJobs, numTriangles, ds);
     // Never an empty buffer (the counts below stay those of the scene, except planes: see Plane).
     if (ds.triangles.empty()) { ds.triangles.push_back(dev::Triangle{}); ds.triangleShading.push_back(dev::TriangleShading{}); }
+    if (ds.triangleAttributes.empty()) ds.triangleAttributes.push_back(0.0f);
     if (ds.spheres.empty()) ds.spheres.push_back(dev::Sphere{});
     if (ds.planes.empty()) ds.planes.push_back(dev::Plane{});  // a zero normal: never hit, counted in numPlanes
     if (ds.textureSets.empty()) ds.textureSets.push_back(dev::TextureSet{{-1, -1, -1, -1}, {}});

@@ -45,13 +45,18 @@ BottomLevel appendBottomLevel(const Scene& scene, const Shape& s, DeviceScene& d
     objectSpace.materialIndex = CLRT_INVALID;
     objectSpace.lightIndex = CLRT_INVALID;
     const size_t base = ds.triangles.size(), n = scene.meshes.at(size_t(s.meshIndex)).indices.size() / 3;
+    const size_t attributeBase = ds.triangleAttributes.size(), floats = attributeFloats(meshAttributeFlags(scene, s));
     ds.triangles.resize(base + n);
     ds.triangleShading.resize(base + n);
+    ds.triangleAttributes.resize(attributeBase + n * floats);
     std::vector<Aabb> boxes(n);
-    TriangleSlots slots{ds.triangles.data() + base, ds.triangleShading.data() + base, boxes.data()};
+    // Corner attributes (normals, uvs) follow those already stored; the records hold their offsets.
+    TriangleSlots slots{ds.triangles.data() + base, ds.triangleShading.data() + base, boxes.data(),
+                        ds.triangleAttributes.data() + attributeBase, attributeBase};
     flattenMesh(scene, objectSpace, CLRT_INVALID, slots);
     ds.triangles.resize(base + slots.kept);
     ds.triangleShading.resize(base + slots.kept);
+    ds.triangleAttributes.resize(attributeBase + slots.kept * floats);
     boxes.resize(slots.kept);
     ds.skippedTriangles += slots.degenerate + slots.nonFinite;
     BottomLevel b;
@@ -144,12 +149,16 @@ std::vector<bool> instancedShapes(const Scene& scene, Instancing mode) {
     return out;
 }
 
-size_t bottomLevelTriangles(const Scene& scene, const std::vector<bool>& instanced) {
+size_t bottomLevelTriangles(const Scene& scene, const std::vector<bool>& instanced, size_t* attributeFloatsOut) {
     std::set<std::pair<int, bool>> keys;
-    size_t total = 0;
+    size_t total = 0, floats = 0;
     for (size_t i = 0; i < scene.shapes.size(); ++i)
-        if (instanced[i] && keys.insert(bottomKey(scene.shapes[i])).second)
-            total += scene.meshes.at(size_t(scene.shapes[i].meshIndex)).indices.size() / 3;
+        if (instanced[i] && keys.insert(bottomKey(scene.shapes[i])).second) {
+            const size_t n = scene.meshes.at(size_t(scene.shapes[i].meshIndex)).indices.size() / 3;
+            total += n;
+            floats += n * attributeFloats(meshAttributeFlags(scene, scene.shapes[i]));
+        }
+    if (attributeFloatsOut) *attributeFloatsOut = floats;
     return total;
 }
 

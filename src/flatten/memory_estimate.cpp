@@ -16,6 +16,7 @@
 #include <sstream>
 
 #include "bvh/bvh.h"
+#include "flatten/flatten.h"
 #include "image/image.h"  // kMaxImageTexels
 #include "image/image_size.h"
 #include "shared/device_types.h"
@@ -97,9 +98,10 @@ uint64_t addGeometry(const Scene& scene, const MemoryPlan& plan, MemoryEstimate&
         const uint64_t tris = scene.meshes[size_t(s.meshIndex)].indices.size() / 3;
         e.trianglesSeen += tris;
         const bool instanced = size_t(s.meshIndex) < plan.meshInstanced.size() && plan.meshInstanced[size_t(s.meshIndex)];
-        if (!instanced) { flatTris += tris; continue; }
+        const uint64_t floats = tris * attributeFloats(meshAttributeFlags(scene, s));
+        if (!instanced) { flatTris += tris; e.attributeFloatsFlattened += floats; continue; }
         ++e.instances;
-        if (!storedOnce[size_t(s.meshIndex)]) e.trianglesStored += tris;
+        if (!storedOnce[size_t(s.meshIndex)]) { e.trianglesStored += tris; e.attributeFloats += floats; }
         storedOnce[size_t(s.meshIndex)] = true;
     }
     for (const Light& l : scene.lights)
@@ -112,6 +114,8 @@ uint64_t addGeometry(const Scene& scene, const MemoryPlan& plan, MemoryEstimate&
     e.trianglesFlattened = flatTris;
     e.addHostArray(e.geometry, std::max<uint64_t>(1, e.trianglesStored) * sizeof(dev::Triangle));
     e.addHostArray(e.geometry, std::max<uint64_t>(1, e.trianglesStored) * sizeof(dev::TriangleShading));
+    e.attributeFloats += e.attributeFloatsFlattened;
+    e.addHostArray(e.geometry, std::max<uint64_t>(1, e.attributeFloats) * sizeof(float));
     e.addCopied(e.geometry, std::max<uint64_t>(1, spheres) * sizeof(dev::Sphere));
     e.addCopied(e.geometry, std::max<uint64_t>(1, planes) * sizeof(dev::Plane));
     if (e.instances) e.addCopied(e.geometry, e.instances * kInstanceBytes);

@@ -42,6 +42,8 @@ struct MemoryEstimate {
     uint64_t trianglesSeen = 0;    // triangles as the renderer sees them (every instance counted)
     uint64_t trianglesStored = 0;  // triangles stored on the device (an instanced mesh once)
     uint64_t trianglesFlattened = 0;  // of those, the ones flattened into world space
+    uint64_t attributeFloats = 0;  // stored triangles' corner normals and uvs (TriangleShading.attributes)
+    uint64_t attributeFloatsFlattened = 0;  // of those, the flattened triangles'
     uint64_t instances = 0;        // shapes placing an instanced mesh (top-level entries)
     uint64_t texels = 0;           // texels of every image loaded (mip levels included)
     // Device arrays of the scene (on each device), by family.

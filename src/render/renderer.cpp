@@ -35,7 +35,7 @@ struct Renderer::Impl {
     FusedPath fused;  // the fused CPU path (fused_renderer.h), bound to the same scene buffers
     // Every kernel argument, each named as the kernel parameter it is bound to (src/shared/kernel_params.h):
     // bindAll() binds each kernel's whole parameter list from these members, by name.
-    cl::Buffer nodes, leaves, tris, triShading, spheres, planes, instances, materials, textureSets, textures, images, texels, lights, envDist, lightData;
+    cl::Buffer nodes, leaves, tris, triShading, triAttributes, spheres, planes, instances, materials, textureSets, textures, images, texels, lights, envDist, lightData;
     // Queue buffers (sized per render).
     size_t queueCapacity = 0, shadowCapacity = 0;
     cl::Buffer paths, rays, hits, points, pathRadiance, nextPaths, nextRays, childValid, shadows;
@@ -83,6 +83,7 @@ struct Renderer::Impl {
         leaves = uploader.upload(ds.bvh4.leaves);
         tris = uploader.upload(ds.triangles);
         triShading = uploader.upload(ds.triangleShading);
+        triAttributes = uploader.upload(ds.triangleAttributes);
         spheres = uploader.upload(ds.spheres);
         planes = uploader.upload(ds.planes);
         instances = uploader.upload(ds.instances);

@@ -132,21 +132,30 @@ typedef struct Bvh4Leaf {
     int4 prim;
 } Bvh4Leaf;
 
-/* A world-space triangle. Vertex data for shading lives in TriangleShading at the same index.
+/* A world-space triangle. What shading needs beyond its vertices lives in TriangleShading at the same index.
  * v0.w, v1.w, v2.w: the x, y, z of its MotionBlur translation (0 when static; read only under
  * CLRT_HAS_MOTION_BLUR): at shutter time t in [0, 1] the triangle is at v + t·motion. */
 typedef struct Triangle {
     float4 v0, v1, v2;  /* world-space positions at time 0; w: motion (above) */
 } Triangle;
 
+/* TriangleShading.attributes: flags and, below them, an offset (in floats) into the triAttributes array,
+ * where a triangle's optional corner data lies: with CLRT_TRI_NORMALS (smooth shading) its three
+ * world-space vertex normals (9 floats: n0.xyz n1.xyz n2.xyz), then with CLRT_TRI_UVS (a mesh with
+ * texture coordinates) its three uvs (6 floats: u0 v0 u1 v1 u2 v2). Without CLRT_TRI_NORMALS the shading
+ * normal is the face normal of the stored vertices (Triangle_FaceNormal, cl_kernels/intersect.cl, the
+ * face normal flattenTriangles computes); without CLRT_TRI_UVS the uvs are (0, 0). 0: a flat triangle without uvs. */
+#define CLRT_TRI_NORMALS 0x40000000u
+#define CLRT_TRI_UVS 0x80000000u
+#define CLRT_TRI_OFFSET_MASK 0x3FFFFFFFu
+#define CLRT_TRI_NORMAL_FLOATS 9
+#define CLRT_TRI_UV_FLOATS 6
+
 typedef struct TriangleShading {
-    float4 n0, n1, n2;  /* world-space vertex normals (smooth) or the face normal thrice (flat) */
-    float4 uv01;        /* u0 v0 u1 v1 */
-    float4 uv2;         /* u2 v2, unused, unused */
     int material;       /* index into materials */
     int textureSet;     /* index into textureSets, or CLRT_INVALID */
     int light;          /* LightMesh: index into lights (its emission), else CLRT_INVALID */
-    int pad1;
+    uint attributes;    /* CLRT_TRI_NORMALS | CLRT_TRI_UVS | offset into triAttributes (above) */
 } TriangleShading;
 
 /* A sphere: object-space centre and radius, and the object<->world affine maps as 3 rows each. */

@@ -20,10 +20,11 @@
     P(IN, Bvh4Node, nodes) P(IN, Bvh4Leaf, leaves) P(IN, Triangle, tris) P(IN, Sphere, spheres)    \
     P(IN, Plane, planes) P(IN, Instance, instances)
 
-/* The surfaces as shading sees them (a hit's position, normals, uv, material). */
+/* The surfaces as shading sees them (a hit's position, normals, uv, material); triAttributes: the
+ * triangles' optional vertex normals and uvs (TriangleShading.attributes). */
 #define CLRT_PARAMS_SURFACES(P)                                                                    \
-    P(IN, Triangle, tris) P(IN, TriangleShading, triShading) P(IN, Sphere, spheres) P(IN, Plane, planes) \
-    P(IN, Instance, instances)
+    P(IN, Triangle, tris) P(IN, TriangleShading, triShading) P(IN, float, triAttributes)           \
+    P(IN, Sphere, spheres) P(IN, Plane, planes) P(IN, Instance, instances)
 
 #define CLRT_PARAMS_MATERIALS(P) P(IN, Material, materials) P(IN, TextureSet, textureSets) P(IN, TextureMap, textures)
 
@@ -84,7 +85,7 @@
  * from firstSample; lightSlots as sample_lights'; rayCounts[0] += secondary rays traced. */
 #define CLRT_PARAMS_FUSED_SCENE(P)                                                                 \
     P(VAL, CameraParams, cam) P(VAL, SceneParams, scene) CLRT_PARAMS_GEOMETRY(P)                   \
-    P(IN, TriangleShading, triShading) CLRT_PARAMS_MATERIALS(P) CLRT_PARAMS_IMAGES(P)               \
+    P(IN, TriangleShading, triShading) P(IN, float, triAttributes) CLRT_PARAMS_MATERIALS(P) CLRT_PARAMS_IMAGES(P)               \
     P(IN, Light, lights) P(IN, float, envDist) P(IN, float4, lightData) P(BUF, float4, image)
 #define CLRT_PARAMS_FUSED_LAUNCH(P)                                                                \
     P(VAL, int, count) P(VAL, int, firstPixel) P(VAL, int, firstSample) P(VAL, int, samples)       \

@@ -62,7 +62,7 @@ int main(int argc, char** argv) {
     cl_kernel k = clCreateKernel(p, "shade_hits", &e); CK(e);
     const int N = 8192;
     std::vector<PathState> paths(N); std::vector<Ray> rays(N); std::vector<Hit> hits(N);
-    std::vector<Triangle> tris(N); std::vector<TriangleShading> sh(N);
+    std::vector<Triangle> tris(N); std::vector<TriangleShading> sh(N); std::vector<float> attr(size_t(N) * 15);
     for (int i = 0; i < N; ++i) {
         float cx = rnd() * 4 - 2, cy = rnd() * 4 - 2, cz = -3 - rnd() * 2;
         float v[3][3];
@@ -74,11 +74,13 @@ int main(int argc, char** argv) {
         float l = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]); for (int a = 0; a < 3; ++a) n[a] /= l;
         float4 nn[3];
         for (int a = 0; a < 3; ++a) nn[a] = {n[0] + 0.1f * (rnd() - 0.5f), n[1] + 0.1f * (rnd() - 0.5f), n[2] + 0.1f * (rnd() - 0.5f), 0};
-        sh[i].n0 = nn[0]; sh[i].n1 = nn[1]; sh[i].n2 = nn[2];
-        sh[i].uv01 = {rnd(), rnd(), rnd(), rnd()}; sh[i].uv2 = {rnd(), rnd(), 0, 0};
+        float* corner = &attr[size_t(i) * 15];  // normals, then uvs (TriangleShading.attributes)
+        for (int a = 0; a < 3; ++a) { corner[3 * a] = nn[a].x; corner[3 * a + 1] = nn[a].y; corner[3 * a + 2] = nn[a].z; }
+        for (int a = 9; a < 15; ++a) corner[a] = rnd();
+        sh[i].attributes = CLRT_TRI_NORMALS | CLRT_TRI_UVS | unsigned(i * 15);
         float u = rnd(); sh[i].material = u < 0.3f ? 0 : u < 0.45f ? 1 : 2;
         sh[i].textureSet = (sh[i].material == 0 && rnd() < 0.7f) ? 0 : -1;
-        sh[i].light = -1; sh[i].pad1 = 0;
+        sh[i].light = -1;
         float b1 = 0.2f + 0.3f * rnd(), b2 = 0.2f + 0.3f * rnd(), b0 = 1 - b1 - b2;
         float h[3]; for (int a = 0; a < 3; ++a) h[a] = b0 * v[0][a] + b1 * v[1][a] + b2 * v[2][a];
         float o[3] = {0.1f * rnd(), 0.1f * rnd(), 0.0f};
@@ -102,13 +104,13 @@ int main(int argc, char** argv) {
     auto rw = [&](size_t bytes) { cl_int e2; cl_mem m = clCreateBuffer(ctx, CL_MEM_READ_WRITE, bytes, 0, &e2); CK(e2);
         std::vector<unsigned char> z(bytes, 0xAB); clEnqueueWriteBuffer(q, m, CL_TRUE, 0, bytes, z.data(), 0, 0, 0); return m; };
     cl_mem bPaths = ro(sizeof(PathState) * N, paths.data()), bRays = ro(sizeof(Ray) * N, rays.data()), bHits = ro(sizeof(Hit) * N, hits.data());
-    cl_mem bTris = ro(sizeof(Triangle) * N, tris.data()), bSh = ro(sizeof(TriangleShading) * N, sh.data()), bSph = ro(sizeof sph, &sph), bPla = ro(sizeof pla, &pla);
+    cl_mem bTris = ro(sizeof(Triangle) * N, tris.data()), bSh = ro(sizeof(TriangleShading) * N, sh.data()), bAttr = ro(sizeof(float) * attr.size(), attr.data()), bSph = ro(sizeof sph, &sph), bPla = ro(sizeof pla, &pla);
     cl_mem bMat = ro(sizeof(Material) * 3, mats.data()), bTs = ro(sizeof ts, &ts), bTm = ro(sizeof tm, &tm), bImg = ro(sizeof img, &img), bTex = ro(sizeof texel, &texel);
     cl_mem bLight = ro(sizeof light, &light), bEnv = ro(sizeof envd, &envd);
     cl_mem bPts = rw(sizeof(ShadingPoint) * N), bRad = rw(sizeof(float4) * N), bNP = rw(sizeof(PathState) * 2 * N), bNR = rw(sizeof(Ray) * 2 * N), bV = rw(sizeof(int) * 2 * N);
     int a = 0; int cnt = N;
     CK(clSetKernelArg(k, a++, sizeof cnt, &cnt)); CK(clSetKernelArg(k, a++, sizeof sc, &sc)); CK(clSetKernelArg(k, a++, sizeof cam, &cam));
-    cl_mem bufs[] = {bPaths, bRays, bHits, bTris, bSh, bSph, bPla, bMat, bTs, bTm, bImg, bTex, bLight, bPts, bRad, bEnv, bNP, bNR, bV};
+    cl_mem bufs[] = {bPaths, bRays, bHits, bTris, bSh, bAttr, bSph, bPla, bMat, bTs, bTm, bImg, bTex, bLight, bPts, bRad, bEnv, bNP, bNR, bV};
     for (cl_mem& m : bufs) CK(clSetKernelArg(k, a++, sizeof(cl_mem), &m));
     size_t g = N, l = 64;
     CK(clEnqueueNDRangeKernel(q, k, 1, 0, &g, &l, 0, 0, 0)); clFinish(q);
