@@ -24,6 +24,7 @@
 #include <thread>
 
 #include "bvh/simd4.h"
+#include "util/parallel.h"
 
 namespace clrt {
 namespace {
@@ -317,25 +318,6 @@ struct SahSum {
     }
 };
 
-// Runs body(c) for c = 0 .. count - 1 on up to `threads` threads, this one included.
-template <class Body>
-void parallelFor(int count, int threads, const Body& body) {
-    std::atomic<int> next{0};
-    auto run = [&] {
-        for (int c = next++; c < count; c = next++) body(c);
-    };
-    std::vector<std::thread> helpers;
-    for (int i = 1; i < std::min(threads, count); ++i) {
-        try {
-            helpers.emplace_back(run);
-        } catch (const std::system_error&) {  // fewer threads to be had: fine
-            break;
-        }
-    }
-    run();
-    for (std::thread& h : helpers) h.join();
-}
-
 // A node range for some thread to build. A big one (more than the task size) is only split: its
 // node is made and its children become tasks. A smaller one is built whole: straight into place
 // by the thread that assembles the tree, or by another into an array of its own, copied later.
@@ -545,7 +527,8 @@ Bvh buildBvh(const std::vector<Aabb>& primBounds, const BvhBuildOptions& opts) {
     Item* items = itemStore.get();
     const int chunks = (n + kChunk - 1) / kChunk;
     std::vector<Range> chunkBounds(static_cast<size_t>(chunks));
-    parallelFor(chunks, threads, [&](int c) {
+    parallelFor(size_t(chunks), [&](size_t chunk) {
+        const int c = int(chunk);
         const int begin = c * kChunk, end = std::min(n, begin + kChunk);
         Box bounds, cbounds;
         for (int i = begin; i < end; ++i) {
@@ -558,7 +541,7 @@ Bvh buildBvh(const std::vector<Aabb>& primBounds, const BvhBuildOptions& opts) {
             cbounds.grow(v.c, v.c);
         }
         chunkBounds[size_t(c)] = Range{begin, end, bounds, cbounds};
-    });
+    }, size_t(threads));
     Range root{0, n, {}, {}};
     for (const Range& r : chunkBounds) {
         root.bounds.grow(r.bounds);

@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "util/parallel.h"
+
 namespace clrt {
 namespace {
 
@@ -142,18 +144,26 @@ bool collapseNodes(const Bvh& bvh, HostArray<dev::Bvh4Node>& nodes, std::vector<
     return true;
 }
 
+constexpr size_t kBlocksPerTask = 16384;  // leaf blocks per parallelFor item (2.5 MB)
+
 // The leaf blocks from their primitives, moved by primOffset, appended to `leaves` (vertices zero
-// until setLeafTriangles).
+// until setLeafTriangles). Written on all threads: most of the time is the kernel zeroing the fresh
+// pages each thread touches first (resize leaves them unwritten, util/huge_pages.h).
 void makeLeaves(const std::vector<dev::int4>& blockPrims, int primOffset, HostArray<dev::Bvh4Leaf>& leaves) {
     reserveMore(leaves, blockPrims.size());
-    for (const dev::int4& prims : blockPrims) {
-        dev::Bvh4Leaf block{};
-        block.prim = prims;
-        int* prim = &block.prim.x;
-        for (int i = 0; i < 4; ++i)
-            if (prim[i] >= 0) prim[i] += primOffset;
-        leaves.push_back(block);
-    }
+    const size_t first = leaves.size(), count = blockPrims.size();
+    leaves.resize(first + count);
+    parallelFor((count + kBlocksPerTask - 1) / kBlocksPerTask, [&](size_t task) {
+        const size_t end = std::min(count, (task + 1) * kBlocksPerTask);
+        for (size_t b = task * kBlocksPerTask; b < end; ++b) {
+            dev::Bvh4Leaf block{};
+            block.prim = blockPrims[b];
+            int* prim = &block.prim.x;
+            for (int i = 0; i < 4; ++i)
+                if (prim[i] >= 0) prim[i] += primOffset;
+            leaves[first + b] = block;
+        }
+    });
 }
 
 }  // namespace
@@ -193,20 +203,24 @@ int appendBvh4(Bvh&& bvh, int primOffset, Bvh4& into, int* maxStack) {
 }
 
 void setLeafTriangles(Bvh4& b4, const dev::Triangle* tris, int numTriangles, size_t firstLeaf) {
-    for (size_t l = firstLeaf; l < b4.leaves.size(); ++l) {
-        dev::Bvh4Leaf& block = b4.leaves[l];
-        const int* prim = &block.prim.x;
-        for (int i = 0; i < 4; ++i) {
-            if (prim[i] < 0 || prim[i] >= numTriangles) continue;
-            const dev::Triangle& t = tris[size_t(prim[i])];
-            const dev::float4* v[3] = {&t.v0, &t.v1, &t.v2};
-            for (int k = 0; k < 3; ++k) {
-                (&block.vertex[3 * k + 0].x)[i] = v[k]->x;
-                (&block.vertex[3 * k + 1].x)[i] = v[k]->y;
-                (&block.vertex[3 * k + 2].x)[i] = v[k]->z;
+    const size_t count = b4.leaves.size() - std::min(firstLeaf, b4.leaves.size());
+    parallelFor((count + kBlocksPerTask - 1) / kBlocksPerTask, [&](size_t task) {
+        const size_t end = firstLeaf + std::min(count, (task + 1) * kBlocksPerTask);
+        for (size_t l = firstLeaf + task * kBlocksPerTask; l < end; ++l) {
+            dev::Bvh4Leaf& block = b4.leaves[l];
+            const int* prim = &block.prim.x;
+            for (int i = 0; i < 4; ++i) {
+                if (prim[i] < 0 || prim[i] >= numTriangles) continue;
+                const dev::Triangle& t = tris[size_t(prim[i])];
+                const dev::float4* v[3] = {&t.v0, &t.v1, &t.v2};
+                for (int k = 0; k < 3; ++k) {
+                    (&block.vertex[3 * k + 0].x)[i] = v[k]->x;
+                    (&block.vertex[3 * k + 1].x)[i] = v[k]->y;
+                    (&block.vertex[3 * k + 2].x)[i] = v[k]->z;
+                }
             }
         }
-    }
+    });
 }
 
 }  // namespace clrt

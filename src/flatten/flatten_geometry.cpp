@@ -19,6 +19,7 @@
 #include "flatten/vertex_normals.h"
 #include "scene/transforms.h"
 #include "util/error.h"
+#include "util/parallel.h"
 
 namespace clrt {
 
@@ -219,32 +220,6 @@ bool flattenSphere(const Shape& s, int texSet, DeviceScene& ds, std::vector<Aabb
 }
 
 using MeshJob = std::pair<const Shape*, int>;  // (shape, texture set)
-
-// Runs body(k) for k = 0 .. count - 1 on all hardware threads (this one included); the first
-// exception thrown stops the rest and is rethrown here.
-template <class Body>
-void parallelFor(size_t count, const Body& body) {
-    std::atomic<size_t> next{0};
-    const size_t threads = std::min<size_t>(count, std::max(1u, std::thread::hardware_concurrency()));
-    std::vector<std::exception_ptr> errors(std::max<size_t>(threads, 1));
-    auto worker = [&](size_t t) {
-        try {
-            for (size_t k; (k = next++) < count;) body(k);
-        } catch (...) {
-            errors[t] = std::current_exception();
-            next = count;  // the others stop too
-        }
-    };
-    std::vector<std::thread> pool;
-    try {
-        for (size_t t = 1; t < threads; ++t) pool.emplace_back(worker, t);
-    } catch (const std::system_error&) {  // no thread to be had: the others (and this one) do it
-    }
-    worker(0);
-    for (std::thread& t : pool) t.join();
-    for (const std::exception_ptr& e : errors)
-        if (e) std::rethrow_exception(e);
-}
 
 constexpr size_t kTrianglesPerTask = 16384;  // a big mesh is cut into runs of this many for the threads
 
