@@ -58,17 +58,20 @@ TEST_CASE("object-space vertex normals: area-weighted face normals summed per ve
     CHECK(g[2] == Vec3(0, 0, 0));      // a zero given normal: none
 }
 
-TEST_CASE("flattened smooth normals are the object-space ones by the inverse transpose", "[flatten][smooth]") {
-    TempDir dir;
-    // The corner mesh under a non-uniform scaling and a rotation, and an instance under another
-    // scaling (which mirrors x: its winding is reversed, its normals still point outward).
-    const std::string xml = R"(<Scene><BackgroundColor>0 0 0</BackgroundColor>
+// The start of the small scenes below: a 4x4 camera, ambient light, one white material.
+static const char* const kSceneHead = R"(<Scene><BackgroundColor>0 0 0</BackgroundColor>
 <Cameras><Camera id="1"><Position>0 0 10</Position><Gaze>0 0 -1</Gaze><Up>0 1 0</Up>
 <NearPlane>-1 1 -1 1</NearPlane><NearDistance>1</NearDistance><ImageResolution>4 4</ImageResolution>
 <ImageName>v.png</ImageName></Camera></Cameras>
 <Lights><AmbientLight>1 1 1</AmbientLight></Lights>
 <Materials><Material id="1"><DiffuseReflectance>1 1 1</DiffuseReflectance></Material></Materials>
-<Transformations><Scaling id="1">4 1 0.5</Scaling><Rotation id="1">30 1 1 0</Rotation><Scaling id="2">-2 3 1</Scaling><Translation id="1">5 0 0</Translation></Transformations>
+)";
+
+TEST_CASE("flattened smooth normals are the object-space ones by the inverse transpose", "[flatten][smooth]") {
+    TempDir dir;
+    // The corner mesh under a non-uniform scaling and a rotation, and an instance under another
+    // scaling (which mirrors x: its winding is reversed, its normals still point outward).
+    const std::string xml = std::string(kSceneHead) + R"(<Transformations><Scaling id="1">4 1 0.5</Scaling><Rotation id="1">30 1 1 0</Rotation><Scaling id="2">-2 3 1</Scaling><Translation id="1">5 0 0</Translation></Transformations>
 <VertexData>0 0 0  1 0 0  0 1 0  0 2 0  0 0 2</VertexData>
 <Objects><Mesh id="1" shadingMode="smooth"><Material>1</Material><Transformations>s1 r1</Transformations><Faces>1 2 3  1 4 5</Faces></Mesh>
 <MeshInstance id="2" baseMeshId="1" resetTransform="true"><Transformations>s2 t1</Transformations></MeshInstance></Objects></Scene>)";
@@ -139,13 +142,7 @@ TEST_CASE("triangle corner attributes: stored only where a mesh has them; flat n
     TempDir dir;
     // Four meshes over the same irregular vertices: flat, smooth, flat with uvs (one under a mirroring
     // transform), smooth with uvs. Vertices at odd float values, so the face normal's roundings matter.
-    const std::string xml = R"(<Scene><BackgroundColor>0 0 0</BackgroundColor>
-<Cameras><Camera id="1"><Position>0 0 10</Position><Gaze>0 0 -1</Gaze><Up>0 1 0</Up>
-<NearPlane>-1 1 -1 1</NearPlane><NearDistance>1</NearDistance><ImageResolution>4 4</ImageResolution>
-<ImageName>v.png</ImageName></Camera></Cameras>
-<Lights><AmbientLight>1 1 1</AmbientLight></Lights>
-<Materials><Material id="1"><DiffuseReflectance>1 1 1</DiffuseReflectance></Material></Materials>
-<Transformations><Scaling id="1">-1.3 0.7 1.1</Scaling><Rotation id="1">33 0.3 1 0.2</Rotation></Transformations>
+    const std::string xml = std::string(kSceneHead) + R"(<Transformations><Scaling id="1">-1.3 0.7 1.1</Scaling><Rotation id="1">33 0.3 1 0.2</Rotation></Transformations>
 <VertexData>0.1 0.2 0.3  1.37 0.01 -0.2  0.33 1.91 0.07  -0.71 0.93 1.13  0.57 -1.01 0.77</VertexData>
 <TexCoordData>0 0  1 0  1 1  0 1  0.5 0.5</TexCoordData>
 <Objects>
