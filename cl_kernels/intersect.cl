@@ -136,7 +136,7 @@ inline int Sphere_Intersect(const __global Sphere* sp, float3 orgW, float3 dirW,
 inline float3 Triangle_Motion(const __global Triangle* tri) { return (float3)(tri->v0.w, tri->v1.w, tri->v2.w); }
 
 /* The unit face normal of a flat triangle, cross(v1 - v0, v2 - v0) / its length: the same float
- * operations in the same order as flattenTriangles' face normal (src/flatten/flatten_geometry.cpp; this
+ * operations in the same order as the flattener's faceNormal (src/flatten/flatten_geometry.cpp; this
  * file's FP_CONTRACT OFF), so shading gets, bit for bit, the normal flattening once stored (the course
  * scenes' images unchanged). The flattener drops triangles whose length is not > 0. */
 inline float3 Triangle_FaceNormal(float3 v0, float3 v1, float3 v2) {

@@ -268,7 +268,8 @@ int renderScene(RenderArgs a) {
     const std::vector<DeviceInfo> devs = selectDevices(a.device);
     checkImagesFit(a, cams, devs);
     std::vector<std::unique_ptr<DeviceContext>> contexts = makeContexts(devs);
-    checkMemory(a, scene, contextInfos(contexts));
+    const std::vector<DeviceInfo> infos = contextInfos(contexts);
+    checkMemory(a, scene, infos);
 
     t = std::chrono::steady_clock::now();
     auto programFeatures = [&a](FeatureSet f) {
@@ -281,7 +282,7 @@ int renderScene(RenderArgs a) {
     FlattenOptions flattenOpts;
     flattenOpts.instancing = a.instancing;
     flattenOpts.leafOrderTriangles = false;  // only for GPUs (FlattenOptions)
-    for (const DeviceInfo& d : contextInfos(contexts))
+    for (const DeviceInfo& d : infos)
         flattenOpts.leafOrderTriangles = flattenOpts.leafOrderTriangles || (d.type & CL_DEVICE_TYPE_CPU) == 0;
     flattenOpts.onFeaturesKnown = [&](const FeatureSet& f) { builds.start(contexts, programFeatures(f).defines()); };
     DeviceScene ds = flattenScene(scene, flattenOpts);

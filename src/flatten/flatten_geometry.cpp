@@ -40,6 +40,19 @@ uint32_t attributeWord(uint32_t flags, size_t offset) {
     return flags | uint32_t(offset);
 }
 
+namespace {
+
+// A triangle's face normal cross(p1 - p0, p2 - p0) / its length, and that length in *len. The kernels'
+// Triangle_FaceNormal (cl_kernels/intersect.cl) repeats these operations in this order, so a flat
+// triangle's normal recomputed on the device equals this one bit for bit.
+Vec3 faceNormal(const Vec3& p0, const Vec3& p1, const Vec3& p2, float* len) {
+    const Vec3 n = cross(p1 - p0, p2 - p0);
+    *len = length(n);
+    return n / *len;
+}
+
+}  // namespace
+
 // A mesh shape's vertices in world space, and its smooth normals: what its triangles are made from.
 struct MeshVertices {
     std::vector<Vec3> pw, nw;
@@ -90,15 +103,12 @@ void flattenTriangles(const Scene& scene, const Shape& s, int texSet, const Mesh
         int a = mesh.indices[t], b = mesh.indices[t + kB], c = mesh.indices[t + kC];
         const Vec3 &p0 = pw[a], &p1 = pw[b], &p2 = pw[c];
         if (!isFinite(p0) || !isFinite(p1) || !isFinite(p2)) { ++out.nonFinite; continue; }
-        // The face normal (the kernels' Triangle_FaceNormal recomputes it, bit for bit, for a triangle
-        // without CLRT_TRI_NORMALS: keep the two the same operations in the same order).
-        Vec3 n = cross(p1 - p0, p2 - p0);
-        float len = length(n);
+        float len;
+        const Vec3 n = faceNormal(p0, p1, p2, &len);  // what the device recomputes without CLRT_TRI_NORMALS
         if (p0 == p1 || p1 == p2 || p0 == p2 || !(len > 0) || !std::isfinite(len)) {
             ++out.degenerate;
             continue;
         }
-        n = n / len;
         // w of the three vertices: the motion's x, y, z (0, 0, 0 for a static mesh).
         dev::Triangle tri{toFloat4(p0, s.motion.x), toFloat4(p1, s.motion.y), toFloat4(p2, s.motion.z)};
         dev::TriangleShading sh{};
@@ -344,9 +354,9 @@ TriangleCorners triangleCorners(const DeviceScene& ds, size_t t) {
         if (word & CLRT_TRI_NORMALS) {
             c.normal[k] = Vec3(corner[3 * k], corner[3 * k + 1], corner[3 * k + 2]);
         } else {  // as flattenTriangles computes it (and Triangle_FaceNormal)
-            const Vec3 p0(tri.v0.x, tri.v0.y, tri.v0.z), p1(tri.v1.x, tri.v1.y, tri.v1.z), p2(tri.v2.x, tri.v2.y, tri.v2.z);
-            const Vec3 n = cross(p1 - p0, p2 - p0);
-            c.normal[k] = n / length(n);
+            float len;
+            c.normal[k] = faceNormal(Vec3(tri.v0.x, tri.v0.y, tri.v0.z), Vec3(tri.v1.x, tri.v1.y, tri.v1.z),
+                                     Vec3(tri.v2.x, tri.v2.y, tri.v2.z), &len);
         }
     }
     if (word & CLRT_TRI_NORMALS) corner += CLRT_TRI_NORMAL_FLOATS;
