@@ -296,7 +296,7 @@ SphereRef refSphere(const Vec3& o, const Vec3& d, const Vec3& c, float r) {
 }  // namespace
 
 TEST_CASE("BVH of an empty and of a one-primitive input", "[bvh]") {
-    Bvh empty = buildBvh({});
+    Bvh empty = buildBvh(std::vector<Aabb>{});
     REQUIRE(empty.nodes.size() == 1);
     CHECK(empty.primRefs.empty());
     int calls = 0;

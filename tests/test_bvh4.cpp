@@ -200,7 +200,7 @@ std::vector<Tri> towerScene(int levels) {
 }  // namespace
 
 TEST_CASE("BVH4 of an empty and of a one-primitive input", "[bvh4]") {
-    Bvh4 empty = collapseBvh4(buildBvh({}));
+    Bvh4 empty = collapseBvh4(buildBvh(std::vector<Aabb>{}));
     REQUIRE(empty.nodes.size() == 1);
     CHECK(empty.nodes[0].child.x == CLRT_INVALID);
     CHECK(empty.nodes[0].minX.x == INFINITY);
@@ -319,7 +319,7 @@ TEST_CASE("BVH4 appended after another tree equals its own collapse moved by the
     CHECK(mismatches == 0);
     // An empty tree appends one empty node and no block.
     const size_t nodes = into.nodes.size(), leaves = into.leaves.size();
-    CHECK(appendBvh4(buildBvh({}), 0, into) == int(nodes));
+    CHECK(appendBvh4(buildBvh(std::vector<Aabb>{}), 0, into) == int(nodes));
     CHECK(into.nodes.size() == nodes + 1);
     CHECK(into.leaves.size() == leaves);
     CHECK(into.nodes.back().child.x == CLRT_INVALID);

@@ -32,14 +32,10 @@ using namespace simd4;
 
 constexpr int kMaxBins = 64;
 
-// One primitive as the builder sees it: lo and hi load as one vector each, prim riding in the
+// One primitive as the builder sees it (bvh.h): lo and hi load as one vector each, prim riding in the
 // fourth lane of lo (pad, in that of hi, stays 0).
-struct alignas(16) Item {
-    float lo[3];
-    int prim;
-    float hi[3];
-    int pad;
-};
+using Item = BvhItem;
+static_assert(sizeof(Item) == 32, "an item is two 16-byte vectors");
 
 // An item in registers: c = lo + hi is twice its centroid (fourth lane 0: prim is masked off
 // before the add, so no stray bits become a denormal).
@@ -120,7 +116,8 @@ public:
     }
 
     // Appends the subtree of r to nodes, depth-first.
-    void build(const Range& r, int level, std::vector<BvhNode>& nodes) {
+    template <class Nodes>  // BvhNodes, or a task's std::vector (bvh.h)
+    void build(const Range& r, int level, Nodes& nodes) {
         const size_t idx = nodes.size();
         nodes.emplace_back();
         Range left, right;
@@ -203,17 +200,35 @@ private:
     }
 
     // Bins r's items on all three axes (unusable axes are binned too, and ignored), then sweeps
-    // the usable ones for the cheapest split.
+    // the usable ones for the cheapest split. A big node bins its items alternately into two sets of
+    // bins, merged before the sweep: neighbouring items often fall in the same bins, and one set would
+    // make each update wait for the last one's store.
     SplitChoice binnedSplit(const Range& r, const Binner& binner, const bool usable[3], bool perimeter) {
-        for (int i = r.begin; i < r.end; ++i) {
-            ItemV v(items_[i]);
+        auto binItem = [&](Bin (*bins)[kMaxBins], const Item& item) {
+            ItemV v(item);
             int b[4];
             binner.binsOf(v.c, b);
             for (int a = 0; a < 3; ++a) {
-                bins_[a][b[a]].box.grow(v.lo, v.hi);
-                bins_[a][b[a]].count++;
+                bins[a][b[a]].box.grow(v.lo, v.hi);
+                bins[a][b[a]].count++;
             }
+        };
+        int i = r.begin;
+        if (r.end - r.begin >= kTwoSetsMin) {
+            for (; i + 1 < r.end; i += 2) {
+                binItem(bins_, items_[i]);
+                binItem(bins2_, items_[i + 1]);
+            }
+            for (int a = 0; a < 3; ++a)
+                for (int k = 0; k < numBins_; ++k) {
+                    Bin& from = bins2_[a][k];
+                    if (from.count == 0) continue;
+                    bins_[a][k].box.grow(from.box);
+                    bins_[a][k].count += from.count;
+                    from = Bin();
+                }
         }
+        for (; i < r.end; ++i) binItem(bins_, items_[i]);
         SplitChoice best;
         for (int a = 0; a < 3; ++a) sweepAxis(a, usable[a], perimeter, best);
         return best;
@@ -299,7 +314,9 @@ private:
     Item* items_;
     int numBins_ = 16;
     int maxLeaf_ = 4;
-    Bin bins_[3][kMaxBins];  // per axis; all empty between nodes
+    static constexpr int kTwoSetsMin = 256;  // nodes of this many items bin into two sets (binnedSplit)
+    Bin bins_[3][kMaxBins];   // per axis; all empty between nodes
+    Bin bins2_[3][kMaxBins];  // the second set; all empty between nodes
 };
 
 // The SAH cost of a tree, summed node by node in order: node area relative to the root's, times
@@ -328,7 +345,7 @@ struct Task {
     bool taken = false, done = false;
     BvhNode node{};              // split: its node
     int left = -1, right = -1;   // split: its children's tasks (none: it made a leaf)
-    std::vector<BvhNode> nodes;  // built whole apart: its subtree
+    std::vector<BvhNode> nodes;  // built whole apart: its subtree (plain heap memory: many, short-lived)
     int depth = 0;
     Task(const Range& r, int lvl, uint64_t p) : range(r), level(lvl), path(p) {}
 };
@@ -503,8 +520,18 @@ constexpr int kChunk = 65536;        // items per chunk of the initial copy
 }  // namespace
 
 Bvh buildBvh(const std::vector<Aabb>& primBounds, const BvhBuildOptions& opts) {
+    BvhItems items;
+    items.resize(primBounds.size());
+    parallelFor((primBounds.size() + kChunk - 1) / kChunk, [&](size_t chunk) {
+        const size_t end = std::min(primBounds.size(), (chunk + 1) * kChunk);
+        for (size_t i = chunk * kChunk; i < end; ++i) items[i] = bvhItem(primBounds[i]);
+    }, size_t(opts.maxThreads));
+    return buildBvh(std::move(items), opts);
+}
+
+Bvh buildBvh(BvhItems&& itemStore, const BvhBuildOptions& opts) {
     Bvh bvh;
-    const int n = int(primBounds.size());
+    const int n = int(itemStore.size());
     if (n == 0) {
         // Single empty node with inverted bounds; callers must not traverse (primRefs is empty).
         BvhNode root{};
@@ -519,12 +546,11 @@ Bvh buildBvh(const std::vector<Aabb>& primBounds, const BvhBuildOptions& opts) {
     int threads = opts.maxThreads > 0 ? opts.maxThreads : int(std::thread::hardware_concurrency());
     if (threads < 1 || n < kParallelMin) threads = 1;
 
-    // The items, copied in chunks (in parallel: fresh pages are slow to touch) with each chunk's
-    // bounds; merged in order they give the root's bounds bit for bit as one pass would. Boxes with
-    // NaN/inf or min > max become empty items (centroid 0); they are still referenced once, in some
-    // leaf, and never widen any node's bounds.
-    std::unique_ptr<Item[]> itemStore(new Item[size_t(n)]);  // not zeroed first
-    Item* items = itemStore.get();
+    // A pass over the items in chunks (in parallel) that numbers them and gathers each chunk's bounds;
+    // merged in order they give the root's bounds bit for bit as one pass would. Boxes with NaN/inf or
+    // min > max become empty items (centroid 0); they are still referenced once, in some leaf, and never
+    // widen any node's bounds.
+    Item* items = itemStore.data();
     const int chunks = (n + kChunk - 1) / kChunk;
     std::vector<Range> chunkBounds(static_cast<size_t>(chunks));
     parallelFor(size_t(chunks), [&](size_t chunk) {
@@ -532,11 +558,13 @@ Bvh buildBvh(const std::vector<Aabb>& primBounds, const BvhBuildOptions& opts) {
         const int begin = c * kChunk, end = std::min(n, begin + kChunk);
         Box bounds, cbounds;
         for (int i = begin; i < end; ++i) {
-            const Aabb& b = primBounds[size_t(i)];
-            bool ok = isFinite(b.min) && isFinite(b.max) && b.valid();
-            items[i] = ok ? Item{{b.min.x, b.min.y, b.min.z}, i, {b.max.x, b.max.y, b.max.z}, 0}
-                          : Item{{1e30f, 1e30f, 1e30f}, i, {-1e30f, -1e30f, -1e30f}, 0};
-            ItemV v(items[i]);
+            Item& it = items[i];
+            const Vec3 lo(it.lo[0], it.lo[1], it.lo[2]), hi(it.hi[0], it.hi[1], it.hi[2]);
+            const bool ok = isFinite(lo) && isFinite(hi) && lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z;
+            if (!ok) it = Item{{1e30f, 1e30f, 1e30f}, 0, {-1e30f, -1e30f, -1e30f}, 0};
+            it.prim = i;
+            it.pad = 0;
+            ItemV v(it);
             bounds.grow(v.lo, v.hi);
             cbounds.grow(v.c, v.c);
         }
@@ -558,10 +586,10 @@ Bvh buildBvh(const std::vector<Aabb>& primBounds, const BvhBuildOptions& opts) {
         for (const BvhNode& nd : bvh.nodes) sah.add(nd);
         bvh.sahCost = float(sah.cost);
         for (int i = 0; i < n; ++i) bvh.primRefs[size_t(i)] = items[i].prim;
-        return bvh;
+    } else {
+        ParallelBuild(opts, items, threads, bvh).run(root);
     }
-
-    ParallelBuild(opts, items, threads, bvh).run(root);
+    BvhItems().swap(itemStore);  // freed before the caller's next arrays (util/huge_pages.h, HugeRecycling)
     return bvh;
 }
 

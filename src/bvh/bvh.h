@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "shared/device_types.h"
+#include "util/huge_pages.h"
 #include "util/math.h"
 
 namespace clrt {
@@ -43,8 +44,10 @@ struct BvhBuildOptions {
                               // threads. The tree does not depend on it.
 };
 
+using BvhNodes = HostArray<BvhNode>;
+
 struct Bvh {
-    std::vector<BvhNode> nodes;  // nodes[0] is the root
+    BvhNodes nodes;                   // nodes[0] is the root
     std::vector<int> primRefs;        // leaf ranges index this; values index the input boxes
     float sahCost = 0;                // SAH cost of the tree (root area normalised)
     int depth = 0;                    // levels on the longest root-to-leaf path (root alone = 1);
@@ -61,10 +64,24 @@ struct BvhSummary {
 };
 BvhSummary summarizeBvh(const Bvh& bvh);
 
+// One primitive as the builder takes it: its box and, in the fourth lane of lo, its reference. The
+// builder partitions these 32-byte items in place, so a caller that writes them (flattening does, one
+// per triangle as it stores the triangle) hands them over and no other copy of the boxes is made.
+struct alignas(16) BvhItem {
+    float lo[3];
+    int prim;  // set by buildBvh: the item's index
+    float hi[3];
+    int pad;   // set by buildBvh: 0
+};
+using BvhItems = HostArray<BvhItem>;
+inline BvhItem bvhItem(const Aabb& b) { return BvhItem{{b.min.x, b.min.y, b.min.z}, 0, {b.max.x, b.max.y, b.max.z}, 0}; }
+
 // Builds over the given primitive boxes (one per primitive; index = primitive reference).
 // Empty input gives a single node with count 0 and inverted bounds and no primRefs: callers must
 // not traverse it (check primRefs.empty()). Boxes that are non-finite or inverted are still
 // referenced once but never widen a node. Leaves hold at most maxLeafSize primitives.
 Bvh buildBvh(const std::vector<Aabb>& primBounds, const BvhBuildOptions& opts = {});
+// The same over items (item i: primitive i's box), which the build consumes and frees: the same tree.
+Bvh buildBvh(BvhItems&& items, const BvhBuildOptions& opts = {});
 
 }  // namespace clrt

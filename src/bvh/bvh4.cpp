@@ -37,6 +37,45 @@ struct Collapser {
         return firstBlock;
     }
 
+    // The binary nodes that become the lanes of the 4-wide node made for binary node b: a leaf root
+    // alone, else b's children, opening the interior lane with the largest area until there are four.
+    // Returns how many.
+    int lanesOf(int b, int lanes[4]) const {
+        int k = 0;
+        const BvhNode& nb = bin.nodes[size_t(b)];
+        if (nb.count > 0) {
+            lanes[k++] = b;  // a leaf root: one lane
+            return k;
+        }
+        lanes[k++] = b + 1;
+        lanes[k++] = nb.first;
+        while (k < 4) {
+            int best = -1;
+            double bestArea = -1;
+            for (int i = 0; i < k; ++i) {
+                const BvhNode& c = bin.nodes[size_t(lanes[i])];
+                if (c.count > 0) continue;
+                const double area = halfArea(c);
+                if (area > bestArea) { bestArea = area; best = i; }
+            }
+            if (best < 0) break;
+            const int c = lanes[best];
+            lanes[best] = c + 1;
+            lanes[k++] = bin.nodes[size_t(c)].first;
+        }
+        return k;
+    }
+
+    // The 4-wide nodes emit(b) writes (the same choices, nothing written): so `out` is sized exactly.
+    size_t countNodes(int b) const {
+        int lanes[4];
+        const int k = lanesOf(b, lanes);
+        size_t n = 1;
+        for (int i = 0; i < k; ++i)
+            if (bin.nodes[size_t(lanes[i])].count == 0) n += countNodes(lanes[i]);
+        return n;
+    }
+
     // Writes the 4-wide node for binary node b and its subtree; returns {index, stack need}.
     // Stack need of a subtree: the most entries its traversal pushes, from an empty stack (a node
     // with k hit children pushes k - 1 and goes on into one of them).
@@ -45,28 +84,7 @@ struct Collapser {
         const int idx = int(out.size());
         out.emplace_back();
         int lanes[4];
-        int k = 0;
-        const BvhNode& nb = bin.nodes[size_t(b)];
-        if (nb.count > 0) {
-            lanes[k++] = b;  // a leaf root: one lane
-        } else {
-            lanes[k++] = b + 1;
-            lanes[k++] = nb.first;
-            while (k < 4) {  // open the interior lane with the largest area
-                int best = -1;
-                double bestArea = -1;
-                for (int i = 0; i < k; ++i) {
-                    const BvhNode& c = bin.nodes[size_t(lanes[i])];
-                    if (c.count > 0) continue;
-                    const double area = halfArea(c);
-                    if (area > bestArea) { bestArea = area; best = i; }
-                }
-                if (best < 0) break;
-                const int c = lanes[best];
-                lanes[best] = c + 1;
-                lanes[k++] = bin.nodes[size_t(c)].first;
-            }
-        }
+        const int k = lanesOf(b, lanes);
         dev::Bvh4Node node;
         float* mn[3] = {&node.minX.x, &node.minY.x, &node.minZ.x};
         float* mx[3] = {&node.maxX.x, &node.maxY.x, &node.maxZ.x};
@@ -130,12 +148,12 @@ bool collapseNodes(const Bvh& bvh, HostArray<dev::Bvh4Node>& nodes, std::vector<
         *depth = 1;
         return false;
     }
-    reserveMore(nodes, bvh.nodes.size() / 2 + 1);  // an upper bound: pages past the end are never touched
+    Collapser c{bvh, nodes, blockPrims};
+    reserveMore(nodes, c.countNodes(0));  // exactly, so a recycled block fits (util/huge_pages.h)
     size_t blocks = 0;  // exactly: each binary leaf's primitives, four to a block (no growth, no copies)
     for (const BvhNode& n : bvh.nodes)
         if (n.count > 0) blocks += size_t(n.count + 3) / 4;
     blockPrims.reserve(blocks);
-    Collapser c{bvh, nodes, blockPrims};
     *maxStack = c.emit(0, 1).second;
     *depth = c.depth;
     if (*maxStack > CLRT_BVH4_STACK_SIZE)

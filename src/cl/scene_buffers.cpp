@@ -15,10 +15,10 @@ HugePageBlock::HugePageBlock(size_t bytes) {
     data_ = hugeAlloc(bytes, &advised_);
 }
 
-HugePageBlock::~HugePageBlock() { hugeFree(data_); }
+HugePageBlock::~HugePageBlock() { hugeFree(data_, size_); }
 
 SceneBufferUploader::SceneBufferUploader(cl::Context ctx, bool cpuDevice) : ctx_(std::move(ctx)) {
-    useHuge_ = cpuDevice && hugePagesWanted();
+    useHuge_ = cpuDevice && hostBuffersInPlace();
 }
 
 cl::Buffer SceneBufferUploader::upload(const void* src, size_t bytes, size_t emptyBytes) {

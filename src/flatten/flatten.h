@@ -67,7 +67,7 @@ void flattenLights(const Scene& scene, DeviceScene& ds, ImageAtlas& atlas);
 struct TriangleSlots {
     dev::Triangle* triangles;
     dev::TriangleShading* shading;
-    Aabb* boxes;
+    BvhItem* boxes;  // each kept triangle's box (swept over the shutter), for the BVH
     float* attributes;
     size_t attributeBase;
     size_t kept = 0, degenerate = 0, nonFinite = 0;

@@ -130,7 +130,7 @@ void flattenTriangles(const Scene& scene, const Shape& s, int texSet, const Mesh
         box.grow(p0); box.grow(p1); box.grow(p2);
         out.triangles[out.kept] = tri;
         out.shading[out.kept] = sh;
-        out.boxes[out.kept] = sweptBox(box, s.motion);
+        out.boxes[out.kept] = bvhItem(sweptBox(box, s.motion));
         ++out.kept;
     }
 }
@@ -238,7 +238,7 @@ constexpr size_t kTrianglesPerTask = 16384;  // a big mesh is cut into runs of t
 // one cut into runs after its vertices are transformed), then the runs are closed up over the
 // triangles left out: the same arrays as a sequential loop. Warns about and counts
 // (ds.skippedTriangles) degenerate and non-finite triangles.
-void flattenMeshes(const Scene& scene, const std::vector<MeshJob>& meshJobs, DeviceScene& ds, std::vector<Aabb>& boxes) {
+void flattenMeshes(const Scene& scene, const std::vector<MeshJob>& meshJobs, DeviceScene& ds, BvhItems& boxes) {
     struct Task {
         size_t job, tBegin, tEnd, slot;  // triangles [tBegin, tEnd) of job, written from slot
         size_t attributeSlot, floats;    // their corner attributes from there, `floats` per triangle
@@ -325,15 +325,14 @@ void flattenMeshes(const Scene& scene, const std::vector<MeshJob>& meshJobs, Dev
 // boxes are released once the tree is built, the triangles and their shading are put in leaf order in
 // place (no copies), and the binary tree is freed once its 4-wide nodes are made, before the leaf
 // blocks (only its figures stay: ds.bvh), so the binary tree and the leaf blocks are never held together.
-void buildDeviceBvh(std::vector<Aabb>&& boxes, DeviceScene& ds, bool leafOrder) {
+void buildDeviceBvh(BvhItems&& boxes, DeviceScene& ds, bool leafOrder) {
     auto tb = std::chrono::steady_clock::now();
     // The device tests a leaf's triangles four at a time (Bvh4Leaf), so a leaf of up to four costs
     // about what one triangle test did: a node is costed as two triangle tests, which gives fuller
     // leaves (Audi TT: 2.1 -> 3.0 primitives per block) and fewer nodes (86k -> 61k).
     BvhBuildOptions opts;
     opts.traversalCost = 2;
-    Bvh bvh = buildBvh(boxes, opts);
-    std::vector<Aabb>().swap(boxes);
+    Bvh bvh = buildBvh(std::move(boxes), opts);  // consumes the boxes
     const int numTris = int(ds.triangles.size());
     if (leafOrder) putInLeafOrder(bvh, ds.triangles.data(), ds.triangleShading.data(), numTris);
     ds.bvh = summarizeBvh(bvh);
@@ -368,7 +367,8 @@ TriangleCorners triangleCorners(const DeviceScene& ds, size_t t) {
 bool mirrorsOrientation(const Mat4& m) { return linearDeterminant(m) < 0; }
 
 void flattenGeometry(const Scene& scene, DeviceScene& ds, const FlattenOptions& opts) {
-    std::vector<Aabb> boxes, sphereBoxes;
+    BvhItems boxes;  // the BVH's items: one per triangle, written as it is stored, then the spheres
+    std::vector<Aabb> sphereBoxes;
     const std::vector<bool> instanced = instancedShapes(scene, opts.instancing);
     size_t total = 0, floats = 0;
     for (size_t i = 0; i < scene.shapes.size(); ++i)
@@ -396,7 +396,7 @@ void flattenGeometry(const Scene& scene, DeviceScene& ds, const FlattenOptions& 
     for (const Shape& s : scene.shapes)
         if (s.type != ShapeType::Plane && s.motion != Vec3(0, 0, 0)) ds.features.motionBlur = true;
     const int numTriangles = int(boxes.size());
-    boxes.insert(boxes.end(), sphereBoxes.begin(), sphereBoxes.end());
+    for (const Aabb& b : sphereBoxes) boxes.push_back(bvhItem(b));
     buildDeviceBvh(std::move(boxes), ds, opts.leafOrderTriangles);
     ds.params.numTriangles = numTriangles;
     if (!instanceJobs.empty()) flattenInstances(scene, instanceJobs, numTriangles, ds);

@@ -49,7 +49,8 @@ BottomLevel appendBottomLevel(const Scene& scene, const Shape& s, DeviceScene& d
     ds.triangles.resize(base + n);
     ds.triangleShading.resize(base + n);
     ds.triangleAttributes.resize(attributeBase + n * floats);
-    std::vector<Aabb> boxes(n);
+    BvhItems boxes;
+    boxes.resize(n);
     // Corner attributes (normals, uvs) follow those already stored; the records hold their offsets.
     TriangleSlots slots{ds.triangles.data() + base, ds.triangleShading.data() + base, boxes.data(),
                         ds.triangleAttributes.data() + attributeBase, attributeBase};
@@ -62,11 +63,13 @@ BottomLevel appendBottomLevel(const Scene& scene, const Shape& s, DeviceScene& d
     BottomLevel b;
     b.triangles = slots.kept;
     if (b.triangles == 0) return b;
-    for (const Aabb& box : boxes) b.box.grow(box);
+    for (const BvhItem& box : boxes) {
+        b.box.grow(Vec3(box.lo[0], box.lo[1], box.lo[2]));
+        b.box.grow(Vec3(box.hi[0], box.hi[1], box.hi[2]));
+    }
     BvhBuildOptions opts;
     opts.traversalCost = 2;  // as the world BVH's (flatten_geometry.cpp, buildDeviceBvh)
-    Bvh bvh = buildBvh(boxes, opts);
-    std::vector<Aabb>().swap(boxes);
+    Bvh bvh = buildBvh(std::move(boxes), opts);  // consumes the boxes
     putInLeafOrder(bvh, ds.triangles.data() + base, ds.triangleShading.data() + base, int(b.triangles));
     const size_t firstLeaf = ds.bvh4.leaves.size();
     b.rootNode = appendBvh4(std::move(bvh), int(base), ds.bvh4, maxStack);

@@ -18,6 +18,9 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
 // atlas (textures, then environment maps); opts.onFeaturesKnown between the BVH and the lights.
 DeviceScene flattenScene(const Scene& scene, const FlattenOptions& opts) {
     auto t0 = std::chrono::steady_clock::now();
+    // Scratch arrays freed during flattening (the BVH builder's items and binary nodes) lend their pages
+    // to the arrays made after them (util/huge_pages.h); what is left is freed on return.
+    HugeRecycling recycling;
     DeviceScene ds;
     ImageAtlas atlas(scene, ds);
     flattenMaterials(scene, ds);

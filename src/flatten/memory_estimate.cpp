@@ -199,7 +199,7 @@ uint64_t MemoryEstimate::hostPeak(const MemoryPlan& plan) const {
     const uint64_t kept = deviceScene();  // DeviceScene, alive through the render (no binary tree)
     // A CPU device uses the DeviceScene's HostArrays of >= 1 MiB in place (util/huge_pages.h); it copies
     // the rest (copiedOnCpu), or everything with CLRT_HUGE_PAGES=0.
-    const uint64_t scenePerCopy = hugePagesWanted() ? copiedOnCpu : deviceScene();
+    const uint64_t scenePerCopy = hostBuffersInPlace() ? copiedOnCpu : deviceScene();
     const uint64_t rendering = kept + copies * (scenePerCopy + render.bytes) + hostImages +
                                uint64_t(std::max(plan.devices, 1)) * kRuntimeBytesPerDevice;
     return std::max(sceneModel, plan.residentNow) + std::max(flattenTransient + deviceScene(), rendering);
