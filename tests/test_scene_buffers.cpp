@@ -1,5 +1,5 @@
 // cl/scene_buffers: the scene arrays a kernel reads are the host's, byte for byte, whether they went into
-// huge-page host memory used in place (CPU devices, arrays of >= 1 MiB) or into copied buffers; the blocks
+// aligned host memory used in place (CPU devices, arrays of >= 1 MiB) or into copied buffers; the blocks
 // are 2 MiB aligned and advised for transparent huge pages with CLRT_HUGE_PAGES=1 where the kernel offers
 // them; CLRT_HUGE_PAGES=0 and non-CPU devices copy.
 #include <catch.hpp>
@@ -76,7 +76,7 @@ TEST_CASE("scene buffers: kernels read the host's arrays, huge-page or copied", 
         }
         CHECK(up.hugePages() == (cpuDevice && !(std::getenv("CLRT_HUGE_PAGES") && std::string(std::getenv("CLRT_HUGE_PAGES")) == "0")));
         CHECK(up.hugeBytes() == expectHuge);
-        CHECK((up.summary().find("huge pages off") == std::string::npos) == up.hugePages());
+        CHECK((up.summary().find("in place off") == std::string::npos) == up.hugePages());
         CHECK(up.copiedBytes() == expectCopied);
         for (size_t i = 0; i < arrays.size(); ++i) {
             INFO(arrays[i].size() << " uints");

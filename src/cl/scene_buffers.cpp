@@ -47,10 +47,10 @@ std::string SceneBufferUploader::summary() const {
     char buf[256];
     bool allAdvised = true;
     for (const auto& b : blocks_) allAdvised = allAdvised && b->advised();
-    std::snprintf(buf, sizeof buf, "%.1f MB of huge-page host memory used in place, %.1f MB copied into huge pages%s, "
-                  "%.1f MB copied%s", inPlaceBytes_ / 1e6, hugeBytes_ / 1e6,
-                  blocks_.empty() || allAdvised ? "" : " (madvise refused: 4 KiB pages)", copiedBytes_ / 1e6,
-                  useHuge_ ? "" : " (huge pages off: not a CPU device, or CLRT_HUGE_PAGES=0)");
+    const char* pages = !hugePagesWanted() ? "" : allAdvised ? "; huge pages advised" : "; madvise refused: 4 KiB pages";
+    std::snprintf(buf, sizeof buf, "%.1f MB of aligned host memory used in place, %.1f MB copied into aligned blocks, "
+                  "%.1f MB copied%s%s", inPlaceBytes_ / 1e6, hugeBytes_ / 1e6, copiedBytes_ / 1e6,
+                  useHuge_ ? "" : " (in place off: not a CPU device, or CLRT_HUGE_PAGES=0)", pages);
     return buf;
 }
 

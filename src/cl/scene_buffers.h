@@ -3,9 +3,9 @@
 // read these arrays at random: beyond the TLB's reach (a few MB with 4 KiB pages) nearly every cache miss
 // is also a page walk, which in a virtual machine costs several memory accesses (pointer chase measured on
 // the 2-core VM: 500 ns per load over 64 MB with 4 KiB pages, 170 ns with 2 MiB pages). So on CPU devices
-// arrays of at least kHugeMinBytes live in 2 MiB-aligned host memory advised for transparent huge pages
-// (util/huge_pages.h) and the buffer uses that memory in place (CL_MEM_USE_HOST_PTR: PoCL and Intel's CPU
-// runtime do not copy an aligned host pointer):
+// arrays of at least kHugeMinBytes live in 2 MiB-aligned host memory (advised for transparent huge pages
+// with CLRT_HUGE_PAGES=1: util/huge_pages.h says why not by default) and the buffer uses that memory in
+// place (CL_MEM_USE_HOST_PTR: PoCL and Intel's CPU runtime do not copy an aligned host pointer):
 //   - a HostArray (the DeviceScene's big arrays are HostArrays) is used where it is: no copy at all;
 //     the array must outlive every buffer made from it (a Renderer holds its DeviceScene by reference);
 //   - any other array is copied once into a HugePageBlock the uploader owns.
@@ -24,7 +24,7 @@
 namespace clrt {
 
 // Host memory behind CL_MEM_USE_HOST_PTR buffers: `bytes` rounded up to whole 2 MiB pages, 2 MiB aligned,
-// advised for huge pages where the system has them.
+// advised for huge pages with CLRT_HUGE_PAGES=1 where the system has them.
 class HugePageBlock {
 public:
     static constexpr size_t kPage = kHugePageBytes;
@@ -44,8 +44,8 @@ private:
 
 class SceneBufferUploader {
 public:
-    // cpuDevice: the device reads host memory (CL_DEVICE_TYPE_CPU). CLRT_HUGE_PAGES=0 turns the huge-page
-    // path off (for measuring it).
+    // cpuDevice: the device reads host memory (CL_DEVICE_TYPE_CPU). CLRT_HUGE_PAGES=0 turns the in-place
+    // path off (for measuring it, and for oclgrind's uninitialised-value pass).
     SceneBufferUploader(cl::Context ctx, bool cpuDevice);
     static constexpr size_t kHugeMinBytes = ::clrt::kHugeMinBytes;
 
@@ -61,7 +61,7 @@ public:
         return upload(v.data(), sizeof(T) * v.size(), sizeof(T));
     }
 
-    // One line for -v: where the arrays went, e.g. "79.6 MB in huge-page host memory, 0.1 MB copied".
+    // One line for -v: where the arrays went, e.g. "79.6 MB of aligned host memory used in place, ...".
     std::string summary() const;
     size_t hugeBytes() const { return hugeBytes_; }    // bytes uploaded into HugePageBlocks
     size_t inPlaceBytes() const { return inPlaceBytes_; }  // HostArray bytes used where they are
