@@ -30,9 +30,6 @@ namespace {
 constexpr double kLeafBlocksPerPrim = 1.0 / 2.2;
 constexpr double kNodesPerPrim = 1.0 / 6.0;
 constexpr double kBinaryNodesPerPrim = 0.8;  // ~2·leaves, leaves of >= 2.5 primitives
-// What the BVH build holds per primitive beyond its box and the binary tree (nodes, primRefs): its
-// builder item.
-constexpr uint64_t kBuildPerPrim = 32;
 constexpr uint64_t kTrianglePair = sizeof(dev::Triangle) + sizeof(dev::TriangleShading);
 
 // One placed instance of a two-level mesh: its record (two 3x4 rows, offsets, material...) and its
@@ -130,9 +127,9 @@ void addBvh(uint64_t prims, MemoryEstimate& e) {
 }
 
 // What the flattening holds at its peak beyond the DeviceScene arrays it returns (flatten_geometry.cpp,
-// flatten_instances.cpp): the meshes' phase (the boxes; every triangle, flattened or of a bottom level,
-// is written straight into its slot), the build's (boxes, items, primRefs and binary nodes, before any
-// 4-wide array exists), the collapse's (the binary tree and the blocks' primitives beside the 4-wide
+// flatten_instances.cpp): the meshes' phase (the builder's items, one per triangle, written with it;
+// every triangle, flattened or of a bottom level, is written straight into its slot), the build's (items,
+// primRefs and binary nodes, before any 4-wide array exists), the collapse's (the binary tree and the blocks' primitives beside the 4-wide
 // nodes, before the leaf blocks) and the blocks' primitives beside the leaf blocks. The triangles are
 // put in leaf order in place (an int per triangle). A bottom level is built the same way after the world
 // tree, its phases bounded by the same terms (its triangles are among `prims`), and appended to the
@@ -141,14 +138,14 @@ uint64_t flattenExcess(const MemoryEstimate& e, uint64_t prims) {
     const uint64_t leaves = leafBlocks(prims) * sizeof(dev::Bvh4Leaf);
     const uint64_t blockPrims = leafBlocks(prims) * sizeof(dev::int4);
     const uint64_t binaryTree = uint64_t(double(prims) * kBinaryNodesPerPrim) * sizeof(BvhNode) + prims * sizeof(int);
-    const uint64_t boxes = prims * sizeof(Aabb);
+    const uint64_t items = prims * sizeof(BvhItem);
     const uint64_t worldPrims = prims - (e.trianglesStored - e.trianglesFlattened) - e.instances;
     uint64_t worldTree = 0;
     if (e.instances)
         worldTree = leafBlocks(worldPrims) * sizeof(dev::Bvh4Leaf) +
                     uint64_t(std::ceil(double(worldPrims) * kNodesPerPrim) + 1) * sizeof(dev::Bvh4Node);
     auto beyond = [](uint64_t held, uint64_t notYet) { return held > notYet ? held - notYet : 0; };
-    return std::max({boxes, beyond(boxes + prims * kBuildPerPrim + binaryTree, e.bvh.bytes),
+    return std::max({items, beyond(items + binaryTree, e.bvh.bytes),
                      beyond(binaryTree + blockPrims, leaves) + worldTree, blockPrims + worldTree});
 }
 
