@@ -118,10 +118,12 @@ TEST_CASE("<Transparency>: the centre of scenes/transparency.xml equals its clos
 
 // FlattenOptions::leafOrderTriangles renumbers the triangles into BVH leaf order (for GPUs); the leaf
 // blocks name triangles by index, so it must not change a pixel: moving (motion blur), smooth,
-// textured and emitting (LightMesh) triangles, spheres among them.
-static ImageRGB renderLeafOrder(const Scene& scene, bool leafOrder, int spp, std::vector<dev::Triangle>* tris) {
+// textured and emitting (LightMesh) triangles, spheres among them; the same for two-level bottom levels.
+static ImageRGB renderLeafOrder(const Scene& scene, bool leafOrder, int spp, std::vector<dev::Triangle>* tris,
+                                Instancing instancing = Instancing::Auto) {
     FlattenOptions opts;
     opts.leafOrderTriangles = leafOrder;
+    opts.instancing = instancing;
     DeviceScene ds = flattenScene(scene, opts);
     tris->assign(ds.triangles.begin(), ds.triangles.end());
     Camera cam = scene.cameras.at(0);
@@ -156,4 +158,26 @@ TEST_CASE("flattening: triangles in leaf order or as read render the same image"
                        std::memcmp(leafTris.data(), readTris.data(), leafTris.size() * sizeof(dev::Triangle)) != 0;
     }
     CHECK(anyReordered);  // the option did renumber triangles somewhere
+}
+
+TEST_CASE("flattening: two-level bottom levels in leaf order or as read render the same image", "[render][bvh][instancing]") {
+    std::vector<std::string> scenes = {std::string(CLRT_SOURCE_DIR) + "/scenes/demo.xml",
+                                       std::string(CLRT_SOURCE_DIR) + "/scenes/motion_blur.xml"};
+    if (haveShared())
+        for (const char* s : {"/scenes/hw1/bunny.xml", "/scenes/hw4/brickwall_with_normalmap.xml", "/scenes/hw2/grass/grass_desert.xml"})
+            scenes.push_back(sharedDir() + s);
+    bool anyReordered = false;
+    for (const std::string& path : scenes) {
+        INFO(path);
+        Scene scene = loadScene(path);
+        std::vector<dev::Triangle> leafTris, readTris;
+        ImageRGB leaf = renderLeafOrder(scene, true, 2, &leafTris, Instancing::TwoLevel);
+        ImageRGB read = renderLeafOrder(scene, false, 2, &readTris, Instancing::TwoLevel);
+        REQUIRE(leaf.pixels.size() == read.pixels.size());
+        CHECK(std::memcmp(leaf.pixels.data(), read.pixels.data(), leaf.pixels.size() * sizeof(float)) == 0);
+        REQUIRE(leafTris.size() == readTris.size());
+        anyReordered = anyReordered ||
+                       std::memcmp(leafTris.data(), readTris.data(), leafTris.size() * sizeof(dev::Triangle)) != 0;
+    }
+    CHECK(anyReordered);
 }

@@ -136,7 +136,7 @@ void reserveMore(HostArray<T>& a, size_t more) {
 // `nodes`, leaf lanes index blockPrims), and its leaf blocks' primitives into blockPrims; *maxStack and
 // *depth its figures. False for an empty tree (then one empty node is appended).
 bool collapseNodes(const Bvh& bvh, HostArray<dev::Bvh4Node>& nodes, std::vector<dev::int4>& blockPrims, int* maxStack,
-                   int* depth) {
+                   int* depth, size_t spareNodes = 0) {
     if (bvh.primRefs.empty() || bvh.nodes.empty()) {
         dev::Bvh4Node empty;
         empty.minX = empty.minY = empty.minZ = {INFINITY, INFINITY, INFINITY, INFINITY};
@@ -149,7 +149,7 @@ bool collapseNodes(const Bvh& bvh, HostArray<dev::Bvh4Node>& nodes, std::vector<
         return false;
     }
     Collapser c{bvh, nodes, blockPrims};
-    reserveMore(nodes, c.countNodes(0));  // exactly, so a recycled block fits (util/huge_pages.h)
+    reserveMore(nodes, c.countNodes(0) + spareNodes);  // exactly, so a recycled block fits (util/huge_pages.h)
     size_t blocks = 0;  // exactly: each binary leaf's primitives, four to a block (no growth, no copies)
     for (const BvhNode& n : bvh.nodes)
         if (n.count > 0) blocks += size_t(n.count + 3) / 4;
@@ -202,11 +202,11 @@ Bvh4 collapseBvh4(Bvh&& bvh) {
     return r;
 }
 
-int appendBvh4(Bvh&& bvh, int primOffset, Bvh4& into, int* maxStack) {
+int appendBvh4(Bvh&& bvh, int primOffset, Bvh4& into, int* maxStack, size_t spareNodes) {
     const size_t root = into.nodes.size(), leafOffset = into.leaves.size();
     std::vector<dev::int4> blockPrims;
     int stack = 0, depth = 0;
-    const bool any = collapseNodes(bvh, into.nodes, blockPrims, &stack, &depth);
+    const bool any = collapseNodes(bvh, into.nodes, blockPrims, &stack, &depth, spareNodes);
     bvh = Bvh{};  // freed before the leaf blocks are allocated
     for (size_t n = root; n < into.nodes.size(); ++n) {
         dev::Bvh4Node& node = into.nodes[n];

@@ -34,7 +34,9 @@ Bvh4 collapseBvh4(Bvh&& bvh);
 // blocks into into.leaves, child indices pointing into those arrays and primitive references moved by
 // primOffset, so neither array is made twice. Returns the root's index in into.nodes, *maxStack its
 // traversal stack need (into.maxStack and depth stay the caller's). The binary tree is left empty.
-int appendBvh4(Bvh&& bvh, int primOffset, Bvh4& into, int* maxStack = nullptr);
+// spareNodes: room for that many more nodes kept past them where into.nodes must grow (the top level,
+// appended last, then does not move the bottom levels' nodes).
+int appendBvh4(Bvh&& bvh, int primOffset, Bvh4& into, int* maxStack = nullptr, size_t spareNodes = 0);
 
 // Copies each triangle lane's world-space vertices (prim < numTriangles) from tris into its block, for
 // the blocks from firstLeaf on.

@@ -76,6 +76,12 @@ struct TriangleSlots {
 // index order, written into out's slots (room for every triangle of the mesh and its attribute floats;
 // degenerate and non-finite ones counted and left out, out.kept the rest).
 void flattenMesh(const Scene& scene, const Shape& s, int texSet, TriangleSlots& out);
+// The mesh shapes of `jobs` (shape, texture set) on all hardware threads, appended to ds.triangles,
+// ds.triangleShading, ds.triangleAttributes and `boxes` in job and index order (what flattenMesh would
+// give one after another); degenerate and non-finite triangles left out, counted in ds.skippedTriangles
+// and returned as {degenerate, non-finite}.
+std::pair<size_t, size_t> flattenMeshes(const Scene& scene, const std::vector<std::pair<const Shape*, int>>& jobs,
+                                        DeviceScene& ds, BvhItems& boxes);
 // Puts the triangles [0, numTriangles) of tris and shading in the leaf order of `bvh` (built over their
 // boxes, then maybe others: references from numTriangles on, spheres, keep their indices) in place, no
 // copy of either array made, and makes bvh's triangle references those new positions. The shading
@@ -105,8 +111,9 @@ void storeRows(dev::float4 rows[3], const Mat4& m);  // the first three rows of 
 // most: each (mesh, flat or smooth) once; *attributeFloats their triAttributes floats. flattenGeometry
 // reserves them, so no array grows by copying.
 size_t bottomLevelTriangles(const Scene& scene, const std::vector<bool>& instanced, size_t* attributeFloats = nullptr);
+// leafOrder: each bottom level's triangles renumbered into its leaf order (FlattenOptions::leafOrderTriangles).
 void flattenInstances(const Scene& scene, const std::vector<std::pair<const Shape*, int>>& jobs, int numWorldTriangles,
-                      DeviceScene& ds);
+                      DeviceScene& ds, bool leafOrder = true);
 // The device fields of environment light `l` (index `lightIndex`), its importance distribution, and
 // the scene's miss radiance (ds.params env fields) from the first environment light.
 void flattenEnvironmentLight(const Scene& scene, const Light& l, int lightIndex, dev::Light& d, DeviceScene& ds,

@@ -231,14 +231,16 @@ bool flattenSphere(const Shape& s, int texSet, DeviceScene& ds, std::vector<Aabb
 
 using MeshJob = std::pair<const Shape*, int>;  // (shape, texture set)
 
+}  // namespace
+
 constexpr size_t kTrianglesPerTask = 16384;  // a big mesh is cut into runs of this many for the threads
 
 // Meshes on all hardware threads, written straight into their place in ds.triangles,
 // ds.triangleShading and `boxes` (each task its own run of slots; small meshes one task each, a big
 // one cut into runs after its vertices are transformed), then the runs are closed up over the
-// triangles left out: the same arrays as a sequential loop. Warns about and counts
-// (ds.skippedTriangles) degenerate and non-finite triangles.
-void flattenMeshes(const Scene& scene, const std::vector<MeshJob>& meshJobs, DeviceScene& ds, BvhItems& boxes) {
+// triangles left out: the same arrays as a sequential loop (flatten.h).
+std::pair<size_t, size_t> flattenMeshes(const Scene& scene, const std::vector<MeshJob>& meshJobs, DeviceScene& ds,
+                                        BvhItems& boxes) {
     struct Task {
         size_t job, tBegin, tEnd, slot;  // triangles [tBegin, tEnd) of job, written from slot
         size_t attributeSlot, floats;    // their corner attributes from there, `floats` per triangle
@@ -288,7 +290,7 @@ void flattenMeshes(const Scene& scene, const std::vector<MeshJob>& meshJobs, Dev
     }
     // Close up: each run's kept triangles (and their corner attributes, whose offsets follow) move down
     // to follow the previous run's.
-    size_t to = 0, attributeTo = 0, nanSkipped = 0;
+    size_t to = 0, attributeTo = 0, degenerate = 0, nanSkipped = 0;
     for (Task& k : tasks) {
         if (to != k.slot)
             for (size_t i = 0; i < k.out.kept; ++i) {
@@ -307,17 +309,18 @@ void flattenMeshes(const Scene& scene, const std::vector<MeshJob>& meshJobs, Dev
         }
         to += k.out.kept;
         attributeTo += k.out.kept * k.floats;
-        ds.skippedTriangles += k.out.degenerate;
+        degenerate += k.out.degenerate;
         nanSkipped += k.out.nonFinite;
     }
     ds.triangles.resize(base + to);
     ds.triangleShading.resize(base + to);
     ds.triangleAttributes.resize(attributeBase + attributeTo);
     boxes.resize(boxBase + to);
-    if (ds.skippedTriangles) warn(scene.path + ": skipped " + std::to_string(ds.skippedTriangles) + " degenerate triangles");
-    if (nanSkipped) warn(scene.path + ": skipped " + std::to_string(nanSkipped) + " triangles with NaN/Inf vertices");
-    ds.skippedTriangles += nanSkipped;
+    ds.skippedTriangles += degenerate + nanSkipped;
+    return {degenerate, nanSkipped};
 }
+
+namespace {
 
 // The BVH over `boxes` (triangles, then spheres); with leafOrder the triangles are stored in leaf order
 // so a leaf's triangles are contiguous in memory (FlattenOptions::leafOrderTriangles), then the tree is
@@ -391,7 +394,9 @@ void flattenGeometry(const Scene& scene, DeviceScene& ds, const FlattenOptions& 
         else if (s.type == ShapeType::Sphere) flattenSphere(s, texSet, ds, sphereBoxes);
         else (instanced[i] ? instanceJobs : meshJobs).push_back({&s, texSet});
     }
-    flattenMeshes(scene, meshJobs, ds, boxes);
+    const auto skipped = flattenMeshes(scene, meshJobs, ds, boxes);
+    if (skipped.first) warn(scene.path + ": skipped " + std::to_string(skipped.first) + " degenerate triangles");
+    if (skipped.second) warn(scene.path + ": skipped " + std::to_string(skipped.second) + " triangles with NaN/Inf vertices");
     ds.features.spheres = !ds.spheres.empty();
     for (const Shape& s : scene.shapes)
         if (s.type != ShapeType::Plane && s.motion != Vec3(0, 0, 0)) ds.features.motionBlur = true;
@@ -399,7 +404,7 @@ void flattenGeometry(const Scene& scene, DeviceScene& ds, const FlattenOptions& 
     for (const Aabb& b : sphereBoxes) boxes.push_back(bvhItem(b));
     buildDeviceBvh(std::move(boxes), ds, opts.leafOrderTriangles);
     ds.params.numTriangles = numTriangles;
-    if (!instanceJobs.empty()) flattenInstances(scene, instanceJobs, numTriangles, ds);
+    if (!instanceJobs.empty()) flattenInstances(scene, instanceJobs, numTriangles, ds, opts.leafOrderTriangles);
     // Never an empty buffer (the counts below stay those of the scene, except planes: see Plane).
     if (ds.triangles.empty()) { ds.triangles.push_back(dev::Triangle{}); ds.triangleShading.push_back(dev::TriangleShading{}); }
     if (ds.triangleAttributes.empty()) ds.triangleAttributes.push_back(0.0f);

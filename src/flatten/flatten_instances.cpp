@@ -35,45 +35,37 @@ std::pair<int, bool> bottomKey(const Shape& s) { return {s.meshIndex, s.smooth};
 
 // The mesh of shape s in object space (identity transform, no motion; material, texture set and light
 // belong to the instance) appended to ds: its triangles and their shading written in place after
-// ds's (room reserved by flattenGeometry), its BVH built over their boxes, the triangles put in leaf
-// order in place, the binary tree freed before its leaf blocks are appended to ds.bvh4 (as the world
-// tree, flatten_geometry.cpp's buildDeviceBvh). *maxStack: its traversal stack need.
-BottomLevel appendBottomLevel(const Scene& scene, const Shape& s, DeviceScene& ds, int* maxStack) {
+// ds's (room reserved by flattenGeometry) on all threads (flattenMeshes), its BVH built over their
+// boxes, with leafOrder the triangles put in leaf order in place, the binary tree freed before its
+// leaf blocks are appended to ds.bvh4 (as the world tree, flatten_geometry.cpp's buildDeviceBvh).
+// *maxStack: its traversal stack need; spareNodes: room kept for the top level's nodes (appendBvh4).
+// Its build and collapse count as BVH time (ds.bvhSeconds).
+BottomLevel appendBottomLevel(const Scene& scene, const Shape& s, DeviceScene& ds, bool leafOrder, size_t spareNodes,
+                              int* maxStack) {
     Shape objectSpace = s;
     objectSpace.transform = Mat4::identity();
     objectSpace.motion = Vec3(0, 0, 0);
     objectSpace.materialIndex = CLRT_INVALID;
     objectSpace.lightIndex = CLRT_INVALID;
-    const size_t base = ds.triangles.size(), n = scene.meshes.at(size_t(s.meshIndex)).indices.size() / 3;
-    const size_t attributeBase = ds.triangleAttributes.size(), floats = attributeFloats(meshAttributeFlags(scene, s));
-    ds.triangles.resize(base + n);
-    ds.triangleShading.resize(base + n);
-    ds.triangleAttributes.resize(attributeBase + n * floats);
+    const size_t base = ds.triangles.size();
     BvhItems boxes;
-    boxes.resize(n);
-    // Corner attributes (normals, uvs) follow those already stored; the records hold their offsets.
-    TriangleSlots slots{ds.triangles.data() + base, ds.triangleShading.data() + base, boxes.data(),
-                        ds.triangleAttributes.data() + attributeBase, attributeBase};
-    flattenMesh(scene, objectSpace, CLRT_INVALID, slots);
-    ds.triangles.resize(base + slots.kept);
-    ds.triangleShading.resize(base + slots.kept);
-    ds.triangleAttributes.resize(attributeBase + slots.kept * floats);
-    boxes.resize(slots.kept);
-    ds.skippedTriangles += slots.degenerate + slots.nonFinite;
+    flattenMeshes(scene, {{&objectSpace, CLRT_INVALID}}, ds, boxes);  // corner attributes after those stored
     BottomLevel b;
-    b.triangles = slots.kept;
+    b.triangles = boxes.size();
     if (b.triangles == 0) return b;
     for (const BvhItem& box : boxes) {
         b.box.grow(Vec3(box.lo[0], box.lo[1], box.lo[2]));
         b.box.grow(Vec3(box.hi[0], box.hi[1], box.hi[2]));
     }
+    const auto tb = std::chrono::steady_clock::now();
     BvhBuildOptions opts;
     opts.traversalCost = 2;  // as the world BVH's (flatten_geometry.cpp, buildDeviceBvh)
     Bvh bvh = buildBvh(std::move(boxes), opts);  // consumes the boxes
-    putInLeafOrder(bvh, ds.triangles.data() + base, ds.triangleShading.data() + base, int(b.triangles));
+    if (leafOrder) putInLeafOrder(bvh, ds.triangles.data() + base, ds.triangleShading.data() + base, int(b.triangles));
     const size_t firstLeaf = ds.bvh4.leaves.size();
-    b.rootNode = appendBvh4(std::move(bvh), int(base), ds.bvh4, maxStack);
+    b.rootNode = appendBvh4(std::move(bvh), int(base), ds.bvh4, maxStack, spareNodes);
     setLeafTriangles(ds.bvh4, ds.triangles, int(ds.triangles.size()), firstLeaf);
+    ds.bvhSeconds += secondsSince(tb);
     return b;
 }
 
@@ -110,6 +102,7 @@ int appendTopLevel(const std::vector<Aabb>& boxes, DeviceScene& ds, int* maxStac
     Bvh top = buildBvh(boxes, opts);
     Bvh4 b4 = collapseBvh4(top);
     const int nodeOffset = int(ds.bvh4.nodes.size());
+    ds.bvh4.nodes.reserve(ds.bvh4.nodes.size() + b4.nodes.size());  // room kept by the bottom levels
     for (dev::Bvh4Node n : b4.nodes) {
         int* child = &n.child.x;
         int* count = &n.count.x;
@@ -166,7 +159,7 @@ size_t bottomLevelTriangles(const Scene& scene, const std::vector<bool>& instanc
 }
 
 void flattenInstances(const Scene& scene, const std::vector<std::pair<const Shape*, int>>& jobs, int numWorldTriangles,
-                      DeviceScene& ds) {
+                      DeviceScene& ds, bool leafOrder) {
     const int numWorldLeaves = int(ds.bvh4.leaves.size());
     const int worldStack = std::max(1, ds.bvh4.maxStack);
     std::map<std::pair<int, bool>, BottomLevel> bottoms;
@@ -174,7 +167,8 @@ void flattenInstances(const Scene& scene, const std::vector<std::pair<const Shap
     for (const auto& job : jobs) {
         if (bottoms.count(bottomKey(*job.first))) continue;
         int stack = 0;
-        bottoms[bottomKey(*job.first)] = appendBottomLevel(scene, *job.first, ds, &stack);
+        // The top level's 4-wide nodes: at most one per instance (each has two children or more).
+        bottoms[bottomKey(*job.first)] = appendBottomLevel(scene, *job.first, ds, leafOrder, jobs.size() + 1, &stack);
         bottomStack = std::max(bottomStack, stack);
     }
     // The world tree's sphere references follow every triangle.
