@@ -116,4 +116,11 @@ size_t hugeRecycledBytes() {
     return gRecycled;
 }
 
+size_t hugeKeptBytes() {
+    std::lock_guard<std::mutex> lock(gMutex);
+    size_t bytes = 0;
+    for (const Kept& k : gKept) bytes += k.bytes;
+    return bytes;
+}
+
 }  // namespace clrt

@@ -50,7 +50,8 @@ public:
     HugeRecycling(const HugeRecycling&) = delete;
     HugeRecycling& operator=(const HugeRecycling&) = delete;
 };
-size_t hugeRecycledBytes();  // bytes served from kept blocks so far (for tests and -v)
+size_t hugeRecycledBytes();  // bytes served from kept blocks so far (for tests)
+size_t hugeKeptBytes();      // bytes kept now, waiting for a request (0 outside every HugeRecycling scope)
 
 template <class T>
 struct HugePageAllocator {
