@@ -272,6 +272,54 @@ TEST_CASE("BVH4 structure on random, degenerate and deep trees", "[bvh4]") {
     }
 }
 
+// Walks two 4-wide trees from their roots in lane order: the same boxes (bit for bit), counts and leaf
+// primitives at every node, wherever each tree keeps its nodes and blocks. Returns the nodes compared.
+size_t sameTree4(const Bvh4& a, int na, const Bvh4& b, int nb) {
+    const dev::Bvh4Node &x = a.nodes[size_t(na)], &y = b.nodes[size_t(nb)];
+    REQUIRE(std::memcmp(&x.minX, &y.minX, 6 * sizeof(dev::float4)) == 0);
+    size_t compared = 1;
+    for (int i = 0; i < 4; ++i) {
+        const int cx = lane(x.child, i), cy = lane(y.child, i), count = lane(x.count, i);
+        REQUIRE(count == lane(y.count, i));
+        REQUIRE((cx == CLRT_INVALID) == (cy == CLRT_INVALID));
+        if (cx == CLRT_INVALID) continue;
+        if (count == 0) {
+            compared += sameTree4(a, cx, b, cy);
+            continue;
+        }
+        for (int k = 0; k < (count + 3) / 4; ++k)
+            REQUIRE(std::memcmp(&a.leaves[size_t(cx + k)].prim, &b.leaves[size_t(cy + k)].prim, sizeof(dev::int4)) == 0);
+    }
+    return compared;
+}
+
+TEST_CASE("BVH4 of a big tree, split over threads or in one pass: the same tree", "[bvh4]") {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> pos(-10, 10), unit(-1, 1);
+    std::vector<Tri> tris;
+    for (int i = 0; i < 60000; ++i) {
+        Vec3 c(pos(rng), pos(rng), pos(rng));
+        tris.push_back({c, c + Vec3(unit(rng), unit(rng), unit(rng)) * 0.3f, c + Vec3(unit(rng), unit(rng), unit(rng)) * 0.3f});
+    }
+    const auto boxes = triBoxes(tris);
+    const Bvh bin = buildBvh(boxes);
+    const Bvh4 onePass = collapseBvh4(bin, SIZE_MAX);
+    for (size_t split : {size_t(1), size_t(1000), kCollapseSplitNodes}) {
+        INFO("splitNodes " << split);
+        const Bvh4 b4 = collapseBvh4(bin, split);
+        checkStructure4(bin, b4, boxes);
+        REQUIRE(b4.nodes.size() == onePass.nodes.size());
+        REQUIRE(b4.leaves.size() == onePass.leaves.size());
+        CHECK(sameTree4(b4, 0, onePass, 0) == onePass.nodes.size());
+        CHECK(b4.maxStack == onePass.maxStack);
+        CHECK(b4.depth == onePass.depth);
+        if (split < bin.nodes.size())  // split: laid out otherwise (top first), else byte for byte the same
+            CHECK(std::memcmp(b4.nodes.data(), onePass.nodes.data(), b4.nodes.size() * sizeof(dev::Bvh4Node)) != 0);
+        else
+            CHECK(std::memcmp(b4.nodes.data(), onePass.nodes.data(), b4.nodes.size() * sizeof(dev::Bvh4Node)) == 0);
+    }
+}
+
 TEST_CASE("BVH4 appended after another tree equals its own collapse moved by the arrays before it", "[bvh4]") {
     // appendBvh4 (the two-level BVH's bottom levels, flatten_instances.cpp) writes a tree into arrays
     // that already hold one: node for node it must be collapseBvh4's, interior children moved by the

@@ -1,4 +1,5 @@
-// Binary -> 4-wide BVH collapse (see bvh4.h). Nodes are written depth-first, parent before children.
+// Binary -> 4-wide BVH collapse (see bvh4.h). Nodes are written depth-first, parent before children; a
+// big tree's top first, then its subtrees, each depth-first (SplitCollapse).
 #include "bvh/bvh4.h"
 
 #include <algorithm>
@@ -18,24 +19,22 @@ double halfArea(const BvhNode& n) {
     return dx * dy + dy * dz + dz * dx;
 }
 
+// The tree's leaf blocks' primitives: each binary leaf's primRefs, four to a block (the blocks are
+// made afterwards, makeLeaves).
+using BlockPrims = HostArray<dev::int4>;
+
+// Writes 4-wide nodes at fixed places: node i at out[i] (i counts in the whole nodes array), leaf block
+// j's primitives at blocks[j], from nextNode and nextBlock on. countOf tells how many of each emit uses.
 struct Collapser {
     const Bvh& bin;
-    HostArray<dev::Bvh4Node>& out;
-    std::vector<dev::int4>& blockPrims;  // each leaf block's primitives (the blocks are made afterwards)
+    dev::Bvh4Node* out;
+    dev::int4* blocks;
+    int nextNode = 0, nextBlock = 0;
     int depth = 0;
 
-    // Appends the blocks of binary leaf c (its primRefs, four to a block); returns the first block.
-    int emitLeaf(const BvhNode& c) {
-        const int firstBlock = int(blockPrims.size());
-        for (int k = 0; k < c.count; k += 4) {
-            dev::int4 prims;
-            int* prim = &prims.x;
-            for (int i = 0; i < 4; ++i)
-                prim[i] = k + i < c.count ? bin.primRefs[size_t(c.first + k + i)] : CLRT_INVALID;
-            blockPrims.push_back(prims);
-        }
-        return firstBlock;
-    }
+    struct Counts {
+        size_t nodes = 0, blocks = 0;
+    };
 
     // The binary nodes that become the lanes of the 4-wide node made for binary node b: a leaf root
     // alone, else b's children, opening the interior lane with the largest area until there are four.
@@ -66,55 +65,73 @@ struct Collapser {
         return k;
     }
 
-    // The 4-wide nodes emit(b) writes (the same choices, nothing written): so `out` is sized exactly.
-    size_t countNodes(int b) const {
+    // The 4-wide nodes and leaf blocks emit(b) writes (the same choices, nothing written).
+    Counts countOf(int b) const {
         int lanes[4];
         const int k = lanesOf(b, lanes);
-        size_t n = 1;
-        for (int i = 0; i < k; ++i)
-            if (bin.nodes[size_t(lanes[i])].count == 0) n += countNodes(lanes[i]);
+        Counts n;
+        n.nodes = 1;
+        for (int i = 0; i < k; ++i) {
+            const BvhNode& c = bin.nodes[size_t(lanes[i])];
+            if (c.count > 0) {
+                n.blocks += size_t(c.count + 3) / 4;
+            } else {
+                const Counts sub = countOf(lanes[i]);
+                n.nodes += sub.nodes;
+                n.blocks += sub.blocks;
+            }
+        }
         return n;
     }
 
-    // Writes the 4-wide node for binary node b and its subtree; returns {index, stack need}.
-    // Stack need of a subtree: the most entries its traversal pushes, from an empty stack (a node
-    // with k hit children pushes k - 1 and goes on into one of them).
+    // Writes the blocks of binary leaf c (its primRefs, four to a block); returns the first block.
+    int emitLeaf(const BvhNode& c) {
+        // The traversal packs a leaf into one stack entry: ~(first << 4 | count).
+        if (c.count > CLRT_BVH4_MAX_LEAF)
+            throw std::logic_error("collapseBvh4: leaf of " + std::to_string(c.count) + " primitives");
+        if (c.first > CLRT_BVH4_MAX_PRIMS - c.count)
+            throw std::runtime_error("scene has more than " + std::to_string(CLRT_BVH4_MAX_PRIMS) +
+                                     " primitives (the BVH's limit)");
+        const int firstBlock = nextBlock;
+        for (int k = 0; k < c.count; k += 4) {
+            int* prim = &blocks[size_t(nextBlock++)].x;
+            for (int i = 0; i < 4; ++i)
+                prim[i] = k + i < c.count ? bin.primRefs[size_t(c.first + k + i)] : CLRT_INVALID;
+        }
+        return firstBlock;
+    }
+
+    // Lane i of node: the box of binary node c (empty: c null), its child and count.
+    static void setLane(dev::Bvh4Node& node, int i, const BvhNode* c, int child, int count) {
+        float* mn[3] = {&node.minX.x, &node.minY.x, &node.minZ.x};
+        float* mx[3] = {&node.maxX.x, &node.maxY.x, &node.maxZ.x};
+        for (int a = 0; a < 3; ++a) {
+            mn[a][i] = c ? (&c->boundsMin.x)[a] : INFINITY;
+            mx[a][i] = c ? (&c->boundsMax.x)[a] : -INFINITY;
+        }
+        (&node.child.x)[i] = child;
+        (&node.count.x)[i] = count;
+    }
+
+    // Writes the 4-wide node for binary node b and its subtree, depth-first; returns {index, stack
+    // need}. Stack need of a subtree: the most entries its traversal pushes, from an empty stack (a
+    // node with k hit children pushes k - 1 and goes on into one of them).
     std::pair<int, int> emit(int b, int level) {
         depth = std::max(depth, level);
-        const int idx = int(out.size());
-        out.emplace_back();
+        const int idx = nextNode++;
         int lanes[4];
         const int k = lanesOf(b, lanes);
         dev::Bvh4Node node;
-        float* mn[3] = {&node.minX.x, &node.minY.x, &node.minZ.x};
-        float* mx[3] = {&node.maxX.x, &node.maxY.x, &node.maxZ.x};
-        int* child = &node.child.x;
-        int* count = &node.count.x;
         int need = 0;
         for (int i = 0; i < 4; ++i) {
-            if (i >= k) {
-                for (int a = 0; a < 3; ++a) { mn[a][i] = INFINITY; mx[a][i] = -INFINITY; }
-                child[i] = CLRT_INVALID;
-                count[i] = 0;
-                continue;
-            }
-            const BvhNode& c = bin.nodes[size_t(lanes[i])];
-            const float* lo = &c.boundsMin.x;
-            const float* hi = &c.boundsMax.x;
-            for (int a = 0; a < 3; ++a) { mn[a][i] = lo[a]; mx[a][i] = hi[a]; }
-            if (c.count > 0) {
-                // The traversal packs a leaf into one stack entry: ~(first << 4 | count).
-                if (c.count > CLRT_BVH4_MAX_LEAF)
-                    throw std::logic_error("collapseBvh4: leaf of " + std::to_string(c.count) + " primitives");
-                if (c.first > CLRT_BVH4_MAX_PRIMS - c.count)
-                    throw std::runtime_error("scene has more than " + std::to_string(CLRT_BVH4_MAX_PRIMS) +
-                                             " primitives (the BVH's limit)");
-                child[i] = emitLeaf(c);
-                count[i] = c.count;
+            const BvhNode* c = i < k ? &bin.nodes[size_t(lanes[i])] : nullptr;
+            if (!c) {
+                setLane(node, i, nullptr, CLRT_INVALID, 0);
+            } else if (c->count > 0) {
+                setLane(node, i, c, emitLeaf(*c), c->count);
             } else {
-                auto sub = emit(lanes[i], level + 1);
-                child[i] = sub.first;
-                count[i] = 0;
+                const auto sub = emit(lanes[i], level + 1);
+                setLane(node, i, c, sub.first, 0);
                 need = std::max(need, sub.second);
             }
         }
@@ -132,30 +149,156 @@ void reserveMore(HostArray<T>& a, size_t more) {
     if (need > a.capacity()) a.reserve(a.empty() ? need : std::max(need, a.capacity() + a.capacity() / 2));
 }
 
+// The collapse of a big tree on all threads. Its top (4-wide nodes over binary subtrees of more than
+// taskSpan binary nodes) is planned on this thread; the subtrees under it are counted, then written, in
+// parallel, each at the place its counts give: the top's nodes first (in pre-order), then each subtree's
+// (in pre-order), subtrees in the order the top meets them; leaf blocks alike (the top's own leaves
+// first). The same 4-wide nodes as one depth-first pass, laid out by the tree alone (never by the
+// thread count), parents before children.
+class SplitCollapse {
+public:
+    SplitCollapse(const Bvh& bin, size_t taskSpan) : bin_(bin), taskSpan_(taskSpan), c_{bin, nullptr, nullptr} {}
+
+    // Appends the tree's nodes to `nodes` (spareNodes more reserved) and fills `blocks`; *maxStack, *depth.
+    void run(HostArray<dev::Bvh4Node>& nodes, BlockPrims& blocks, size_t spareNodes, int* maxStack, int* depth) {
+        plan(0, 1);
+        std::vector<Collapser::Counts> counts(tasks_.size());
+        parallelFor(tasks_.size(), [&](size_t t) { counts[t] = c_.countOf(tasks_[t].binary); });
+        const size_t base = nodes.size();
+        size_t nodeEnd = base + tops_.size(), blockEnd = topBlocks_;
+        for (size_t t = 0; t < tasks_.size(); ++t) {
+            tasks_[t].node = int(nodeEnd);
+            tasks_[t].block = int(blockEnd);
+            nodeEnd += counts[t].nodes;
+            blockEnd += counts[t].blocks;
+        }
+        reserveMore(nodes, nodeEnd - base + spareNodes);
+        nodes.resize(nodeEnd);
+        blocks.resize(blockEnd);
+        parallelFor(tasks_.size(), [&](size_t t) {
+            Collapser c{bin_, nodes.data(), blocks.data(), tasks_[t].node, tasks_[t].block};
+            tasks_[t].need = c.emit(tasks_[t].binary, tasks_[t].level).second;
+            tasks_[t].depth = c.depth;
+        });
+        *maxStack = writeTop(nodes, blocks, base);
+        *depth = 0;
+        for (const Top& top : tops_) *depth = std::max(*depth, top.level);
+        for (const Task& t : tasks_) *depth = std::max(*depth, t.depth);
+    }
+
+private:
+    enum Kind { kLeaf, kTop, kTask };
+    struct Top {
+        int binary, level, k;
+        int lanes[4];
+        Kind kind[4];
+        int ref[4];  // kTop: index in tops_; kTask: index in tasks_
+    };
+    struct Task {
+        int binary, level;
+        int node = 0, block = 0, need = 0, depth = 0;
+    };
+
+    // Binary nodes in b's subtree (depth-first layout: it ends at its rightmost leaf).
+    size_t span(int b) const {
+        int e = b;
+        while (bin_.nodes[size_t(e)].count == 0) e = bin_.nodes[size_t(e)].first;
+        return size_t(e) + 1 - size_t(b);
+    }
+
+    // Plans the top node made for binary node b (in pre-order); returns its index in tops_.
+    int plan(int b, int level) {
+        const int t = int(tops_.size());
+        tops_.push_back(Top{b, level, 0, {}, {}, {}});
+        int lanes[4];
+        const int k = c_.lanesOf(b, lanes);
+        tops_[size_t(t)].k = k;
+        for (int i = 0; i < k; ++i) {
+            tops_[size_t(t)].lanes[i] = lanes[i];
+            const BvhNode& c = bin_.nodes[size_t(lanes[i])];
+            Kind kind = kLeaf;
+            int ref = -1;
+            if (c.count > 0) {
+                topBlocks_ += size_t(c.count + 3) / 4;
+            } else if (span(lanes[i]) > taskSpan_) {
+                kind = kTop;
+                ref = plan(lanes[i], level + 1);
+            } else {
+                kind = kTask;
+                ref = int(tasks_.size());
+                tasks_.push_back(Task{lanes[i], level + 1});
+            }
+            tops_[size_t(t)].kind[i] = kind;
+            tops_[size_t(t)].ref[i] = ref;
+        }
+        return t;
+    }
+
+    // Writes the top's nodes (at base on) and its own leaves' blocks (from 0); returns the root's
+    // stack need. Children come after their parents in tops_, so a backward pass has their needs.
+    int writeTop(HostArray<dev::Bvh4Node>& nodes, BlockPrims& blocks, size_t base) {
+        Collapser c{bin_, nodes.data(), blocks.data(), 0, 0};
+        std::vector<int> need(tops_.size(), 0);
+        std::vector<int> leafBlock(4 * tops_.size(), 0);
+        for (size_t t = 0; t < tops_.size(); ++t)  // blocks in pre-order
+            for (int i = 0; i < tops_[t].k; ++i)
+                if (tops_[t].kind[i] == kLeaf) leafBlock[4 * t + size_t(i)] = c.emitLeaf(bin_.nodes[size_t(tops_[t].lanes[i])]);
+        for (size_t t = tops_.size(); t-- > 0;) {
+            const Top& top = tops_[t];
+            dev::Bvh4Node node;
+            int lanesNeed = 0;
+            for (int i = 0; i < 4; ++i) {
+                const BvhNode* b = i < top.k ? &bin_.nodes[size_t(top.lanes[i])] : nullptr;
+                if (!b) { Collapser::setLane(node, i, nullptr, CLRT_INVALID, 0); continue; }
+                if (top.kind[i] == kLeaf) { Collapser::setLane(node, i, b, leafBlock[4 * t + size_t(i)], b->count); continue; }
+                const bool isTop = top.kind[i] == kTop;
+                const int child = isTop ? int(base) + top.ref[i] : tasks_[size_t(top.ref[i])].node;
+                lanesNeed = std::max(lanesNeed, isTop ? need[size_t(top.ref[i])] : tasks_[size_t(top.ref[i])].need);
+                Collapser::setLane(node, i, b, child, 0);
+            }
+            need[t] = lanesNeed + (top.k - 1);
+            nodes[base + t] = node;
+        }
+        return need[0];
+    }
+
+    const Bvh& bin_;
+    size_t taskSpan_;
+    Collapser c_;  // for lanesOf and countOf (writes nothing)
+    std::vector<Top> tops_;
+    std::vector<Task> tasks_;
+    size_t topBlocks_ = 0;
+};
+
 // The 4-wide nodes of `bvh` appended to `nodes` (child indices of interior lanes are indices of
-// `nodes`, leaf lanes index blockPrims), and its leaf blocks' primitives into blockPrims; *maxStack and
-// *depth its figures. False for an empty tree (then one empty node is appended).
-bool collapseNodes(const Bvh& bvh, HostArray<dev::Bvh4Node>& nodes, std::vector<dev::int4>& blockPrims, int* maxStack,
-                   int* depth, size_t spareNodes = 0) {
+// `nodes`, leaf lanes index blocks), and its leaf blocks' primitives into blocks; *maxStack and
+// *depth its figures. A tree of splitNodes binary nodes or more is collapsed by SplitCollapse.
+// False for an empty tree (then one empty node is appended).
+bool collapseNodes(const Bvh& bvh, HostArray<dev::Bvh4Node>& nodes, BlockPrims& blocks, int* maxStack, int* depth,
+                   size_t spareNodes, size_t splitNodes) {
     if (bvh.primRefs.empty() || bvh.nodes.empty()) {
         dev::Bvh4Node empty;
-        empty.minX = empty.minY = empty.minZ = {INFINITY, INFINITY, INFINITY, INFINITY};
-        empty.maxX = empty.maxY = empty.maxZ = {-INFINITY, -INFINITY, -INFINITY, -INFINITY};
-        empty.child = {CLRT_INVALID, CLRT_INVALID, CLRT_INVALID, CLRT_INVALID};
-        empty.count = {0, 0, 0, 0};
+        for (int i = 0; i < 4; ++i) Collapser::setLane(empty, i, nullptr, CLRT_INVALID, 0);
         nodes.push_back(empty);
         *maxStack = 0;
         *depth = 1;
         return false;
     }
-    Collapser c{bvh, nodes, blockPrims};
-    reserveMore(nodes, c.countNodes(0) + spareNodes);  // exactly, so a recycled block fits (util/huge_pages.h)
-    size_t blocks = 0;  // exactly: each binary leaf's primitives, four to a block (no growth, no copies)
-    for (const BvhNode& n : bvh.nodes)
-        if (n.count > 0) blocks += size_t(n.count + 3) / 4;
-    blockPrims.reserve(blocks);
-    *maxStack = c.emit(0, 1).second;
-    *depth = c.depth;
+    if (bvh.nodes.size() >= splitNodes) {
+        SplitCollapse(bvh, std::max<size_t>(bvh.nodes.size() / 64, 1)).run(nodes, blocks, spareNodes, maxStack, depth);
+    } else {
+        Collapser c{bvh, nullptr, nullptr};
+        const Collapser::Counts n = c.countOf(0);  // sized exactly, so a recycled block fits (util/huge_pages.h)
+        reserveMore(nodes, n.nodes + spareNodes);
+        const size_t base = nodes.size();
+        nodes.resize(base + n.nodes);
+        blocks.resize(n.blocks);
+        c.out = nodes.data();
+        c.blocks = blocks.data();
+        c.nextNode = int(base);
+        *maxStack = c.emit(0, 1).second;
+        *depth = c.depth;
+    }
     if (*maxStack > CLRT_BVH4_STACK_SIZE)
         throw std::logic_error("collapseBvh4: traversal stack need " + std::to_string(*maxStack) +
                                " exceeds CLRT_BVH4_STACK_SIZE");
@@ -167,7 +310,7 @@ constexpr size_t kBlocksPerTask = 16384;  // leaf blocks per parallelFor item (2
 // The leaf blocks from their primitives, moved by primOffset, appended to `leaves` (vertices zero
 // until setLeafTriangles). Written on all threads: most of the time is the kernel zeroing the fresh
 // pages each thread touches first (resize leaves them unwritten, util/huge_pages.h).
-void makeLeaves(const std::vector<dev::int4>& blockPrims, int primOffset, HostArray<dev::Bvh4Leaf>& leaves) {
+void makeLeaves(const BlockPrims& blockPrims, int primOffset, HostArray<dev::Bvh4Leaf>& leaves) {
     reserveMore(leaves, blockPrims.size());
     const size_t first = leaves.size(), count = blockPrims.size();
     leaves.resize(first + count);
@@ -186,17 +329,17 @@ void makeLeaves(const std::vector<dev::int4>& blockPrims, int primOffset, HostAr
 
 }  // namespace
 
-Bvh4 collapseBvh4(const Bvh& bvh) {
+Bvh4 collapseBvh4(const Bvh& bvh, size_t splitNodes) {
     Bvh4 r;
-    std::vector<dev::int4> blockPrims;
-    if (collapseNodes(bvh, r.nodes, blockPrims, &r.maxStack, &r.depth)) makeLeaves(blockPrims, 0, r.leaves);
+    BlockPrims blockPrims;
+    if (collapseNodes(bvh, r.nodes, blockPrims, &r.maxStack, &r.depth, 0, splitNodes)) makeLeaves(blockPrims, 0, r.leaves);
     return r;
 }
 
 Bvh4 collapseBvh4(Bvh&& bvh) {
     Bvh4 r;
-    std::vector<dev::int4> blockPrims;
-    const bool any = collapseNodes(bvh, r.nodes, blockPrims, &r.maxStack, &r.depth);
+    BlockPrims blockPrims;
+    const bool any = collapseNodes(bvh, r.nodes, blockPrims, &r.maxStack, &r.depth, 0, kCollapseSplitNodes);
     bvh = Bvh{};  // freed before the leaf blocks are allocated
     if (any) makeLeaves(blockPrims, 0, r.leaves);
     return r;
@@ -204,9 +347,9 @@ Bvh4 collapseBvh4(Bvh&& bvh) {
 
 int appendBvh4(Bvh&& bvh, int primOffset, Bvh4& into, int* maxStack, size_t spareNodes) {
     const size_t root = into.nodes.size(), leafOffset = into.leaves.size();
-    std::vector<dev::int4> blockPrims;
+    BlockPrims blockPrims;
     int stack = 0, depth = 0;
-    const bool any = collapseNodes(bvh, into.nodes, blockPrims, &stack, &depth, spareNodes);
+    const bool any = collapseNodes(bvh, into.nodes, blockPrims, &stack, &depth, spareNodes, kCollapseSplitNodes);
     bvh = Bvh{};  // freed before the leaf blocks are allocated
     for (size_t n = root; n < into.nodes.size(); ++n) {
         dev::Bvh4Node& node = into.nodes[n];

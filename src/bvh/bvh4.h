@@ -20,11 +20,18 @@ struct Bvh4 {
     int depth = 0;     // node levels on the longest root-to-leaf path
 };
 
+// A tree of this many binary nodes or more is collapsed on all threads: its top (nodes over subtrees of
+// more than 1/64 of the tree) on one, the subtrees below in parallel, each written where counting it
+// says. Nodes are then laid out top first, subtree after subtree (each depth-first), which depends on the
+// tree alone: the same nodes, and the same traversal, as one depth-first pass gives.
+constexpr size_t kCollapseSplitNodes = size_t(1) << 18;
+
 // Always succeeds for a tree from buildBvh (maxStack <= CLRT_BVH4_STACK_SIZE); throws
 // std::logic_error for a hand-made tree that breaks that bound.
 // Leaf lanes point at blocks of `leaves` whose prim holds the binary tree's primRefs (in leaf order);
-// their vertices are zero until setLeafTriangles.
-Bvh4 collapseBvh4(const Bvh& bvh);
+// their vertices are zero until setLeafTriangles. splitNodes: see kCollapseSplitNodes (tests compare
+// the split layout with one pass, SIZE_MAX).
+Bvh4 collapseBvh4(const Bvh& bvh, size_t splitNodes = kCollapseSplitNodes);
 // The same, freeing the binary tree (left empty) before the leaf blocks are allocated, so the two are
 // never held together: what flattening does, since nothing reads its binary tree afterwards.
 Bvh4 collapseBvh4(Bvh&& bvh);
