@@ -295,7 +295,7 @@ void twoLevelInputs(const Scene& scene, std::vector<TwoLevelMesh>& meshes, std::
     }
 }
 
-// Brute force over the world-space triangles of every mesh shape (as flattenMesh places them), each
+// Brute force over the world-space triangles of every mesh shape (as flattening places them), each
 // at its position at shutter time `time`: the closest (t, shape, triangle).
 TwoLevelHit bruteForce(const Scene& scene, const Vec3& org, const Vec3& dir, float time) {
     TwoLevelHit best;

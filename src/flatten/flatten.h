@@ -61,24 +61,9 @@ bool mirrorsOrientation(const Mat4& m);
 void flattenLights(const Scene& scene, DeviceScene& ds, ImageAtlas& atlas);
 
 // ---- shared by flatten_geometry.cpp and flatten_instances.cpp ----
-// Where a run of triangles is written: the slots from `first` of the scene's arrays (triangles, their
-// shading and boxes; their corner attributes from `attributes`, which is triAttributes[attributeBase]),
-// and what was left out (degenerate and non-finite triangles, counted).
-struct TriangleSlots {
-    dev::Triangle* triangles;
-    dev::TriangleShading* shading;
-    BvhItem* boxes;  // each kept triangle's box (swept over the shutter), for the BVH
-    float* attributes;
-    size_t attributeBase;
-    size_t kept = 0, degenerate = 0, nonFinite = 0;
-};
-// The triangles of one mesh shape in world space (or, with an identity transform, in object space), in
-// index order, written into out's slots (room for every triangle of the mesh and its attribute floats;
-// degenerate and non-finite ones counted and left out, out.kept the rest).
-void flattenMesh(const Scene& scene, const Shape& s, int texSet, TriangleSlots& out);
 // The mesh shapes of `jobs` (shape, texture set) on all hardware threads, appended to ds.triangles,
-// ds.triangleShading, ds.triangleAttributes and `boxes` in job and index order (what flattenMesh would
-// give one after another); degenerate and non-finite triangles left out, counted in ds.skippedTriangles
+// ds.triangleShading, ds.triangleAttributes and `boxes` in job and index order (what one thread writing
+// them in turn would give); degenerate and non-finite triangles left out, counted in ds.skippedTriangles
 // and returned as {degenerate, non-finite}.
 std::pair<size_t, size_t> flattenMeshes(const Scene& scene, const std::vector<std::pair<const Shape*, int>>& jobs,
                                         DeviceScene& ds, BvhItems& boxes);

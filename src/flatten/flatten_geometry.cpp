@@ -53,6 +53,17 @@ Vec3 faceNormal(const Vec3& p0, const Vec3& p1, const Vec3& p2, float* len) {
 
 }  // namespace
 
+// Where a run of triangles is written: slots of the scene's arrays (triangles, their
+// shading and boxes; their corner attributes from `attributes`, which is triAttributes[attributeBase]),
+// and what was left out (degenerate and non-finite triangles, counted).
+struct TriangleSlots {
+    dev::Triangle* triangles;
+    dev::TriangleShading* shading;
+    BvhItem* boxes;  // each kept triangle's box (swept over the shutter), for the BVH
+    float* attributes;
+    size_t attributeBase;
+    size_t kept = 0, degenerate = 0, nonFinite = 0;
+};
 // A mesh shape's vertices in world space, and its smooth normals: what its triangles are made from.
 struct MeshVertices {
     std::vector<Vec3> pw, nw;
@@ -135,12 +146,6 @@ void flattenTriangles(const Scene& scene, const Shape& s, int texSet, const Mesh
     }
 }
 
-
-void flattenMesh(const Scene& scene, const Shape& s, int texSet, TriangleSlots& out) {
-    MeshVertices mv;
-    meshVertices(scene, s, mv);
-    flattenTriangles(scene, s, texSet, mv, 0, scene.meshes.at(s.meshIndex).indices.size() / 3, out);
-}
 
 namespace {
 
