@@ -21,7 +21,24 @@ without references (classic, json2025) get one line each saying so. The rules (i
                  the figure is the larger ratio err(a, ref) / (err(a, b) * (1 + N / R)), ok when <= 1. At N < R a PNG
                  is judged per pixel only (the 8-bit clamp and floor of the noisier image shift its block means).
                  And the image's mean per channel within 1% + 3 sigma of the reference's (sigma: the standard error
-                 of the difference of the means, from the two renders; the course's RR references fail here).
+                 of the difference of the means, from the two renders).
+  roulette       (a path camera with RussianRoulette in RendererParams) the course's RR references follow a
+                 biased rule that `clrt render --rr-rule course` reproduces, with infinite variance (heavy
+                 tails: plain means and MSEs swing by tens of per cent between seeds), so they are judged as
+                 in docs/studies/2026-12-03-russian-roulette-references.md, by clipped means: two renders a, b
+                 (--seed 1 and 2, --sampler independent, --rr-rule course) at the reference's size and spp R
+                 (a clipped mean depends on a pixel's sample count and footprint); the image cut into 8x8
+                 blocks; in each block and channel every pixel (of a, b and the reference) clipped at the
+                 reference's 95th percentile of that block and channel, m = the mean of a's and b's clipped
+                 means, m_ref the reference's over the same pixels. ok when in every block and channel
+                 |m - m_ref| <= 1% m_ref + 4 sigma, sigma^2 = v (1 / 2n + 1 / n), v the variance of a clipped
+                 pixel (half that of the block's clipped a - b differences), n the block's pixels (the
+                 reference's pixels as noisy as clrt's: same spp); and the same for the whole image's clipped
+                 mean (the mean of the blocks', sigma from theirs). The figure: the image's ratios m / m_ref
+                 and the share of its tolerance used, the blocks' range of ratios and the worst block. The
+                 95th percentile, not the study's 99th: at the 99th a block of the reduced check keeps too
+                 few clipped pixels for a variance from two renders (seeds 1 and 2: a block at 1.25 of its
+                 tolerance). clrt's unbiased default rule fails it (--rr-rule unbiased renders with it).
   perlin         (a TextureMap type="perlin": its lattice is not the course's, the pattern can't be matched)
                  the luminance (0.2126 R + 0.7152 G + 0.0722 B) mean and standard deviation of the whole
                  image each within 2% of the reference's; the PSNR is printed too.
@@ -31,7 +48,9 @@ scenes in KNOWN_EDITED, which ../shared edited so that its reference no longer s
 --reduced (CI): sampled PNG scenes at N = min(R, 4) spp at full size (their 8-bit values are clamped, so a
 smaller render's pixel is not the mean of the reference's block), sampled EXR scenes at a quarter of the width and
 height (each clrt pixel against the mean of the reference's 4x4 block) and N = min(R, 16); deterministic and Perlin
-scenes are unchanged (their rules need the full image). --expected FILE: the list of cameras known to fail
+scenes are unchanged (their rules need the full image); roulette cameras with an EXR reference render every 8th
+pixel row only (clrt render --part 1/8 --tile-pixels WIDTH: the same pixels as the full render's, at R spp), each
+block judged on those rows (its clipping bound still from all its reference pixels). --expected FILE: the list of cameras known to fail
 (tests/course_expected_failures.txt); a FAIL listed there does not fail the run, a FAIL not listed does, and a
 listed camera that passes is reported so the list can shrink.
 Exit status: 1 when a camera FAILs (without --expected) or FAILs unlisted (with it), else 0.
@@ -65,6 +84,11 @@ BLOCK = 8          # block scale of the sampled rule, in reference pixels
 REDUCED_SPP_PNG = 4
 REDUCED_SPP_EXR = 16
 REDUCED_SCALE = 4  # EXR sampled scenes in --reduced: resolution / 4
+REDUCED_RR_ROWS = 8  # roulette cameras (EXR) in --reduced: every 8th pixel row (clrt render --part 1/8, a row a tile)
+RR_GRID = 8        # roulette rule: the image cut into RR_GRID x RR_GRID blocks
+RR_PERCENTILE = 95 # each pixel clipped at the reference's 95th percentile of its block and channel
+RR_SIGMAS = 4.0    # a block's clipped mean within RR_FLOOR + RR_SIGMAS sigma of the reference's
+RR_FLOOR = 0.01
 
 
 # ---------------------------------------------------------------- images
@@ -153,6 +177,7 @@ def cameras_of(root):
         aperture = float(first_text(c, "ApertureSize", "0") or 0)
         renderer = first_text(c, "Renderer")
         res = [int(x) for x in first_text(c, "ImageResolution", "0 0").split()[:2]]
+        rr = "russianroulette" in first_text(c, "RendererParams").lower().split()
         traits = set()
         if spp > 1:
             traits.add("NumSamples %d" % spp)
@@ -160,7 +185,7 @@ def cameras_of(root):
             traits.add("depth of field")
         if renderer.lower() == "pathtracing":
             traits.add("path tracing")
-        cams.append(dict(id=c.get("id", str(i + 1)), image=name, spp=max(spp, 1), traits=traits, res=res))
+        cams.append(dict(id=c.get("id", str(i + 1)), image=name, spp=max(spp, 1), traits=traits, res=res, rr=rr))
     return cams
 
 
@@ -188,7 +213,7 @@ class Renderer:
     def __init__(self, args, tmp):
         self.args, self.tmp, self.n = args, tmp, 0
 
-    def render(self, scene, cam, image, seed, spp=None, sampler=None, res=None):
+    def render(self, scene, cam, image, seed, spp=None, sampler=None, res=None, rr_rule=None, rows_of=None):
         """Renders one camera; returns (image array, None) or (None, error line)."""
         self.n += 1
         out = os.path.join(self.tmp, "r%d" % self.n)
@@ -201,6 +226,11 @@ class Renderer:
             cmd += ["--sampler", sampler]
         if res:
             cmd += ["--resolution", "%dx%d" % tuple(res)]
+        if rr_rule:
+            cmd += ["--rr-rule", rr_rule]
+        if rows_of:  # (n, width): every n-th pixel row from the first, as the EXR part file of --part 1/n
+            cmd += ["--part", "1/%d" % rows_of[0], "--tile-pixels", str(rows_of[1])]
+            image += ".part1of%d.exr" % rows_of[0]
         try:
             p = subprocess.run(cmd, capture_output=True, text=True, timeout=self.args.timeout)
         except subprocess.TimeoutExpired:
@@ -293,6 +323,66 @@ def judge_means(a, b, ref, k):
     return ok, "mean ratio %.3f %.3f %.3f (within %.1f%%)" % (*ratio, 100 * float(tol.max()))
 
 
+def blocks(img, g):
+    """G x G x (pixels per block) x 3: the image cut into a g x g grid of equal blocks."""
+    h, w = img.shape[0] // g * g, img.shape[1] // g * g
+    bh, bw = h // g, w // g
+    return img[:h, :w].reshape(g, bh, g, bw, 3).transpose(0, 2, 1, 3, 4).reshape(g, g, bh * bw, 3)
+
+
+def judge_roulette(r, scene, cam, ref, reduced, rr_rule):
+    """Russian-roulette cameras: block means of values clipped at the reference's percentile (the 2026-12-03
+    study's method), the tolerance from clrt's two renders. Renders keep the reference's spp and pixels (a
+    clipped mean depends on a pixel's sample count and footprint); --reduced renders every 8th row only."""
+    R = cam["spp"]
+    h, w = ref.shape[:2]
+    if w % RR_GRID or h % RR_GRID:
+        return False, "size %dx%d is not divisible into %dx%d blocks" % (w, h, RR_GRID, RR_GRID)
+    exr = cam["image"].lower().endswith(".exr")  # a --part file is an EXR: a PNG reference needs the whole image
+    k = REDUCED_RR_ROWS if reduced and exr and h % (RR_GRID * REDUCED_RR_ROWS) == 0 else 1
+    imgs = []
+    for seed in (1, 2):
+        img, err = r.render(scene, cam["id"], cam["image"], seed, spp=R, sampler="independent", rr_rule=rr_rule,
+                            rows_of=(k, w) if k > 1 else None)
+        if err:
+            return False, err
+        if img.shape[:2] != (h, w):
+            return False, "size %dx%d, reference %dx%d" % (img.shape[1], img.shape[0], w, h)
+        imgs.append(img)
+    rb = blocks(ref, RR_GRID)
+    bound = np.percentile(rb, RR_PERCENTILE, axis=2, keepdims=True)   # G x G x 1 x 3, from all its pixels
+    # The rendered rows of each block (every k-th row of the image, the same pixels in both renders).
+    picked = blocks(np.repeat((np.arange(h) % k == 0)[:, None, None], w, axis=1).repeat(3, axis=2), RR_GRID)
+    sel = picked[0, 0, :, 0] > 0        # the same pattern in every block (h divisible by RR_GRID * k)
+    ca, cb, cr = (np.minimum(blocks(i, RR_GRID)[:, :, sel], bound) for i in (*imgs, ref))
+    n = ca.shape[2]
+    m_clrt = 0.5 * (ca.mean(axis=2) + cb.mean(axis=2))
+    m_ref = cr.mean(axis=2)
+    # Per-pixel variance of a clipped value, from the two renders' differences (independent pixels); the
+    # reference's pixels (the same ones) have the same (same spp, same rule when the rule is right).
+    v_pix = (ca - cb).var(axis=2) / 2.0
+    sigma = np.sqrt(v_pix * (1.0 / (2.0 * n) + 1.0 / n))
+    limit = RR_FLOOR * m_ref + RR_SIGMAS * sigma
+    dev = np.abs(m_clrt - m_ref)
+    score = np.where(limit > 0, dev / np.where(limit > 0, limit, 1.0), np.where(dev > 0, np.inf, 0.0))
+    ratio = m_clrt / np.maximum(m_ref, 1e-12)
+    worst = float(score.max())
+    bi, bj, ch = np.unravel_index(int(np.argmax(score)), score.shape)
+    # The whole image: the mean of the blocks' clipped means (equal blocks), its sigma from theirs.
+    g2 = RR_GRID * RR_GRID
+    im_clrt, im_ref = m_clrt.mean(axis=(0, 1)), m_ref.mean(axis=(0, 1))
+    im_limit = RR_FLOOR * im_ref + RR_SIGMAS * np.sqrt((sigma ** 2).sum(axis=(0, 1))) / g2
+    im_ratio = im_clrt / np.maximum(im_ref, 1e-12)
+    im_worst = float(np.max(np.abs(im_clrt - im_ref) / np.maximum(im_limit, 1e-300)))
+    what = ("image clipped-mean ratio %.3f %.3f %.3f (within %.1f%%: %.2f of it); %dx%d blocks %.3f-%.3f, worst %.2f "
+            "of its %.1f%% (row %d col %d %s: %.3f), %d over; %d vs %d spp%s, --rr-rule %s") % (
+        *im_ratio, 100 * float(np.max(im_limit / np.maximum(im_ref, 1e-12))), im_worst, RR_GRID, RR_GRID,
+        float(ratio.min()), float(ratio.max()), worst, 100 * float(limit[bi, bj, ch] / max(m_ref[bi, bj, ch], 1e-12)),
+        bi, bj, "RGB"[ch], float(ratio[bi, bj, ch]), int((score > 1.0).sum()), R, R, ", every %dth row" % k if k > 1 else "",
+        rr_rule)
+    return worst <= 1.0 and im_worst <= 1.0, what
+
+
 # ---------------------------------------------------------------- main
 
 def read_expected(path):
@@ -308,13 +398,13 @@ def read_expected(path):
     return exp
 
 
-def judge_camera(r, rel, path, root, cam, reduced):
+def judge_camera(r, rel, path, root, cam, reduced, rr_rule="course"):
     """(rule, ok, figure) for one camera: ok is None when it is SKIPPED (figure: the reason)."""
     scene_dir = os.path.dirname(path)
     hdr = cam["image"].lower().endswith(".exr")
     traits, perlin = scene_traits(root)
     traits |= cam["traits"]
-    rule = "perlin" if perlin else ("sampled" if traits else "deterministic")
+    rule = "perlin" if perlin else ("roulette" if cam["rr"] else ("sampled" if traits else "deterministic"))
     missing = missing_inputs(root, scene_dir)
     if missing:
         return rule, None, "missing input: " + ", ".join(missing)
@@ -327,7 +417,10 @@ def judge_camera(r, rel, path, root, cam, reduced):
         return (rule, *judge_deterministic(r, path, cam, ref, hdr))
     if rule == "perlin":
         return (rule, *judge_perlin(r, path, cam, ref, hdr))
-    ok, figure = judge_sampled(r, path, cam, ref, hdr, reduced)
+    if rule == "roulette":
+        ok, figure = judge_roulette(r, path, cam, ref, reduced, rr_rule)
+    else:
+        ok, figure = judge_sampled(r, path, cam, ref, hdr, reduced)
     return rule, ok, figure + " [" + ", ".join(sorted(traits)) + "]"
 
 
@@ -344,7 +437,7 @@ class Tally:
         self.counts[status] += 1
         self.seen.add(key)
         name = os.path.basename(self.path)
-        if status == "FAIL" and self.expected:
+        if status == "FAIL" and self.path:
             if key in self.expected:
                 self.listed.append(key)
                 return " (listed in %s)" % name
@@ -359,7 +452,7 @@ class Tally:
         c = self.counts
         print("check_course: %d cameras: %d ok, %d FAIL, %d SKIPPED; %s mode, %.0f s" % (
             sum(c.values()), c["ok"], c["FAIL"], c["SKIPPED"], mode, seconds))
-        if not self.expected:
+        if not self.path:
             return 1 if c["FAIL"] else 0
         gone = sorted(k for k in self.expected if k not in self.seen and not only)
         print("check_course: against %s: %d new failure(s), %d listed failure(s), %d listed camera(s) now pass%s" % (
@@ -372,7 +465,7 @@ class Tally:
         return 1 if self.unexpected else 0
 
 
-def check_scene(r, tally, rel, path, reduced):
+def check_scene(r, tally, rel, path, reduced, rr_rule):
     """Prints one line per camera of the scene that has a reference."""
     try:
         root = ET.parse(path).getroot()
@@ -383,7 +476,7 @@ def check_scene(r, tally, rel, path, reduced):
         if not os.path.exists(os.path.join(os.path.dirname(path), REF_DIR, cam["image"])):
             continue  # this camera has no reference
         t0 = time.time()
-        rule, ok, figure = judge_camera(r, rel, path, root, cam, reduced)
+        rule, ok, figure = judge_camera(r, rel, path, root, cam, reduced, rr_rule)
         status = "SKIPPED" if ok is None else ("ok" if ok else "FAIL")
         note = tally.add((rel, cam["id"]), status)
         print("%-44s cam %-3s %-36s %-13s %-7s %s (%.0f s)%s" % (
@@ -399,6 +492,9 @@ def main():
     ap.add_argument("--expected", default="", help="expected-failures list (tests/course_expected_failures.txt)")
     ap.add_argument("--only", default="", help="regular expression: check only the scenes whose path matches")
     ap.add_argument("--timeout", type=int, default=1800, help="seconds per clrt render")
+    ap.add_argument("--rr-rule", default="course", choices=["course", "unbiased"],
+                    help="clrt's --rr-rule for the roulette rule's renders (default course, as the references; "
+                         "unbiased shows the rule failing)")
     args = ap.parse_args()
     scenes_root = os.path.normpath(args.scenes)
     if not os.path.isdir(scenes_root):
@@ -413,7 +509,7 @@ def main():
         r = Renderer(args, tmp)
         for rel, path in found:
             if not args.only or re.search(args.only, rel):
-                check_scene(r, tally, rel, path, args.reduced)
+                check_scene(r, tally, rel, path, args.reduced, args.rr_rule)
     return tally.report("reduced" if args.reduced else "full", time.time() - start, args.only)
 
 
