@@ -53,14 +53,11 @@ BottomLevel appendBottomLevel(const Scene& scene, const Shape& s, DeviceScene& d
     BottomLevel b;
     b.triangles = boxes.size();
     if (b.triangles == 0) return b;
-    for (const BvhItem& box : boxes) {
-        b.box.grow(Vec3(box.lo[0], box.lo[1], box.lo[2]));
-        b.box.grow(Vec3(box.hi[0], box.hi[1], box.hi[2]));
-    }
     const auto tb = std::chrono::steady_clock::now();
     BvhBuildOptions opts;
     opts.traversalCost = 2;  // as the world BVH's (flatten_geometry.cpp, buildDeviceBvh)
     Bvh bvh = buildBvh(std::move(boxes), opts);  // consumes the boxes
+    b.box = summarizeBvh(bvh).bounds;  // the root's box: the union of the triangles' (all finite)
     if (leafOrder) putInLeafOrder(bvh, ds.triangles.data() + base, ds.triangleShading.data() + base, int(b.triangles));
     const size_t firstLeaf = ds.bvh4.leaves.size();
     b.rootNode = appendBvh4(std::move(bvh), int(base), ds.bvh4, maxStack, spareNodes);
