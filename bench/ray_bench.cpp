@@ -243,7 +243,8 @@ private:
                         std::vector<int>& prim) {
         cl::Buffer rb = upload(const_cast<std::vector<dev::Ray>&>(rays));
         cl::Buffer hb = CL_CPP(cl::Buffer(dc_.context(), CL_MEM_READ_WRITE, sizeof(dev::Hit) * rays.size()));
-        kClosest_.set("rays", rb).set("hits", hb).set("queueCount", cb);
+        cl::Buffer ib = CL_CPP(cl::Buffer(dc_.context(), CL_MEM_READ_WRITE, sizeof(int) * rays.size()));
+        kClosest_.set("rays", rb).set("hits", hb).set("hitInstances", ib).set("queueCount", cb);
         double s = timeKernel(kClosest_, global, local);
         std::vector<dev::Hit> hits(rays.size());
         CL_CPP(dc_.queue().enqueueReadBuffer(hb, CL_TRUE, 0, sizeof(dev::Hit) * hits.size(), hits.data()));

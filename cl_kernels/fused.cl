@@ -42,8 +42,9 @@ inline float4 Fused_Shadow(ShadowRay sr, SceneParams scene, const __global Bvh4N
 /* One path: its closest hit, shading (children into *res) and direct light; returns its radiance as
  * accumulate adds it (finite). */
 inline float3 Fused_Path(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int lightSlots, PathState path, Ray ray, ShadeResult* res) {
-    Hit h = Ray_Closest(ray, scene, nodes, leaves, tris, spheres, planes, instances);
-    Shade_Hit(scene, cam, path, ray, h, tris, triShading, triAttributes, spheres, planes, instances, materials, textureSets, textures, images,
+    int instance;
+    Hit h = Ray_Closest(ray, scene, nodes, leaves, tris, spheres, planes, instances, &instance);
+    Shade_Hit(scene, cam, path, ray, h, instance, tris, triShading, triAttributes, spheres, planes, instances, materials, textureSets, textures, images,
               texels, lights, envDist, res);
     float4 sum = res->radiance;
     const ShadingPoint sp = res->sp;

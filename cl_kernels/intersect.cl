@@ -428,7 +428,7 @@ inline int Instance_Enter(const __global Instance* inst, float3 orgW, float3 dir
 inline int Bvh_Traverse(const __global Bvh4Node* nodes, const __global Bvh4Leaf* leaves,
                         const __global Triangle* tris, const __global Sphere* spheres,
                         const __global Instance* instances, SceneParams scene, float3 org, float3 dir,
-                        float tMax, float time, int anyHit, Hit* hit) {
+                        float tMax, float time, int anyHit, Hit* hit, int* hitInstance) {
     const int numTriangles = scene.numTriangles;
     TraceRay r = TraceRay_Make(org, dir);
     int stackEntry[CLRT_BVH4_STACK_SIZE];
@@ -461,7 +461,7 @@ inline int Bvh_Traverse(const __global Bvh4Node* nodes, const __global Bvh4Leaf*
                                   anyHit, &tMax, hit)) {
             found = 1;
 #ifdef CLRT_HAS_INSTANCES
-            hit->instance = instance;
+            *hitInstance = instance;
 #endif
             if (anyHit) return 1;
         }
@@ -496,20 +496,21 @@ inline int Planes_Intersect(const __global Plane* planes, int numPlanes, int fir
     return found;
 }
 
-/* The closest hit of ray r (planes, then the BVH); prim CLRT_INVALID when it hits nothing. */
+/* The closest hit of ray r (planes, then the BVH); prim CLRT_INVALID when it hits nothing. *instance:
+ * the Instance hit, or CLRT_INVALID (Hit). */
 inline Hit Ray_Closest(Ray r, SceneParams scene, const __global Bvh4Node* nodes, const __global Bvh4Leaf* leaves,
                        const __global Triangle* tris, const __global Sphere* spheres, const __global Plane* planes,
-                       const __global Instance* instances) {
+                       const __global Instance* instances, int* instance) {
     const int numPlanes = scene.numPlanes;
     const int firstPlaneRef = scene.numTriangles + scene.numSpheres;
     Hit h;
     h.t = -1.0f; h.prim = CLRT_INVALID; h.u = 0.0f; h.v = 0.0f;
-    h.instance = CLRT_INVALID; h.hitPad[0] = h.hitPad[1] = h.hitPad[2] = 0;
+    *instance = CLRT_INVALID;
     float3 dir = r.direction.xyz;
     if (allFinite3(r.origin.xyz) && allFinite3(dir) && r.direction.w > 0.0f) {
         float tMax = r.direction.w;
         if (numPlanes > 0 && Planes_Intersect(planes, numPlanes, firstPlaneRef, r.origin.xyz, dir, tMax, 0, &h)) tMax = h.t;
-        Bvh_Traverse(nodes, leaves, tris, spheres, instances, scene, r.origin.xyz, dir, tMax, Ray_Time(r), 0, &h);
+        Bvh_Traverse(nodes, leaves, tris, spheres, instances, scene, r.origin.xyz, dir, tMax, Ray_Time(r), 0, &h, instance);
     }
     return h;
 }
@@ -521,9 +522,10 @@ inline int Shadow_Occluded(ShadowRay s, SceneParams scene, const __global Bvh4No
     const int numPlanes = scene.numPlanes;
     const int firstPlaneRef = scene.numTriangles + scene.numSpheres;
     Hit h;
+    int instance;
     return (numPlanes > 0 && Planes_Intersect(planes, numPlanes, firstPlaneRef, s.origin.xyz, s.direction.xyz, s.origin.w, 1, &h)) ||
            Bvh_Traverse(nodes, leaves, tris, spheres, instances, scene, s.origin.xyz, s.direction.xyz, s.origin.w,
-                        s.direction.w, 1, &h);
+                        s.direction.w, 1, &h, &instance);
 }
 
 /* Closest hit for each ray of the queue. */
@@ -531,7 +533,11 @@ inline int Shadow_Occluded(ShadowRay s, SceneParams scene, const __global Bvh4No
 __kernel void intersect_closest(CLRT_KERNEL_PARAMS(intersect_closest)) {
     int i = get_global_id(0);
     if (i >= *queueCount) return;
-    hits[i] = Ray_Closest(rays[i], scene, nodes, leaves, tris, spheres, planes, instances);
+    int instance;
+    hits[i] = Ray_Closest(rays[i], scene, nodes, leaves, tris, spheres, planes, instances, &instance);
+#ifdef CLRT_HAS_INSTANCES
+    hitInstances[i] = instance;
+#endif
 }
 
 /* Any hit for each shadow ray: an occluded ray's contribution is set to zero. */

@@ -55,7 +55,7 @@
         M(SceneParams, samplerWidth) M(SceneParams, samplerLog2Spp)                               \
         M(SceneParams, numInstances) M(SceneParams, instanceRoot) M(SceneParams, sceneParamsPad)  \
     S(Ray) M(Ray, origin) M(Ray, direction)                                                       \
-    S(Hit) M(Hit, t) M(Hit, prim) M(Hit, u) M(Hit, v) M(Hit, instance) M(Hit, hitPad)  \
+    S(Hit) M(Hit, t) M(Hit, prim) M(Hit, u) M(Hit, v)  \
     S(PathState) M(PathState, throughput) M(PathState, pixel) M(PathState, sample)                \
         M(PathState, depth) M(PathState, pathId) M(PathState, coneWidth) M(PathState, pathPad)                                                \
     S(ShadowRay) M(ShadowRay, origin) M(ShadowRay, direction) M(ShadowRay, contribution)        \

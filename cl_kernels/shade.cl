@@ -42,7 +42,7 @@ inline int Shade_OrientsNormalToRay(int materialKind, int pathMode) {
 }
 
 /* The hit triangle as shading sees it, in world space at rest: a world-space triangle as stored; a
- * triangle of an instanced mesh (Hit.instance) mapped by its Instance: vertices by objectToWorld,
+ * triangle of an instanced mesh (instance: Ray_Closest's, beside the Hit) mapped by its Instance: vertices by objectToWorld,
  * normals by the transpose of worldToObject (then unit, as flattening stores them), the material and
  * texture set the instance's, and, for a mirroring instance, the winding reversed (corners 1 and 2 and
  * their barycentrics exchanged), so that it is the triangle flattening would have stored. */
@@ -54,7 +54,7 @@ typedef struct {
     int material, textureSet, light;
 } HitTriangle;
 
-inline void HitTriangle_Load(Hit h, const __global Triangle* tris, const __global TriangleShading* shading,
+inline void HitTriangle_Load(Hit h, int instance, const __global Triangle* tris, const __global TriangleShading* shading,
                              const __global float* triAttributes, const __global Instance* instances, HitTriangle* ht) {
     const __global Triangle* tri = &tris[h.prim];
     const __global TriangleShading* sh = &shading[h.prim];
@@ -78,8 +78,8 @@ inline void HitTriangle_Load(Hit h, const __global Triangle* tris, const __globa
     ht->motion = Triangle_Motion(tri);
     ht->material = sh->material; ht->textureSet = sh->textureSet; ht->light = sh->light;
 #ifdef CLRT_HAS_INSTANCES
-    if (h.instance == CLRT_INVALID) return;
-    const __global Instance* in = &instances[h.instance];
+    if (instance == CLRT_INVALID) return;
+    const __global Instance* in = &instances[instance];
     const __global float4* wo = in->worldToObject;
     ht->v0 = affinePoint(in->objectToWorld, ht->v0);
     ht->v1 = affinePoint(in->objectToWorld, ht->v1);
@@ -370,7 +370,7 @@ inline void Shade_ClassicChildren(SceneParams scene, PathState path, Material m,
 /* Shading of one path's hit h along ray (the whole of shade_hits for one path; the fused kernel calls
  * it too): the ShadingPoint for light sampling, the radiance that needs no shadow ray (ambient,
  * background or environment on a miss, object-light emission, replace_all) and the children. */
-inline void Shade_Hit(SceneParams scene, CameraParams cam, PathState path, Ray ray, Hit h,
+inline void Shade_Hit(SceneParams scene, CameraParams cam, PathState path, Ray ray, Hit h, int instance,
                       const __global Triangle* tris, const __global TriangleShading* triShading,
                       const __global float* triAttributes, const __global Sphere* spheres, const __global Plane* planes, const __global Instance* instances,
                       const __global Material* materials, const __global TextureSet* textureSets, const __global TextureMap* textures,
@@ -392,7 +392,7 @@ inline void Shade_Hit(SceneParams scene, CameraParams cam, PathState path, Ray r
         return;
     }
     HitTriangle ht;
-    if (h.prim < scene.numTriangles) HitTriangle_Load(h, tris, triShading, triAttributes, instances, &ht);
+    if (h.prim < scene.numTriangles) HitTriangle_Load(h, instance, tris, triShading, triAttributes, instances, &ht);
 #ifdef CLRT_HAS_MOTION_BLUR
     const float3 motionShift = MotionBlur_HitShift(h, ray, &ht, spheres, scene.numTriangles, scene.numSpheres);
     ray.origin.xyz -= motionShift;  /* the ray in the rest frame of the primitive it hit */
@@ -486,7 +486,12 @@ __kernel CLRT_KERNEL_VEC_HINT void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
     int i = get_global_id(0);
     if (i >= *queueCount) return;
     ShadeResult res;
-    Shade_Hit(scene, cam, paths[i], rays[i], hits[i], tris, triShading, triAttributes, spheres, planes, instances, materials, textureSets,
+#ifdef CLRT_HAS_INSTANCES
+    const int instance = hitInstances[i];
+#else
+    const int instance = CLRT_INVALID;
+#endif
+    Shade_Hit(scene, cam, paths[i], rays[i], hits[i], instance, tris, triShading, triAttributes, spheres, planes, instances, materials, textureSets,
               textures, images, texels, lights, envDist, &res);
     /* Whole structs go to global memory from plain locals: oclgrind 21.10's uninitialised-value check
      * (-cl-opt-disable) reports a struct copied straight from a member of res, initialised or not. */

@@ -453,6 +453,7 @@ TEST_CASE("BVH4 traversal stack: the host bound holds, and the kernel with exact
     std::vector<dev::Instance> noInstances(1);
     cl::Buffer ib = ro(noInstances);
     closest.set("spheres", sb).set("planes", pb).set("instances", ib).set("rays", rb).set("hits", hb);
+    closest.set("hitInstances", cb);  // unused without instances
     CL_CPP(dc.queue().enqueueNDRangeKernel(closest.ready(), cl::NullRange, cl::NDRange(roundUp(size_t(numRays), 64)),
                                            cl::NDRange(64)));
     std::vector<dev::Hit> hits(numRays);
@@ -516,7 +517,7 @@ DeviceTrace traceOnDevice(Bvh4 b4, const std::vector<Tri>& tris, const std::vect
     for (KernelArgs* k : {&closest, &shadow})
         k->set("queueCount", cb).set("scene", sp).set("nodes", nodes).set("leaves", leaves).set("tris", tb)
             .set("spheres", sb).set("planes", pb).set("instances", ib);
-    closest.set("rays", rb).set("hits", hb);
+    closest.set("rays", rb).set("hits", hb).set("hitInstances", cb);  // hitInstances: unused without instances
     shadow.set("raysPerPath", 1).set("shadows", shb);
     const cl::NDRange global(roundUp(size_t(n), 64)), local(64);
     CL_CPP(dc.queue().enqueueNDRangeKernel(closest.ready(), cl::NullRange, global, local));

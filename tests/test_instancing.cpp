@@ -22,6 +22,9 @@
 
 #include "bvh/host_intersect.h"
 #include "bvh/two_level.h"
+#include "cl/check.h"
+#include "cl/kernel_args.h"
+#include "cl/program.h"
 #include "flatten/device_scene.h"
 #include "scene/scene_loader.h"
 #include "test_helpers.h"
@@ -354,6 +357,112 @@ TEST_CASE("instancing: the host two-level BVH finds the hits of the flattened tr
     // Object-space tests round differently from world-space ones: a ray within a few ULPs of an edge may
     // take the neighbouring triangle, never another surface.
     CHECK(sameHit >= n - n / 500);
+    CHECK(tClose >= n - n / 1000);
+}
+
+namespace {
+
+Vec3 rowsApply(const dev::float4 rows[3], const dev::float4& p) {
+    return Vec3(rows[0].x * p.x + rows[0].y * p.y + rows[0].z * p.z + rows[0].w,
+                rows[1].x * p.x + rows[1].y * p.y + rows[1].z * p.z + rows[1].w,
+                rows[2].x * p.x + rows[2].y * p.y + rows[2].z * p.z + rows[2].w);
+}
+
+// The device's closest hits (intersect_closest of the intersection program, this scene's defines) with
+// the Instance of each (hitInstances, CLRT_INVALID for a world-space primitive).
+void deviceClosestTwoLevel(const DeviceScene& ds, const std::vector<dev::Ray>& rays, std::vector<dev::Hit>& hits,
+                           std::vector<int>& instances) {
+    DeviceContext& dc = testContext();
+    cl::Context& ctx = dc.context();
+    cl::Program program = buildProgram(dc, KernelProgram::Intersect, ds.features.defines());
+    KernelArgs k(program, "intersect_closest");
+    auto ro = [&](const auto& v) {
+        using T = typename std::decay_t<decltype(v)>::value_type;
+        return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), (void*)v.data()));
+    };
+    std::vector<dev::Sphere> noSpheres(1);
+    std::vector<dev::Plane> noPlanes(1);
+    const int n = int(rays.size());
+    std::vector<int> queueLength{n};
+    cl::Buffer nodes = ro(ds.bvh4.nodes), leaves = ro(ds.bvh4.leaves), tb = ro(ds.triangles),
+               sb = ro(ds.spheres.empty() ? noSpheres : ds.spheres), pb = ro(noPlanes), ib = ro(ds.instances),
+               rb = ro(rays), cb = ro(queueLength);
+    cl::Buffer hb = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(dev::Hit) * rays.size()));
+    cl::Buffer hib = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(int) * rays.size()));
+    dev::SceneParams sp = ds.params;
+    sp.numPlanes = 0;
+    k.set("queueCount", cb).set("scene", sp).set("nodes", nodes).set("leaves", leaves).set("tris", tb).set("spheres", sb);
+    k.set("planes", pb).set("instances", ib).set("rays", rb).set("hits", hb).set("hitInstances", hib);
+    CL_CPP(dc.queue().enqueueNDRangeKernel(k.ready(), cl::NullRange, cl::NDRange(roundUp(size_t(n), 64)), cl::NDRange(64)));
+    hits.resize(rays.size());
+    instances.resize(rays.size());
+    CL_CPP(dc.queue().enqueueReadBuffer(hb, CL_TRUE, 0, sizeof(dev::Hit) * hits.size(), hits.data()));
+    CL_CPP(dc.queue().enqueueReadBuffer(hib, CL_TRUE, 0, sizeof(int) * instances.size(), instances.data()));
+}
+
+}  // namespace
+
+// The device's two-level traversal against the brute force: each hit's triangle, placed at rest by the
+// Instance the kernel reports beside the Hit (hitInstances), is the triangle the brute force hits.
+TEST_CASE("instancing: the device's two-level traversal reports the instance and triangle hit", "[instancing][bvh][intersect]") {
+    TempDir dir;
+    Scene s = loadText(dir, "nested.xml", instanceScene(kNested));
+    FlattenOptions opts;
+    opts.instancing = Instancing::TwoLevel;
+    DeviceScene ds = flattenScene(s, opts);
+    REQUIRE(ds.params.numInstances == 8);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(0, 1);
+    const int n = 20000;
+    std::vector<dev::Ray> rays;
+    std::vector<float> times;
+    for (int i = 0; i < n; ++i) {
+        const Vec3 org(-3 + 6 * u(rng), 0.1f + 4 * u(rng), -3 + 7 * u(rng));
+        const Vec3 target(-2.5f + 5 * u(rng), -0.2f + 2 * u(rng), -3 + 4 * u(rng));
+        const Vec3 d = normalize(target - org);
+        times.push_back(u(rng));
+        rays.push_back({{org.x, org.y, org.z, times.back()}, {d.x, d.y, d.z, INFINITY}});
+    }
+    std::vector<dev::Hit> hits;
+    std::vector<int> hitInstances;
+    deviceClosestTwoLevel(ds, rays, hits, hitInstances);
+    int refHits = 0, instanced = 0, sameTriangle = 0, tClose = 0;
+    for (int i = 0; i < n; ++i) {
+        const Vec3 org(rays[i].origin.x, rays[i].origin.y, rays[i].origin.z);
+        const Vec3 d(rays[i].direction.x, rays[i].direction.y, rays[i].direction.z);
+        const TwoLevelHit ref = bruteForce(s, org, d, times[size_t(i)]);
+        const dev::Hit& h = hits[size_t(i)];
+        refHits += ref.instance >= 0;
+        if (ref.instance < 0 || h.prim < 0) {
+            sameTriangle += (ref.instance < 0) == (h.prim < 0);
+            tClose += (ref.instance < 0) == (h.prim < 0);
+            continue;
+        }
+        // The brute force's triangle at rest, in world space.
+        const Shape* shape = nullptr;
+        int meshShape = -1;
+        for (const Shape& sh : s.shapes) if (sh.type == ShapeType::Mesh && ++meshShape == ref.instance) shape = &sh;
+        REQUIRE(shape);
+        const MeshData& mesh = s.meshes[size_t(shape->meshIndex)];
+        Vec3 refCentroid(0, 0, 0);
+        for (int c = 0; c < 3; ++c)
+            refCentroid = refCentroid + shape->transform.transformPoint(mesh.positions[size_t(mesh.indices[size_t(ref.triangle) * 3 + size_t(c)])]) * (1.0f / 3);
+        // The device's, through the Instance it reports.
+        const dev::Triangle& tri = ds.triangles[size_t(h.prim)];
+        const int inst = hitInstances[size_t(i)];
+        instanced += inst >= 0;
+        Vec3 centroid(0, 0, 0);
+        for (const dev::float4* v : {&tri.v0, &tri.v1, &tri.v2})
+            centroid = centroid + (inst >= 0 ? rowsApply(ds.instances[size_t(inst)].objectToWorld, *v) : Vec3(v->x, v->y, v->z)) * (1.0f / 3);
+        sameTriangle += length(centroid - refCentroid) <= 1e-4f;
+        tClose += std::fabs(h.t - ref.t) <= 1e-4f * ref.t;
+    }
+    INFO(refHits << " hits of " << n << " rays (" << instanced << " in instances); same triangle " << sameTriangle
+                 << ", t within 1e-4 " << tClose);
+    CHECK(refHits > n / 2);
+    CHECK(instanced > refHits / 4);  // the instances are hit, not only the floor
+    // As the host test: a ray within a few ULPs of an edge may take the neighbouring triangle.
+    CHECK(sameTriangle >= n - n / 500);
     CHECK(tClose >= n - n / 1000);
 }
 

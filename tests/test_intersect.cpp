@@ -141,7 +141,7 @@ void compareWithHost(const cl::Program& program, const RandomScene& s, bool time
     for (KernelArgs* k : {&closest, &shadow})
         k->set("queueCount", countBuf).set("scene", sp).set("nodes", nodes).set("leaves", leaves).set("tris", tris)
             .set("spheres", sph).set("planes", planeBuf).set("instances", instBuf);
-    closest.set("rays", rayBuf).set("hits", hitBuf);
+    closest.set("rays", rayBuf).set("hits", hitBuf).set("hitInstances", countBuf);  // hitInstances: unused without instances
     shadow.set("shadows", shadowBuf);
     cl::CommandQueue& q = dc.queue();
     CL_CPP(q.enqueueNDRangeKernel(closest.ready(), cl::NullRange, cl::NDRange(roundUp(numRays, 64)), cl::NDRange(64)));

@@ -129,7 +129,8 @@ std::vector<dev::Hit> deviceClosest(const std::vector<dev::Triangle>& trisIn, co
     k.set("queueCount", cb).set("scene", sp).set("nodes", nodes).set("leaves", leaves).set("tris", tb).set("spheres", sb);
     std::vector<dev::Instance> noInstances(1);
     cl::Buffer ib = ro(noInstances);
-    k.set("planes", pb).set("instances", ib).set("rays", rb).set("hits", hb);
+    cl::Buffer hib = ro(queueLength);  // hitInstances: unused without instances
+    k.set("planes", pb).set("instances", ib).set("rays", rb).set("hits", hb).set("hitInstances", hib);
     CL_CPP(dc.queue().enqueueNDRangeKernel(k.ready(), cl::NullRange, cl::NDRange(roundUp(size_t(n), 64)), cl::NDRange(64)));
     std::vector<dev::Hit> hits(rays.size());
     CL_CPP(dc.queue().enqueueReadBuffer(hb, CL_TRUE, 0, sizeof(dev::Hit) * hits.size(), hits.data()));

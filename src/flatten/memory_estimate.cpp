@@ -167,7 +167,8 @@ uint64_t renderBytes(const Scene& scene, const MemoryPlan& plan, const Camera& c
     if (dielectric && spp <= 4 && cam.pathMode == 0)
         for (int split = 0; split < maxDepth && (capacity << 1) <= (uint64_t(1) << 21); ++split) capacity <<= 1;
     const uint64_t perPath = 3 * sizeof(dev::PathState) + 3 * sizeof(dev::Ray) + sizeof(dev::Hit) +
-                             sizeof(dev::ShadingPoint) + sizeof(dev::float4) + 4 * sizeof(int);
+                             sizeof(dev::ShadingPoint) + sizeof(dev::float4) + 4 * sizeof(int) +
+                             sizeof(int);  // hitInstances (with instances)
     uint64_t bytes = capacity * perPath;
     const uint64_t lights = scene.lights.size();
     if (lights) {

@@ -38,7 +38,7 @@ struct Renderer::Impl {
     cl::Buffer nodes, leaves, tris, triShading, triAttributes, spheres, planes, instances, materials, textureSets, textures, images, texels, lights, envDist, lightData;
     // Queue buffers (sized per render).
     size_t queueCapacity = 0, shadowCapacity = 0;
-    cl::Buffer paths, rays, hits, points, pathRadiance, nextPaths, nextRays, childValid, shadows;
+    cl::Buffer paths, rays, hits, hitInstances, points, pathRadiance, nextPaths, nextRays, childValid, shadows;
     // The queue length on the device (one int each): the current bounce's, and the next one's that
     // the compaction writes (swapped after it). hostCounts[d]: the length at depth d, read back
     // without blocking (countReads[d] completes it).
@@ -113,6 +113,7 @@ struct Renderer::Impl {
             paths = rw(sizeof(dev::PathState) * capacity);
             rays = rw(sizeof(dev::Ray) * capacity);
             hits = rw(sizeof(dev::Hit) * capacity);
+            hitInstances = rw(ds.instances.empty() ? 0 : sizeof(int) * capacity);  // read only with instances
             points = rw(sizeof(dev::ShadingPoint) * capacity);
             pathRadiance = rw(sizeof(dev::float4) * capacity);
             nextPaths = rw(sizeof(dev::PathState) * capacity * 2);

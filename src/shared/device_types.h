@@ -361,9 +361,11 @@ typedef struct Hit {
     float t;               /* < 0: miss */
     int prim;              /* primitive reference (see above) */
     float u, v;            /* triangle barycentrics */
-    int instance;          /* the Instance whose mesh prim belongs to, or CLRT_INVALID (world-space primitive) */
-    int hitPad[3];         /* explicit padding to the float4 alignment */
 } Hit;
+/* With instances (CLRT_HAS_INSTANCES), the Instance whose mesh prim belongs to (CLRT_INVALID: a
+ * world-space primitive) travels beside the Hit (intersect_closest's hitInstances, Ray_Closest's
+ * *instance), not in it: a 32 B Hit cost the closest-hit kernel 8-10% of its speed on the TT, instances
+ * or not (docs/performance.md, "Traversal"). */
 
 /* One path of the wavefront. */
 typedef struct PathState {

@@ -42,8 +42,10 @@
     P(VAL, int, count) P(VAL, int, firstPixel) P(VAL, int, firstSample) P(VAL, int, samples)       \
     P(VAL, CameraParams, cam) P(VAL, SceneParams, scene) P(BUF, PathState, paths) P(BUF, Ray, rays)
 
+/* hitInstances: each hit's Instance (Hit), written and read only under CLRT_HAS_INSTANCES. */
 #define CLRT_KERNEL_intersect_closest(P)                                                           \
-    P(IN, int, queueCount) P(VAL, SceneParams, scene) CLRT_PARAMS_GEOMETRY(P) P(IN, Ray, rays) P(BUF, Hit, hits)
+    P(IN, int, queueCount) P(VAL, SceneParams, scene) CLRT_PARAMS_GEOMETRY(P) P(IN, Ray, rays) P(BUF, Hit, hits)  \
+    P(BUF, int, hitInstances)
 
 /* The shadow queue: raysPerPath slots for each of the *queueCount paths. */
 #define CLRT_KERNEL_intersect_shadow(P)                                                            \
@@ -51,7 +53,7 @@
 
 #define CLRT_KERNEL_shade_hits(P)                                                                  \
     P(IN, int, queueCount) P(VAL, SceneParams, scene) P(VAL, CameraParams, cam) P(IN, PathState, paths) \
-    P(IN, Ray, rays) P(IN, Hit, hits) CLRT_PARAMS_SURFACES(P) CLRT_PARAMS_MATERIALS(P)              \
+    P(IN, Ray, rays) P(IN, Hit, hits) P(IN, int, hitInstances) CLRT_PARAMS_SURFACES(P) CLRT_PARAMS_MATERIALS(P)              \
     CLRT_PARAMS_IMAGES(P) P(IN, Light, lights) P(BUF, ShadingPoint, points) P(BUF, float4, pathRadiance) \
     P(IN, float, envDist) P(BUF, PathState, nextPaths) P(BUF, Ray, nextRays) P(BUF, int, childValid)
 
