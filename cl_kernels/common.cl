@@ -212,8 +212,8 @@ inline float Sampler_Time(SceneParams scene, int pixel, int sample) {
  * The form on every device, not a quirk (docs/quirks.md "Not quirks"). */
 inline float Math_PowNonNegative(float x, float e) {
     /* x = 0 as pow(0, e) gives it (1 for e = 0, 0 for e > 0, +inf for e < 0, NaN for a NaN e), without
-     * calling pow: vectorised across work-items, both sides of the select are computed for every lane,
-     * and PoCL's pow took 12% of a Phong box's render (perf). */
+     * calling pow: the compiler turned the ternary into a select that computes both sides (pow is a pure
+     * function), and PoCL's pow took 12% of a Phong box's render (perf, hw6 path box). */
     const float atZero = e > 0.0f ? 0.0f : (e == 0.0f ? 1.0f : (e < 0.0f ? INFINITY : e));
     return x > 0.0f ? exp2(e * log2(x)) : atZero;
 }
