@@ -7,8 +7,8 @@
      build + render + output), the issue's "renders in <= 1.5 s after parsing";
   3. the same for every scene given with --scenes (default: the three above), camera/shadow/secondary
      Mrays/s from the stats line (rays per second of device time of their trace kernel).
-Prints Markdown on stdout. Needs build/clrt and build/ray_bench (cmake --build build --target ray_bench;
-Debian libembree-dev) and ../shared/scenes. Uses only the standard library.
+Prints Markdown on stdout. Builds build/clrt and build/ray_bench first (cmake --build build --target
+ray_bench clrt; needs Debian libembree-dev); reads ../shared/scenes. Uses only the standard library.
 
 usage: scripts/speed_table.py [--runs 5] [--device cpu] [--build build] [--threads 1,2] [--rays-only]
   --threads: one ray_bench table per thread count, each run with ray_bench --threads T (Embree on T
@@ -100,6 +100,9 @@ def main():
     ap.add_argument("--rays-only", action="store_true", help="only the ray_bench tables")
     a = ap.parse_args()
     clrt, rb = os.path.join(a.build, "clrt"), os.path.join(a.build, "ray_bench")
+    # ray_bench is not in `all` (EXCLUDE_FROM_ALL): built here, it cannot lag behind the kernels it embeds.
+    if os.path.exists(os.path.join(a.build, "CMakeCache.txt")):
+        subprocess.run(["cmake", "--build", a.build, "--target", "ray_bench", "clrt"], stdout=subprocess.DEVNULL, check=True)
     cpu, cores, dev = machine(clrt, a.device)
     print("Measured %s on %s, %d cores; OpenCL device %s. Medians of %d runs [min–max].\n"
           % (datetime.date.today().isoformat(), cpu, cores, dev, a.runs))
