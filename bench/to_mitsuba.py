@@ -50,6 +50,8 @@ def _mat_mul(a, b):
 class Converter:
     def __init__(self, path, warn=None, path_tracing=False, open_lights="two-sided"):
         self.path_tracing = path_tracing
+        if open_lights not in ("two-sided", "outward"):
+            raise ValueError("open_lights: two-sided or outward, not %r" % (open_lights,))
         self.open_lights = open_lights  # an open LightMesh: "two-sided" or "outward" (to_mitsuba_path.py)
         self.path = os.path.abspath(path)
         self.base = os.path.dirname(self.path)
