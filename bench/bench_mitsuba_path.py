@@ -6,6 +6,8 @@ to_mitsuba_path.py).
 Scenes (all with clrt's MultipleImportanceSampling, no Russian roulette on either side, box filter):
 - hw6_box: the hw6 path box (cornellbox_jaroslav_path_diffuse.xml, camera 1's view, bench_path.py's
   copy: PointLight removed) at the course's MaxRecursionDepth 3.
+  Its light box is open at the top, where the ceiling closes it: converted with open_lights="outward"
+  (to_mitsuba_path.py), one copy of its faces turned outwards, the area clrt samples.
 - hw6_glass_box: the same with the yellow sphere glass (scripts/path_glass_box.sh), depth 3 as the
   course's glass box; the glass's Phong lobe (SpecularReflectance 0.3) and absorption (0.01) zeroed on
   both sides (no Mitsuba equivalent: to_mitsuba_path.py).
@@ -34,8 +36,8 @@ SHARED = os.environ.get("CLRT_SHARED_SCENES", bench_path.SHARED)  # ../shared/sc
 BOX = os.path.join(SHARED, "hw6", "cornellbox_jaroslav_path_diffuse.xml")
 VEACH = os.path.join(SHARED, "classic", "veachAjar.xml")
 SCENES = [
-    dict(name="hw6_box", path=BOX, res=(128, 128), depth=3, glass=False, ref_spp=2048),
-    dict(name="hw6_glass_box", path=BOX, res=(128, 128), depth=3, glass=True, ref_spp=2048),
+    dict(name="hw6_box", path=BOX, res=(128, 128), depth=3, glass=False, ref_spp=2048, open_lights="outward"),
+    dict(name="hw6_glass_box", path=BOX, res=(128, 128), depth=3, glass=True, ref_spp=2048, open_lights="outward"),
     dict(name="veach_ajar", path=VEACH, res=(128, 90), depth=6, ref_spp=1024),
 ]
 SPP = [16, 64, 256]
@@ -127,10 +129,11 @@ def clrt_render(B, clrt, scene, spp, seed):
 class MitsubaPath:
     """A converted path-traced scene; render() times mi.render (wall and process CPU)."""
 
-    def __init__(self, B, mi, scene_path, variant, sampler="independent"):
+    def __init__(self, B, mi, scene_path, variant, sampler="independent", open_lights="two-sided"):
         import to_mitsuba
         self.mi = mi
-        d, self.warnings = to_mitsuba.scene_dict(scene_path, 1, warn=B.log, path_tracing=True)
+        self.open_lights = open_lights
+        d, self.warnings = to_mitsuba.scene_dict(scene_path, 1, warn=B.log, path_tracing=True, open_lights=open_lights)
         d["sensor"]["sampler"]["type"] = sampler
         self.max_depth = d["integrator"]["max_depth"]
         self.scene = mi.load_dict(to_mitsuba.materialize(d, mi))
@@ -152,7 +155,8 @@ class MitsubaPath:
 
 def mitsuba_reference(B, ms, sc, scene_path, cache, refresh):
     """Mitsuba's two independent halves, cached like clrt's (the scene's hash and the variant in the name)."""
-    d = os.path.join(cache, "%s-mitsuba-path-%s-%s-%d" % (sc["name"], ms.variant, B.scene_hash(scene_path), sc["ref_spp"]))
+    d = os.path.join(cache, "%s-mitsuba-path-%s-%s-%d%s" % (sc["name"], ms.variant, B.scene_hash(scene_path), sc["ref_spp"],
+                                                           "" if ms.open_lights == "two-sided" else "-" + ms.open_lights))
     files = [os.path.join(d, f) for f in ("half_a.npy", "half_b.npy")]
     if not refresh and all(os.path.exists(f) for f in files):
         B.log("  mitsuba reference %s (cached)" % os.path.basename(d))
@@ -191,7 +195,7 @@ def run_scene(B, clrt, mi, a, sc, tmp):
     scene = make_scene(sc, tmp)
     B.log("%s (%dx%d, clrt depth %d, MIS, no roulette)" % (sc["name"], sc["res"][0], sc["res"][1], sc["depth"]))
     samplers = a.path_mi_samplers
-    mss = {smp: MitsubaPath(B, mi, scene, a.mitsuba_variant, smp) for smp in samplers}
+    mss = {smp: MitsubaPath(B, mi, scene, a.mitsuba_variant, smp, sc.get("open_lights", "two-sided")) for smp in samplers}
     ms = mss[samplers[0]]  # the reference's (any sampler is unbiased; the cache key names no sampler)
     cref, cmeta = B.reference(clrt, sc, scene, "default", a.refs, True, a.refresh_refs)
     mref, mfloor = floor_of(*mitsuba_reference(B, ms, sc, scene, a.refs, a.refresh_refs))
@@ -332,7 +336,7 @@ def depth_check(B, clrt, mi, a, tmp, spp=1024):
     for d in (0, 1):
         scene = make_scene(sc, tmp, depth=d)
         _, cimg = clrt_render(B, clrt, scene, spp, 5)
-        dd, _ = to_mitsuba.scene_dict(scene, 1, path_tracing=True)
+        dd, _ = to_mitsuba.scene_dict(scene, 1, path_tracing=True, open_lights=sc.get("open_lights", "two-sided"))
         for md in (d + 1, d + 2, d + 3):
             dd["integrator"].update(max_depth=md, rr_depth=md + 1)
             img = np.array(mi.render(mi.load_dict(to_mitsuba.materialize(dd, mi)), spp=spp, seed=5))[..., :3]

@@ -48,8 +48,11 @@ def _mat_mul(a, b):
 
 
 class Converter:
-    def __init__(self, path, warn=None, path_tracing=False):
+    def __init__(self, path, warn=None, path_tracing=False, open_lights="two-sided"):
         self.path_tracing = path_tracing
+        if open_lights not in ("two-sided", "outward"):
+            raise ValueError("open_lights: two-sided or outward, not %r" % (open_lights,))
+        self.open_lights = open_lights  # an open LightMesh: "two-sided" or "outward" (to_mitsuba_path.py)
         self.path = os.path.abspath(path)
         self.base = os.path.dirname(self.path)
         self.root = ET.parse(self.path).getroot()
@@ -360,10 +363,11 @@ def _look_at(origin, target, up):
     return m.tolist()
 
 
-def scene_dict(path, spp, res=None, warn=None, path_tracing=False):
+def scene_dict(path, spp, res=None, warn=None, path_tracing=False, open_lights="two-sided"):
     """(scene, warnings): the Mitsuba scene dict whose image is the course's image of the scene's first
-    camera (see the module's comment). path_tracing: the camera's path tracer (to_mitsuba_path.py)."""
-    c = Converter(path, warn, path_tracing)
+    camera (see the module's comment). path_tracing: the camera's path tracer (to_mitsuba_path.py);
+    open_lights: how it converts an open LightMesh ("two-sided" or "outward", to_mitsuba_path.py)."""
+    c = Converter(path, warn, path_tracing, open_lights)
     integrator = {"type": "path", "max_depth": 2}
     if path_tracing:
         import to_mitsuba_path

@@ -32,7 +32,12 @@ Conventions (clrt's, docs/scene-format.md "Path tracing" and cl_kernels/path.cl,
 - Emission: clrt's LightMesh and AreaLight emit from both faces, Mitsuba's area emitter from the front
   only. A closed LightMesh (every edge shared by two faces) gets each face turned to point away from the
   mesh's centroid (exact for convex light boxes; the inside is closed off anyway); an open one is two
-  copies offset by ±1e-4 of its size, facing away from each other. An AreaLight (not geometry in clrt)
+  copies offset by ±1e-4 of its size, facing away from each other, unless the converter is told
+  open_lights="outward" (scene_dict): then it is turned outwards like a closed one. That is for an open
+  box whose opening other geometry closes (the hw6 light box: five faces under the ceiling), whose inner
+  side lights only its own inside: the same image, and Mitsuba samples the same area as clrt (the two
+  copies double it, and the light samples that land on the inner copy are lost: +32% relMSE on the hw6
+  box at 64 spp, docs/studies/2026-12-05-path-noise-vs-mitsuba.md). An AreaLight (not geometry in clrt)
   is two such rectangles with a black BSDF: in Mitsuba they occlude and the camera sees them (clrt's do
   neither; no benchmark scene shows either). LightSphere: a sphere with an area emitter (outside).
 """
@@ -177,10 +182,11 @@ def _is_closed(faces):
     return all(v == 2 for v in edges.values())
 
 
-def _emitting_faces(pos, faces):
-    """(positions, faces) whose front faces emit where clrt's two-sided light mesh does."""
+def _emitting_faces(pos, faces, outward=False):
+    """(positions, faces) whose front faces emit where clrt's two-sided light mesh does (outward: an open
+    mesh too is only turned outwards; see the module comment)."""
     fn = np.cross(pos[faces[:, 1]] - pos[faces[:, 0]], pos[faces[:, 2]] - pos[faces[:, 0]])
-    if _is_closed(faces):  # turn each face away from the centroid
+    if outward or _is_closed(faces):  # turn each face away from the centroid
         out = (pos[faces].mean(axis=1) - pos.mean(axis=0)) * fn
         flip = out.sum(axis=1) < 0
         faces = faces.copy()
@@ -203,7 +209,12 @@ def shape(c, el, out):
     """LightMesh, LightSphere or MeshInstance el into out (Mitsuba shapes by name)."""
     mid = el.find("Material").text.strip() if el.find("Material") is not None else None
     if el.tag == "LightMesh":
-        pos, faces = _emitting_faces(*_inline_mesh(c, el))
+        pos, faces = _inline_mesh(c, el)
+        outward = getattr(c, "open_lights", "") == "outward"
+        if outward and not _is_closed(faces):
+            c.warn("LightMesh %s: open, turned outwards (open_lights=outward): its inner side must be closed off"
+                   % el.get("id"))
+        pos, faces = _emitting_faces(pos, faces, outward)
         path = c._write_ply("LightMesh_%s" % el.get("id"), pos, faces)
         out["lightmesh_" + el.get("id")] = {"type": "ply", "filename": path, "face_normals": True,
                                             "bsdf": c.bsdf(mid), "emitter": _emitter(el)}
