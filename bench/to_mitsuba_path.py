@@ -37,7 +37,7 @@ Conventions (clrt's, docs/scene-format.md "Path tracing" and cl_kernels/path.cl,
   box whose opening other geometry closes (the hw6 light box: five faces under the ceiling), whose inner
   side lights only its own inside: the same image, and Mitsuba samples the same area as clrt (the two
   copies double it, and the light samples that land on the inner copy are lost: +32% relMSE on the hw6
-  box at 64 spp, docs/studies/2026-12-05-path-noise-vs-mitsuba.md). An AreaLight (not geometry in clrt)
+  box at 64 spp, docs/studies/2026-12-04-path-noise-vs-mitsuba.md). An AreaLight (not geometry in clrt)
   is two such rectangles with a black BSDF: in Mitsuba they occlude and the camera sees them (clrt's do
   neither; no benchmark scene shows either). LightSphere: a sphere with an area emitter (outside).
 """

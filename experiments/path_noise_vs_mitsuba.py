@@ -1,5 +1,5 @@
 """path_noise_vs_mitsuba.py — where clrt's path tracer is noisier than Mitsuba 3's `path` on the hw6 box
-(issue 32; docs/studies/2026-12-05-path-noise-vs-mitsuba.md). bench_mitsuba_path's box copy (camera 1,
+(issue 32; docs/studies/2026-12-04-path-noise-vs-mitsuba.md). bench_mitsuba_path's box copy (camera 1,
 PointLight removed, MIS, no roulette) at --res², --spp per render, --seeds renders per renderer.
 
 Renderers: clrt with each --clrt-samplers (stratified, independent) for each --exe [LABEL=]PATH (LABEL
