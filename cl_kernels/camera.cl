@@ -27,7 +27,7 @@ __attribute__((always_inline)) inline void Camera_GenerateAt(CameraParams cam, S
                                                              int y, int sample, PathState* path, Ray* ray) {
     RngKey key = Rng_Key(scene.seed, pixel, sample, 1u);
     float jx = 0.5f, jy = 0.5f;
-    if (cam.spp > 1 && scene.pixelSampler == CLRT_PIXEL_SAMPLER_ZSOBOL) {
+    if (cam.spp > 1 && CLRT_SAMPLER_IS_ZSOBOL(scene)) {
         /* dimensions (0, 1) of the camera's path id 1 (common.cl) */
         const float2 j = ZSobol_2D(scene, pixel, sample, 1u, 0u);
         jx = j.x;
@@ -47,7 +47,7 @@ __attribute__((always_inline)) inline void Camera_GenerateAt(CameraParams cam, S
         float3 dn = normalize(dir);
         float tFocus = cam.focusDistance / dot(dn, -cam.w.xyz);
         float3 focus = org + tFocus * dn;
-        const float2 ab = scene.pixelSampler == CLRT_PIXEL_SAMPLER_ZSOBOL       ? ZSobol_2D(scene, pixel, sample, 1u, 2u)
+        const float2 ab = CLRT_SAMPLER_IS_ZSOBOL(scene)                         ? ZSobol_2D(scene, pixel, sample, 1u, 2u)
                           : scene.pixelSampler == CLRT_PIXEL_SAMPLER_STRATIFIED ? Rng_Stratified2D(key, sample, 2u)
                                                                                 : (float2)(Rng_Uniform(key, 2), Rng_Uniform(key, 3));
         float a = (ab.x - 0.5f) * cam.apertureSize;

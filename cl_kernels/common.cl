@@ -170,11 +170,20 @@ inline float2 ZSobol_2D(SceneParams scene, int pixel, int sample, uint pathId, u
     return (float2)((float)(px >> 8), (float)(py >> 8)) * (1.0f / 16777216.0f);
 }
 
+/* Whether the render draws from ZSobol_2D: only programs built with CLRT_HAS_ZSOBOL (clrt render --sampler
+ * zsobol) carry its branches; in the others the compiler drops them (their dead code cost the env-lit
+ * sphere ~6% of its render through the inlining around Rng_Stratified2D; studies/2026-12-04-time-per-sample-s18.md). */
+#ifdef CLRT_HAS_ZSOBOL
+#define CLRT_SAMPLER_IS_ZSOBOL(scene) ((scene).pixelSampler == CLRT_PIXEL_SAMPLER_ZSOBOL)
+#else
+#define CLRT_SAMPLER_IS_ZSOBOL(scene) 0
+#endif
+
 /* The 2D sample of dimensions (dim, dim + 1) at a shading point of `path` for light and BSDF samples:
  * stratified over the pixel's samples, Z-ordered Sobol or independent, by scene.pixelSampler.
  * key = Rng_Key(scene.seed, path.pixel, path.sample, path.pathId). */
 inline float2 Sampler_2D(SceneParams scene, PathState path, RngKey key, uint dim) {
-    if (scene.pixelSampler == CLRT_PIXEL_SAMPLER_ZSOBOL) return ZSobol_2D(scene, path.pixel, path.sample, path.pathId, dim);
+    if (CLRT_SAMPLER_IS_ZSOBOL(scene)) return ZSobol_2D(scene, path.pixel, path.sample, path.pathId, dim);
     if (scene.pixelSampler == CLRT_PIXEL_SAMPLER_STRATIFIED)
         return Rng_Stratified2D(key, path.sample, dim);
     return (float2)(Rng_Uniform(key, dim), Rng_Uniform(key, dim + 1u));
@@ -184,11 +193,11 @@ inline float2 Sampler_2D(SceneParams scene, PathState path, RngKey key, uint dim
  * picks, roulette): Z-ordered Sobol under CLRT_PIXEL_SAMPLER_ZSOBOL, else independent uniforms
  * (Rng_Uniform of dim, and dim + 1 for the second coordinate). */
 inline float2 Sampler_Other2D(SceneParams scene, PathState path, RngKey key, uint dim) {
-    if (scene.pixelSampler == CLRT_PIXEL_SAMPLER_ZSOBOL) return ZSobol_2D(scene, path.pixel, path.sample, path.pathId, dim);
+    if (CLRT_SAMPLER_IS_ZSOBOL(scene)) return ZSobol_2D(scene, path.pixel, path.sample, path.pathId, dim);
     return (float2)(Rng_Uniform(key, dim), Rng_Uniform(key, dim + 1u));
 }
 inline float Sampler_Other1D(SceneParams scene, PathState path, RngKey key, uint dim) {
-    if (scene.pixelSampler == CLRT_PIXEL_SAMPLER_ZSOBOL) return ZSobol_2D(scene, path.pixel, path.sample, path.pathId, dim).x;
+    if (CLRT_SAMPLER_IS_ZSOBOL(scene)) return ZSobol_2D(scene, path.pixel, path.sample, path.pathId, dim).x;
     return Rng_Uniform(key, dim);
 }
 
@@ -202,7 +211,7 @@ inline float MotionBlur_Time(uint seed, int pixel, int sample) {
 }
 /* The same under the scene's sampler: Z-ordered Sobol (path id 0, dimension 0) or MotionBlur_Time. */
 inline float Sampler_Time(SceneParams scene, int pixel, int sample) {
-    if (scene.pixelSampler == CLRT_PIXEL_SAMPLER_ZSOBOL) return ZSobol_2D(scene, pixel, sample, 0u, 0u).x;
+    if (CLRT_SAMPLER_IS_ZSOBOL(scene)) return ZSobol_2D(scene, pixel, sample, 0u, 0u).x;
     return MotionBlur_Time(scene.seed, pixel, sample);
 }
 

@@ -85,6 +85,7 @@ struct TempDir {
 inline ImageRGB renderCamera(const Scene& scene, const Camera& cam, int spp = 1, uint32_t seed = 0,
                              PixelSampler pixelSampler = PixelSampler::Stratified) {
     DeviceScene ds = flattenScene(scene);
+    ds.features.zsobol = pixelSampler == PixelSampler::ZSobol;  // as clrt render --sampler zsobol builds it
     Renderer r(testContext(), ds);
     RenderSettings rs;
     rs.spp = spp;

@@ -252,3 +252,38 @@ TEST_CASE("clrt render --sampler: stratified by default, independent or zsobol o
     CHECK(r.errorLines == 1);
     CHECK(readFileBytes(d.file("log")).find("--sampler: expected stratified, independent or zsobol, got 'sobol'") != std::string::npos);
 }
+
+// The Z-ordered Sobol sampler's code is compiled only into programs that run it (CLRT_HAS_ZSOBOL): the
+// kernel flags (-v) carry it exactly with --sampler zsobol, and a renderer whose program lacks it
+// refuses the sampler instead of drawing from another one.
+TEST_CASE("clrt render --sampler zsobol alone builds the kernels with CLRT_HAS_ZSOBOL; without it the renderer refuses zsobol", "[sampler][cli]") {
+    TempDir d;
+    ImageRGB sky;
+    sky.width = 8; sky.height = 4; sky.isHdr = true;
+    sky.pixels.assign(size_t(8) * 4 * 3, 1.0f);
+    writeExr(d.file("sky.exr"), sky);
+    std::ofstream(d.file("s.xml")) << skyScene(d.file("sky.exr"), 8);
+    const std::string base = "render " + d.file("s.xml") + " -o " + d.path.string() + " --spp 4 -v" + deviceArg();
+    for (const std::string sampler : {"stratified", "independent", "zsobol"}) {
+        const int rc = runClrt(base + " --sampler " + sampler, d.file("log"));
+        const std::string log = readFileBytes(d.file("log"));
+        INFO(sampler << ": " << log);
+        REQUIRE(rc == 0);
+        REQUIRE(log.find("-DCLRT_HAS_") != std::string::npos);  // the flags are listed
+        CHECK((log.find("-DCLRT_HAS_ZSOBOL=1") != std::string::npos) == (sampler == "zsobol"));
+    }
+    Scene scene = loadScene(d.file("s.xml"));
+    DeviceScene ds = flattenScene(scene);
+    REQUIRE_FALSE(ds.features.zsobol);  // not a scene's feature
+    Renderer r(testContext(), ds);
+    RenderSettings rs;
+    rs.spp = 4;
+    rs.pixelSampler = PixelSampler::ZSobol;
+    RenderCounters c;
+    try {
+        r.render(scene.cameras.at(0), rs, c);
+        FAIL("rendered zsobol without CLRT_HAS_ZSOBOL");
+    } catch (const Error& e) {
+        CHECK(std::string(e.what()).find("CLRT_HAS_ZSOBOL") != std::string::npos);
+    }
+}

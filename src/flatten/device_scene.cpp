@@ -31,6 +31,7 @@ std::vector<std::string> FeatureSet::defines() const {
     add(motionBlur, "CLRT_HAS_MOTION_BLUR");
     add(instances, "CLRT_HAS_INSTANCES");
     add(pathTracing, "CLRT_HAS_PATH_TRACING");
+    add(zsobol, "CLRT_HAS_ZSOBOL");
     // Rounded up to a multiple of 8 so that scenes of similar depth share a cached program.
     if (bvhStack > 0) d.push_back("-DCLRT_BVH4_STACK_SIZE=" + std::to_string((bvhStack + 7) / 8 * 8));
     return d;

@@ -29,6 +29,7 @@ struct FeatureSet {
     bool motionBlur = false;        // a mesh, triangle or sphere has a MotionBlur translation
     bool pathTracing = false;       // a camera has <Renderer>PathTracing (cl_kernels/path.cl)
     bool instances = false;         // a two-level BVH (dev::Instance; flatten_instances.cpp)
+    bool zsobol = false;            // not the scene's: clrt render --sampler zsobol (ZSobol_2D, common.cl)
     int bvhStack = 0;  // traversal stack entries the scene's BVH needs (0: the header's default)
     void add(dev::LightKind k) { lightKinds |= 1u << k; }
     void add(dev::MaterialKind k) { materialKinds |= 1u << k; }
@@ -42,7 +43,7 @@ struct FeatureSet {
     static FeatureSet all() {
         FeatureSet f;
         f.lightKinds = f.materialKinds = f.brdfKinds = ~0u;
-        f.textures = f.normalMaps = f.bumpMaps = f.mipMaps = f.spheres = f.motionBlur = f.pathTracing = f.instances = true;
+        f.textures = f.normalMaps = f.bumpMaps = f.mipMaps = f.spheres = f.motionBlur = f.pathTracing = f.instances = f.zsobol = true;
         return f;
     }
 };

@@ -475,6 +475,8 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     if (cam.maxRecursionDepth >= 0) sp.maxDepth = cam.maxRecursionDepth;  // the camera's own (2025 scenes)
     if (sp.pathMode != 0 && !m.ds.features.pathTracing)
         throw Error("camera " + std::to_string(cam.id) + " is path traced but the program was built without CLRT_HAS_PATH_TRACING");
+    if (settings.pixelSampler == PixelSampler::ZSobol && !m.ds.features.zsobol)
+        throw Error("--sampler zsobol, but the program was built without CLRT_HAS_ZSOBOL (FeatureSet::zsobol)");
     const BatchPlan plan = planBatches(m.ds, numPixels, settings, cp, sp);
     m.ensureQueues(plan.capacity, plan.capacity * std::max<size_t>(plan.lightChunk, 1) * size_t(plan.lightSlots));
 
