@@ -113,7 +113,9 @@ struct Renderer::Impl {
             paths = rw(sizeof(dev::PathState) * capacity);
             rays = rw(sizeof(dev::Ray) * capacity);
             hits = rw(sizeof(dev::Hit) * capacity);
-            hitInstances = rw(ds.instances.empty() ? 0 : sizeof(int) * capacity);  // read only with instances
+            // Written by every intersect_closest of a program built with CLRT_HAS_INSTANCES (--all-features
+            // too, instances or not: oclgrind caught the writes past a 16 B buffer), read with it.
+            hitInstances = rw(ds.features.instances ? sizeof(int) * capacity : 0);
             points = rw(sizeof(dev::ShadingPoint) * capacity);
             pathRadiance = rw(sizeof(dev::float4) * capacity);
             nextPaths = rw(sizeof(dev::PathState) * capacity * 2);
