@@ -156,11 +156,11 @@ inline float Brdf_GlossyWeight(const BrdfParams* b) {
 inline float3 Brdf_WarpPowerCosine(float3 axis, float q, float u1, float u2, float* cosOut) {
     float c = Math_PowNonNegative(u1, 1.0f / (q + 1.0f));
     float s = sqrt(fmax(0.0f, 1.0f - c * c));
-    float phi = 2.0f * CLRT_PI * u2;
+    float2 cs = Math_SinCos2Pi(u2);
     float3 t, bt;
     makeBasis(axis, &t, &bt);
     *cosOut = c;
-    return normalize(s * cos(phi) * t + s * sin(phi) * bt + c * axis);
+    return normalize(s * cs.x * t + s * cs.y * bt + c * axis);
 }
 
 inline float Brdf_PowerCosinePdf(float q, float c) {

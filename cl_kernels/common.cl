@@ -227,18 +227,63 @@ inline float Math_PowNonNegative(float x, float e) {
     return x > 0.0f ? exp2(e * log2(x)) : atZero;
 }
 
+/* atan2(y, x) for finite arguments, within 3e-7 rad (about an ulp of π) of the exact value (the
+ * polynomial's error is 8.7e-8 over [0, 1]; the rest is the rounding of the quadrant fix-ups): atan(a) = a·P(a²) on
+ * a = min/max in [0, 1], P fitted by us (least squares on Chebyshev nodes, degree 8 in a²). PoCL's
+ * atan2 made EnvMap_DirToUv most of shade_hits and much of sample_lights; spheres' (u, v) and frames use it too.
+ * atan2(±0, x<0) gives +π (u = 0 or 1: the same lat-long column either way). The form on every device,
+ * not a quirk (docs/quirks.md "Not quirks"). */
+inline float Math_Atan2(float y, float x) {
+    float ax = fabs(x), ay = fabs(y);
+    float mx = fmax(ax, ay), mn = fmin(ax, ay);
+    float a = mx > 0.0f ? mn / mx : 0.0f;
+    float s = a * a;
+    float p = 2.932761940e-03f;
+    p = p * s - 1.641319041e-02f;
+    p = p * s + 4.327824176e-02f;
+    p = p * s - 7.556900204e-02f;
+    p = p * s + 1.066748690e-01f;
+    p = p * s - 1.421110605e-01f;
+    p = p * s + 1.999369432e-01f;
+    p = p * s - 3.333313797e-01f;
+    p = p * s + 9.999999938e-01f;
+    float r = a * p;
+    if (ay > ax) r = 0.5f * CLRT_PI - r;
+    if (x < 0.0f) r = CLRT_PI - r;
+    return y < 0.0f ? -r : r;
+}
+
+/* (cos 2πt, sin 2πt) for finite t in turns: every angle on the render path is a fraction of a turn
+ * (2π·u of a sample, π·v of a map row), so the reduction is exact and needs no constants of π: r0 = t −
+ * rint(t) in [−1/2, 1/2] and r = r0 − q/4 in [−1/8, 1/8] with q = rint(4·r0) are exact (Sterbenz), and the
+ * quarter turns q rotate the pair. sin 2πr = r·P(r²) and cos 2πr = 1 + r²·Q(r²), fitted by us (weighted
+ * least squares towards minimax relative error on Chebyshev nodes, coefficients rounded to float). Within
+ * 1.8 ulp of the exact values wherever |sin|, |cos| > 1e-3 and 9e-8 absolute (tests/test_math.cpp checks the
+ * device against the host replica mathSinCos2Pi and both against long double). PoCL's sin and cos reduce every
+ * argument out of line (__pocl_argReductionS, 3-4% of render_fused on the TT and the hw6 box). */
+inline float2 Math_SinCos2Pi(float t) {
+    const float r0 = t - rint(t);
+    const float q = rint(4.0f * r0);
+    const float r = r0 - 0.25f * q, r2 = r * r;
+    const float s = r * (6.2831854820e+00f + r2 * (-4.1341659546e+01f + r2 * (8.1592155457e+01f + r2 * -7.5395851135e+01f)));
+    const float c = 1.0f + r2 * (-1.9739208221e+01f + r2 * (6.4939331055e+01f + r2 * (-8.5444244385e+01f + r2 * 5.9263893127e+01f)));
+    const int k = (int)q & 3; /* quarter turns: (c, s) rotated k times by 90 degrees */
+    const float cq = (k & 1) ? -s : c, sq = (k & 1) ? c : s;
+    return (k & 2) ? (float2)(-cq, -sq) : (float2)(cq, sq);
+}
+
 /* ---- Warps ------------------------------------------------------------------------------------ */
 inline float3 Warp_CosineHemisphere(float u1, float u2) {
     float r = sqrt(u1);
-    float phi = 2.0f * CLRT_PI * u2;
-    return (float3)(r * cos(phi), r * sin(phi), sqrt(fmax(0.0f, 1.0f - u1)));
+    float2 cs = Math_SinCos2Pi(u2);
+    return (float3)(r * cs.x, r * cs.y, sqrt(fmax(0.0f, 1.0f - u1)));
 }
 
 inline float3 Warp_UniformHemisphere(float u1, float u2) {
     float z = u1;
     float r = sqrt(fmax(0.0f, 1.0f - z * z));
-    float phi = 2.0f * CLRT_PI * u2;
-    return (float3)(r * cos(phi), r * sin(phi), z);
+    float2 cs = Math_SinCos2Pi(u2);
+    return (float3)(r * cs.x, r * cs.y, z);
 }
 
 /* ---- Robust ray origins -----------------------------------------------------------------------

@@ -11,41 +11,15 @@
 #define CLRT_ENV_MAX_REJECTIONS 32
 #define CLRT_ONE_MINUS_EPS 0.99999994f
 
-/* atan2(y, x) for finite arguments, within 3e-7 rad (about an ulp of π) of the exact value (the
- * polynomial's error is 8.7e-8 over [0, 1]; the rest is the rounding of the quadrant fix-ups): atan(a) = a·P(a²) on
- * a = min/max in [0, 1], P fitted by us (least squares on Chebyshev nodes, degree 8 in a²). PoCL's
- * atan2 made EnvMap_DirToUv most of shade_hits and much of sample_lights (README "Where the time goes").
- * atan2(±0, x<0) gives +π (u = 0 or 1: the same lat-long column either way). The form on every device,
- * not a quirk (docs/quirks.md "Not quirks"). */
-inline float Env_Atan2(float y, float x) {
-    float ax = fabs(x), ay = fabs(y);
-    float mx = fmax(ax, ay), mn = fmin(ax, ay);
-    float a = mx > 0.0f ? mn / mx : 0.0f;
-    float s = a * a;
-    float p = 2.932761940e-03f;
-    p = p * s - 1.641319041e-02f;
-    p = p * s + 4.327824176e-02f;
-    p = p * s - 7.556900204e-02f;
-    p = p * s + 1.066748690e-01f;
-    p = p * s - 1.421110605e-01f;
-    p = p * s + 1.999369432e-01f;
-    p = p * s - 3.333313797e-01f;
-    p = p * s + 9.999999938e-01f;
-    float r = a * p;
-    if (ay > ax) r = 0.5f * CLRT_PI - r;
-    if (x < 0.0f) r = CLRT_PI - r;
-    return y < 0.0f ? -r : r;
-}
-
 /* Direction (unit, y up) -> (u, v). */
 inline float2 EnvMap_DirToUv(int mapping, float3 d) {
     if (mapping == ENV_PROBE) {
         float s = sqrt(d.x * d.x + d.y * d.y);
-        float r = Env_Atan2(s, -d.z) / CLRT_PI; /* acos(-dz), accurate near the centre and the rim */
+        float r = Math_Atan2(s, -d.z) / CLRT_PI; /* acos(-dz), accurate near the centre and the rim */
         float x = s > 0.0f ? r * d.x / s : r, y = s > 0.0f ? r * d.y / s : 0.0f;
         return (float2)(0.5f * (x + 1.0f), 0.5f * (1.0f - y));
     }
-    return (float2)(0.5f * (1.0f + Env_Atan2(d.x, -d.z) / CLRT_PI), Env_Atan2(sqrt(d.x * d.x + d.z * d.z), d.y) / CLRT_PI);
+    return (float2)(0.5f * (1.0f + Math_Atan2(d.x, -d.z) / CLRT_PI), Math_Atan2(sqrt(d.x * d.x + d.z * d.z), d.y) / CLRT_PI);
 }
 
 /* (u, v) -> unit direction; returns 0 where (u, v) carries no light (probe: outside the disc). */
@@ -55,13 +29,13 @@ inline int EnvMap_UvToDir(int mapping, float u, float v, float3* d) {
         float r = sqrt(x * x + y * y);
         if (!(r <= 1.0f)) return 0;
         if (r <= 0.0f) { *d = (float3)(0.0f, 0.0f, -1.0f); return 1; }
-        float theta = CLRT_PI * r, st = sin(theta);
-        *d = (float3)(st * x / r, st * y / r, -cos(theta));
+        float2 th = Math_SinCos2Pi(0.5f * r); /* θ = π·r */
+        *d = (float3)(th.y * x / r, th.y * y / r, -th.x);
         return 1;
     }
-    float phi = CLRT_PI * (2.0f * u - 1.0f), theta = CLRT_PI * v;
-    float st = sin(theta);
-    *d = (float3)(st * sin(phi), cos(theta), -st * cos(phi));
+    /* φ = π(2u − 1) = 2πu − π: sin φ = −sin 2πu, cos φ = −cos 2πu; θ = π·v */
+    float2 ph = Math_SinCos2Pi(u), th = Math_SinCos2Pi(0.5f * v);
+    *d = (float3)(-th.y * ph.y, th.x, th.y * ph.x);
     return 1;
 }
 
@@ -72,10 +46,10 @@ inline float EnvMap_UvToSolidAngle(int mapping, float u, float v) {
         float r = sqrt(x * x + y * y);
         if (!(r <= 1.0f)) return 0.0f;
         if (r < 1e-6f) return 1.0f / (4.0f * CLRT_PI * CLRT_PI);
-        float s = sin(CLRT_PI * r);
+        float s = Math_SinCos2Pi(0.5f * r).y;
         return s > 0.0f ? r / (4.0f * CLRT_PI * s) : 0.0f;
     }
-    float s = sin(CLRT_PI * v);
+    float s = Math_SinCos2Pi(0.5f * v).y;
     return s > 0.0f ? 1.0f / (2.0f * CLRT_PI * CLRT_PI * s) : 0.0f;
 }
 
@@ -194,9 +168,9 @@ inline int EnvDist_CellSample(const __global float* dist, int i, int j, float du
         const __global float* zr = dist + 4 + H + 1 + H * (W + 1) + W * H;
         float z = zr[j] - dv * (zr[j] - zr[j + 1]);
         float st = sqrt(fmax(0.0f, 1.0f - z * z));
-        float phi = CLRT_PI * (2.0f * (((float)i + du) / (float)W) - 1.0f);
-        *dir = (float3)(st * sin(phi), z, -st * cos(phi));
-        *uvOut = (float2)(((float)i + du) / (float)W, acos(clamp(z, -1.0f, 1.0f)) * CLRT_INV_PI);
+        float2 ph = Math_SinCos2Pi(((float)i + du) / (float)W); /* φ = 2πu − π, as in EnvMap_UvToDir */
+        *dir = (float3)(-st * ph.y, z, st * ph.x);
+        *uvOut = (float2)(((float)i + du) / (float)W, Math_Atan2(st, z) * CLRT_INV_PI); /* acos(z) */
         float omega = 2.0f * CLRT_PI / (float)W * (zr[j] - zr[j + 1]);
         *pdf = omega > 0.0f ? p / omega : 0.0f;
         return *pdf > 0.0f && isfinite(*pdf);

@@ -113,11 +113,11 @@ inline float3 SphereLight_ConeDirection(float3 n, float R, float d2, float2 u, f
     float oneMinusCosMax = sin2Max / (1.0f + cosMax); /* 1 − cosθmax without cancellation */
     float oneMinusCos = u.x * oneMinusCosMax;
     float cosT = 1.0f - oneMinusCos, sinT = sqrt(fmax(0.0f, oneMinusCos * (2.0f - oneMinusCos)));
-    float phi = 2.0f * CLRT_PI * u.y;
+    float2 cs = Math_SinCos2Pi(u.y);
     float3 t, b;
     makeBasis(n, &t, &b);
     *solidAngle = 2.0f * CLRT_PI * oneMinusCosMax;
-    return normalize(sinT * cos(phi) * t + sinT * sin(phi) * b + cosT * n);
+    return normalize(sinT * cs.x * t + sinT * cs.y * b + cosT * n);
 }
 
 /* A light sphere under a transformation that is no similarity (an ellipsoid): the shading point is taken
@@ -158,8 +158,9 @@ inline float3 SphereLight_Sample(const __global Light* light, const __global flo
     if (d2 > R * R) {
         w = SphereLight_ConeDirection(axis / sqrt(d2), R, d2, u, &invPdf);
     } else { /* inside the sphere: all directions (the inside emits nothing: SphereLight_Hit) */
-        float z = 1.0f - 2.0f * u.x, r = sqrt(fmax(0.0f, 1.0f - z * z)), phi = 2.0f * CLRT_PI * u.y;
-        w = (float3)(r * cos(phi), r * sin(phi), z);
+        float z = 1.0f - 2.0f * u.x, r = sqrt(fmax(0.0f, 1.0f - z * z));
+        float2 cs = Math_SinCos2Pi(u.y);
+        w = (float3)(r * cs.x, r * cs.y, z);
         invPdf = 4.0f * CLRT_PI;
     }
     float t = SphereLight_Hit(data + light->objFirst, p, w);

@@ -142,8 +142,8 @@ inline SurfaceHit Surface_FromHit(Hit h, Ray r, const HitTriangle* ht, const __g
         float3 nW = nObj.x * sp->worldToObject[0].xyz + nObj.y * sp->worldToObject[1].xyz + nObj.z * sp->worldToObject[2].xyz;
         s.ng = normalize(nW);
         s.ns = s.ng;
-        float theta = acos(clamp(nObj.y, -1.0f, 1.0f));
-        float phi = atan2(nObj.z, nObj.x);
+        float theta = Math_Atan2(sqrt(nObj.x * nObj.x + nObj.z * nObj.z), nObj.y); /* acos(n.y) */
+        float phi = Math_Atan2(nObj.z, nObj.x);
         s.uv = (float2)((-phi + CLRT_PI) / (2.0f * CLRT_PI), theta / CLRT_PI);
         s.material = sp->material;
         s.textureSet = sp->textureSet;
@@ -248,7 +248,8 @@ inline float Surface_UvArea(Hit h, SurfaceHit s, const HitTriangle* ht, const __
     float3 nObj = normalize(affinePoint(sp->worldToObject, s.p) - sp->centerRadius.xyz);
     float r = sp->centerRadius.w;
     float cosT = clamp(nObj.y, -1.0f, 1.0f), sinT = sqrt(fmax(0.0f, 1.0f - cosT * cosT));
-    float phi = atan2(nObj.z, nObj.x), cosP = cos(phi), sinP = sin(phi);
+    float rho = sqrt(nObj.x * nObj.x + nObj.z * nObj.z); /* cos φ, sin φ of φ = atan2(n.z, n.x); (1, 0) at the poles */
+    float cosP = rho > 0.0f ? nObj.x / rho : 1.0f, sinP = rho > 0.0f ? nObj.z / rho : 0.0f;
     /* u = (π − φ)/2π, v = θ/π (Surface_FromHit) */
     float3 dpdu = affineVector(sp->objectToWorld, (-2.0f * CLRT_PI * r) * (float3)(-sinT * sinP, 0.0f, sinT * cosP));
     float3 dpdv = affineVector(sp->objectToWorld, (CLRT_PI * r) * (float3)(cosT * cosP, -sinT, cosT * sinP));

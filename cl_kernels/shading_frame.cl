@@ -45,10 +45,11 @@ inline TangentFrame Frame_Triangle(float3 p0, float3 p1, float3 p2, float2 t0, f
  * world space by the sphere's transform (rows of objectToWorld). */
 inline TangentFrame Frame_Sphere(float3 nObj, float r, const __global float4* objectToWorld) {
     float3 q = r * nObj;
-    float phi = atan2(nObj.z, nObj.x);
+    float rho = sqrt(nObj.x * nObj.x + nObj.z * nObj.z); /* cos φ, sin φ without atan2: (1, 0) at the poles */
+    float cosP = rho > 0.0f ? nObj.x / rho : 1.0f, sinP = rho > 0.0f ? nObj.z / rho : 0.0f;
     float sinTheta = sqrt(fmax(0.0f, 1.0f - nObj.y * nObj.y));
     float3 dpduObj = 2.0f * CLRT_PI * (float3)(q.z, 0.0f, -q.x);
-    float3 dpdvObj = CLRT_PI * (float3)(q.y * cos(phi), -r * sinTheta, q.y * sin(phi));
+    float3 dpdvObj = CLRT_PI * (float3)(q.y * cosP, -r * sinTheta, q.y * sinP);
     TangentFrame f;
     f.dpdu = (float3)(dot(objectToWorld[0].xyz, dpduObj), dot(objectToWorld[1].xyz, dpduObj), dot(objectToWorld[2].xyz, dpduObj));
     f.dpdv = (float3)(dot(objectToWorld[0].xyz, dpdvObj), dot(objectToWorld[1].xyz, dpdvObj), dot(objectToWorld[2].xyz, dpdvObj));

@@ -6,7 +6,7 @@
 // mapping (a kd = 0.5 sphere under radiance 1 shows π/2), spot/directional/area/environment
 // Light_Sample kernels against host reference evaluations at random points, the mis env strategy's
 // cosine-weighted tables (each bucket's pdf integrating to one, chi-square, cells and buckets covering
-// texels and normals, the device's bucket, samples and pdfs against EnvCosineTable), Env_Atan2
+// texels and normals, the device's bucket, samples and pdfs against EnvCosineTable), Math_Atan2
 // against libm, and (tagged [.slow],
 // run by scripts/env_sampling_compare.sh) the relMSE of each env strategy on sunset.exr.
 #include <catch.hpp>
@@ -772,11 +772,11 @@ TEST_CASE("env strategies on sunset.exr: importance and MIS beat uniform >= 10x 
     CHECK(err[0] / err[3] >= 10.0);
 }
 
-TEST_CASE("Env_Atan2 (the env mappings' atan2) is within 3e-7 rad (an ulp of pi) of atan2", "[lights][env][cl]") {
+TEST_CASE("Math_Atan2 (the env mappings' atan2) is within 3e-7 rad (an ulp of pi) of atan2", "[lights][env][cl]") {
     const char* src = R"CLC(
 __kernel void atan_test(const __global float2* in, __global float* out, int n) {
     int i = get_global_id(0);
-    if (i < n) out[i] = Env_Atan2(in[i].x, in[i].y);
+    if (i < n) out[i] = Math_Atan2(in[i].x, in[i].y);
 }
 )CLC";
     DeviceContext& dc = testContext();
@@ -807,7 +807,7 @@ __kernel void atan_test(const __global float2* in, __global float* out, int n) {
         worst = std::max(worst, d);
         if (d > 3e-7) CHECK(d <= 3e-7);
     }
-    WARN("Env_Atan2: largest error " << worst << " rad over " << n << " pairs");
+    WARN("Math_Atan2: largest error " << worst << " rad over " << n << " pairs");
 }
 
 // Maps for the cosine tables: odd sizes (cells of one texel), a lat-long map larger than the coarse grid

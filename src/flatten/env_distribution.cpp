@@ -68,13 +68,15 @@ bool envUvToDir(int mapping, float u, float v, Vec3& d) {
             d = Vec3(0, 0, -1);
             return true;
         }
-        float theta = kPi * r, st = std::sin(theta);
-        d = Vec3(st * x / r, st * y / r, -std::cos(theta));
+        float ct, st;
+        sinCos2Pi(0.5f * r, ct, st);  // θ = π·r, as the device
+        d = Vec3(st * x / r, st * y / r, -ct);
         return true;
     }
-    float phi = kPi * (2.0f * u - 1.0f), theta = kPi * v;
-    float st = std::sin(theta);
-    d = Vec3(st * std::sin(phi), std::cos(theta), -st * std::cos(phi));
+    float cp, sp, ct, st;  // φ = π(2u − 1) = 2πu − π, θ = π·v, as the device
+    sinCos2Pi(u, cp, sp);
+    sinCos2Pi(0.5f * v, ct, st);
+    d = Vec3(-st * sp, ct, st * cp);
     return true;
 }
 
@@ -84,10 +86,12 @@ float envUvToSolidAngle(int mapping, float u, float v) {
         float r = std::sqrt(x * x + y * y);
         if (!(r <= 1.0f)) return 0.0f;
         if (r < 1e-6f) return 1.0f / (4.0f * kPi * kPi);
-        float s = std::sin(kPi * r);
+        float c, s;
+        sinCos2Pi(0.5f * r, c, s);
         return s > 0.0f ? r / (4.0f * kPi * s) : 0.0f;
     }
-    float s = std::sin(kPi * v);
+    float c, s;
+    sinCos2Pi(0.5f * v, c, s);
     return s > 0.0f ? 1.0f / (2.0f * kPi * kPi * s) : 0.0f;
 }
 
@@ -434,8 +438,9 @@ bool EnvDistribution::cellSample(int i, int j, float du, float dv, float p, floa
         const float* zr = &data[4 + H + 1 + size_t(H) * (W + 1) + size_t(W) * H];
         float z = zr[j] - dv * (zr[j] - zr[j + 1]);
         float st = std::sqrt(std::max(0.0f, 1.0f - z * z));
-        float phi = kPi * (2.0f * ((float(i) + du) / float(W)) - 1.0f);
-        dir = Vec3(st * std::sin(phi), z, -st * std::cos(phi));
+        float cp, sp;  // φ = 2πu − π, as the device
+        sinCos2Pi((float(i) + du) / float(W), cp, sp);
+        dir = Vec3(-st * sp, z, st * cp);
         float omega = 2.0f * kPi / float(W) * (zr[j] - zr[j + 1]);
         pdfSolidAngle = omega > 0.0f ? p / omega : 0.0f;
         return pdfSolidAngle > 0.0f && std::isfinite(pdfSolidAngle);

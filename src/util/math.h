@@ -42,6 +42,19 @@ inline Vec3 vmin(const Vec3& a, const Vec3& b) {
 inline Vec3 vmax(const Vec3& a, const Vec3& b) {
     return {std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)};
 }
+// (cos 2πt, sin 2πt) for finite t in turns: the host replica of the device's Math_SinCos2Pi (common.cl),
+// the same float operations in the same order (the device may fuse a multiply-add: within an ulp of this).
+inline void sinCos2Pi(float t, float& cosOut, float& sinOut) {
+    const float r0 = t - std::rint(t);
+    const float q = std::rint(4.0f * r0);
+    const float r = r0 - 0.25f * q, r2 = r * r;
+    const float s = r * (6.2831854820e+00f + r2 * (-4.1341659546e+01f + r2 * (8.1592155457e+01f + r2 * -7.5395851135e+01f)));
+    const float c = 1.0f + r2 * (-1.9739208221e+01f + r2 * (6.4939331055e+01f + r2 * (-8.5444244385e+01f + r2 * 5.9263893127e+01f)));
+    const int k = std::isfinite(q) ? static_cast<int>(q) & 3 : 0;
+    const float cq = (k & 1) ? -s : c, sq = (k & 1) ? c : s;
+    cosOut = (k & 2) ? -cq : cq;
+    sinOut = (k & 2) ? -sq : sq;
+}
 inline bool isFinite(const Vec3& a) {
     return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
 }
