@@ -298,13 +298,13 @@ def plot(name, runs, meta, path):
     plt.close(fig)
 
 
-def report(B, a, metas, rows, seconds):
+def report(B, a, metas, rows, seconds, device_name):
     lines = ["## Path tracing against Mitsuba 3 (issue 32)", "",
-             "bench/bench_mitsuba_path.py, Mitsuba %s `%s`, %d threads each (clrt: PoCL's pthread device); %d runs "
-             "per point; %.0f s. Time: wall of the render (clrt's render stage, Mitsuba's mi.render after a "
-             "warm-up) and process CPU (user+system; clrt's less the median CPU of a 1-spp run: set-up). relMSE "
-             "(W = 1) against each renderer's own reference, less that reference's own estimated relMSE." % (
-                 a.mi_version, a.mitsuba_variant, a.threads, a.runs, seconds), "",
+             ("bench/bench_mitsuba_path.py, Mitsuba %s `%s`, %d threads each (clrt: `--device %s`, %s); %d runs "
+              "per point; %.0f s. Time: wall of the render (clrt's render stage, Mitsuba's mi.render after a "
+              "warm-up) and process CPU (user+system; clrt's less the median CPU of a 1-spp run: set-up). relMSE "
+              "(W = 1) against each renderer's own reference, less that reference's own estimated relMSE." % (
+                 a.mi_version, a.mitsuba_variant, a.threads, a.device or "cpu", device_name, a.runs, seconds)), "",
              "| scene | size | clrt depth / Mitsuba max_depth | ref spp | mean Mitsuba/clrt (R G B) | agree | relMSE between refs |",
              "|---|---|---|---|---|---|---|"]
     for m in metas:
@@ -376,7 +376,7 @@ def main(B, clrt, a):
     B.write_csv(os.path.join(out, "mitsuba_path.csv"), rows, cols)
     B.write_csv(os.path.join(out, "mitsuba_path_runs.csv"), runs, list(runs[0].keys()) if runs else [])
     rep = ["# clrt benchmark, path tracing against Mitsuba 3: %s" % device_name, ""]
-    rep += report(B, a, metas, rows, time.perf_counter() - t0) + extra
+    rep += report(B, a, metas, rows, time.perf_counter() - t0, device_name) + extra
     open(os.path.join(out, "mitsuba_path_report.md"), "w").write("\n".join(rep) + "\n")
     print("\n".join(rep))
     shutil.rmtree(tmp, ignore_errors=True)
