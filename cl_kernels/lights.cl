@@ -199,17 +199,21 @@ inline void EnvLight_SampleMis(const __global Light* light, float3 n, float2 uLi
     const int mapping = light->mapping;
     float3 wL = n, wB = n, lL = (float3)(0.0f), lB = (float3)(0.0f);
     float pB = 0.0f; /* the map's pdf of the cosine direction */
+    /* Both directions first, then the three table reads that miss the cache (two texel footprints, the
+     * cosine direction's pdf) side by side, so that the core waits for them together, not in turn. */
+    float2 uvL = (float2)(0.0f), uvB = (float2)(0.0f);
+    float pL = 0.0f;
+    const int okL = EnvLightDist_SampleUv(d, uLight.x, uLight.y, &wL, &pL, &uvL);
     if (withCosine) {
         wB = EnvSample_Cosine(n, (float2)(fmin(uBsdf.x, CLRT_ONE_MINUS_EPS), uBsdf.y));
-        float2 uvB = EnvMap_DirToUv(mapping, wB);
+        uvB = EnvMap_DirToUv(mapping, wB);
+    }
+    if (okL) lL = EnvMap_Lookup(texels, img, mapping, uvL.x, uvL.y) * light->radiance.xyz;
+    else wL = n;
+    if (withCosine) {
         lB = EnvMap_Lookup(texels, img, mapping, uvB.x, uvB.y) * light->radiance.xyz;
         pB = EnvLightDist_PdfUv(d, uvB);
     }
-    float2 uvL = (float2)(0.0f);
-    float pL = 0.0f;
-    const int okL = EnvLightDist_SampleUv(d, uLight.x, uLight.y, &wL, &pL, &uvL);
-    if (okL) lL = EnvMap_Lookup(texels, img, mapping, uvL.x, uvL.y) * light->radiance.xyz;
-    else wL = n;
     *wiL = wL;
     *wiB = wB;
     *eL = okL ? EnvLight_MisValue(lL, 1.0f, pL, cosShare, fmax(dot(wL, n), 0.0f) * CLRT_INV_PI) : (float3)(0.0f);
