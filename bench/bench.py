@@ -477,6 +477,12 @@ def parse_args(argv=None):
                     "integrator (bench/bench_mitsuba_path.py; --scenes, --spp, --runs apply)")
     ap.add_argument("--mitsuba-variant", default="llvm_ad_rgb", choices=["llvm_ad_rgb", "scalar_rgb"],
                     help="Mitsuba variant for --mitsuba-path (default llvm_ad_rgb: the faster on 2 cores)")
+    ap.add_argument("--scene-file", default="", metavar="FILE[@CAMERA],...",
+                    help="with --mitsuba-path: these course XML scenes instead of the benchmark's (camera N with @N)")
+    ap.add_argument("--path-res", type=int, default=128, help="with --scene-file: the long side of the render (default 128)")
+    ap.add_argument("--path-params", default="", help="with --scene-file: clrt's RendererParams instead of the camera's "
+                    "(e.g. MultipleImportanceSampling, what Mitsuba's path does)")
+    ap.add_argument("--path-ref-spp", type=int, default=1024, help="with --scene-file: each reference's spp (default 1024)")
     ap.add_argument("--depth-check", action="store_true", help="with --mitsuba-path: also the depth-mapping test")
     ap.add_argument("--replot", metavar="DIR", help="only redraw the plots of DIR (a results folder) from its CSVs")
     return ap.parse_args(argv)

@@ -21,11 +21,17 @@ time, process wall and CPU time (getrusage of the child), Mitsuba's mi.render wa
 (time.process_time), both on the same thread count; relMSE of each against its own reference;
 efficiency = 1/(relMSE x time); ratio clrt/Mitsuba = time factor x noise factor.
 --depth-check: the box at clrt depths 0 and 1 against Mitsuba max_depth d+1 and d+2 (the mapping's test).
+--scene-file FILE[@CAMERA],...: any course XML scene instead of the three above (user_scene below): one of
+its cameras (the first unless @N, 1-based), its own depth and RendererParams (or --path-params; Russian
+roulette removed, as above), the resolution scaled to --path-res on the long side, references of --path-ref-spp; what the
+conversion cannot map is listed under the report's table ("Conversion warnings"), and the means must still
+agree within 1% for the efficiency to count.
 Writes mitsuba_path.csv, mitsuba_path_runs.csv, mitsuba_path_<scene>.png, mitsuba_path_report.md."""
 import os
 import re
 import resource
 import time
+import xml.etree.ElementTree as ET
 
 import numpy as np
 
@@ -100,9 +106,89 @@ def veach_scene(sc, depth, tmpdir, params, area_light=False):
     return out
 
 
+def user_scene(spec, long_side, ref_spp):
+    """A SCENES entry for --scene-file FILE[@CAMERA]: the camera (1-based, default the first), its resolution
+    scaled to long_side on the long side (aspect kept), its depth as clrt reads it (the camera's
+    MaxRecursionDepth, else the scene's, else 6)."""
+    path, _, cam = spec.partition("@")
+    path = os.path.abspath(path)
+    if not path.endswith(".xml"):
+        raise SystemExit("bench: --scene-file %s: an XML course scene is needed (the converter reads XML)" % path)
+    root = ET.parse(path).getroot()
+    cams = list(root.find("Cameras")) if root.find("Cameras") is not None else []
+    k = int(cam) if cam else 1
+    if not 1 <= k <= len(cams):
+        raise SystemExit("bench: --scene-file %s: camera %d of %d" % (path, k, len(cams)))
+    c = cams[k - 1]
+    w, h = (int(x) for x in c.find("ImageResolution").text.split())
+    f = long_side / max(w, h)
+    res = (max(1, round(w * f)), max(1, round(h * f)))
+    depth = 6
+    for el in (c.find("MaxRecursionDepth"), root.find("MaxRecursionDepth")):
+        if el is not None and el.text and el.text.strip():
+            depth = int(el.text)
+            break
+    name = os.path.splitext(os.path.basename(path))[0] + ("-cam%d" % k if k > 1 else "")
+    return dict(name=name, path=path, camera=k, res=res, depth=depth, ref_spp=ref_spp, user=True)
+
+
+def user_scene_copy(sc, tmpdir, depth):
+    """The copy of a --scene-file scene both renderers render: only its chosen camera (ImageName img.exr, the
+    reduced resolution, no NumSamples, Russian roulette removed from its RendererParams), file paths (PLY,
+    texture images) made absolute, MaxRecursionDepth set where clrt reads it when depth differs."""
+    tree = ET.parse(sc["path"])
+    root = tree.getroot()
+    base = os.path.dirname(sc["path"])
+    for el in root.iter():
+        if "plyFile" in el.attrib and not os.path.isabs(el.attrib["plyFile"]):
+            el.attrib["plyFile"] = os.path.join(base, el.attrib["plyFile"])
+    for img in root.iter("Image"):
+        if img.text and img.text.strip() and not os.path.isabs(img.text.strip()):
+            img.text = os.path.join(base, img.text.strip())
+    cams = root.find("Cameras")
+    keep = list(cams)[sc["camera"] - 1]
+    for c in list(cams):
+        if c is not keep:
+            cams.remove(c)
+
+    def set_child(parent, tag, text):
+        el = parent.find(tag)
+        if el is None:
+            el = ET.SubElement(parent, tag)
+        el.text = text
+
+    set_child(keep, "ImageName", "img.exr")
+    set_child(keep, "ImageResolution", "%d %d" % sc["res"])
+    for el in keep.findall("NumSamples"):
+        keep.remove(el)
+    rp = keep.find("RendererParams")
+    notes = sc.setdefault("notes", [])
+    path_traced = (keep.findtext("Renderer") or "").strip() == "PathTracing"
+    if sc.get("params") and path_traced:
+        if rp is None:
+            rp = ET.SubElement(keep, "RendererParams")
+        if (rp.text or "").split() != sc["params"].split():
+            note = "RendererParams '%s' replaced by '%s' (--path-params)" % ((rp.text or "").strip(), sc["params"])
+            if note not in notes:
+                notes.append(note)
+        rp.text = sc["params"]
+    if rp is not None and "RussianRoulette" in (rp.text or "").split():
+        rp.text = " ".join(x for x in rp.text.split() if x != "RussianRoulette")
+        note = "RussianRoulette removed from clrt's RendererParams (it lifts the depth cap; Mitsuba renders at the cap)"
+        if note not in notes:
+            notes.append(note)
+    if depth != sc["depth"]:
+        set_child(keep if keep.find("MaxRecursionDepth") is not None else root, "MaxRecursionDepth", str(depth))
+    out = os.path.join(tmpdir, "%s-d%d.xml" % (sc["name"], depth))
+    tree.write(out)
+    return out
+
+
 def make_scene(sc, tmpdir, depth=None, params="MultipleImportanceSampling", area_light=False):
     """The scene copy both renderers render (see the module comment)."""
     depth = sc["depth"] if depth is None else depth
+    if sc.get("user"):
+        return user_scene_copy(sc, tmpdir, depth)
     if sc["path"] == VEACH:
         return veach_scene(sc, depth, tmpdir, params, area_light)
     p = bench_path.make_scene(dict(sc, name=sc["name"] + "-d%d" % depth), params, tmpdir, "mi")
@@ -193,7 +279,8 @@ def setup_cpu(B, clrt, scene, runs):
 def run_scene(B, clrt, mi, a, sc, tmp):
     """References, agreement, and every (spp, run) of both renderers; returns (rows, runs_rows, meta)."""
     scene = make_scene(sc, tmp)
-    B.log("%s (%dx%d, clrt depth %d, MIS, no roulette)" % (sc["name"], sc["res"][0], sc["res"][1], sc["depth"]))
+    B.log("%s (%dx%d, clrt depth %d, %s, no roulette)" % (sc["name"], sc["res"][0], sc["res"][1], sc["depth"],
+                                                        "its own RendererParams" if sc.get("user") else "MIS"))
     samplers = a.path_mi_samplers
     mss = {smp: MitsubaPath(B, mi, scene, a.mitsuba_variant, smp, sc.get("open_lights", "two-sided")) for smp in samplers}
     ms = mss[samplers[0]]  # the reference's (any sampler is unbiased; the cache key names no sampler)
@@ -204,7 +291,7 @@ def run_scene(B, clrt, mi, a, sc, tmp):
                                                       "agree" if agree else "DISAGREE (> 1%)"))
     meta = dict(scene=sc["name"], res="%dx%d" % sc["res"], clrt_depth=sc["depth"], mitsuba_max_depth=ms.max_depth,
                 ref_spp=sc["ref_spp"], clrt_floor=cmeta["relmse"], mitsuba_floor=mfloor, ratio=ratio, agree=agree,
-                refs_relmse=B.rel_mse(mref, cref, 1.0), warnings=ms.warnings)
+                refs_relmse=B.rel_mse(mref, cref, 1.0), warnings=sc.get("notes", []) + ms.warnings)
     for m in mss.values():
         m.image(4, 0)  # warm-up (Dr.Jit compiles once per size)
     meta["clrt_setup_cpu"] = setup_cpu(B, clrt, scene, 3)
@@ -361,6 +448,10 @@ def main(B, clrt, a):
     tmp = tempfile.mkdtemp(prefix="clrt-bench-mipath-")
     wanted = set(filter(None, a.scenes.split(",")))
     scenes = [s for s in SCENES if os.path.exists(s["path"]) and (not wanted or s["name"] in wanted)]
+    if a.scene_file:
+        scenes = [dict(user_scene(x, a.path_res, a.path_ref_spp), params=a.path_params) for x in a.scene_file.split(",") if x]
+        if a.depth_check:
+            raise SystemExit("bench: --depth-check runs on the hw6 box, not with --scene-file")
     device_name, out = B.device_folder(clrt, make_scene(scenes[0], tmp), a)
     B.log("bench: path tracing against Mitsuba %s (%s), %d threads; device '%s' -> %s" % (
         a.mi_version, a.mitsuba_variant, a.threads, device_name, out))
