@@ -21,6 +21,12 @@
 #else
 #define CLRT_KERNEL_VEC_HINT
 #endif
+/* CLRT_QUIRK_BIT_REVERSE_TABLE (Oclgrind): LLVM turns Bits_Reverse's shift-and-mask network into the
+ * llvm.bitreverse intrinsic, which Oclgrind cannot run ("Undefined external function"); there the bits
+ * are reversed by a table of reversed bytes, the same values. */
+#ifdef CLRT_QUIRK_BIT_REVERSE_TABLE
+#define CLRT_BITS_REVERSE_BY_TABLE 1
+#endif
 
 inline float4 f4(float3 v, float w) { return (float4)(v, w); }
 inline float maxComponent(float3 v) { return fmax(v.x, fmax(v.y, v.z)); }
@@ -75,16 +81,27 @@ inline float Rng_Uniform(RngKey k, uint dim) {
  * (0,m,2)-net, one point in each elementary interval of area 2^-m. Each point alone is uniform, so
  * every estimate stays unbiased. Host replica: tests/test_sampler.cpp. */
 
-/* Bit reversal by a table of reversed bytes. Not the shift-and-mask network: LLVM turns that into
- * llvm.bitreverse.i32, which Oclgrind cannot run ("Undefined external function"). */
+/* Bit reversal: the shift-and-mask network (LLVM makes it llvm.bitreverse: a few instructions on x86, one
+ * on GPUs), or under CLRT_BITS_REVERSE_BY_TABLE (quirk BIT_REVERSE_TABLE) a table of reversed bytes. The
+ * network was 1.5-3% faster than the table on the CPU (hw6 box, TT; docs/quirks.md). */
 #define CLRT_REV2_(n) n, n + 2 * 64, n + 1 * 64, n + 3 * 64
 #define CLRT_REV4_(n) CLRT_REV2_(n), CLRT_REV2_(n + 2 * 16), CLRT_REV2_(n + 1 * 16), CLRT_REV2_(n + 3 * 16)
 #define CLRT_REV6_(n) CLRT_REV4_(n), CLRT_REV4_(n + 2 * 4), CLRT_REV4_(n + 1 * 4), CLRT_REV4_(n + 3 * 4)
+#ifdef CLRT_BITS_REVERSE_BY_TABLE
 __constant uchar kBitsReversedByte[256] = {CLRT_REV6_(0), CLRT_REV6_(2), CLRT_REV6_(1), CLRT_REV6_(3)};
+#endif
 
 inline uint Bits_Reverse(uint v) {
+#ifdef CLRT_BITS_REVERSE_BY_TABLE
     return ((uint)kBitsReversedByte[v & 0xffu] << 24) | ((uint)kBitsReversedByte[(v >> 8) & 0xffu] << 16) |
            ((uint)kBitsReversedByte[(v >> 16) & 0xffu] << 8) | (uint)kBitsReversedByte[v >> 24];
+#else
+    v = ((v >> 1) & 0x55555555u) | ((v & 0x55555555u) << 1);
+    v = ((v >> 2) & 0x33333333u) | ((v & 0x33333333u) << 2);
+    v = ((v >> 4) & 0x0f0f0f0fu) | ((v & 0x0f0f0f0fu) << 4);
+    v = ((v >> 8) & 0x00ff00ffu) | ((v & 0x00ff00ffu) << 8);
+    return (v >> 16) | (v << 16);
+#endif
 }
 
 /* Laine and Karras' hash: each output bit depends on that bit and the ones below it only, so on

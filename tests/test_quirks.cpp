@@ -82,10 +82,13 @@ TEST_CASE("Quirks: each implementation gets its defines and host settings", "[qu
     const Strings intel = {"-DCLRT_QUIRK_INTEL_VEC_HINT"};
     CHECK(quirksFor(kImplIntelCpu, CL_DEVICE_TYPE_CPU).defines == intel);
     CHECK(quirksFor(kImplIntelCpu, CL_DEVICE_TYPE_ACCELERATOR).defines == intel);  // FPGA emulation: same compiler
+    // Oclgrind: the byte table for bit reversal (it cannot run llvm.bitreverse).
+    const Strings oclgrind = {"-DCLRT_QUIRK_BIT_REVERSE_TABLE"};
+    CHECK(quirksFor(kImplOclgrind, CL_DEVICE_TYPE_CPU).defines == oclgrind);
+    CHECK(quirksFor(kImplOclgrind, CL_DEVICE_TYPE_GPU).defines == oclgrind);
     // Everyone else: no kernel define (PoCL's programs are built exactly as before the table; GPU
     // targets too, which scripts/gpu_compile_check.sh relies on).
-    for (unsigned impl : {kImplPocl, kImplIntelGpu, kImplNvidia, kImplAmd, kImplApple, kImplMesa, kImplOclgrind,
-                          kImplOther})
+    for (unsigned impl : {kImplPocl, kImplIntelGpu, kImplNvidia, kImplAmd, kImplApple, kImplMesa, kImplOther})
         for (cl_device_type type : {CL_DEVICE_TYPE_CPU, CL_DEVICE_TYPE_GPU}) {
             INFO(implementationName(impl) << " type " << type);
             CHECK(quirksFor(impl, type).defines.empty());

@@ -80,6 +80,13 @@ const std::vector<Quirk>& quirkTable() {
          "build, overlapping the flattening, runs on the context's thread there",
          "scripts/oclgrind_suite.sh's uninit pass (every render exits 139 with CLRT_QUIRKS=-BUILD_ON_CONTEXT_THREAD)",
          buildOnContextThread},
+        {"BIT_REVERSE_TABLE", kImplOclgrind, CL_DEVICE_TYPE_ALL, true,
+         "oclgrind 21.10 cannot run the llvm.bitreverse intrinsic (\"Undefined external function\"), which LLVM "
+         "makes of Bits_Reverse's shift-and-mask network (common.cl); there the bits are reversed by a table of "
+         "reversed bytes (CLRT_BITS_REVERSE_BY_TABLE), the same values",
+         "scripts/oclgrind_suite.sh (its renders fail with CLRT_QUIRKS=-BIT_REVERSE_TABLE); tests/test_sampler.cpp "
+         "[sampler][cl][quirks] checks both forms against the host's reversal",
+         nullptr},
     };
     return table;
 }
