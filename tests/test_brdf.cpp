@@ -300,26 +300,13 @@ __kernel void pow_test(const __global float2* in, __global float* out, int n) {
     if (i < n) out[i] = Math_PowNonNegative(in[i].x, in[i].y);
 }
 )CLC";
-    DeviceContext& dc = testContext();
-    auto sources = loadKernelSources({"common.cl"});
-    sources.push_back({"pow_test.cl", src});
-    cl::Program program = buildProgramFromSources(dc, sources, {});
-    cl::Kernel k = CL_CPP(cl::Kernel(program, "pow_test"));
     const float xs[] = {0.0f, -0.0f, 1e-30f, 1e-6f, 0.25f, 0.5f, 0.9f, 0.999f, 1.0f};
     const float es[] = {0.0f, 1.0f, 2.5f, 10.0f, 100.0f, 1000.0f, -1.0f, NAN};
     std::vector<dev::float2> in;
     for (float x : xs)
         for (float e : es) in.push_back({x, e});
     const int n = int(in.size());
-    std::vector<float> out(in.size());
-    cl::Context& ctx = dc.context();
-    cl::Buffer ib = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(dev::float2) * in.size(), in.data()));
-    cl::Buffer ob = CL_CPP(cl::Buffer(ctx, CL_MEM_WRITE_ONLY, sizeof(float) * out.size()));
-    CL_CPP(k.setArg(0, ib));
-    CL_CPP(k.setArg(1, ob));
-    CL_CPP(k.setArg(2, n));
-    CL_CPP(dc.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(roundUp(size_t(n), 64)), cl::NDRange(64)));
-    CL_CPP(dc.queue().enqueueReadBuffer(ob, CL_TRUE, 0, sizeof(float) * out.size(), out.data()));
+    const std::vector<float> out = runElementwiseKernel<float>({"common.cl"}, "pow_test", src, in);
     for (int i = 0; i < n; ++i) {
         const float x = in[size_t(i)].x, e = in[size_t(i)].y, got = out[size_t(i)];
         const float want = std::pow(x, e);

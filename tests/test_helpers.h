@@ -7,7 +7,9 @@
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <vector>
 
+#include "cl/check.h"
 #include "cl/devices.h"
 #include "cl/program.h"
 #include "flatten/device_scene.h"
@@ -29,6 +31,30 @@ inline DeviceContext& testContext() {
     // freed per-thread call stack: valgrind, and "corrupted double-linked list" aborts at exit).
     static DeviceContext* dc = new DeviceContext(testDevice());
     return *dc;
+}
+
+// Runs an element-wise test kernel on the test device: kernelSource defines
+//     __kernel void NAME(const __global In* in, __global Out* out, int n)   (out[i] from in[i], i < n)
+// and is built after the kernel files `files` (e.g. {"common.cl"}) with `defines` ("-D..."); returns out.
+template <class Out, class In>
+std::vector<Out> runElementwiseKernel(const std::vector<std::string>& files, const char* name, const char* kernelSource,
+                                      const std::vector<In>& in, const std::vector<std::string>& defines = {}) {
+    DeviceContext& dc = testContext();
+    auto sources = loadKernelSources(files);
+    sources.push_back({std::string(name) + ".cl", kernelSource});
+    cl::Program program = buildProgramFromSources(dc, sources, defines);
+    cl::Kernel k = CL_CPP(cl::Kernel(program, name));
+    const int n = int(in.size());
+    std::vector<Out> out(in.size());
+    cl::Buffer ib = CL_CPP(cl::Buffer(dc.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(In) * in.size(),
+                                      const_cast<In*>(in.data())));
+    cl::Buffer ob = CL_CPP(cl::Buffer(dc.context(), CL_MEM_WRITE_ONLY, sizeof(Out) * out.size()));
+    CL_CPP(k.setArg(0, ib));
+    CL_CPP(k.setArg(1, ob));
+    CL_CPP(k.setArg(2, n));
+    CL_CPP(dc.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(roundUp(size_t(n), 64)), cl::NDRange(64)));
+    CL_CPP(dc.queue().enqueueReadBuffer(ob, CL_TRUE, 0, sizeof(Out) * out.size(), out.data()));
+    return out;
 }
 
 inline std::string sharedDir() { return CLRT_SHARED_DIR; }

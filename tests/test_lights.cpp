@@ -772,18 +772,13 @@ TEST_CASE("env strategies on sunset.exr: importance and MIS beat uniform >= 10x 
     CHECK(err[0] / err[3] >= 10.0);
 }
 
-TEST_CASE("Math_Atan2 (the env mappings' atan2) is within 3e-7 rad (an ulp of pi) of atan2", "[lights][env][cl]") {
+TEST_CASE("Math_Atan2 (the env mappings' and spheres' atan2) is within 3e-7 rad (an ulp of pi) of atan2", "[lights][env][cl]") {
     const char* src = R"CLC(
 __kernel void atan_test(const __global float2* in, __global float* out, int n) {
     int i = get_global_id(0);
     if (i < n) out[i] = Math_Atan2(in[i].x, in[i].y);
 }
 )CLC";
-    DeviceContext& dc = testContext();
-    auto sources = loadKernelSources({"envmap.cl"});
-    sources.push_back({"atan_test.cl", src});
-    cl::Program program = buildProgramFromSources(dc, sources, {});
-    cl::Kernel k = CL_CPP(cl::Kernel(program, "atan_test"));
     std::vector<dev::float2> in;
     std::mt19937 rng(9);
     std::normal_distribution<float> g;
@@ -791,13 +786,7 @@ __kernel void atan_test(const __global float2* in, __global float* out, int n) {
     for (float a : {0.0f, -0.0f, 1.0f, -1.0f, 1e-30f, -1e-30f, 3e7f, -3e7f})  // axes, diagonals, extremes
         for (float b : {0.0f, 1.0f, -1.0f, 1e-30f, -1e-30f, 3e7f, -3e7f}) in.push_back({a, b});
     const int n = int(in.size());
-    std::vector<float> out(n);
-    cl::Context& ctx = dc.context();
-    cl::Buffer ib = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(dev::float2) * n, in.data()));
-    cl::Buffer ob = CL_CPP(cl::Buffer(ctx, CL_MEM_WRITE_ONLY, sizeof(float) * n));
-    k.setArg(0, ib); k.setArg(1, ob); k.setArg(2, n);
-    CL_CPP(dc.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(roundUp(n, 64)), cl::NDRange(64)));
-    CL_CPP(dc.queue().enqueueReadBuffer(ob, CL_TRUE, 0, sizeof(float) * n, out.data()));
+    const std::vector<float> out = runElementwiseKernel<float>({"common.cl"}, "atan_test", src, in);
     double worst = 0;
     for (int i = 0; i < n; ++i) {
         double e = std::atan2(double(in[i].x), double(in[i].y)), d = std::fabs(out[i] - e);

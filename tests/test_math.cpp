@@ -11,8 +11,6 @@
 #include <random>
 #include <vector>
 
-#include "cl/check.h"
-#include "cl/program.h"
 #include "test_helpers.h"
 #include "util/math.h"
 
@@ -78,22 +76,8 @@ __kernel void sincos_test(const __global float* in, __global float2* out, int n)
     if (i < n) out[i] = Math_SinCos2Pi(in[i]);
 }
 )CLC";
-    DeviceContext& dc = testContext();
-    auto sources = loadKernelSources({"common.cl"});
-    sources.push_back({"sincos_test.cl", src});
-    cl::Program program = buildProgramFromSources(dc, sources, {});
-    cl::Kernel k = CL_CPP(cl::Kernel(program, "sincos_test"));
+    const std::vector<dev::float2> out = runElementwiseKernel<dev::float2>({"common.cl"}, "sincos_test", src, ts);
     const int n = int(ts.size());
-    std::vector<dev::float2> out(ts.size());
-    cl::Context& ctx = dc.context();
-    cl::Buffer ib = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(float) * ts.size(),
-                                      const_cast<float*>(ts.data())));
-    cl::Buffer ob = CL_CPP(cl::Buffer(ctx, CL_MEM_WRITE_ONLY, sizeof(dev::float2) * out.size()));
-    CL_CPP(k.setArg(0, ib));
-    CL_CPP(k.setArg(1, ob));
-    CL_CPP(k.setArg(2, n));
-    CL_CPP(dc.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(roundUp(size_t(n), 64)), cl::NDRange(64)));
-    CL_CPP(dc.queue().enqueueReadBuffer(ob, CL_TRUE, 0, sizeof(dev::float2) * out.size(), out.data()));
     double deviceWorst = 0.0, apart = 0.0;
     for (int i = 0; i < n; ++i) {
         const float t = ts[size_t(i)];

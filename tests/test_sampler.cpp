@@ -304,23 +304,10 @@ __kernel void reverse_test(const __global uint* in, __global uint* out, int n) {
         x ^= x << 13; x ^= x >> 17; x ^= x << 5;
         in.push_back(x);
     }
-    DeviceContext& dc = testContext();
-    auto sources = loadKernelSources({"common.cl"});
-    sources.push_back({"reverse_test.cl", src});
-    const int n = int(in.size());
-    cl::Context& ctx = dc.context();
-    cl::Buffer ib = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(uint32_t) * in.size(), in.data()));
-    cl::Buffer ob = CL_CPP(cl::Buffer(ctx, CL_MEM_WRITE_ONLY, sizeof(uint32_t) * in.size()));
     for (const std::vector<std::string>& defines : {std::vector<std::string>{}, std::vector<std::string>{"-DCLRT_QUIRK_BIT_REVERSE_TABLE"}}) {
         INFO("defines: " << (defines.empty() ? "none (the shift network)" : defines[0]));
-        cl::Program program = buildProgramFromSources(dc, sources, defines);
-        cl::Kernel k = CL_CPP(cl::Kernel(program, "reverse_test"));
-        CL_CPP(k.setArg(0, ib));
-        CL_CPP(k.setArg(1, ob));
-        CL_CPP(k.setArg(2, n));
-        CL_CPP(dc.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(roundUp(size_t(n), 64)), cl::NDRange(64)));
-        std::vector<uint32_t> out(in.size());
-        CL_CPP(dc.queue().enqueueReadBuffer(ob, CL_TRUE, 0, sizeof(uint32_t) * out.size(), out.data()));
+        const std::vector<uint32_t> out = runElementwiseKernel<uint32_t>({"common.cl"}, "reverse_test", src, in, defines);
+        const int n = int(in.size());
         int wrong = 0;
         for (int i = 0; i < n; ++i) wrong += out[size_t(i)] != reverseBits(in[size_t(i)]);
         CHECK(wrong == 0);
