@@ -275,9 +275,10 @@ inline float Math_Atan2(float y, float x) {
  * rint(t) in [−1/2, 1/2] and r = r0 − q/4 in [−1/8, 1/8] with q = rint(4·r0) are exact (Sterbenz), and the
  * quarter turns q rotate the pair. sin 2πr = r·P(r²) and cos 2πr = 1 + r²·Q(r²), fitted by us (weighted
  * least squares towards minimax relative error on Chebyshev nodes, coefficients rounded to float). Within
- * 1.8 ulp of the exact values wherever |sin|, |cos| > 1e-3 and 9e-8 absolute (tests/test_math.cpp checks the
- * device against the host replica mathSinCos2Pi and both against long double). PoCL's sin and cos reduce every
- * argument out of line (__pocl_argReductionS, 3-4% of render_fused on the TT and the hw6 box). */
+ * 1.7 ulp of the exact values wherever |sin|, |cos| > 1e-3 and 9e-8 absolute (tests/test_math.cpp: the
+ * device against the host replica sinCos2Pi, both against long double); a non-finite t gives NaNs.
+ * PoCL's sin and cos reduce every argument out of line (__pocl_argReductionS, 3-4% of render_fused on
+ * the TT and the hw6 box). */
 inline float2 Math_SinCos2Pi(float t) {
     const float r0 = t - rint(t);
     const float q = rint(4.0f * r0);
