@@ -248,8 +248,8 @@ inline float Surface_UvArea(Hit h, SurfaceHit s, const HitTriangle* ht, const __
     float3 nObj = normalize(affinePoint(sp->worldToObject, s.p) - sp->centerRadius.xyz);
     float r = sp->centerRadius.w;
     float cosT = clamp(nObj.y, -1.0f, 1.0f), sinT = sqrt(fmax(0.0f, 1.0f - cosT * cosT));
-    float rho = sqrt(nObj.x * nObj.x + nObj.z * nObj.z); /* cos φ, sin φ of φ = atan2(n.z, n.x); (1, 0) at the poles */
-    float cosP = rho > 0.0f ? nObj.x / rho : 1.0f, sinP = rho > 0.0f ? nObj.z / rho : 0.0f;
+    const float2 phi = Sphere_CosSinPhi(nObj);
+    const float cosP = phi.x, sinP = phi.y;
     /* u = (π − φ)/2π, v = θ/π (Surface_FromHit) */
     float3 dpdu = affineVector(sp->objectToWorld, (-2.0f * CLRT_PI * r) * (float3)(-sinT * sinP, 0.0f, sinT * cosP));
     float3 dpdv = affineVector(sp->objectToWorld, (CLRT_PI * r) * (float3)(cosT * cosP, -sinT, cosT * sinP));

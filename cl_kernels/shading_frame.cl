@@ -40,16 +40,22 @@ inline TangentFrame Frame_Triangle(float3 p0, float3 p1, float3 p2, float2 t0, f
     return f;
 }
 
+/* (cos φ, sin φ) of a sphere's object-space unit normal nObj, φ = atan2(n.z, n.x), without atan2: (x, z)/ρ,
+ * and (1, 0) at the poles (ρ = 0), as atan2(0, 0) = 0 gives. */
+inline float2 Sphere_CosSinPhi(float3 nObj) {
+    const float rho = sqrt(nObj.x * nObj.x + nObj.z * nObj.z);
+    return rho > 0.0f ? (float2)(nObj.x / rho, nObj.z / rho) : (float2)(1.0f, 0.0f);
+}
+
 /* A sphere of radius r at the object-space unit normal nObj: with θ = acos(n.y), φ = atan2(n.z, n.x),
  * dp/du = 2π·(z, 0, −x) and dp/dv = π·(y cos φ, −r sin θ, y sin φ) (x, y, z = r·nObj), then mapped to
  * world space by the sphere's transform (rows of objectToWorld). */
 inline TangentFrame Frame_Sphere(float3 nObj, float r, const __global float4* objectToWorld) {
     float3 q = r * nObj;
-    float rho = sqrt(nObj.x * nObj.x + nObj.z * nObj.z); /* cos φ, sin φ without atan2: (1, 0) at the poles */
-    float cosP = rho > 0.0f ? nObj.x / rho : 1.0f, sinP = rho > 0.0f ? nObj.z / rho : 0.0f;
+    const float2 phi = Sphere_CosSinPhi(nObj);
     float sinTheta = sqrt(fmax(0.0f, 1.0f - nObj.y * nObj.y));
     float3 dpduObj = 2.0f * CLRT_PI * (float3)(q.z, 0.0f, -q.x);
-    float3 dpdvObj = CLRT_PI * (float3)(q.y * cosP, -r * sinTheta, q.y * sinP);
+    float3 dpdvObj = CLRT_PI * (float3)(q.y * phi.x, -r * sinTheta, q.y * phi.y);
     TangentFrame f;
     f.dpdu = (float3)(dot(objectToWorld[0].xyz, dpduObj), dot(objectToWorld[1].xyz, dpduObj), dot(objectToWorld[2].xyz, dpduObj));
     f.dpdv = (float3)(dot(objectToWorld[0].xyz, dpdvObj), dot(objectToWorld[1].xyz, dpdvObj), dot(objectToWorld[2].xyz, dpdvObj));
