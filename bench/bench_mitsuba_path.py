@@ -162,21 +162,22 @@ def user_scene_copy(sc, tmpdir, depth):
     for el in keep.findall("NumSamples"):
         keep.remove(el)
     rp = keep.find("RendererParams")
-    notes = sc.setdefault("notes", [])
+    notes = sc.setdefault("notes", [])  # kept once each: make_scene may copy the scene more than once
+
+    def note(text):
+        if text not in notes:
+            notes.append(text)
+
     path_traced = (keep.findtext("Renderer") or "").strip() == "PathTracing"
     if sc.get("params") and path_traced:
         if rp is None:
             rp = ET.SubElement(keep, "RendererParams")
         if (rp.text or "").split() != sc["params"].split():
-            note = "RendererParams '%s' replaced by '%s' (--path-params)" % ((rp.text or "").strip(), sc["params"])
-            if note not in notes:
-                notes.append(note)
+            note("RendererParams '%s' replaced by '%s' (--path-params)" % ((rp.text or "").strip(), sc["params"]))
         rp.text = sc["params"]
     if rp is not None and "RussianRoulette" in (rp.text or "").split():
         rp.text = " ".join(x for x in rp.text.split() if x != "RussianRoulette")
-        note = "RussianRoulette removed from clrt's RendererParams (it lifts the depth cap; Mitsuba renders at the cap)"
-        if note not in notes:
-            notes.append(note)
+        note("RussianRoulette removed from clrt's RendererParams (it lifts the depth cap; Mitsuba renders at the cap)")
     if depth != sc["depth"]:
         set_child(keep if keep.find("MaxRecursionDepth") is not None else root, "MaxRecursionDepth", str(depth))
     out = os.path.join(tmpdir, "%s-d%d.xml" % (sc["name"], depth))
