@@ -2,18 +2,33 @@
 // alone, on synthetic hits (8192 paths on random small triangles: a checkerboard-textured diffuse
 // material, a mirror and a dielectric with Beer absorption; 5% misses; depths 0..2 with splitDepth 2),
 // no scene file, no BVH, and writes its outputs (childValid, the children, the path radiance).
-// The program is one that clrt dumped (CLRT_DUMP_PROGRAM=DIR writes DIR/<hash>.cl and .options).
-// Intel's OpenCL CPU runtime (2026.22) with its vectoriser gives children unlike PoCL's
-// (scripts/intel_vectorizer_repro.sh runs it); with CL_CONFIG_USE_VECTORIZER=False, or with
-// shade_hits' vec_type_hint(float4), it agrees.
-// Built by scripts/intel_vectorizer_repro.sh (g++ -Isrc ... -lOpenCL), not by CMake.
-// It binds shade_hits' arguments by index, in issue 17's parameter list: it runs against a program dumped by
-// a build before 6682b8f (queueCount became a buffer there); with later programs clSetKernelArg fails with -51
-// (docs/quirks.md, INTEL_VEC_HINT).
+// The program is one that clrt dumped (CLRT_DUMP_PROGRAM=DIR writes DIR/<hash>.cl and .options); it is
+// built with exactly the dumped options.
+// In issue 17, Intel's OpenCL CPU runtime (2026.22) with its vectoriser gave children unlike PoCL's
+// (~1500 of 16384 child slots); with CL_CONFIG_USE_VECTORIZER=False, or with shade_hits'
+// vec_type_hint(float4), it agreed. What it shows on today's kernels: docs/quirks.md, INTEL_VEC_HINT.
+// The arguments are bound by name through the project's own binder (src/cl/kernel_args.h, KernelArgs and
+// CLRT_BIND_GROUP over CLRT_KERNEL_shade_hits of src/shared/kernel_params.h), as src/render/renderer.cpp
+// binds them, from the members of ShadeArgs below: a parameter added to the declaration is a compile
+// error here (no member of that name), a wrong kind or value size throws. Before binding, the kernel
+// of the dumped program is checked against that declaration (argument count, then the names; a runtime
+// that reports no names without -cl-kernel-arg-info, as PoCL, gets a second build with it for the
+// check alone), so a program from another revision than these sources fails with a message naming the
+// first mismatch instead of clSetKernelArg's -51. On stderr it prints the build log's lines about
+// shade_hits (Intel's runtime: whether it vectorised the kernel, and how wide) and what it checked.
+// Built by scripts/intel_vectorizer_repro.sh, not by CMake:
+//   g++ -std=c++17 -O1 -Isrc -DCL_TARGET_OPENCL_VERSION=120 -DCL_HPP_TARGET_OPENCL_VERSION=120
+//       -DCL_HPP_MINIMUM_OPENCL_VERSION=120 -DCL_HPP_ENABLE_EXCEPTIONS tests/intel_repro/shade_hits_alone.cpp
+//       src/cl/kernel_args.cpp src/cl/check.cpp src/util/error.cpp -lOpenCL
 // usage: shade_hits_alone PROGRAM.cl OPTIONS PLATFORM_SUBSTRING OUT.bin
 //        shade_hits_alone --compare A.bin B.bin
-#define CL_TARGET_OPENCL_VERSION 120
-#include <CL/cl.h>
+//   (PROGRAM.cl and OPTIONS: a dumped program and the contents of its .options file; the first device of
+//   the first platform whose name contains PLATFORM_SUBSTRING runs it.) --compare prints how many of
+//   the 16384 childValid slots differ (and how many the first marks valid) and how many output floats
+//   (valid children, radiance) differ by more than 1e-3 relative and in any bit (exit 2 if slots or
+//   floats beyond 1e-3 differ).
+#include <CL/opencl.hpp>
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -23,43 +38,110 @@
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include "cl/check.h"
+#include "cl/kernel_args.h"
 #include "shared/device_types.h"
+#include "shared/kernel_params.h"
+#include "util/error.h"
 using namespace clrt::dev;
 static unsigned st = 12345;
 static float rnd() { st = st * 1664525u + 1013904223u; return (st >> 8) * (1.0f / 16777216.0f); }
-#define CK(x) do { cl_int e_ = (x); if (e_) { fprintf(stderr, "%s: %d\n", #x, e_); exit(1); } } while (0)
 static int compare(const char* fa, const char* fb) {
     auto load = [](const char* f) { std::ifstream in(f, std::ios::binary); return std::vector<char>(std::istreambuf_iterator<char>(in), {}); };
     std::vector<char> a = load(fa), b = load(fb);
     const int N = 8192;
     if (a.size() != b.size() || a.size() < sizeof(int) * 2 * N) { printf("output sizes differ\n"); return 1; }
     const int* va = (const int*)a.data(); const int* vb = (const int*)b.data();
-    int dv = 0; for (int i = 0; i < 2 * N; ++i) dv += va[i] != vb[i];
+    int dv = 0, nv = 0; for (int i = 0; i < 2 * N; ++i) { dv += va[i] != vb[i]; nv += va[i] != 0; }
     const float* xa = (const float*)a.data() + 2 * N; const float* xb = (const float*)b.data() + 2 * N;
-    size_t nf = a.size() / 4 - 2 * N, bad = 0;
+    size_t nf = a.size() / 4 - 2 * N, bad = 0, bits = 0;
     for (size_t i = 0; i < nf; ++i) {
         float x = xa[i], y = xb[i];
+        bits += std::memcmp(&x, &y, sizeof x) != 0;
         if (x != y && !(std::isnan(x) && std::isnan(y)) && std::fabs(x - y) > 1e-3f * std::fmax(std::fmax(std::fabs(x), std::fabs(y)), 1e-6f)) ++bad;
     }
-    printf("childValid differs in %d of %d slots; %zu of %zu output floats differ by more than 1e-3 relative\n", dv, 2 * N, bad, nf);
+    printf("childValid differs in %d of %d slots (%d valid in the first); %zu of %zu output floats differ by more than 1e-3 relative, %zu in any bit\n",
+           dv, 2 * N, nv, bad, nf, bits);
     return dv || bad ? 2 : 0;
 }
 
-int main(int argc, char** argv) {
-    if (argc == 4 && !strcmp(argv[1], "--compare")) return compare(argv[2], argv[3]);
-    if (argc != 5) { fprintf(stderr, "usage: shade_hits_alone PROGRAM.cl OPTIONS PLATFORM OUT.bin | --compare A B\n"); return 1; }
-    std::ifstream in(argv[1]); std::stringstream ss; ss << in.rdbuf(); std::string src = ss.str();
-    cl_platform_id ps[8]; cl_uint np; clGetPlatformIDs(8, ps, &np); cl_platform_id pl = 0;
-    for (cl_uint i = 0; i < np; ++i) { char name[256]; clGetPlatformInfo(ps[i], CL_PLATFORM_NAME, 256, name, 0); if (strstr(name, argv[3])) pl = ps[i]; }
-    if (!pl) { fprintf(stderr, "no OpenCL platform named *%s*\n", argv[3]); return 1; }
-    cl_device_id dev; clGetDeviceIDs(pl, CL_DEVICE_TYPE_ALL, 1, &dev, 0);
-    cl_int e; cl_context ctx = clCreateContext(0, 1, &dev, 0, 0, &e); cl_command_queue q = clCreateCommandQueue(ctx, dev, 0, &e);
-    const char* s = src.c_str();
-    cl_program p = clCreateProgramWithSource(ctx, 1, &s, 0, &e);
-    e = clBuildProgram(p, 1, &dev, argv[2], 0, 0);
-    static char log[1 << 20]; clGetProgramBuildInfo(p, dev, CL_PROGRAM_BUILD_LOG, sizeof log, log, 0);
-    if (e) { fprintf(stderr, "build %d\n%s\n", e, log); return 1; }
-    cl_kernel k = clCreateKernel(p, "shade_hits", &e); CK(e);
+// shade_hits' arguments, each member named as the parameter it is bound to (CLRT_KERNEL_shade_hits).
+struct ShadeArgs {
+    cl::Buffer queueCount;
+    SceneParams scene{};
+    CameraParams cam{};
+    cl::Buffer paths, rays, hits, hitInstances, tris, triShading, triAttributes, spheres, planes, instances, materials,
+        textureSets, textures, images, texels, lights, points, pathRadiance, envDist, nextPaths, nextRays, childValid;
+};
+
+// The kernel of the dumped program against the declaration these sources were compiled with: throws
+// clrt::Error naming the first mismatch. Returns how many argument names the runtime reported.
+static int checkDeclaration(const cl::Kernel& k, const clrt::KernelDecl& decl) {
+    std::string declared;
+    for (const clrt::ParamDecl& p : decl.params) declared += std::string(declared.empty() ? "" : ", ") + p.name;
+    const std::string hint = " (" + declared + "): dump the program with a clrt built from these sources";
+    cl_uint n = 0;
+    CL_CHECK(clGetKernelInfo(k(), CL_KERNEL_NUM_ARGS, sizeof n, &n, nullptr));
+    if (n != decl.params.size())
+        throw clrt::Error("the program's " + std::string(decl.name) + " takes " + std::to_string(n) +
+                              " arguments; src/shared/kernel_params.h declares " + std::to_string(decl.params.size()) + hint,
+                          clrt::ExitCode::Device);
+    int named = 0;
+    for (cl_uint i = 0; i < n; ++i) {
+        char name[256] = {0};
+        if (clGetKernelArgInfo(k(), i, CL_KERNEL_ARG_NAME, sizeof name, name, nullptr) != CL_SUCCESS) continue;
+        ++named;
+        if (std::strcmp(name, decl.params[i].name) != 0)
+            throw clrt::Error("the program's " + std::string(decl.name) + " argument " + std::to_string(i) + " is " +
+                                  name + "; src/shared/kernel_params.h declares " + decl.params[i].name + " there" + hint,
+                              clrt::ExitCode::Device);
+    }
+    return named;
+}
+
+static void buildOrExit(cl::Program& program, const cl::Device& dev, const std::string& options) {
+    try {
+        program.build(std::vector<cl::Device>{dev}, options.c_str());
+    } catch (const cl::Error& e) {
+        fprintf(stderr, "build %d\n%s\n", e.err(), program.getBuildInfo<CL_PROGRAM_BUILD_LOG>(dev).c_str());
+        exit(1);
+    }
+}
+
+static int run(char** argv) {
+    std::ifstream in(argv[1]);
+    if (!in) { fprintf(stderr, "shade_hits_alone: cannot read %s\n", argv[1]); return 1; }
+    std::stringstream ss; ss << in.rdbuf(); std::string src = ss.str();
+    std::string options = argv[2];
+    while (!options.empty() && (options.back() == '\n' || options.back() == '\r')) options.pop_back();
+    std::vector<cl::Platform> platforms; cl::Platform::get(&platforms); cl::Platform pl;
+    for (cl::Platform& p : platforms) if (!pl() && p.getInfo<CL_PLATFORM_NAME>().find(argv[3]) != std::string::npos) pl = p;
+    if (!pl()) { fprintf(stderr, "no OpenCL platform named *%s*\n", argv[3]); return 1; }
+    std::vector<cl::Device> devices; pl.getDevices(CL_DEVICE_TYPE_ALL, &devices);
+    cl::Device dev = devices.at(0);
+    cl::Context ctx(dev); cl::CommandQueue q(ctx, dev);
+    // Built with exactly the dumped options, as clrt built it.
+    cl::Program program(ctx, src);
+    buildOrExit(program, dev, options);
+    {  // what the compiler says about shade_hits (Intel's runtime: whether it vectorised it, and how wide)
+        std::istringstream log(program.getBuildInfo<CL_PROGRAM_BUILD_LOG>(dev));
+        for (std::string line; std::getline(log, line);)
+            if (line.find("shade_hits") != std::string::npos) fprintf(stderr, "shade_hits_alone: build log: %s\n", line.c_str());
+    }
+    clrt::KernelArgs k(program, "shade_hits");
+    cl_uint nargs = cl_uint(k.decl().params.size());
+    const char* names = "checked";
+    if (checkDeclaration(k.kernel(), k.decl()) == 0) {
+        // This runtime reports no names without -cl-kernel-arg-info (PoCL): a second build with it, for
+        // the check only (the launch uses the program above).
+        cl::Program withInfo(ctx, src);
+        buildOrExit(withInfo, dev, options + " -cl-kernel-arg-info");
+        if (checkDeclaration(CL_CPP(cl::Kernel(withInfo, "shade_hits")), k.decl()) == 0) names = "not reported";
+        else names = "checked (-cl-kernel-arg-info build)";
+    }
+    fprintf(stderr, "shade_hits_alone: %s: %s; shade_hits' %u arguments as src/shared/kernel_params.h declares (names %s)\n",
+            argv[3], pl.getInfo<CL_PLATFORM_NAME>().c_str(), nargs, names);
     const int N = 8192;
     std::vector<PathState> paths(N); std::vector<Ray> rays(N); std::vector<Hit> hits(N);
     std::vector<Triangle> tris(N); std::vector<TriangleShading> sh(N); std::vector<float> attr(size_t(N) * 15);
@@ -100,30 +182,47 @@ int main(int argc, char** argv) {
     SceneParams sc{}; sc.numTriangles = N; sc.numSpheres = 0; sc.numPlanes = 0; sc.numLights = 1; sc.maxDepth = 8; sc.backgroundTexture = -1; sc.envLight = -1; sc.seed = 7; sc.splitDepth = 2; sc.envImage = -1;
     sc.background = {0.2f, 0.3f, 0.4f, 0}; sc.ambient = {0.1f, 0.1f, 0.1f, 0};
     CameraParams cam{}; cam.width = N / 2; cam.height = 1; cam.spp = 2;
-    auto ro = [&](size_t bytes, const void* data) { cl_int e2; cl_mem m = clCreateBuffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, bytes, (void*)data, &e2); CK(e2); return m; };
-    auto rw = [&](size_t bytes) { cl_int e2; cl_mem m = clCreateBuffer(ctx, CL_MEM_READ_WRITE, bytes, 0, &e2); CK(e2);
-        std::vector<unsigned char> z(bytes, 0xAB); clEnqueueWriteBuffer(q, m, CL_TRUE, 0, bytes, z.data(), 0, 0, 0); return m; };
-    cl_mem bPaths = ro(sizeof(PathState) * N, paths.data()), bRays = ro(sizeof(Ray) * N, rays.data()), bHits = ro(sizeof(Hit) * N, hits.data());
-    cl_mem bTris = ro(sizeof(Triangle) * N, tris.data()), bSh = ro(sizeof(TriangleShading) * N, sh.data()), bAttr = ro(sizeof(float) * attr.size(), attr.data()), bSph = ro(sizeof sph, &sph), bPla = ro(sizeof pla, &pla);
-    cl_mem bMat = ro(sizeof(Material) * 3, mats.data()), bTs = ro(sizeof ts, &ts), bTm = ro(sizeof tm, &tm), bImg = ro(sizeof img, &img), bTex = ro(sizeof texel, &texel);
-    cl_mem bLight = ro(sizeof light, &light), bEnv = ro(sizeof envd, &envd);
-    cl_mem bPts = rw(sizeof(ShadingPoint) * N), bRad = rw(sizeof(float4) * N), bNP = rw(sizeof(PathState) * 2 * N), bNR = rw(sizeof(Ray) * 2 * N), bV = rw(sizeof(int) * 2 * N);
-    int a = 0; int cnt = N;
-    CK(clSetKernelArg(k, a++, sizeof cnt, &cnt)); CK(clSetKernelArg(k, a++, sizeof sc, &sc)); CK(clSetKernelArg(k, a++, sizeof cam, &cam));
-    cl_mem bufs[] = {bPaths, bRays, bHits, bTris, bSh, bAttr, bSph, bPla, bMat, bTs, bTm, bImg, bTex, bLight, bPts, bRad, bEnv, bNP, bNR, bV};
-    for (cl_mem& m : bufs) CK(clSetKernelArg(k, a++, sizeof(cl_mem), &m));
-    size_t g = N, l = 64;
-    CK(clEnqueueNDRangeKernel(q, k, 1, 0, &g, &l, 0, 0, 0)); clFinish(q);
+    auto ro = [&](size_t bytes, const void* data) { return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, bytes, (void*)data)); };
+    auto rw = [&](size_t bytes) { cl::Buffer m = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, bytes));
+        std::vector<unsigned char> z(bytes, 0xAB); CL_CPP(q.enqueueWriteBuffer(m, CL_TRUE, 0, bytes, z.data())); return m; };
+    // hitInstances: every hit on a world-space primitive (read only when the program has CLRT_HAS_INSTANCES).
+    std::vector<int> hitInst(N, CLRT_INVALID); Instance inst{}; int count = N;
+    ShadeArgs a;
+    a.queueCount = ro(sizeof count, &count); a.scene = sc; a.cam = cam;
+    a.paths = ro(sizeof(PathState) * N, paths.data()); a.rays = ro(sizeof(Ray) * N, rays.data()); a.hits = ro(sizeof(Hit) * N, hits.data());
+    a.hitInstances = ro(sizeof(int) * N, hitInst.data());
+    a.tris = ro(sizeof(Triangle) * N, tris.data()); a.triShading = ro(sizeof(TriangleShading) * N, sh.data()); a.triAttributes = ro(sizeof(float) * attr.size(), attr.data());
+    a.spheres = ro(sizeof sph, &sph); a.planes = ro(sizeof pla, &pla); a.instances = ro(sizeof inst, &inst);
+    a.materials = ro(sizeof(Material) * 3, mats.data()); a.textureSets = ro(sizeof ts, &ts); a.textures = ro(sizeof tm, &tm); a.images = ro(sizeof img, &img); a.texels = ro(sizeof texel, &texel);
+    a.lights = ro(sizeof light, &light); a.envDist = ro(sizeof envd, &envd);
+    a.points = rw(sizeof(ShadingPoint) * N); a.pathRadiance = rw(sizeof(float4) * N); a.nextPaths = rw(sizeof(PathState) * 2 * N); a.nextRays = rw(sizeof(Ray) * 2 * N); a.childValid = rw(sizeof(int) * 2 * N);
+    CLRT_BIND_GROUP(k, CLRT_KERNEL_shade_hits, a);
+    CL_CPP(q.enqueueNDRangeKernel(k.ready(), cl::NullRange, cl::NDRange(N), cl::NDRange(64)));
+    CL_CPP(q.finish());
     std::vector<int> valid(2 * N); std::vector<PathState> np2(2 * N); std::vector<Ray> nr(2 * N); std::vector<ShadingPoint> pts(N); std::vector<float4> rad(N);
-    clEnqueueReadBuffer(q, bV, 1, 0, sizeof(int) * 2 * N, valid.data(), 0, 0, 0);
-    clEnqueueReadBuffer(q, bNP, 1, 0, sizeof(PathState) * 2 * N, np2.data(), 0, 0, 0);
-    clEnqueueReadBuffer(q, bNR, 1, 0, sizeof(Ray) * 2 * N, nr.data(), 0, 0, 0);
-    clEnqueueReadBuffer(q, bPts, 1, 0, sizeof(ShadingPoint) * N, pts.data(), 0, 0, 0);
-    clEnqueueReadBuffer(q, bRad, 1, 0, sizeof(float4) * N, rad.data(), 0, 0, 0);
+    CL_CPP(q.enqueueReadBuffer(a.childValid, CL_TRUE, 0, sizeof(int) * 2 * N, valid.data()));
+    CL_CPP(q.enqueueReadBuffer(a.nextPaths, CL_TRUE, 0, sizeof(PathState) * 2 * N, np2.data()));
+    CL_CPP(q.enqueueReadBuffer(a.nextRays, CL_TRUE, 0, sizeof(Ray) * 2 * N, nr.data()));
+    CL_CPP(q.enqueueReadBuffer(a.points, CL_TRUE, 0, sizeof(ShadingPoint) * N, pts.data()));
+    CL_CPP(q.enqueueReadBuffer(a.pathRadiance, CL_TRUE, 0, sizeof(float4) * N, rad.data()));
     // only the valid children count
     for (int i = 0; i < 2 * N; ++i) if (!valid[i]) { memset(&np2[i], 0, sizeof(PathState)); memset(&nr[i], 0, sizeof(Ray)); }
     FILE* o = fopen(argv[4], "wb");
+    if (!o) { fprintf(stderr, "shade_hits_alone: cannot write %s\n", argv[4]); return 1; }
     fwrite(valid.data(), sizeof(int), 2 * N, o); fwrite(np2.data(), sizeof(PathState), 2 * N, o); fwrite(nr.data(), sizeof(Ray), 2 * N, o);
     fwrite(rad.data(), sizeof(float4), N, o); fclose(o);
     return 0;
+}
+
+int main(int argc, char** argv) {
+    if (argc == 4 && !strcmp(argv[1], "--compare")) return compare(argv[2], argv[3]);
+    if (argc != 5) { fprintf(stderr, "usage: shade_hits_alone PROGRAM.cl OPTIONS PLATFORM OUT.bin | --compare A B\n"); return 1; }
+    try {
+        return run(argv);
+    } catch (const clrt::Error& e) {
+        fprintf(stderr, "shade_hits_alone: %s\n", e.what());
+    } catch (const cl::Error& e) {
+        fprintf(stderr, "shade_hits_alone: OpenCL error %s (%d) in %s\n", clrt::clErrorName(e.err()), e.err(), e.what());
+    }
+    return 1;
 }
