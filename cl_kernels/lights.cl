@@ -91,6 +91,27 @@ inline float3 EnvSample_Cosine(float3 n, float2 u) {
     return normalize(l.x * t + l.y * b + l.z * n);
 }
 
+/* An environment light's map turned by its <Transformations> (a rotation R, read_lights.cpp): the map's
+ * direction dMap shows in world direction R·dMap. The light's direction, edgeU and edgeV hold the rows of
+ * R^T (world -> map). Sampling runs in map space (the distributions are the map's; dot products and
+ * solid-angle densities are the same in both spaces), its directions leave it through EnvLight_ToWorld;
+ * lookups of a world direction enter it through EnvLight_ToMap. Compiled only where some environment
+ * light is turned (CLRT_HAS_ENV_ROTATION); elsewhere both are the identity. */
+inline float3 EnvLight_ToMap(const __global Light* light, float3 dirWorld) {
+#ifdef CLRT_HAS_ENV_ROTATION
+    return (float3)(dot(light->direction.xyz, dirWorld), dot(light->edgeU.xyz, dirWorld), dot(light->edgeV.xyz, dirWorld));
+#else
+    return dirWorld;
+#endif
+}
+inline float3 EnvLight_ToWorld(const __global Light* light, float3 dirMap) {
+#ifdef CLRT_HAS_ENV_ROTATION
+    return dirMap.x * light->direction.xyz + dirMap.y * light->edgeU.xyz + dirMap.z * light->edgeV.xyz;
+#else
+    return dirMap;
+#endif
+}
+
 /* The importance distribution an env light samples at a shading point: the map's (own), and under the mis
  * strategy the cosine-weighted table (tab) with the bucket of the point's normal (envmap.cl, EnvCos_*; bucket
  * -1: the map's). The importance strategy keeps the map's: the path tracer's MIS evaluates its pdf without a
@@ -117,10 +138,11 @@ inline float EnvLightDist_PdfUv(EnvLightDist d, float2 uv) {
     return d.bucket < 0 ? EnvDist_PdfUv(d.own, uv) : EnvCos_PdfUv(d.own, d.tab, d.bucket, uv);
 }
 
-inline float3 EnvironmentLight_Sample(const __global Light* light, float3 n, float2 u, const __global ImageInfo* images,
+inline float3 EnvironmentLight_Sample(const __global Light* light, float3 nWorld, float2 u, const __global ImageInfo* images,
                                       const __global float4* texels, const __global float* envDist, float3* wi,
                                       float* dist) {
     *dist = INFINITY;
+    const float3 n = EnvLight_ToMap(light, nWorld); /* everything below in map space */
     int strategy = light->envStrategy;
     if (light->distribution == CLRT_INVALID && (strategy == ENV_STRATEGY_IMPORTANCE || strategy == ENV_STRATEGY_MIS))
         strategy = ENV_STRATEGY_COSINE;
@@ -154,7 +176,7 @@ inline float3 EnvironmentLight_Sample(const __global Light* light, float3 n, flo
         break;
     }
     }
-    *wi = w;
+    *wi = EnvLight_ToWorld(light, w);
     if (!(pdf > 0.0f) || !isfinite(pdf)) return (float3)(0.0f);
     if (uv.x < 0.0f) uv = EnvMap_DirToUv(mapping, w);
     float3 l = EnvMap_Lookup(texels, images[light->image], mapping, uv.x, uv.y) * light->radiance.xyz;
@@ -191,9 +213,10 @@ inline float3 EnvLight_MisValue(float3 l, float nP, float p, float nQ, float q) 
  * is read for both (the two bilinear lookups and the cosine direction's pdf): the reads miss the cache
  * (an 8 MB map, random directions), and issued together their misses overlap (README "Where the time
  * goes"). */
-inline void EnvLight_SampleMis(const __global Light* light, float3 n, float2 uLight, float2 uBsdf, float cosShare,
+inline void EnvLight_SampleMis(const __global Light* light, float3 nWorld, float2 uLight, float2 uBsdf, float cosShare,
                                int withCosine, const __global ImageInfo* images, const __global float4* texels,
                                const __global float* envDist, float3* wiL, float3* eL, float3* wiB, float3* eB) {
+    const float3 n = EnvLight_ToMap(light, nWorld); /* everything below in map space */
     const EnvLightDist d = EnvLight_Distribution(light, envDist, n);
     const ImageInfo img = images[light->image];
     const int mapping = light->mapping;
@@ -214,8 +237,8 @@ inline void EnvLight_SampleMis(const __global Light* light, float3 n, float2 uLi
         lB = EnvMap_Lookup(texels, img, mapping, uvB.x, uvB.y) * light->radiance.xyz;
         pB = EnvLightDist_PdfUv(d, uvB);
     }
-    *wiL = wL;
-    *wiB = wB;
+    *wiL = EnvLight_ToWorld(light, wL);
+    *wiB = EnvLight_ToWorld(light, wB);
     *eL = okL ? EnvLight_MisValue(lL, 1.0f, pL, cosShare, fmax(dot(wL, n), 0.0f) * CLRT_INV_PI) : (float3)(0.0f);
     *eB = withCosine ? EnvLight_MisValue(lB, cosShare, fmax(dot(wB, n), 0.0f) * CLRT_INV_PI, 1.0f, pB) : (float3)(0.0f);
 }

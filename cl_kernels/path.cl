@@ -65,7 +65,7 @@ inline float Path_EnvLightPdf(const __global Light* light, const __global float*
 #ifdef CLRT_HAS_ENV_LIGHT
     if (light->envStrategy == ENV_STRATEGY_UNIFORM) return 0.5f * CLRT_INV_PI;
     if (light->envStrategy == ENV_STRATEGY_IMPORTANCE && light->distribution != CLRT_INVALID)
-        return EnvDist_PdfUv(envDist + light->distribution, EnvMap_DirToUv(light->mapping, dirWorld));
+        return EnvDist_PdfUv(envDist + light->distribution, EnvMap_DirToUv(light->mapping, EnvLight_ToMap(light, dirWorld)));
 #endif
     return -1.0f;
 }

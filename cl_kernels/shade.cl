@@ -189,12 +189,14 @@ inline void MotionBlur_StampChildren(ShadeResult* res, float time) {
  * environment light (camera, mirror and refraction rays alike), else the background texture (camera
  * rays) or the background colour. */
 inline float3 Miss_Radiance(SceneParams scene, const __global TextureMap* textures, const __global ImageInfo* images,
-                            const __global float4* texels, CameraParams cam, PathState path, float3 dir) {
+                            const __global float4* texels, const __global Light* lights, CameraParams cam, PathState path,
+                            float3 dir) {
 #ifdef CLRT_HAS_ENV_LIGHT
     if (scene.envLight != CLRT_INVALID) {
         float l = length(dir);
         if (!(l > 0.0f) || !isfinite(l)) return (float3)(0.0f);
-        return EnvMap_Radiance(texels, images[scene.envImage], scene.envMapping, scene.envScale.xyz, dir / l);
+        return EnvMap_Radiance(texels, images[scene.envImage], scene.envMapping, scene.envScale.xyz,
+                               EnvLight_ToMap(&lights[scene.envLight], dir / l));
     }
 #endif
     if (path.depth == 0 && scene.backgroundTexture != CLRT_INVALID) {
@@ -385,7 +387,7 @@ inline void Shade_Hit(SceneParams scene, CameraParams cam, PathState path, Ray r
     sp.pad0 = sp.pad1 = sp.pad2 = 0;
     res->sp = sp;
     if (h.prim == CLRT_INVALID) {
-        float3 missed = Miss_Radiance(scene, textures, images, texels, cam, path, ray.direction.xyz);
+        float3 missed = Miss_Radiance(scene, textures, images, texels, lights, cam, path, ray.direction.xyz);
 #ifdef CLRT_HAS_PATH_TRACING
         if (scene.pathMode != 0) missed *= Path_MissWeight(scene, path, lights, envDist, ray.direction.xyz);
 #endif

@@ -149,13 +149,30 @@ TEST_CASE("scene 2025: <Transformations> in lights", "[scene][scene2025]") {
     CHECK(near(s.lights[5].direction, Vec3(1, 0.5f, 0) * (1 / std::sqrt(1.25f))));
     CHECK(std::fabs(s.lights[5].size - 2 * std::sqrt(6 * std::sqrt(1.25f) / std::sqrt(2.0f))) < 1e-5f);
 
-    SECTION("an environment light's Transformations are ignored with a warning") {
-        const std::string env = R"(<SphericalDirectionalLight id="7"><ImageId>1</ImageId><Transformations>r1</Transformations></SphericalDirectionalLight>)";
-        std::string text = sub(scene2025(simpleCamera("0 0 0", "0 0 -1", "0 1 0"), env), "<Lights>",
-                               "<Textures><Images><Image id=\"1\">env.exr</Image></Images></Textures>\n<Lights>");
-        Scene e = loadText(d, "e.xml", text);
-        REQUIRE(e.lights.size() == 1);
-        CHECK(e.lights[0].type == dev::LIGHT_ENVIRONMENT);
+    SECTION("an environment light's Transformations turn its map: a rotation, translations and uniform scalings ignored") {
+        auto envScene = [&](const std::string& name, const std::string& transforms) {
+            const std::string env = "<SphericalDirectionalLight id=\"7\"><ImageId>1</ImageId><Transformations>" + transforms +
+                                    "</Transformations></SphericalDirectionalLight>";
+            std::string text = sub(scene2025(simpleCamera("0 0 0", "0 0 -1", "0 1 0"), env), "<Lights>",
+                                   "<Textures><Images><Image id=\"1\">env.exr</Image></Images></Textures>\n<Lights>");
+            writeFileBytes(d.file(name), text);
+            return d.file(name);
+        };
+        const Mat4 r1 = Mat4::rotation(90, Vec3(0, 1, 0));
+        for (const char* t : {"r1", "t1 r1", "s1 r1 t1", "r1 s1 s1"}) {
+            INFO(t);
+            Scene e = loadScene(envScene("e.xml", t));
+            REQUIRE(e.lights.size() == 1);
+            CHECK(e.lights[0].type == dev::LIGHT_ENVIRONMENT);
+            for (int i = 0; i < 3; ++i)
+                for (int j = 0; j < 3; ++j) CHECK(std::fabs(e.lights[0].envToWorld.m[i][j] - r1.m[i][j]) < 1e-12);
+        }
+        Scene mirrored = loadScene(envScene("m.xml", "s3"));  // a mirror keeps solid angles
+        CHECK(mirrored.lights[0].envToWorld.m[0][0] == -1);
+        // A non-uniform scaling would distort the map: an error naming the file and the element.
+        CHECK_THROWS_WITH(loadScene(envScene("n.xml", "r1 s2")),
+                          Catch::Contains("n.xml:") && Catch::Contains("SphericalDirectionalLight") &&
+                              Catch::Contains("must be rotations"));
     }
 }
 

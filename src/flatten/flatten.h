@@ -103,5 +103,7 @@ void flattenInstances(const Scene& scene, const std::vector<std::pair<const Shap
 // the scene's miss radiance (ds.params env fields) from the first environment light.
 void flattenEnvironmentLight(const Scene& scene, const Light& l, int lightIndex, dev::Light& d, DeviceScene& ds,
                              ImageAtlas& atlas);
+// Whether `l` is an environment light whose map its <Transformations> turn (CLRT_HAS_ENV_ROTATION).
+bool isEnvironmentTurned(const Light& l);
 
 }  // namespace clrt

@@ -7,10 +7,23 @@
 
 namespace clrt {
 
+bool isEnvironmentTurned(const Light& l) {
+    if (l.type != dev::LIGHT_ENVIRONMENT) return false;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            if (l.envToWorld.m[i][j] != (i == j ? 1.0 : 0.0)) return true;
+    return false;
+}
+
 void flattenEnvironmentLight(const Scene& scene, const Light& l, int lightIndex, dev::Light& d, DeviceScene& ds,
                              ImageAtlas& atlas) {
     d.radiance = {1, 1, 1, 0};
-    d.direction = {0, 1, 0, 0};
+    // The rows of the world -> map rotation (the transpose of envToWorld): lights.cl, EnvLight_ToMap.
+    const Mat4& r = l.envToWorld;
+    d.direction = {float(r.m[0][0]), float(r.m[1][0]), float(r.m[2][0]), 0};
+    d.edgeU = {float(r.m[0][1]), float(r.m[1][1]), float(r.m[2][1]), 0};
+    d.edgeV = {float(r.m[0][2]), float(r.m[1][2]), float(r.m[2][2]), 0};
+    ds.features.envRotation = ds.features.envRotation || isEnvironmentTurned(l);
     const int full = atlas.use(l.imageIndex);  // float4: what the distribution is built from
     d.image = atlas.useEnvironment(l.imageIndex);  // what the device reads (half4 where exact)
     d.mapping = l.mapping;

@@ -28,7 +28,10 @@ DeviceScene flattenScene(const Scene& scene, const FlattenOptions& opts) {
     flattenGeometry(scene, ds, opts);
     // The last features (light kinds as flattenLights marks them, path tracing) before the lights,
     // whose environment distributions take a while: the program can build meanwhile.
-    for (const Light& l : scene.lights) ds.features.add(l.type);
+    for (const Light& l : scene.lights) {
+        ds.features.add(l.type);
+        ds.features.envRotation = ds.features.envRotation || isEnvironmentTurned(l);
+    }
     for (const Camera& c : scene.cameras) ds.features.pathTracing = ds.features.pathTracing || c.pathMode != 0;
     if (opts.onFeaturesKnown) opts.onFeaturesKnown(ds.features);
     flattenLights(scene, ds, atlas);

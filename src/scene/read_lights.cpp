@@ -83,21 +83,41 @@ void readEnvironmentLight(Walker& w, const SceneNode& l, Light& light) {
         fail(l, describe(l) + ": unknown sampler '" + *sampler + "' (" + typeNames(envStrategies()) + ")");
 }
 
+// An environment light's Transformations turn its map: the rotation R (M's linear part over its uniform
+// scale; translations and uniform scalings mean nothing at infinity), so that the map's direction d
+// shows in world direction R·d. Anything else (a non-uniform scaling, a shear) would distort the map
+// and its sampling densities: an error. Mirrors (det < 0) keep solid angles and are allowed.
+Mat4 environmentRotation(const SceneNode& t, const SceneNode& l, const Mat4& m, double det) {
+    const double s = std::cbrt(std::fabs(det));
+    Mat4 r;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) r.m[i][j] = m.m[i][j] / s;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+            double dot = 0;
+            for (int k = 0; k < 3; ++k) dot += r.m[k][i] * r.m[k][j];
+            if (!(std::fabs(dot - (i == j ? 1.0 : 0.0)) <= 1e-5))
+                fail(t, describe(l) + ": its Transformations must be rotations (with translations and uniform "
+                        "scalings, which an environment ignores): a non-uniform scaling or shear would distort its map");
+        }
+    return r;
+}
+
 // <Transformations> inside a light (2025): the light moved as an object. Positions by the full matrix;
 // directions (Directional, Spot) by the linear part; an area light's normal by the inverse transpose
 // and its side by the square root of the area scale |det|·|M⁻ᵀn| (the transformed square's area; it
-// stays a square in clrt's own orientation about its normal). An environment map is not rotated:
-// its Transformations are ignored with a warning.
+// stays a square in clrt's own orientation about its normal); an environment map turned by the rotation
+// (environmentRotation).
 void transformLight(const Walker& w, const SceneNode& l, Light& light) {
     auto t = l.child("Transformations");
     if (!t) return;
-    if (light.type == dev::LIGHT_ENVIRONMENT) {
-        warnOnce(t->location() + ": " + describe(l) + ": <Transformations> of an environment light are ignored (clrt does not rotate its map)");
-        return;
-    }
     Mat4 m = transformOf(w, l);
     double det = linearDeterminant(m);
     if (!(std::fabs(det) > 0) || !std::isfinite(det)) fail(*t, describe(l) + ": its Transformations are singular");
+    if (light.type == dev::LIGHT_ENVIRONMENT) {
+        light.envToWorld = environmentRotation(*t, l, m, det);
+        return;
+    }
     light.position = m.transformPoint(light.position);
     if (light.type == dev::LIGHT_AREA) {
         Vec3 n = m.transformNormal(light.direction);  // light.direction is unit

@@ -90,6 +90,7 @@ struct Light {
     int imageIndex = -1;  // Environment
     dev::EnvMappingKind mapping = dev::ENV_LATLONG;
     dev::EnvStrategy envStrategy = dev::ENV_STRATEGY_MIS;  // sampler= (or <Sampler>)
+    Mat4 envToWorld;      // Environment: the map's frame in world space, a rotation (<Transformations>, 2025)
     int shapeIndex = -1;  // LightMesh, LightSphere: the emitting shape (into Scene::shapes); intensity = Radiance
 };
 

@@ -269,10 +269,11 @@ typedef struct ImageInfo {
 
 typedef struct Light {
     float4 position;    /* point/spot/area centre */
-    float4 direction;   /* directional: direction the light travels; spot: axis; area: normal */
+    float4 direction;   /* directional: direction the light travels; spot: axis; area: normal; env: row 0 of
+                         * the world -> map rotation (<Transformations>; lights.cl EnvLight_ToMap) */
     float4 radiance;    /* point/spot: intensity; area/directional/env: radiance scale */
-    float4 edgeU;       /* area: edge vector (length = size) */
-    float4 edgeV;       /* area: second edge vector */
+    float4 edgeU;       /* area: edge vector (length = size); env: row 1 of the world -> map rotation */
+    float4 edgeV;       /* area: second edge vector; env: row 2 */
     float cosCoverageHalf; /* spot */
     float cosFalloffHalf;  /* spot */
     float area;            /* area light: size^2 */
