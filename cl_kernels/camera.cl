@@ -22,22 +22,26 @@ inline float3 Camera_Direction(CameraParams cam, float px, float py) {
 
 /* The camera ray and path of sample `sample` of pixel `pixel` = y·width + x. always_inline: in the fused
  * kernel's sample loop the per-pixel part of the random key is then computed once per pixel (the
- * compiler hoists it), and the pixel's coordinates come from the caller (no division per sample). */
+ * compiler hoists it), and the pixel's coordinates come from the caller (no division per sample).
+ * With scene.split = k > 1 (the camera's SplittingFactor) path samples s = k·c .. k·c + k − 1 share camera
+ * sample c (its jitter, lens point and shutter time: one camera ray, k paths from it); the path's own
+ * numbers (path.sample = s) stay its own. */
 __attribute__((always_inline)) inline void Camera_GenerateAt(CameraParams cam, SceneParams scene, int pixel, int x,
                                                              int y, int sample, PathState* path, Ray* ray) {
-    RngKey key = Rng_Key(scene.seed, pixel, sample, 1u);
+    const int split = max(scene.split, 1), cameraSample = sample / split, cameraSamples = cam.spp / split;
+    RngKey key = Rng_Key(scene.seed, pixel, cameraSample, 1u);
     float jx = 0.5f, jy = 0.5f;
-    if (cam.spp > 1 && CLRT_SAMPLER_IS_ZSOBOL(scene)) {
+    if (cameraSamples > 1 && CLRT_SAMPLER_IS_ZSOBOL(scene)) {
         /* dimensions (0, 1) of the camera's path id 1 (common.cl) */
-        const float2 j = ZSobol_2D(scene, pixel, sample, 1u, 0u);
+        const float2 j = ZSobol_2D(scene, pixel, cameraSample, 1u, 0u);
         jx = j.x;
         jy = j.y;
-    } else if (cam.spp > 1 && scene.pixelSampler == CLRT_PIXEL_SAMPLER_STRATIFIED) {
+    } else if (cameraSamples > 1 && scene.pixelSampler == CLRT_PIXEL_SAMPLER_STRATIFIED) {
         /* the pixel's samples spread over a (0,2)-net: stratified in x and y alone too (common.cl) */
-        const float2 j = Rng_Stratified2D(key, sample, 0u);
+        const float2 j = Rng_Stratified2D(key, cameraSample, 0u);
         jx = j.x;
         jy = j.y;
-    } else if (cam.spp > 1) {
+    } else if (cameraSamples > 1) {
         jx = Rng_Uniform(key, 0);
         jy = Rng_Uniform(key, 1);
     }
@@ -47,8 +51,8 @@ __attribute__((always_inline)) inline void Camera_GenerateAt(CameraParams cam, S
         float3 dn = normalize(dir);
         float tFocus = cam.focusDistance / dot(dn, -cam.w.xyz);
         float3 focus = org + tFocus * dn;
-        const float2 ab = CLRT_SAMPLER_IS_ZSOBOL(scene)                         ? ZSobol_2D(scene, pixel, sample, 1u, 2u)
-                          : scene.pixelSampler == CLRT_PIXEL_SAMPLER_STRATIFIED ? Rng_Stratified2D(key, sample, 2u)
+        const float2 ab = CLRT_SAMPLER_IS_ZSOBOL(scene)                         ? ZSobol_2D(scene, pixel, cameraSample, 1u, 2u)
+                          : scene.pixelSampler == CLRT_PIXEL_SAMPLER_STRATIFIED ? Rng_Stratified2D(key, cameraSample, 2u)
                                                                                 : (float2)(Rng_Uniform(key, 2), Rng_Uniform(key, 3));
         float a = (ab.x - 0.5f) * cam.apertureSize;
         float b = (ab.y - 0.5f) * cam.apertureSize;
@@ -59,7 +63,7 @@ __attribute__((always_inline)) inline void Camera_GenerateAt(CameraParams cam, S
     Ray r;
     r.origin = (float4)(org, 0.0f);
 #ifdef CLRT_HAS_MOTION_BLUR
-    r.origin.w = Sampler_Time(scene, pixel, sample);
+    r.origin.w = Sampler_Time(scene, pixel, cameraSample);
 #endif
     r.direction = (float4)(dir, INFINITY);
     *ray = r;

@@ -7,7 +7,8 @@
  *   - leaves a ShadingPoint for sample_lights (next-event estimation) when the surface has a
  *     non-specular part (kd or ks), and no ambient term,
  *   - plays Russian roulette (Path_RussianRoulette: q = the throughput's largest component, at most
- *     1, and C = 0; with RussianRoulette there is no depth cap, as the course's references show), or
+ *     1, and C = 0; with RussianRoulette there is no depth cap, as the course's references show) at
+ *     hits of depth SceneParams.rrMinDepth or deeper (the camera's MinRecursionDepth; 0: all), or
  *     under clrt render --rr-rule course (CLRT_PATH_RR_COURSE) the course references' biased rule
  *     (Path_CourseRoulette, played at every hit before its radiance is counted),
  *   - makes ONE child (ShadeResult child 0; the wavefront's slot 2i): the sampled direction with
@@ -276,9 +277,10 @@ inline void Path_ShadeHit(SceneParams scene, PathState path, Material m, float3 
     RngKey key = Rng_Key(scene.seed, path.pixel, path.sample, path.pathId);
     uint dim = 4u + 32u * (uint)path.depth;
     const int course = (mode & CLRT_PATH_RR_COURSE) != 0;
+    const int roulette = path.depth >= scene.rrMinDepth; /* the camera's MinRecursionDepth: none before it */
     float courseScale = 1.0f;
-    const int courseSurvives = course && Path_CourseRoulette(throughput, path.throughput.w, Sampler_Other1D(scene, path, key, dim + 4u),
-                                                             &courseScale);
+    const int courseSurvives = course && (!roulette || Path_CourseRoulette(throughput, path.throughput.w,
+                                                                           Sampler_Other1D(scene, path, key, dim + 4u), &courseScale));
     throughput *= courseScale;
     sp.wo.w = courseScale; /* sample_lights scales this hit's light samples by it (course rule only) */
     res->radiance = (float4)(finiteOrZero(throughput * emitted * Path_EmissionWeight(mode, path.throughput.w, lightPdf)), 0.0f);
@@ -318,7 +320,7 @@ inline void Path_ShadeHit(SceneParams scene, PathState path, Material m, float3 
         float3 fVec = pickSpecular ? weight * pSpecular : weight * pdf * (1.0f - pSpecular) / dot(sp.normal.xyz, dir);
         childW = Path_CourseChildW(path.throughput.xyz, path.throughput.w, next, fVec, pickSpecular);
         if (childW == 0.0f) return;
-    } else if ((mode & CLRT_PATH_RR) && !Path_RussianRoulette(&next, Sampler_Other1D(scene, path, key, dim + 4u))) {
+    } else if ((mode & CLRT_PATH_RR) && roulette && !Path_RussianRoulette(&next, Sampler_Other1D(scene, path, key, dim + 4u))) {
         return;
     }
     PathState c = path;

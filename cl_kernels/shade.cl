@@ -599,8 +599,8 @@ inline void Light_ShadowRays(SceneParams scene, PathState path, ShadingPoint sp,
     }
 #endif
 #ifdef CLRT_HAS_MOTION_BLUR
-    /* the shadow rays of a sample see the scene at the sample's time (camera.cl) */
-    sr->direction.w = sr2->direction.w = Sampler_Time(scene, path.pixel, path.sample);
+    /* the shadow rays of a sample see the scene at its camera sample's time (camera.cl) */
+    sr->direction.w = sr2->direction.w = Sampler_Time(scene, path.pixel, path.sample / max(scene.split, 1));
 #endif
 }
 

@@ -5,6 +5,7 @@
 // the image mean at that size.
 #include <catch.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdlib>
@@ -392,6 +393,92 @@ TEST_CASE("Path tracing: MaxRecursionDepth truncates the interior furnace's seri
         INFO("RendererParams '" << params << "': mean " << mean << ", expected " << expected << ", SE " << se);
         CHECK(std::fabs(mean - expected) <= 4 * se + 2e-3 * expected);
     }
+}
+
+// A camera's <MinRecursionDepth> m (2025): Russian roulette is played only at hits of depth m or deeper
+// (0, the default: at every hit). The interior furnace keeps its mean Le/(1 − a) for every m (roulette is
+// unbiased), and its noise falls with m: at a = 0.5 the first hit's roulette alone ends half the paths.
+// Under --rr-rule course (biased: each hit's radiance counts 2 − q times in expectation) no roulette at
+// all (m beyond the depth backstop) must give the unbiased mean, and m = 0 the course rule's brighter one.
+TEST_CASE("Path tracing: MinRecursionDepth starts Russian roulette at its depth", "[path][render]") {
+    TempDir tmp;
+    const float a = 0.5f;
+    const double expected = 1.0 / (1.0 - a);
+    auto render = [&](const char* params, int minDepth, RouletteRule rule, int size, int spp) {
+        std::string xml = interiorFurnace(params, a, 1.0f, 24, size);
+        xml.replace(xml.find("</Camera>"), 9, "<MinRecursionDepth>" + std::to_string(minDepth) + "</MinRecursionDepth></Camera>");
+        Scene scene = loadScene(writeText(tmp.file("inside.xml"), xml));
+        DeviceScene ds = flattenScene(scene);
+        Renderer r(testContext(), ds);
+        RenderSettings rs;
+        rs.spp = spp;
+        rs.seed = 5;
+        rs.rouletteRule = rule;
+        RenderCounters counters;
+        return r.render(scene.cameras.at(0), rs, counters);
+    };
+    for (const char* params : {"RussianRoulette", "NextEventEstimation ImportanceSampling RussianRoulette"}) {
+        double se0 = 0;
+        for (int m : {0, 1, 4}) {
+            double mean, se;
+            meanAndError(render(params, m, RouletteRule::Unbiased, 32, 64), 0, mean, se);
+            INFO("'" << params << "', MinRecursionDepth " << m << ": mean " << mean << " (expected " << expected << "), SE " << se);
+            WARN("MinRecursionDepth " << m << " '" << params << "': mean/expected " << mean / expected << ", SE/expected "
+                                      << se / expected);
+            CHECK(std::fabs(mean - expected) <= 4 * se + 2e-3 * expected);
+            if (m == 0) se0 = se;
+            else CHECK(se < (m == 1 ? 0.9 : 0.6) * se0);  // fewer paths lost to the roulette: less noise (0.80, 0.39 measured)
+        }
+    }
+    double unbiased, seU, course, seC;
+    meanAndError(render("ImportanceSampling RussianRoulette", kMaxRecursionDepth, RouletteRule::Course, 16, 16), 0, unbiased, seU);
+    meanAndError(render("ImportanceSampling RussianRoulette", 0, RouletteRule::Course, 16, 64), 0, course, seC);
+    WARN("--rr-rule course: MinRecursionDepth 256 mean/expected " << unbiased / expected << ", 0: " << course / expected);
+    CHECK(std::fabs(unbiased - expected) <= 4 * seU + 2e-3 * expected);
+    CHECK(course > expected + 4 * seC);
+}
+
+// A camera's <SplittingFactor> k (2025): each camera sample carries k paths that share its camera ray
+// (jitter, lens point, time) and draw the rest of their numbers on their own, so spp camera samples are
+// k·spp paths. The interior furnace keeps its mean, and its noise (all of it path noise there) falls as
+// with k times the samples. Under a constant environment, a sphere's silhouette shows the camera rays: the
+// pixels that see only the environment (exactly Le) at 2 camera samples are the same with k = 4 (8 paths
+// on 2 camera rays) as with k = 1, where 8 camera samples (8 jittered rays) change them.
+TEST_CASE("Path tracing: SplittingFactor traces k paths per camera sample", "[path][render]") {
+    TempDir tmp;
+    auto render = [&](const std::string& xml, int spp, int split) {
+        Scene scene = loadScene(writeText(tmp.file("split.xml"), xml));
+        scene.cameras.at(0).splittingFactor = split;
+        return renderCamera(scene, scene.cameras.at(0), spp, 5);
+    };
+    const float a = 0.5f;
+    const std::string furnace = interiorFurnace("MultipleImportanceSampling", a, 1.0f, 24, 32);
+    double m1, se1, m4, se4, m64, se64;
+    meanAndError(render(furnace, 16, 1), 0, m1, se1);
+    meanAndError(render(furnace, 16, 4), 0, m4, se4);
+    meanAndError(render(furnace, 64, 1), 0, m64, se64);
+    WARN("SplittingFactor: 16 spp SE " << se1 << ", 16 spp x 4 paths " << se4 << ", 64 spp " << se64 << "; means " << m1
+                                      << " " << m4 << " " << m64);
+    const double expected = 1.0 / (1.0 - a);
+    CHECK(std::fabs(m4 - expected) <= 4 * se4 + 2e-3 * expected);
+    CHECK(se4 < 0.7 * se1);                                    // sqrt(1/4) = 0.5 for pure path noise
+    CHECK(se4 == Approx(se64).epsilon(0.2));
+
+    writeConstantEnv(tmp.file("env.exr"), 2.0f);
+    std::string sphere = envFurnace("MultipleImportanceSampling", "importance", 0.8f);
+    sphere.replace(sphere.find("<FovY>10</FovY>"), 15, "<FovY>60</FovY>");
+    auto envOnly = [](const ImageRGB& img) {
+        std::vector<bool> e;
+        for (size_t p = 0; p < img.pixels.size(); p += 3) e.push_back(img.pixels[p] == 2.0f);
+        return e;
+    };
+    const std::vector<bool> centre = envOnly(render(sphere, 2, 1)), split = envOnly(render(sphere, 2, 4)),
+                            jittered = envOnly(render(sphere, 8, 1));
+    const auto count = [](const std::vector<bool>& v) { return std::count(v.begin(), v.end(), true); };
+    INFO("environment-only pixels: 2 camera rays " << count(centre) << ", split " << count(split) << ", 4 jittered " << count(jittered));
+    CHECK(count(centre) > 100);
+    CHECK(split == centre);
+    CHECK(jittered != centre);
 }
 
 // Specular spheres in the white furnace (issue 16's held-out glass check; the classic failure is a

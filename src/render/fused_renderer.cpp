@@ -95,7 +95,7 @@ int FusedPath::renderTile(cl::CommandQueue& q, bool profiling, size_t tileFirst,
     counters.fused = true;
     k_.set("lightSlots", plan.lightSlots).set("rayCounts", rayCounts_);
     for (int sample = 0; sample < spp;) {
-        if (sample > 0 && stopped()) {
+        if (sample > 0 && sample % split == 0 && stopped()) {
             counters.stoppedAtSample = counters.stoppedAtSample < 0 ? sample : std::min(counters.stoppedAtSample, sample);
             return sample;
         }

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 
 #include "cl/check.h"
@@ -436,7 +437,7 @@ int Renderer::Impl::renderTile(size_t tileFirst, size_t tileEnd, const BatchPlan
         ((size_t(spp) + plan.group - 1) / plan.group) * ((tileEnd - tileFirst + plan.batch - 1) / plan.batch);
     size_t doneBatches = 0;
     for (int sample = 0; sample < spp; sample += plan.group) {
-        if (sample > 0 && stopped()) {
+        if (sample > 0 && sample % std::max(scene.split, 1) == 0 && stopped()) {
             counters.stoppedAtSample = counters.stoppedAtSample < 0 ? sample : std::min(counters.stoppedAtSample, sample);
             return sample;
         }
@@ -467,14 +468,22 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     auto t0 = std::chrono::steady_clock::now();
     dev::CameraParams cp = makeCameraParams(cam);
     // The loader and the command line already cap both (with a warning); this is the backstop for
-    // scenes built in code.
-    setSamplesPerPixel(cp, std::min(settings.spp, kMaxSamplesPerPixel));
+    // scenes built in code. With a SplittingFactor k each camera sample carries k paths: the kernels run
+    // k·spp path samples, path sample s taking camera sample s / k (camera.cl), and everything below
+    // counts path samples; settings and counters count camera samples.
+    const int split = std::clamp(cam.splittingFactor, 1, kMaxSamplesPerPixel);
+    setSamplesPerPixel(cp, int(std::min<int64_t>(int64_t(settings.spp) * split, kMaxSamplesPerPixel / split * split)));
+    if (int64_t(settings.firstSample) * split > int64_t(INT32_MAX) - cp.spp)
+        throw Error("camera " + std::to_string(cam.id) + ": samples beyond 2^31 per pixel (SplittingFactor " +
+                    std::to_string(split) + " x " + std::to_string(settings.firstSample) + " samples before this pass)");
     const size_t numPixels = size_t(cam.width) * cam.height;
     const size_t imageBytes = numPixels * sizeof(dev::float4);
     checkImageFits(m.dc.info(), cam);
     dev::SceneParams sp = m.ds.params;
     sp.pathMode = cam.pathMode;  // per camera: <Renderer>PathTracing (compiled in when any camera has it)
     if (cam.maxRecursionDepth >= 0) sp.maxDepth = cam.maxRecursionDepth;  // the camera's own (2025 scenes)
+    sp.rrMinDepth = std::max(0, cam.minRecursionDepth);                    // likewise: no roulette before it
+    sp.split = split;                                                      // and its SplittingFactor
     if (sp.pathMode != 0 && !m.ds.features.pathTracing)
         throw Error("camera " + std::to_string(cam.id) + " is path traced but the program was built without CLRT_HAS_PATH_TRACING");
     if (settings.pixelSampler == PixelSampler::ZSobol && !m.ds.features.zsobol)
@@ -485,8 +494,11 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     cl::Buffer image = CL_CPP(cl::Buffer(m.dc.context(), CL_MEM_READ_WRITE, imageBytes));
     CL_CPP(m.dc.queue().enqueueFillBuffer(image, dev::float4{0, 0, 0, 0}, 0, imageBytes));
     m.setRenderArgs(cp, sp, image);
-    m.sampleBase = settings.firstSample;
-    m.fused.sampleBase = settings.firstSample;
+    m.sampleBase = settings.firstSample * split;
+    m.fused.sampleBase = settings.firstSample * split;
+    m.fused.split = split;
+    const int stoppedBefore = counters.stoppedAtSample;
+    counters.stoppedAtSample = -1;
     // Fused (CPU devices) or wavefront: the same image either way (fused_renderer.h).
     const FusedPlan fusedPlan{plan.group, plan.lightSlots, plan.bounces};
     std::string why;
@@ -513,6 +525,9 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
         counters.pixels += tileEnd - tileFirst;
         m.collectProfile(counters);  // the blocking read above drained the queue
     }
+    if (counters.stoppedAtSample >= 0) counters.stoppedAtSample /= split;  // a multiple of split: camera samples
+    if (stoppedBefore >= 0)
+        counters.stoppedAtSample = counters.stoppedAtSample < 0 ? stoppedBefore : std::min(stoppedBefore, counters.stoppedAtSample);
     m.image = cl::Buffer();  // released with the render (the kernels' binding is replaced on the next)
     counters.profiled = counters.profiled || m.profiling;
     counters.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

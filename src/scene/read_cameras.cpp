@@ -149,13 +149,13 @@ void readCameraPathSettings(const SceneNode& n, const std::string& who, Camera& 
     if (auto c = n.child("MinRecursionDepth")) {
         cam.minRecursionDepth = cappedInteger(*c, kMaxRecursionDepth);
         if (cam.minRecursionDepth < 0) fail(*c, who + ": MinRecursionDepth must not be negative");
-        if (cam.pathMode & CLRT_PATH_RR)
-            warnOnce(c->location() + ": <MinRecursionDepth> is not used: clrt's Russian roulette runs from the first bounce");
+        if (!(cam.pathMode & CLRT_PATH_RR))
+            warnOnce(c->location() + ": <MinRecursionDepth> is not used: it sets where Russian roulette begins, and this "
+                                     "camera plays none (RendererParams without RussianRoulette)");
     }
     if (auto c = n.child("SplittingFactor")) {
-        if (cappedInteger(*c, kMaxSamplesPerPixel) < 1) fail(*c, who + ": SplittingFactor must be at least 1");
-        warnOnce(c->location() + ": <SplittingFactor> is not used: clrt traces one path per camera sample "
-                                 "(NumSamples or --spp sets how many)");
+        cam.splittingFactor = cappedInteger(*c, kMaxSamplesPerPixel);
+        if (cam.splittingFactor < 1) fail(*c, who + ": SplittingFactor must be at least 1");
     }
 }
 

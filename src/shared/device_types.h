@@ -333,7 +333,9 @@ typedef struct SceneParams {
     int samplerLog2Spp;    /* and ceil(log2(samples per pixel)): the bits of the sample in its Sobol index */
     int numInstances;      /* instances of shared meshes (Instance); 0: every triangle is in world space */
     int instanceRoot;      /* nodes index of the top-level BVH's root (over instances), when numInstances > 0 */
-    int sceneParamsPad[2]; /* explicit padding to the float4 alignment */
+    int rrMinDepth;        /* Russian roulette only for hits at this depth or deeper (the camera's <MinRecursionDepth>, 2025; 0: every hit) */
+    int split;             /* paths per camera sample (the camera's <SplittingFactor>, 2025; 1: one): path sample s
+                            * takes camera sample s / split (camera.cl) */
 } SceneParams;
 
 /* SceneParams.pixelSampler (set per render from RenderSettings::pixelSampler, clrt render --sampler). */
