@@ -28,7 +28,8 @@ inline float3 Camera_Direction(CameraParams cam, float px, float py) {
  * numbers (path.sample = s) stay its own. */
 __attribute__((always_inline)) inline void Camera_GenerateAt(CameraParams cam, SceneParams scene, int pixel, int x,
                                                              int y, int sample, PathState* path, Ray* ray) {
-    const int split = max(scene.split, 1), cameraSample = sample / split, cameraSamples = cam.spp / split;
+    const int split = max(scene.split, 1); /* no integer division where there is no splitting (nearly always) */
+    const int cameraSample = split > 1 ? sample / split : sample, cameraSamples = split > 1 ? cam.spp / split : cam.spp;
     RngKey key = Rng_Key(scene.seed, pixel, cameraSample, 1u);
     float jx = 0.5f, jy = 0.5f;
     if (cameraSamples > 1 && CLRT_SAMPLER_IS_ZSOBOL(scene)) {
