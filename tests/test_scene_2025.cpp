@@ -173,6 +173,22 @@ TEST_CASE("scene 2025: <Transformations> in lights", "[scene][scene2025]") {
         CHECK_THROWS_WITH(loadScene(envScene("n.xml", "r1 s2")),
                           Catch::Contains("n.xml:") && Catch::Contains("SphericalDirectionalLight") &&
                               Catch::Contains("must be rotations"));
+        // The JSON form: the same rotation; the error names the key path.
+        const std::string json = R"({"Scene": {
+  "Transformations": {"Rotation": {"_id": "1", "_data": "90 0 1 0"}, "Scaling": {"_id": "2", "_data": "1 2 3"}},
+  "Cameras": {"Camera": {"_id": "1", "Position": "0 0 0", "Gaze": "0 0 -1", "Up": "0 1 0", "NearPlane": "-1 1 -0.5 0.5",
+     "NearDistance": "2", "ImageResolution": "8 4", "ImageName": "out.png"}},
+  "Textures": {"Images": {"Image": {"_id": "1", "_data": "env.exr"}}},
+  "Lights": {"SphericalDirectionalLight": {"_id": "7", "ImageId": "1", "Transformations": "TRANSFORMS"}},
+  "Materials": {"Material": {"_id": "1", "DiffuseReflectance": "1 1 1"}},
+  "VertexData": {"_data": "0 0 0"}, "Objects": {"Sphere": {"_id": "1", "Material": "1", "Center": "1", "Radius": "1"}}}})";
+        Scene j = loadText(d, "e.json", sub(json, "TRANSFORMS", "r1"));
+        for (int i = 0; i < 3; ++i)
+            for (int k = 0; k < 3; ++k) CHECK(std::fabs(j.lights.at(0).envToWorld.m[i][k] - r1.m[i][k]) < 1e-12);
+        writeFileBytes(d.file("n.json"), sub(json, "TRANSFORMS", "r1 s2"));
+        CHECK_THROWS_WITH(loadScene(d.file("n.json")),
+                          Catch::Contains("n.json: Scene.Lights.SphericalDirectionalLight.Transformations") &&
+                              Catch::Contains("must be rotations"));
     }
 }
 
