@@ -370,6 +370,34 @@ inline void Shade_ClassicChildren(SceneParams scene, PathState path, Material m,
     }
 }
 
+/* A ray that hit nothing: what it brings back (Miss_Radiance; in the path tracer weighted by
+ * Path_MissWeight), no ShadingPoint, no children. */
+inline void Shade_Miss(SceneParams scene, CameraParams cam, PathState path, Ray ray, const __global TextureMap* textures,
+                       const __global ImageInfo* images, const __global float4* texels, const __global Light* lights,
+                       const __global float* envDist, ShadeResult* res) {
+    float3 missed = Miss_Radiance(scene, textures, images, texels, lights, cam, path, ray.direction.xyz);
+#ifdef CLRT_HAS_PATH_TRACING
+    if (scene.pathMode != 0) missed *= Path_MissWeight(scene, path, lights, envDist, ray.direction.xyz);
+#endif
+    res->radiance = (float4)(path.throughput.xyz * missed, 0.0f);
+}
+
+/* The ShadingPoint light sampling reads at the surface point p (normals ns, ng facing as shaded, wo
+ * towards the viewer), with the reflectances kd, ks after textures. */
+inline ShadingPoint ShadingPoint_Make(float3 p, float3 ns, float3 ng, float3 wo, float3 kd, float3 ks, Material m,
+                                      int material) {
+    ShadingPoint sp;
+    sp.position = (float4)(p, 1.0f);
+    sp.normal = (float4)(ns, 0.0f);
+    sp.geomNormal = (float4)(ng, 0.0f);
+    sp.wo = (float4)(wo, 0.0f);
+    sp.kd = (float4)(kd, 0.0f);
+    sp.ks = (float4)(ks, m.phongExponent);
+    sp.material = material;
+    sp.pad0 = sp.pad1 = sp.pad2 = 0;
+    return sp;
+}
+
 /* Shading of one path's hit h along ray (the whole of shade_hits for one path; the fused kernel calls
  * it too): the ShadingPoint for light sampling, the radiance that needs no shadow ray (ambient,
  * background or environment on a miss, object-light emission, replace_all) and the children. */
@@ -387,11 +415,7 @@ inline void Shade_Hit(SceneParams scene, CameraParams cam, PathState path, Ray r
     sp.pad0 = sp.pad1 = sp.pad2 = 0;
     res->sp = sp;
     if (h.prim == CLRT_INVALID) {
-        float3 missed = Miss_Radiance(scene, textures, images, texels, lights, cam, path, ray.direction.xyz);
-#ifdef CLRT_HAS_PATH_TRACING
-        if (scene.pathMode != 0) missed *= Path_MissWeight(scene, path, lights, envDist, ray.direction.xyz);
-#endif
-        res->radiance = (float4)(throughput * missed, 0.0f);
+        Shade_Miss(scene, cam, path, ray, textures, images, texels, lights, envDist, res);
         return;
     }
     HitTriangle ht;
@@ -442,13 +466,7 @@ inline void Shade_Hit(SceneParams scene, CameraParams cam, PathState path, Ray r
     }
     if (!insideDielectric) {
         radiance += m.ambient.xyz * scene.ambient.xyz;
-        sp.position = (float4)(s.p, 1.0f);
-        sp.normal = (float4)(ns, 0.0f);
-        sp.geomNormal = (float4)(ng, 0.0f);
-        sp.wo = (float4)(wo, 0.0f);
-        sp.kd = (float4)(kd, 0.0f);
-        sp.ks = (float4)(ks, m.phongExponent);
-        sp.material = s.material;
+        sp = ShadingPoint_Make(s.p, ns, ng, wo, kd, ks, m, s.material);
     }
 #ifdef CLRT_HAS_PATH_TRACING
     if (scene.pathMode != 0) {
