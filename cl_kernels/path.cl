@@ -71,14 +71,16 @@ inline float Path_EnvLightPdf(const __global Light* light, const __global float*
     return -1.0f;
 }
 
-/* The weight of what a ray that leaves the scene brings back (the environment light, if any). */
-inline float Path_MissWeight(SceneParams scene, PathState path, const __global Light* lights,
+/* The weight of what a ray that leaves the scene brings back from environment light `envLight` (weighed
+ * against that light's own samples), or from the background colour (envLight 0: the scene has no
+ * environment light). */
+inline float Path_MissWeight(SceneParams scene, PathState path, const __global Light* envLight,
                              const __global float* envDist, float3 dirWorld) {
     /* a background colour is no light: never sampled; beyond the depth cap (MIS's emission-only segment) unseen */
-    if (scene.envLight == CLRT_INVALID) return path.depth > scene.maxDepth ? 0.0f : 1.0f;
+    if (!envLight) return path.depth > scene.maxDepth ? 0.0f : 1.0f;
     float l = length(dirWorld);
     if (!(l > 0.0f)) return 0.0f;
-    float lightPdf = (scene.pathMode & CLRT_PATH_MIS) ? Path_EnvLightPdf(&lights[scene.envLight], envDist, dirWorld / l) : -1.0f;
+    float lightPdf = (scene.pathMode & CLRT_PATH_MIS) ? Path_EnvLightPdf(envLight, envDist, dirWorld / l) : -1.0f;
     return Path_EmissionWeight(scene.pathMode, path.throughput.w, lightPdf);
 }
 

@@ -185,20 +185,19 @@ inline void MotionBlur_StampChildren(ShadeResult* res, float time) {
         if (res->childValid[k]) res->childRay[k].origin.w = time;
 }
 
-/* Radiance of a ray (direction dir) that hits nothing: the environment map when the scene has an
- * environment light (camera, mirror and refraction rays alike), else the background texture (camera
- * rays) or the background colour. */
+/* The radiance environment light `light` sends along -dir to a ray (direction dir) that hits nothing
+ * (camera, mirror and refraction rays alike). */
+inline float3 EnvLight_MissRadiance(const __global Light* light, const __global ImageInfo* images,
+                                    const __global float4* texels, float3 dir) {
+    float l = length(dir);
+    if (!(l > 0.0f) || !isfinite(l)) return (float3)(0.0f);
+    return EnvMap_Radiance(texels, images[light->image], light->mapping, light->radiance.xyz, EnvLight_ToMap(light, dir / l));
+}
+
+/* Radiance of a ray that hits nothing in a scene without environment lights: the background texture
+ * (camera rays) or the background colour. */
 inline float3 Miss_Radiance(SceneParams scene, const __global TextureMap* textures, const __global ImageInfo* images,
-                            const __global float4* texels, const __global Light* lights, CameraParams cam, PathState path,
-                            float3 dir) {
-#ifdef CLRT_HAS_ENV_LIGHT
-    if (scene.envLight != CLRT_INVALID) {
-        float l = length(dir);
-        if (!(l > 0.0f) || !isfinite(l)) return (float3)(0.0f);
-        return EnvMap_Radiance(texels, images[scene.envImage], scene.envMapping, scene.envScale.xyz,
-                               EnvLight_ToMap(&lights[scene.envLight], dir / l));
-    }
-#endif
+                            const __global float4* texels, CameraParams cam, PathState path) {
     if (path.depth == 0 && scene.backgroundTexture != CLRT_INVALID) {
         int x = path.pixel % cam.width, y = path.pixel / cam.width;
         /* The course maps pixel i to texel i·texW/W (its corner, not its centre): texel i exactly when
@@ -370,14 +369,30 @@ inline void Shade_ClassicChildren(SceneParams scene, PathState path, Material m,
     }
 }
 
-/* A ray that hit nothing: what it brings back (Miss_Radiance; in the path tracer weighted by
- * Path_MissWeight), no ShadingPoint, no children. */
+/* A ray that hit nothing: what it brings back, no ShadingPoint, no children. With environment lights,
+ * the sum of their maps' radiance in its direction (each in the path tracer weighted against its own
+ * light samples, Path_MissWeight); else the background (Miss_Radiance). */
 inline void Shade_Miss(SceneParams scene, CameraParams cam, PathState path, Ray ray, const __global TextureMap* textures,
                        const __global ImageInfo* images, const __global float4* texels, const __global Light* lights,
                        const __global float* envDist, ShadeResult* res) {
-    float3 missed = Miss_Radiance(scene, textures, images, texels, lights, cam, path, ray.direction.xyz);
+    float3 missed = (float3)(0.0f);
+#ifdef CLRT_HAS_ENV_LIGHT
+    if (scene.envLight != CLRT_INVALID) {
+        for (int l = scene.envLight; l < scene.numLights; ++l) {
+            if (lights[l].kind != LIGHT_ENVIRONMENT) continue;
+            float3 fromLight = EnvLight_MissRadiance(&lights[l], images, texels, ray.direction.xyz);
 #ifdef CLRT_HAS_PATH_TRACING
-    if (scene.pathMode != 0) missed *= Path_MissWeight(scene, path, lights, envDist, ray.direction.xyz);
+            if (scene.pathMode != 0) fromLight *= Path_MissWeight(scene, path, &lights[l], envDist, ray.direction.xyz);
+#endif
+            missed += fromLight;
+        }
+        res->radiance = (float4)(path.throughput.xyz * missed, 0.0f);
+        return;
+    }
+#endif
+    missed = Miss_Radiance(scene, textures, images, texels, cam, path);
+#ifdef CLRT_HAS_PATH_TRACING
+    if (scene.pathMode != 0) missed *= Path_MissWeight(scene, path, 0, envDist, ray.direction.xyz);
 #endif
     res->radiance = (float4)(path.throughput.xyz * missed, 0.0f);
 }

@@ -1,6 +1,7 @@
 // flatten_environment.cpp — environment (SphericalDirectionalLight) lights: the map in the texel
-// atlas, mapping and env strategy, the importance distribution (env_distribution.h), and the radiance of
-// rays that miss (the first environment light's map); see flatten.h.
+// atlas, mapping and env strategy, the importance distribution (env_distribution.h), and the index of the
+// first environment light (SceneParams.envLight: rays that miss sum every environment light's map from
+// there, shade.cl Shade_Miss); see flatten.h.
 #include "flatten/env_distribution.h"
 #include "flatten/flatten.h"
 #include "util/error.h"
@@ -40,15 +41,7 @@ void flattenEnvironmentLight(const Scene& scene, const Light& l, int lightIndex,
         ds.envDistribution.insert(ds.envDistribution.end(), table.data().begin(), table.data().end());
     }
     ds.envDistSeconds += secondsSince(te);
-    if (ds.params.envLight == CLRT_INVALID) {
-        ds.params.envLight = lightIndex;
-        ds.params.envScale = d.radiance;
-        ds.params.envImage = d.image;
-        ds.params.envMapping = d.mapping;
-    } else {
-        warnOnce(scene.path + ": several SphericalDirectionalLights: each lights the scene, but rays that "
-                 "miss show the first one only");
-    }
+    if (ds.params.envLight == CLRT_INVALID) ds.params.envLight = lightIndex;
 }
 
 }  // namespace clrt
