@@ -49,10 +49,11 @@
     S(SceneParams) M(SceneParams, background) M(SceneParams, ambient)                             \
         M(SceneParams, numTriangles) M(SceneParams, numSpheres) M(SceneParams, numLights)         \
         M(SceneParams, maxDepth) M(SceneParams, backgroundTexture) M(SceneParams, envLight)       \
-        M(SceneParams, seed) M(SceneParams, splitDepth) M(SceneParams, numPlanes)               \
+        M(SceneParams, seed) M(SceneParams, splitDepth) M(SceneParams, envScale)                  \
+        M(SceneParams, envImage) M(SceneParams, envMapping) M(SceneParams, numPlanes)               \
         M(SceneParams, pathMode) M(SceneParams, pixelSampler) M(SceneParams, shadowEpsilon)   \
         M(SceneParams, samplerWidth) M(SceneParams, samplerLog2Spp)                               \
-        M(SceneParams, numInstances) M(SceneParams, instanceRoot) M(SceneParams, rrMinDepth) M(SceneParams, split) M(SceneParams, sceneParamsPad)  \
+        M(SceneParams, numInstances) M(SceneParams, instanceRoot) M(SceneParams, rrMinDepth) M(SceneParams, split)  \
     S(Ray) M(Ray, origin) M(Ray, direction)                                                       \
     S(Hit) M(Hit, t) M(Hit, prim) M(Hit, u) M(Hit, v)  \
     S(PathState) M(PathState, throughput) M(PathState, pixel) M(PathState, sample)                \

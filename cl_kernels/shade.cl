@@ -185,13 +185,13 @@ inline void MotionBlur_StampChildren(ShadeResult* res, float time) {
         if (res->childValid[k]) res->childRay[k].origin.w = time;
 }
 
-/* The radiance environment light `light` sends along -dir to a ray (direction dir) that hits nothing
- * (camera, mirror and refraction rays alike). */
-inline float3 EnvLight_MissRadiance(const __global Light* light, const __global ImageInfo* images,
+/* The radiance environment light `light` (its map img, mapping and radiance scale) sends along -dir to a
+ * ray (direction dir) that hits nothing (camera, mirror and refraction rays alike). */
+inline float3 EnvLight_MissRadiance(const __global Light* light, ImageInfo img, int mapping, float3 scale,
                                     const __global float4* texels, float3 dir) {
     float l = length(dir);
     if (!(l > 0.0f) || !isfinite(l)) return (float3)(0.0f);
-    return EnvMap_Radiance(texels, images[light->image], light->mapping, light->radiance.xyz, EnvLight_ToMap(light, dir / l));
+    return EnvMap_Radiance(texels, img, mapping, scale, EnvLight_ToMap(light, dir / l));
 }
 
 /* Radiance of a ray that hits nothing in a scene without environment lights: the background texture
@@ -378,11 +378,19 @@ inline void Shade_Miss(SceneParams scene, CameraParams cam, PathState path, Ray 
     float3 missed = (float3)(0.0f);
 #ifdef CLRT_HAS_ENV_LIGHT
     if (scene.envLight != CLRT_INVALID) {
-        for (int l = scene.envLight; l < scene.numLights; ++l) {
-            if (lights[l].kind != LIGHT_ENVIRONMENT) continue;
-            float3 fromLight = EnvLight_MissRadiance(&lights[l], images, texels, ray.direction.xyz);
+        /* the first one from SceneParams' copy of its fields (no Light load before its texel reads) */
+        const float3 dir = ray.direction.xyz;
+        missed = EnvLight_MissRadiance(&lights[scene.envLight], images[scene.envImage], scene.envMapping, scene.envScale.xyz,
+                                       texels, dir);
 #ifdef CLRT_HAS_PATH_TRACING
-            if (scene.pathMode != 0) fromLight *= Path_MissWeight(scene, path, &lights[l], envDist, ray.direction.xyz);
+        if (scene.pathMode != 0) missed *= Path_MissWeight(scene, path, &lights[scene.envLight], envDist, dir);
+#endif
+        for (int l = scene.envLight + 1; l < scene.numLights; ++l) { /* any others */
+            const __global Light* light = &lights[l];
+            if (light->kind != LIGHT_ENVIRONMENT) continue;
+            float3 fromLight = EnvLight_MissRadiance(light, images[light->image], light->mapping, light->radiance.xyz, texels, dir);
+#ifdef CLRT_HAS_PATH_TRACING
+            if (scene.pathMode != 0) fromLight *= Path_MissWeight(scene, path, light, envDist, dir);
 #endif
             missed += fromLight;
         }

@@ -100,7 +100,7 @@ size_t bottomLevelTriangles(const Scene& scene, const std::vector<bool>& instanc
 void flattenInstances(const Scene& scene, const std::vector<std::pair<const Shape*, int>>& jobs, int numWorldTriangles,
                       DeviceScene& ds, bool leafOrder = true);
 // The device fields of environment light `l` (index `lightIndex`), its importance distribution, and
-// SceneParams.envLight (the first environment light's index).
+// the first environment light's SceneParams fields (envLight, envScale, envImage, envMapping).
 void flattenEnvironmentLight(const Scene& scene, const Light& l, int lightIndex, dev::Light& d, DeviceScene& ds,
                              ImageAtlas& atlas);
 // Whether `l` is an environment light whose map its <Transformations> turn (CLRT_HAS_ENV_ROTATION).

@@ -1,6 +1,6 @@
 // flatten_environment.cpp — environment (SphericalDirectionalLight) lights: the map in the texel
-// atlas, mapping and env strategy, the importance distribution (env_distribution.h), and the index of the
-// first environment light (SceneParams.envLight: rays that miss sum every environment light's map from
+// atlas, mapping and env strategy, the importance distribution (env_distribution.h), and the first
+// environment light's fields in SceneParams (rays that miss sum every environment light's map from
 // there, shade.cl Shade_Miss); see flatten.h.
 #include "flatten/env_distribution.h"
 #include "flatten/flatten.h"
@@ -41,7 +41,12 @@ void flattenEnvironmentLight(const Scene& scene, const Light& l, int lightIndex,
         ds.envDistribution.insert(ds.envDistribution.end(), table.data().begin(), table.data().end());
     }
     ds.envDistSeconds += secondsSince(te);
-    if (ds.params.envLight == CLRT_INVALID) ds.params.envLight = lightIndex;
+    if (ds.params.envLight == CLRT_INVALID) {
+        ds.params.envLight = lightIndex;
+        ds.params.envScale = d.radiance;
+        ds.params.envImage = d.image;
+        ds.params.envMapping = d.mapping;
+    }
 }
 
 }  // namespace clrt

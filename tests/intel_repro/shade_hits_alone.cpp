@@ -179,7 +179,7 @@ static int run(char** argv) {
     ts.worldToObject[0] = {1, 0, 0, 0}; ts.worldToObject[1] = {0, 1, 0, 0}; ts.worldToObject[2] = {0, 0, 1, 0};
     TextureMap tm{}; tm.kind = TEXTURE_CHECKERBOARD; tm.decal = DECAL_REPLACE_KD; tm.image = -1; tm.blackColor = {0.1f, 0.1f, 0.1f, 0}; tm.whiteColor = {0.9f, 0.9f, 0.9f, 0}; tm.scale = 3; tm.offset = 0.01f; tm.normalizer = 255;
     ImageInfo img{0, 1, 1, 0}; float4 texel{1, 1, 1, 1}; Light light{}; float envd = 0; Sphere sph{}; Plane pla{};
-    SceneParams sc{}; sc.numTriangles = N; sc.numSpheres = 0; sc.numPlanes = 0; sc.numLights = 1; sc.maxDepth = 8; sc.backgroundTexture = -1; sc.envLight = -1; sc.seed = 7; sc.splitDepth = 2;
+    SceneParams sc{}; sc.numTriangles = N; sc.numSpheres = 0; sc.numPlanes = 0; sc.numLights = 1; sc.maxDepth = 8; sc.backgroundTexture = -1; sc.envLight = -1; sc.seed = 7; sc.splitDepth = 2; sc.envImage = -1;
     sc.background = {0.2f, 0.3f, 0.4f, 0}; sc.ambient = {0.1f, 0.1f, 0.1f, 0};
     CameraParams cam{}; cam.width = N / 2; cam.height = 1; cam.spp = 2;
     auto ro = [&](size_t bytes, const void* data) { return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, bytes, (void*)data)); };
