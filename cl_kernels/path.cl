@@ -71,7 +71,7 @@ inline float Path_EnvLightPdf(const __global Light* light, const __global float*
     return -1.0f;
 }
 
-/* The weight of what a ray that leaves the scene brings back from environment light `envLight` (weighed
+/* The weight of what a ray that leaves the scene brings back from environment light `envLight` (weighted
  * against that light's own samples), or from the background colour (envLight 0: the scene has no
  * environment light). */
 inline float Path_MissWeight(SceneParams scene, PathState path, const __global Light* envLight,
