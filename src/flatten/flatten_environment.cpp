@@ -24,7 +24,6 @@ void flattenEnvironmentLight(const Scene& scene, const Light& l, int lightIndex,
     d.direction = {float(r.m[0][0]), float(r.m[1][0]), float(r.m[2][0]), 0};
     d.edgeU = {float(r.m[0][1]), float(r.m[1][1]), float(r.m[2][1]), 0};
     d.edgeV = {float(r.m[0][2]), float(r.m[1][2]), float(r.m[2][2]), 0};
-    ds.features.envRotation = ds.features.envRotation || isEnvironmentTurned(l);
     const int full = atlas.use(l.imageIndex);  // float4: what the distribution is built from
     d.image = atlas.useEnvironment(l.imageIndex);  // what the device reads (half4 where exact)
     d.mapping = l.mapping;

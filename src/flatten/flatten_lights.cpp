@@ -57,20 +57,6 @@ double maxStretch(const Mat4& m) {
     return std::sqrt(norm);
 }
 
-// Whether the linear part of m is a similarity (a rotation, possibly mirrored, times one scale): MᵀM ∝ I.
-bool isSimilarity(const Mat4& m) {
-    double g[3][3], tr = 0;
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) {
-            g[i][j] = m.m[0][i] * m.m[0][j] + m.m[1][i] * m.m[1][j] + m.m[2][i] * m.m[2][j];
-            if (i == j) tr += g[i][j];
-        }
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j)
-            if (std::fabs(g[i][j] - (i == j ? tr / 3 : 0.0)) > 1e-9 * tr) return false;
-    return tr > 0;
-}
-
 // LightSphere: world-space centre and bounding radius in d, |det M| in d.edgeU.x; d.objCount 1 when M is
 // no similarity (sampled in object space: object_lights.cl), else 0. lightData: the object-space sphere,
 // worldToObject rows, objectToWorld rows (the layout of dev::Sphere's first 7 float4s).

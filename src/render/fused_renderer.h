@@ -58,7 +58,7 @@ public:
     // RenderSettings::firstSample of the render in progress: samples [sampleBase, sampleBase + spp)
     // (the progressive passes of --target-error / --time-limit, render/progressive.h).
     int sampleBase = 0;
-    // Paths per camera sample (CameraParams.split, the camera's SplittingFactor): a stop request ends the
+    // Paths per camera sample (SceneParams.split, the camera's SplittingFactor): a stop request ends the
     // tile only where every camera sample has all its paths.
     int split = 1;
 

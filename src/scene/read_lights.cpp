@@ -88,18 +88,13 @@ void readEnvironmentLight(Walker& w, const SceneNode& l, Light& light) {
 // shows in world direction R·d. Anything else (a non-uniform scaling, a shear) would distort the map
 // and its sampling densities: an error. Mirrors (det < 0) keep solid angles and are allowed.
 Mat4 environmentRotation(const SceneNode& t, const SceneNode& l, const Mat4& m, double det) {
+    if (!isSimilarity(m, 1e-5 / 3))  // MᵀM/s² within 1e-5 of I (a rotation written to 5-6 digits passes)
+        fail(t, describe(l) + ": its Transformations must be rotations (with translations and uniform "
+                "scalings, which an environment ignores): a non-uniform scaling or shear would distort its map");
     const double s = std::cbrt(std::fabs(det));
     Mat4 r;
     for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) r.m[i][j] = m.m[i][j] / s;
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) {
-            double dot = 0;
-            for (int k = 0; k < 3; ++k) dot += r.m[k][i] * r.m[k][j];
-            if (!(std::fabs(dot - (i == j ? 1.0 : 0.0)) <= 1e-5))
-                fail(t, describe(l) + ": its Transformations must be rotations (with translations and uniform "
-                        "scalings, which an environment ignores): a non-uniform scaling or shear would distort its map");
-        }
     return r;
 }
 

@@ -38,7 +38,7 @@ struct Camera {
     int pathMode = 0;  // 0: classic ray tracing; <Renderer>PathTracing: dev CLRT_PATH_* bits (CLRT_PATH_ON set)
     int maxRecursionDepth = -1;  // 2025 <MaxRecursionDepth> in <Camera>: overrides Scene's; -1: Scene's
     int minRecursionDepth = 0;   // 2025 <MinRecursionDepth> in <Camera>: Russian roulette from this depth on (SceneParams.rrMinDepth)
-    int splittingFactor = 1;     // 2025 <SplittingFactor> in <Camera>: paths per camera sample (CameraParams.split)
+    int splittingFactor = 1;     // 2025 <SplittingFactor> in <Camera>: paths per camera sample (SceneParams.split)
 };
 
 struct Material {

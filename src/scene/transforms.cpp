@@ -67,6 +67,19 @@ Mat4 composeTransforms(const std::string& refs, const TransformTable& table, con
     return m;
 }
 
+bool isSimilarity(const Mat4& m, double relTol) {
+    double g[3][3], tr = 0;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+            g[i][j] = m.m[0][i] * m.m[0][j] + m.m[1][i] * m.m[1][j] + m.m[2][i] * m.m[2][j];
+            if (i == j) tr += g[i][j];
+        }
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            if (std::fabs(g[i][j] - (i == j ? tr / 3 : 0.0)) > relTol * tr) return false;
+    return tr > 0;
+}
+
 double linearDeterminant(const Mat4& m) {
     const auto& a = m.m;
     return a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +

@@ -25,5 +25,8 @@ Mat4 makeRotation(double angleDeg, double ax, double ay, double az);
 Mat4 makeComposite(const double v[16]);
 // The determinant of m's linear (upper-left 3x3) part: its volume scale, negative for a mirror.
 double linearDeterminant(const Mat4& m);
+// Whether m's linear part is a similarity (a rotation, possibly mirrored, times one scale): MᵀM = (tr/3)·I
+// within relTol·tr, tr = trace(MᵀM) > 0.
+bool isSimilarity(const Mat4& m, double relTol = 1e-9);
 
 }  // namespace clrt
