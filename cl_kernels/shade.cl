@@ -185,13 +185,18 @@ inline void MotionBlur_StampChildren(ShadeResult* res, float time) {
         if (res->childValid[k]) res->childRay[k].origin.w = time;
 }
 
-/* The radiance environment light `light` (its map img, mapping and radiance scale) sends along -dir to a
- * ray (direction dir) that hits nothing (camera, mirror and refraction rays alike). */
-inline float3 EnvLight_MissRadiance(const __global Light* light, ImageInfo img, int mapping, float3 scale,
-                                    const __global float4* texels, float3 dir) {
+/* What environment light `light` (its map img, mapping and radiance scale) brings back to a ray (direction
+ * dir) that hits nothing (camera, mirror and refraction rays alike): its map's radiance along -dir, in the
+ * path tracer weighted against the light's own samples (Path_MissWeight). */
+inline float3 Miss_EnvLight(SceneParams scene, PathState path, const __global Light* light, ImageInfo img, int mapping,
+                            float3 scale, const __global float4* texels, const __global float* envDist, float3 dir) {
     float l = length(dir);
     if (!(l > 0.0f) || !isfinite(l)) return (float3)(0.0f);
-    return EnvMap_Radiance(texels, img, mapping, scale, EnvLight_ToMap(light, dir / l));
+    float3 radiance = EnvMap_Radiance(texels, img, mapping, scale, EnvLight_ToMap(light, dir / l));
+#ifdef CLRT_HAS_PATH_TRACING
+    if (scene.pathMode != 0) radiance *= Path_MissWeight(scene, path, light, envDist, dir);
+#endif
+    return radiance;
 }
 
 /* Radiance of a ray that hits nothing in a scene without environment lights: the background texture
@@ -370,8 +375,7 @@ inline void Shade_ClassicChildren(SceneParams scene, PathState path, Material m,
 }
 
 /* A ray that hit nothing: what it brings back, no ShadingPoint, no children. With environment lights,
- * the sum of their maps' radiance in its direction (each in the path tracer weighted against its own
- * light samples, Path_MissWeight); else the background (Miss_Radiance). */
+ * the sum of what each brings back (Miss_EnvLight); else the background (Miss_Radiance). */
 inline void Shade_Miss(SceneParams scene, CameraParams cam, PathState path, Ray ray, const __global TextureMap* textures,
                        const __global ImageInfo* images, const __global float4* texels, const __global Light* lights,
                        const __global float* envDist, ShadeResult* res) {
@@ -380,19 +384,13 @@ inline void Shade_Miss(SceneParams scene, CameraParams cam, PathState path, Ray 
     if (scene.envLight != CLRT_INVALID) {
         /* the first one from SceneParams' copy of its fields (no Light load before its texel reads) */
         const float3 dir = ray.direction.xyz;
-        missed = EnvLight_MissRadiance(&lights[scene.envLight], images[scene.envImage], scene.envMapping, scene.envScale.xyz,
-                                       texels, dir);
-#ifdef CLRT_HAS_PATH_TRACING
-        if (scene.pathMode != 0) missed *= Path_MissWeight(scene, path, &lights[scene.envLight], envDist, dir);
-#endif
+        missed = Miss_EnvLight(scene, path, &lights[scene.envLight], images[scene.envImage], scene.envMapping,
+                               scene.envScale.xyz, texels, envDist, dir);
         for (int l = scene.envLight + 1; l < scene.numLights; ++l) { /* any others */
             const __global Light* light = &lights[l];
-            if (light->kind != LIGHT_ENVIRONMENT) continue;
-            float3 fromLight = EnvLight_MissRadiance(light, images[light->image], light->mapping, light->radiance.xyz, texels, dir);
-#ifdef CLRT_HAS_PATH_TRACING
-            if (scene.pathMode != 0) fromLight *= Path_MissWeight(scene, path, light, envDist, dir);
-#endif
-            missed += fromLight;
+            if (light->kind == LIGHT_ENVIRONMENT)
+                missed += Miss_EnvLight(scene, path, light, images[light->image], light->mapping, light->radiance.xyz,
+                                        texels, envDist, dir);
         }
         res->radiance = (float4)(path.throughput.xyz * missed, 0.0f);
         return;
