@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -121,14 +122,20 @@ inline ImageRGB renderCamera(const Scene& scene, const Camera& cam, int spp = 1,
     return r.render(cam, rs, c);
 }
 
-// PSNR in dB between two 8-bit-valued images (values 0..255).
-inline double psnr8(const ImageRGB& a, const ImageRGB& b) {
+// The mean over pixels and channels of (a − b)² (images of one size: else an exception, a failed test).
+inline double meanSquaredDiff(const ImageRGB& a, const ImageRGB& b) {
+    if (a.pixels.size() != b.pixels.size()) throw std::runtime_error("meanSquaredDiff: images of different sizes");
     double se = 0;
     for (size_t i = 0; i < a.pixels.size(); ++i) {
         double d = double(a.pixels[i]) - double(b.pixels[i]);
         se += d * d;
     }
-    double mse = se / double(a.pixels.size());
+    return se / double(a.pixels.size());
+}
+
+// PSNR in dB between two 8-bit-valued images (values 0..255).
+inline double psnr8(const ImageRGB& a, const ImageRGB& b) {
+    double mse = meanSquaredDiff(a, b);
     return mse == 0 ? INFINITY : 10.0 * std::log10(255.0 * 255.0 / mse);
 }
 

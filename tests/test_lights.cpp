@@ -740,12 +740,6 @@ ImageRGB turnedByHand(const ImageRGB& img, bool probe) {
         }
     return out;
 }
-
-double meanSquaredDiff(const ImageRGB& a, const ImageRGB& b) {
-    double sum = 0;
-    for (size_t i = 0; i < a.pixels.size(); ++i) sum += (double(a.pixels[i]) - b.pixels[i]) * (double(a.pixels[i]) - b.pixels[i]);
-    return sum / double(a.pixels.size());
-}
 }  // namespace
 
 TEST_CASE("a turned environment map (<Transformations>) renders as the map turned by hand", "[lights][env][render]") {

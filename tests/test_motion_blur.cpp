@@ -77,13 +77,6 @@ ImageRGB hostMovingSphere(const Vec3& motion, int width, int height) {
     return img;
 }
 
-double mse(const ImageRGB& a, const ImageRGB& b) {
-    REQUIRE(a.pixels.size() == b.pixels.size());
-    double s = 0;
-    for (size_t i = 0; i < a.pixels.size(); ++i) s += double(a.pixels[i] - b.pixels[i]) * (a.pixels[i] - b.pixels[i]);
-    return s / double(a.pixels.size());
-}
-
 Scene loadText(TempDir& dir, const std::string& name, const std::string& xml) {
     const std::string path = dir.file(name);
     writeFileBytes(path, xml);
@@ -216,7 +209,7 @@ TEST_CASE("a moving object's procedural texture moves with it", "[motion][render
     Scene black = scene("black.xml", "0.5 0.25 1", false), white = scene("white.xml", "0 1 0", false);
     ImageRGB a = renderCamera(textured, textured.cameras[0], 16, 5);
     ImageRGB b = renderCamera(black, black.cameras[0], 16, 5), w = renderCamera(white, white.cameras[0], 16, 5);
-    const double dBlack = mse(a, b), dWhite = mse(a, w), dColours = mse(b, w);
+    const double dBlack = meanSquaredDiff(a, b), dWhite = meanSquaredDiff(a, w), dColours = meanSquaredDiff(b, w);
     INFO("MSE to the black-colour sphere " << dBlack << ", to the white-colour sphere " << dWhite
                                             << ", between the two " << dColours);
     CHECK(dColours > 1.0);
@@ -234,8 +227,8 @@ TEST_CASE("a moving sphere renders as the host integration over the shutter, wit
     const int spp = 256;
     ImageRGB a = renderCamera(scene, scene.cameras[0], spp, 1), b = renderCamera(scene, scene.cameras[0], spp, 2);
     ImageRGB want = hostMovingSphere(motion, 32, 24), still = hostMovingSphere(Vec3(0, 0, 0), 32, 24);
-    const double noise = mse(a, b) / 2;  // the variance of one render
-    const double err = mse(a, want), blur = mse(still, want);
+    const double noise = meanSquaredDiff(a, b) / 2;  // the variance of one render
+    const double err = meanSquaredDiff(a, want), blur = meanSquaredDiff(still, want);
     double sumA = 0, sumWant = 0;
     for (size_t i = 0; i < a.pixels.size(); ++i) { sumA += a.pixels[i]; sumWant += want.pixels[i]; }
     INFO("MSE vs host " << err << ", noise floor " << noise << ", host blurred vs still " << blur
