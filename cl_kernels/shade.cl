@@ -323,7 +323,7 @@ inline void Shade_ClassicChildren(SceneParams scene, PathState path, Material m,
     float3 reflDir = normalize(2.0f * cosI * ns - wo);
     const float2 uRefl = Sampler_Other2D(scene, path, key, dim);
     reflDir = Glossy_Perturb(reflDir, m.roughness, uRefl.x, uRefl.y);
-    float3 reflOrg = Ray_OffsetOrigin(p, ng);
+    float3 reflOrg = Ray_EpsilonOrigin(p, ng, scene.shadowEpsilon);
     switch (m.kind) {
 #ifdef CLRT_HAS_MIRROR
     case MATERIAL_MIRROR:
@@ -355,7 +355,7 @@ inline void Shade_ClassicChildren(SceneParams scene, PathState path, Material m,
         float3 refrDir = normalize(-eta * wo + (eta * c - cosT) * ns);
         const float2 uRefr = Sampler_Other2D(scene, path, key, dim + 3u);
         refrDir = Glossy_Perturb(refrDir, m.roughness, uRefr.x, uRefr.y);
-        float3 refrOrg = Ray_OffsetOrigin(p, -ng);
+        float3 refrOrg = Ray_EpsilonOrigin(p, -ng, scene.shadowEpsilon);
         if (fr >= 1.0f) {
             Child_Make(res, 0, path, weight, 0u, reflOrg, reflDir);
         } else if (path.depth < scene.splitDepth) {
@@ -559,7 +559,10 @@ __kernel CLRT_KERNEL_VEC_HINT void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
  * The course's references light such points (bump_mapping_transformed's sphere: thin lines along the
  * terminators, README "Textures"); this gets part of them (every hw4 bump/normal-map scene equal or
  * better: sphere_perlin_bump 40.8 -> 41.8 dB); the rest would need a shadow ray that skips its own
- * primitive. */
+ * primitive. The ray's geometry is the course's: it starts ShadowRayEpsilon off the surface
+ * (Ray_EpsilonOrigin), is aimed from there at the light's point, and is as long as the distance from p,
+ * so a surface through the light's point (2025 hw2 mirror_room: a point light on the ceiling plane, dark
+ * in the reference) blocks it. Object lights re-aim it short of their surface (ObjectLight_AimShadow). */
 inline ShadowRay Shadow_Make(ShadingPoint sp, const __global Material* materials, float3 throughput, float3 wi,
                              float dist, float3 e, float shadowEpsilon) {
     ShadowRay sr;
@@ -574,10 +577,11 @@ inline ShadowRay Shadow_Make(ShadingPoint sp, const __global Material* materials
 #endif
     if (lit) {
         float3 c = throughput * Material_EvalDirect(sp, materials, wi, cosTheta) * e;
-        float3 org = Shadow_Origin(p, ng, shadowEpsilon);
-        float tMax = isinf(dist) ? INFINITY : length(p + dist * wi - org) * (1.0f - 1e-5f);
-        sr.origin = (float4)(org, tMax);
-        sr.direction = (float4)(wi, 0.0f);
+        float3 org = Ray_EpsilonOrigin(p, ng, shadowEpsilon);
+        float3 dir = wi;
+        if (!isinf(dist)) dir = normalize(p + dist * wi - org); /* aimed from org at the light's point */
+        sr.origin = (float4)(org, dist); /* as long as from p: a surface through the light's point blocks it */
+        sr.direction = (float4)(dir, 0.0f);
         sr.contribution = (float4)(finiteOrZero(c), 0.0f);
     }
     return sr;

@@ -362,7 +362,10 @@ namespace {
 // z ∈ [-400, 5]), seen from (0, 1, 4) toward the horizon; with `mirrorFloor`, a mirror covers y = 0.
 std::string mirrorScene(const char* interp, float texY, bool mirrorFloor) {
     std::string y = std::to_string(texY);
-    std::string s = std::string(R"(<Scene><BackgroundColor>0 0 0</BackgroundColor><MaxRecursionDepth>2</MaxRecursionDepth>
+    // ShadowRayEpsilon 0: the reflected ray starts at the robust offset, as close to the mirror as a ray can,
+    // so the mirror shows the ceiling exactly where the plane at -texY shows (at the course's 1e-3 the
+    // reflected view is lifted by it: RMSE 1.86 against 0.02 x 73.4 allowed).
+    std::string s = std::string(R"(<Scene><BackgroundColor>0 0 0</BackgroundColor><MaxRecursionDepth>2</MaxRecursionDepth><ShadowRayEpsilon>0</ShadowRayEpsilon>
 <Cameras><Camera id="1" type="lookAt"><Position>0 1 4</Position><GazePoint>0 0.6 -10</GazePoint><Up>0 1 0</Up>
 <FovY>40</FovY><NearDistance>1</NearDistance><ImageResolution>192 108</ImageResolution><ImageName>m.png</ImageName></Camera></Cameras>
 <Lights><AmbientLight>0 0 0</AmbientLight></Lights>
