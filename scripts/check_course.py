@@ -3,8 +3,11 @@
 
 Run it through scripts/check_course (which sets up numpy, Pillow and OpenEXR). For each camera of each scene
 under hw1..hw6 (any depth) whose ImageName has a reference in the scene folder's _reference_outputs/, it
-prints one line: scene, camera id, image, rule, figure, ok / FAIL / SKIPPED; then a summary line. Folders
-without references (classic, json2025) get one line each saying so. The rules (issue 29):
+prints one line: scene, camera id, image, rule, figure, ok / FAIL / SKIPPED; then a summary line.
+Scenes may be XML or the 2025 JSON form. --scenes DIR --references DIR check another copy of the course's
+packages (e.g. ones laid out as inputs/ and outputs/): each camera's reference is then the file of its
+ImageName under the --references folder. Folders without references (classic, json2025) get one line each
+saying so. The rules (issue 29):
 
   deterministic  PSNR of clrt's 8-bit PNG (--ldr-quantize floor) against the reference >= 40 dB. An EXR
                  reference: PSNR of the linear values with the reference's 99.9th percentile as the peak.
@@ -57,6 +60,7 @@ Exit status: 1 when a camera FAILs (without --expected) or FAILs unlisted (with 
 """
 import argparse
 import glob
+import json
 import os
 import re
 import subprocess
@@ -75,6 +79,7 @@ except ImportError:
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 REF_DIR = "_reference_outputs"
+REF_INDEX = None   # --references DIR: image file name (lower case) -> the paths under DIR with that name
 INPUT_EXT = re.compile(r"^[^\s<>]+\.(ply|png|jpe?g|exr|hdr|tga|bmp)$", re.IGNORECASE)
 KNOWN_EDITED = {
     "hw5/dragon_spot_light_msaa.xml": "the dragon mesh is missing from ../shared (its README: 'lost its dragon'); "
@@ -126,6 +131,60 @@ def luminance_stats(img):
 
 
 # ---------------------------------------------------------------- scenes
+
+def json_to_element(tag, value):
+    """The 2025 JSON form as the XML tree it stands for: a key is an element, "_data" its text, any other
+    "_name" an attribute, a list repeated elements of one tag (SCENE_FORMAT.md's JSON form)."""
+    e = ET.Element(tag)
+    if isinstance(value, dict):
+        for k, v in value.items():
+            if k == "_data":
+                e.text = str(v)
+            elif k.startswith("_"):
+                e.set(k[1:], str(v))
+            else:
+                for item in (v if isinstance(v, list) else [v]):
+                    e.append(json_to_element(k, item))
+    else:
+        e.text = str(value)
+    return e
+
+
+def reference_path(scene_path, image):
+    """The reference image of a camera of scene_path: its folder's _reference_outputs/IMAGE, or with
+    --references the file of that name under DIR whose path shares the longest prefix with the scene's
+    (packages laid out as inputs/ and outputs/); None when there is none."""
+    if REF_INDEX is None:
+        p = os.path.join(os.path.dirname(scene_path), REF_DIR, image)
+        return p if os.path.exists(p) else None
+    candidates = REF_INDEX.get(image.lower(), [])
+    if not candidates:
+        return None
+    return max(candidates, key=lambda c: len(os.path.commonprefix([c, os.path.abspath(scene_path)])))
+
+
+def index_references(ref_root):
+    index = {}
+    for p in glob.glob(os.path.join(os.path.abspath(ref_root), "**", "*"), recursive=True):
+        if os.path.isfile(p) and p.lower().endswith((".png", ".exr")):
+            index.setdefault(os.path.basename(p).lower(), []).append(p)
+    return index
+
+
+def load_scene_tree(path):
+    """The scene's element tree (XML, or JSON mapped by json_to_element); raises ValueError when unreadable."""
+    try:
+        if path.lower().endswith(".json"):
+            with open(path, encoding="utf-8") as f:
+                d = json.load(f)
+            if not isinstance(d, dict) or len(d) != 1:
+                raise ValueError("not one top-level object")
+            (tag, value), = d.items()
+            return json_to_element(tag, value)
+        return ET.parse(path).getroot()
+    except (ET.ParseError, json.JSONDecodeError, OSError, UnicodeDecodeError) as e:
+        raise ValueError(str(e))
+
 
 def local(tag):
     return tag.rsplit("}", 1)[-1]
@@ -190,7 +249,7 @@ def cameras_of(root):
 
 
 def find_scenes(scenes_root):
-    """(relative path, absolute path) of every XML scene under hw*/; and the folders without references."""
+    """(relative path, absolute path) of every XML or JSON scene under hw*/; and the folders without references."""
     found, unreferenced = [], []
     for top in sorted(os.listdir(scenes_root)):
         d = os.path.join(scenes_root, top)
@@ -198,12 +257,11 @@ def find_scenes(scenes_root):
             continue
         files = [p for p in glob.glob(os.path.join(d, "**", "*.xml"), recursive=True) if REF_DIR not in p]
         files += [p for p in glob.glob(os.path.join(d, "**", "*.json"), recursive=True) if REF_DIR not in p]
-        with_refs = [p for p in files if os.path.isdir(os.path.join(os.path.dirname(p), REF_DIR))]
+        with_refs = [p for p in files if REF_INDEX is not None or os.path.isdir(os.path.join(os.path.dirname(p), REF_DIR))]
         if not with_refs:
             unreferenced.append((top, len(files)))
         for p in sorted(with_refs):
-            if p.endswith(".xml"):
-                found.append((os.path.relpath(p, scenes_root), p))
+            found.append((os.path.relpath(p, scenes_root), p))
     return found, unreferenced
 
 
@@ -412,7 +470,7 @@ def judge_camera(r, rel, path, root, cam, reduced, rr_rule="course"):
         return rule, None, KNOWN_EDITED[rel]
     if hdr and not HAVE_OPENEXR:
         return rule, None, "no OpenEXR Python module to read the EXR reference (scripts/check_course installs it)"
-    ref = read_image(os.path.join(scene_dir, REF_DIR, cam["image"]))
+    ref = read_image(reference_path(path, cam["image"]))
     if rule == "deterministic":
         return (rule, *judge_deterministic(r, path, cam, ref, hdr))
     if rule == "perlin":
@@ -468,12 +526,12 @@ class Tally:
 def check_scene(r, tally, rel, path, reduced, rr_rule):
     """Prints one line per camera of the scene that has a reference."""
     try:
-        root = ET.parse(path).getroot()
-    except ET.ParseError as e:
-        print("%-44s cam ?   %-36s %-13s FAIL    unreadable XML: %s%s" % (rel, "?", "-", e, tally.add((rel, "?"), "FAIL")))
+        root = load_scene_tree(path)
+    except ValueError as e:
+        print("%-44s cam ?   %-36s %-13s FAIL    unreadable scene: %s%s" % (rel, "?", "-", e, tally.add((rel, "?"), "FAIL")))
         return
     for cam in cameras_of(root):
-        if not os.path.exists(os.path.join(os.path.dirname(path), REF_DIR, cam["image"])):
+        if reference_path(path, cam["image"]) is None:
             continue  # this camera has no reference
         t0 = time.time()
         rule, ok, figure = judge_camera(r, rel, path, root, cam, reduced, rr_rule)
@@ -495,7 +553,13 @@ def main():
     ap.add_argument("--rr-rule", default="course", choices=["course", "unbiased"],
                     help="clrt's --rr-rule for the roulette rule's renders (default course, as the references; "
                          "unbiased shows the rule failing)")
+    ap.add_argument("--references", default="",
+                    help="folder searched (recursively) for each camera's reference image by its file name, instead "
+                         "of each scene folder's _reference_outputs/ (course packages laid out as inputs/ and outputs/)")
     args = ap.parse_args()
+    global REF_INDEX
+    if args.references:
+        REF_INDEX = index_references(args.references)
     scenes_root = os.path.normpath(args.scenes)
     if not os.path.isdir(scenes_root):
         print("check_course: %s is not there: nothing to check" % scenes_root)
