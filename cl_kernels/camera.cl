@@ -67,6 +67,10 @@ __attribute__((always_inline)) inline void Camera_GenerateAt(CameraParams cam, S
     r.origin.w = Sampler_Time(scene, pixel, cameraSample);
 #endif
     r.direction = (float4)(dir, INFINITY);
+#ifdef CLRT_HAS_BACKFACE_CULLING
+    /* the classic renderer's camera rays skip back faces where the scene culls them (Ray_Closest) */
+    if (scene.cullBackFaces && scene.pathMode == 0) r.direction.w = -INFINITY;
+#endif
     *ray = r;
     PathState p;
     p.throughput = (float4)(1.0f, 1.0f, 1.0f, 0.0f);

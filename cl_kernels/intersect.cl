@@ -50,16 +50,21 @@ inline float4 RayShear_Permute(RayShear s, float3 v3) {
     return s.swap ? r.yxzw : r;
 }
 
+/* What a traversal looks for (the flags argument of the functions below): */
+#define CLRT_RAY_ANY_HIT 1   /* any hit before tMax, t >= 0 (shadow rays), else the closest with t > 0 */
+#define CLRT_RAY_CULL_BACK 2 /* triangles seen from behind are not hit (Ray_Closest: the course's 2025 culling) */
+
 /* The course's shadow test counts a triangle that passes exactly through the shadow ray's origin (t = 0,
  * T == 0 in the watertight test) as blocking; every other ray needs t > 0. It decides the points on the
  * edge where two walls meet at a concave corner: their shadow ray starts ShadowRayEpsilon off one wall,
  * in the other wall's plane, and the course's references show them in shadow (hw1 cornellbox and
  * cornellbox_recursive: 39.20 -> 41.09 and 39.10 -> 40.94 dB; docs/scene-format.md, conventions).
- * anyHit: a shadow ray (Bvh4_Traverse's anyHit). */
-#define TRIANGLE_T_TOO_SMALL(T, anyHit) ((anyHit) ? ((T) < 0.0f) : ((T) <= 0.0f))
+ * flags & CLRT_RAY_ANY_HIT: a shadow ray. */
+#define TRIANGLE_T_TOO_SMALL(T, flags) (((flags) & CLRT_RAY_ANY_HIT) ? ((T) < 0.0f) : ((T) <= 0.0f))
 
-/* Returns 1 and sets *t, *b1, *b2 (weights of v1, v2) for a hit with 0 < t < tMax (0 <= t for anyHit). */
-__attribute__((always_inline)) inline int Triangle_Intersect(float3 org, RayShear s, float3 v0, float3 v1, float3 v2, float tMax, int anyHit,
+/* Returns 1 and sets *t, *b1, *b2 (weights of v1, v2) for a hit with 0 < t < tMax (0 <= t for CLRT_RAY_ANY_HIT;
+ * none from behind with CLRT_RAY_CULL_BACK). */
+__attribute__((always_inline)) inline int Triangle_Intersect(float3 org, RayShear s, float3 v0, float3 v1, float3 v2, float tMax, int flags,
                               float* tOut, float* b1Out, float* b2Out) {
     /* The vertices relative to the origin, their components permuted to (kx, ky, kz) by whole-vector
      * swizzles and selects (the same values comp() would pick one by one). */
@@ -89,8 +94,11 @@ __attribute__((always_inline)) inline int Triangle_Intersect(float3 org, RayShea
     float T = U * Az + V * Bz + W * Cz;
     /* A back-facing hit (det < 0): all of U, V, W, T share det's sign, so the weights V/det, W/det
      * need V and W negated along with T and det. */
+#ifdef CLRT_HAS_BACKFACE_CULLING
+    if (det < 0.0f && (flags & CLRT_RAY_CULL_BACK)) return 0;
+#endif
     if (det < 0.0f) { T = -T; det = -det; V = -V; W = -W; }
-    if (TRIANGLE_T_TOO_SMALL(T, anyHit) || T >= tMax * det) return 0;
+    if (TRIANGLE_T_TOO_SMALL(T, flags) || T >= tMax * det) return 0;
     float inv = 1.0f / det;
     *tOut = T * inv;
     *b1Out = V * inv;
@@ -191,7 +199,7 @@ inline float3 safeInverse(float3 d) {
 /* The four lanes' edge functions, T and det (det > 0 after the back-face flip; V, W, T flipped with
  * it), for the ray origin orgK in the shear's axis order (RayShear_Permute). Returns the lanes that
  * pass every test of Triangle_Intersect with tMax (and are triangles: isTri). */
-__attribute__((always_inline)) inline int4 Triangle4_Intersect(const __global float4* vertex, float4 orgK, RayShear s, int4 isTri, float tMax, int anyHit,
+__attribute__((always_inline)) inline int4 Triangle4_Intersect(const __global float4* vertex, float4 orgK, RayShear s, int4 isTri, float tMax, int flags,
                                 float4* Vout, float4* Wout, float4* Tout, float4* detOut) {
     float4 Az = vertex[s.kz] - orgK.z, Bz = vertex[3 + s.kz] - orgK.z, Cz = vertex[6 + s.kz] - orgK.z;
     const float4 Ax = (vertex[s.kx] - orgK.x) - s.sx * Az, Ay = (vertex[s.ky] - orgK.y) - s.sy * Az;
@@ -218,14 +226,18 @@ __attribute__((always_inline)) inline int4 Triangle4_Intersect(const __global fl
     T = select(T, -T, back); det = select(det, -det, back);
     *Vout = select(V, -V, back); *Wout = select(W, -W, back);
     *Tout = T; *detOut = det;
-    return isTri & ~mixed & (det != 0.0f) & ~(TRIANGLE_T_TOO_SMALL(T, anyHit) | (T >= tMax * det));
+    int4 hit = isTri & ~mixed & (det != 0.0f) & ~(TRIANGLE_T_TOO_SMALL(T, flags) | (T >= tMax * det));
+#ifdef CLRT_HAS_BACKFACE_CULLING
+    if (flags & CLRT_RAY_CULL_BACK) hit &= ~back;
+#endif
+    return hit;
 }
 
 /* One leaf block in leaf order: its triangle lanes that passed Triangle4_Intersect (candidates) and its
  * sphere lanes, each against the tMax the lanes before it left. Returns 1 if some lane hit. */
 inline int Leaf_Block(const __global Bvh4Leaf* block, int4 prim, int4 candidates, float4 V4, float4 W4, float4 T4,
                       float4 det4, const __global Sphere* spheres, int numTriangles, float3 org, float3 dir,
-                      float time, int anyHit, float* tMax, Hit* hit) {
+                      float time, int flags, float* tMax, Hit* hit) {
     int cand[4], ref[4];
     float V[4], W[4], T[4], det[4];
     vstore4(candidates, 0, cand); vstore4(prim, 0, ref);
@@ -244,7 +256,7 @@ inline int Leaf_Block(const __global Bvh4Leaf* block, int4 prim, int4 candidates
         *tMax = t;
         hit->t = t; hit->prim = ref[i]; hit->u = b1; hit->v = b2;
         found = 1;
-        if (anyHit) return 1;
+        if (flags & CLRT_RAY_ANY_HIT) return 1;
     }
     return found;
 }
@@ -252,7 +264,7 @@ inline int Leaf_Block(const __global Bvh4Leaf* block, int4 prim, int4 candidates
 #ifdef CLRT_HAS_MOTION_BLUR
 /* With motion blur every triangle has its own rest-frame origin: one at a time (Triangle_Intersect). */
 inline int Leaf_BlockMoving(const __global int* prim, const __global Triangle* tris, const __global Sphere* spheres,
-                            int numTriangles, float3 org, float3 dir, RayShear shear, float time, int anyHit,
+                            int numTriangles, float3 org, float3 dir, RayShear shear, float time, int flags,
                             float* tMax, Hit* hit) {
     int found = 0;
     for (int i = 0; i < 4; ++i) {
@@ -263,7 +275,7 @@ inline int Leaf_BlockMoving(const __global int* prim, const __global Triangle* t
         if (ref < numTriangles) {
             const __global Triangle* tri = &tris[ref];
             const float3 o = MotionBlur_RestOrigin(org, time, Triangle_Motion(tri));
-            h = Triangle_Intersect(o, shear, tri->v0.xyz, tri->v1.xyz, tri->v2.xyz, *tMax, anyHit, &t, &b1, &b2);
+            h = Triangle_Intersect(o, shear, tri->v0.xyz, tri->v1.xyz, tri->v2.xyz, *tMax, flags, &t, &b1, &b2);
         } else {
             const __global Sphere* sph = &spheres[ref - numTriangles];
             h = Sphere_Intersect(sph, MotionBlur_RestOrigin(org, time, sph->motion.xyz), dir, *tMax, &t);
@@ -272,35 +284,35 @@ inline int Leaf_BlockMoving(const __global int* prim, const __global Triangle* t
         *tMax = t;
         hit->t = t; hit->prim = ref; hit->u = b1; hit->v = b2;
         found = 1;
-        if (anyHit) return 1;
+        if (flags & CLRT_RAY_ANY_HIT) return 1;
     }
     return found;
 }
 #endif
 
 /* The leaf of stack entry ~(firstBlock << 4 | count): its blocks in order. Returns 1 if some
- * primitive hit (closer than *tMax, which it lowers; anyHit: stops at the first). */
+ * primitive hit (closer than *tMax, which it lowers; CLRT_RAY_ANY_HIT in flags: stops at the first). */
 __attribute__((always_inline)) inline int Leaf_Intersect(const __global Bvh4Leaf* leaves, int packed, const __global Triangle* tris,
                           const __global Sphere* spheres, int numTriangles, float3 org, float3 dir, float4 orgK,
-                          RayShear shear, float time, int anyHit, float* tMax, Hit* hit) {
+                          RayShear shear, float time, int flags, float* tMax, Hit* hit) {
     const int firstBlock = packed >> 4, count = packed & 15;
     int found = 0;
     for (int b = firstBlock; b < firstBlock + ((count + 3) >> 2); ++b) {
         const __global Bvh4Leaf* block = &leaves[b];
 #ifdef CLRT_HAS_MOTION_BLUR
-        found |= Leaf_BlockMoving((const __global int*)&block->prim, tris, spheres, numTriangles, org, dir, shear, time, anyHit, tMax, hit);
+        found |= Leaf_BlockMoving((const __global int*)&block->prim, tris, spheres, numTriangles, org, dir, shear, time, flags, tMax, hit);
 #else
         const int4 prim = block->prim;
         const int4 isTri = (prim >= (int4)(0)) & (prim < (int4)(numTriangles));
         float4 V, W, T, det;
-        const int4 cand = Triangle4_Intersect(block->vertex, orgK, shear, isTri, *tMax, anyHit, &V, &W, &T, &det);
+        const int4 cand = Triangle4_Intersect(block->vertex, orgK, shear, isTri, *tMax, flags, &V, &W, &T, &det);
         /* Spheres are not compiled out without CLRT_HAS_SPHERES: with the sphere test gone, Intel's CPU
          * runtime traced the Audi TT's rays at about half the speed (measured). On every device, not a
          * quirk (docs/quirks.md "Not quirks"). */
         if (any(cand | (prim >= (int4)(numTriangles))))
-            found |= Leaf_Block(block, prim, cand, V, W, T, det, spheres, numTriangles, org, dir, time, anyHit, tMax, hit);
+            found |= Leaf_Block(block, prim, cand, V, W, T, det, spheres, numTriangles, org, dir, time, flags, tMax, hit);
 #endif
-        if (found && anyHit) return 1;
+        if (found && (flags & CLRT_RAY_ANY_HIT)) return 1;
     }
     return found;
 }
@@ -357,13 +369,13 @@ __attribute__((always_inline)) inline int Bvh4_SlabTest(const __global Bvh4Node*
  * with their entry distance, so that pops skip those beyond the best hit so far. Any hit (shadow rays,
  * whose answer does not depend on the order): in lane order, no sort. Stack entries: node index (>= 0)
  * or a leaf, ~(firstBlock << 4 | count). */
-__attribute__((always_inline)) inline int Bvh4_Children(const __global Bvh4Node* n, float4 tEnter, int4 isHit, int nh, int anyHit,
+__attribute__((always_inline)) inline int Bvh4_Children(const __global Bvh4Node* n, float4 tEnter, int4 isHit, int nh, int flags,
                          int* stackEntry, float* stackT, int* sp) {
     const int4 cnt = n->count, child = n->child;
     const int4 e = select(child, ~((child << 4) | cnt), cnt > (int4)(0));
     if (nh == 1) return isHit.s0 ? e.s0 : (isHit.s1 ? e.s1 : (isHit.s2 ? e.s2 : e.s3));
     if (*sp + nh - 1 > CLRT_BVH4_STACK_SIZE) return e.s0; /* never, by the host's bound */
-    if (anyHit) { /* visit the first hit lane, push the others */
+    if (flags & CLRT_RAY_ANY_HIT) { /* visit the first hit lane, push the others */
         const int first = isHit.s0 ? 0 : (isHit.s1 ? 1 : (isHit.s2 ? 2 : 3));
         if (isHit.s3 && first < 3) stackEntry[(*sp)++] = e.s3;
         if (isHit.s2 && first < 2) stackEntry[(*sp)++] = e.s2;
@@ -422,13 +434,14 @@ inline int Instance_Enter(const __global Instance* inst, float3 orgW, float3 dir
 /* Traverses the 4-wide BVH (Bvh4Node, leaves in Bvh4Leaf blocks) near-first from nodes[0], then, with
  * instances, the top-level tree from scene.instanceRoot, descending into an instance's bottom-level
  * tree in its object space (the stack holds both levels: popping back to the height at which the
- * instance was entered returns to the world ray). anyHit = 1: stop at the first hit (shadow rays).
+ * instance was entered returns to the world ray). flags: CLRT_RAY_ANY_HIT stops at the first hit (shadow
+ * rays); CLRT_RAY_CULL_BACK skips triangles seen from behind.
  * Returns 1 on a hit. time: the ray's shutter time (used only under CLRT_HAS_MOTION_BLUR). The
  * stack's size is the exact worst case the host computed. */
 inline int Bvh_Traverse(const __global Bvh4Node* nodes, const __global Bvh4Leaf* leaves,
                         const __global Triangle* tris, const __global Sphere* spheres,
                         const __global Instance* instances, SceneParams scene, float3 org, float3 dir,
-                        float tMax, float time, int anyHit, Hit* hit, int* hitInstance) {
+                        float tMax, float time, int flags, Hit* hit, int* hitInstance) {
     const int numTriangles = scene.numTriangles;
     TraceRay r = TraceRay_Make(org, dir);
     int stackEntry[CLRT_BVH4_STACK_SIZE];
@@ -447,7 +460,7 @@ inline int Bvh_Traverse(const __global Bvh4Node* nodes, const __global Bvh4Leaf*
             int4 isHit;
             const int nh = Bvh4_SlabTest(n, r.org, r.invDir, r.nearX, r.nearY, r.nearZ, tMax, &tEnter, &isHit);
             if (nh > 0) {
-                entry = Bvh4_Children(n, tEnter, isHit, nh, anyHit, stackEntry, stackT, &sp);
+                entry = Bvh4_Children(n, tEnter, isHit, nh, flags, stackEntry, stackT, &sp);
                 continue;
             }
 #ifdef CLRT_HAS_INSTANCES
@@ -458,12 +471,12 @@ inline int Bvh_Traverse(const __global Bvh4Node* nodes, const __global Bvh4Leaf*
             continue;
 #endif
         } else if (Leaf_Intersect(leaves, ~entry, tris, spheres, numTriangles, r.org, r.dir, r.orgK, r.shear, time,
-                                  anyHit, &tMax, hit)) {
+                                  flags, &tMax, hit)) {
             found = 1;
 #ifdef CLRT_HAS_INSTANCES
             *hitInstance = instance;
 #endif
-            if (anyHit) return 1;
+            if (flags & CLRT_RAY_ANY_HIT) return 1;
         }
         /* Pop the next entry that can still hold a closer hit (any hit: tMax never drops, so all can). */
         for (;;) {
@@ -472,7 +485,7 @@ inline int Bvh_Traverse(const __global Bvh4Node* nodes, const __global Bvh4Leaf*
 #endif
             if (sp == 0) return found;
             --sp;
-            if (anyHit || stackT[sp] <= tMax) { entry = stackEntry[sp]; break; }
+            if ((flags & CLRT_RAY_ANY_HIT) || stackT[sp] <= tMax) { entry = stackEntry[sp]; break; }
         }
     }
 }
@@ -507,10 +520,17 @@ inline Hit Ray_Closest(Ray r, SceneParams scene, const __global Bvh4Node* nodes,
     h.t = -1.0f; h.prim = CLRT_INVALID; h.u = 0.0f; h.v = 0.0f;
     *instance = CLRT_INVALID;
     float3 dir = r.direction.xyz;
-    if (allFinite3(r.origin.xyz) && allFinite3(dir) && r.direction.w > 0.0f) {
-        float tMax = r.direction.w;
+    float tMax = r.direction.w;
+    int flags = 0;
+#ifdef CLRT_HAS_BACKFACE_CULLING
+    if (tMax < 0.0f) { /* a ray that culls back faces (Ray in device_types.h) */
+        tMax = -tMax;
+        flags = CLRT_RAY_CULL_BACK;
+    }
+#endif
+    if (allFinite3(r.origin.xyz) && allFinite3(dir) && tMax > 0.0f) {
         if (numPlanes > 0 && Planes_Intersect(planes, numPlanes, firstPlaneRef, r.origin.xyz, dir, tMax, 0, &h)) tMax = h.t;
-        Bvh_Traverse(nodes, leaves, tris, spheres, instances, scene, r.origin.xyz, dir, tMax, Ray_Time(r), 0, &h, instance);
+        Bvh_Traverse(nodes, leaves, tris, spheres, instances, scene, r.origin.xyz, dir, tMax, Ray_Time(r), flags, &h, instance);
     }
     return h;
 }
@@ -525,7 +545,7 @@ inline int Shadow_Occluded(ShadowRay s, SceneParams scene, const __global Bvh4No
     int instance;
     return (numPlanes > 0 && Planes_Intersect(planes, numPlanes, firstPlaneRef, s.origin.xyz, s.direction.xyz, s.origin.w, 1, &h)) ||
            Bvh_Traverse(nodes, leaves, tris, spheres, instances, scene, s.origin.xyz, s.direction.xyz, s.origin.w,
-                        s.direction.w, 1, &h, &instance);
+                        s.direction.w, CLRT_RAY_ANY_HIT, &h, &instance);
 }
 
 /* Closest hit for each ray of the queue. */

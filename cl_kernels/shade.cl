@@ -215,7 +215,21 @@ inline float3 Miss_Radiance(SceneParams scene, const __global TextureMap* textur
 }
 
 /* Child k (0: reflection, 1: refraction) of `parent` into res. */
-inline void Child_Make(ShadeResult* res, int k, PathState parent, float3 weight, uint childBit, float3 org, float3 dir) {
+/* Whether a classic child ray that travels in air (not inside a dielectric) skips back faces: in scenes that
+ * cull them (SceneParams.cullBackFaces, the course's 2025 renderer); a ray inside a dielectric must meet the
+ * inside of its surface to leave. */
+inline int Child_Culls(SceneParams scene, int inAir) {
+#ifdef CLRT_HAS_BACKFACE_CULLING
+    return scene.cullBackFaces && inAir;
+#else
+    return 0;
+#endif
+}
+
+/* Child k of a classic hit: the parent's path one bounce deeper, weight times its throughput, the ray from
+ * org along dir (cull: it skips back faces, Child_Culls). */
+inline void Child_Make(ShadeResult* res, int k, PathState parent, float3 weight, uint childBit, float3 org, float3 dir,
+                       int cull) {
     PathState c = parent;
     c.throughput = (float4)(parent.throughput.xyz * weight, 0.0f);
     c.depth = parent.depth + 1;
@@ -224,7 +238,7 @@ inline void Child_Make(ShadeResult* res, int k, PathState parent, float3 weight,
     c.pathId = parent.pathId < 0x80000000u ? parent.pathId * 2u + childBit : parent.pathId;
     Ray r;
     r.origin = (float4)(org, 0.0f);
-    r.direction = (float4)(dir, INFINITY);
+    r.direction = (float4)(dir, cull ? -INFINITY : INFINITY); /* negative: culls (Ray, device_types.h) */
     res->childPath[k] = c;
     res->childRay[k] = r;
     res->childValid[k] = maxComponent(c.throughput.xyz) > 0.0f && allFinite3(dir) ? 1 : 0;
@@ -324,16 +338,18 @@ inline void Shade_ClassicChildren(SceneParams scene, PathState path, Material m,
     const float2 uRefl = Sampler_Other2D(scene, path, key, dim);
     reflDir = Glossy_Perturb(reflDir, m.roughness, uRefl.x, uRefl.y);
     float3 reflOrg = Ray_EpsilonOrigin(p, ng, scene.shadowEpsilon);
+    /* the reflected ray stays on the incoming side, the refracted one crosses */
+    const int cullRefl = Child_Culls(scene, !insideDielectric), cullRefr = Child_Culls(scene, insideDielectric);
     switch (m.kind) {
 #ifdef CLRT_HAS_MIRROR
     case MATERIAL_MIRROR:
-        Child_Make(res, 0, path, m.mirror.xyz, 0u, reflOrg, reflDir);
+        Child_Make(res, 0, path, m.mirror.xyz, 0u, reflOrg, reflDir, cullRefl);
         break;
 #endif
 #ifdef CLRT_HAS_CONDUCTOR
     case MATERIAL_CONDUCTOR: {
         float fr = Fresnel_Conductor(clamp(cosI, 0.0f, 1.0f), m.refractionIndex, m.absorptionIndex);
-        Child_Make(res, 0, path, m.mirror.xyz * fr, 0u, reflOrg, reflDir);
+        Child_Make(res, 0, path, m.mirror.xyz * fr, 0u, reflOrg, reflDir, cullRefl);
         break;
     }
 #endif
@@ -357,14 +373,14 @@ inline void Shade_ClassicChildren(SceneParams scene, PathState path, Material m,
         refrDir = Glossy_Perturb(refrDir, m.roughness, uRefr.x, uRefr.y);
         float3 refrOrg = Ray_EpsilonOrigin(p, -ng, scene.shadowEpsilon);
         if (fr >= 1.0f) {
-            Child_Make(res, 0, path, weight, 0u, reflOrg, reflDir);
+            Child_Make(res, 0, path, weight, 0u, reflOrg, reflDir, cullRefl);
         } else if (path.depth < scene.splitDepth) {
-            Child_Make(res, 0, path, weight * fr, 0u, reflOrg, reflDir);
-            Child_Make(res, 1, path, weight * (1.0f - fr), 1u, refrOrg, refrDir);
+            Child_Make(res, 0, path, weight * fr, 0u, reflOrg, reflDir, cullRefl);
+            Child_Make(res, 1, path, weight * (1.0f - fr), 1u, refrOrg, refrDir, cullRefr);
         } else if (Sampler_Other1D(scene, path, key, dim + 2u) < fr) {
-            Child_Make(res, 0, path, weight, 0u, reflOrg, reflDir);
+            Child_Make(res, 0, path, weight, 0u, reflOrg, reflDir, cullRefl);
         } else {
-            Child_Make(res, 1, path, weight, 1u, refrOrg, refrDir);
+            Child_Make(res, 1, path, weight, 1u, refrOrg, refrDir, cullRefr);
         }
         break;
     }

@@ -6,10 +6,12 @@
 // viewer: an opaque surface is lit on its stored side, from whichever side it is seen (shade.cl).
 #include <catch.hpp>
 
+#include <cmath>
 #include <cstring>
 
 #include "flatten/device_scene.h"
 #include "flatten/flatten.h"
+#include "render/renderer.h"
 #include "scene/scene_loader.h"
 #include "test_helpers.h"
 
@@ -108,4 +110,72 @@ TEST_CASE("a triangle seen from behind is shaded where it was hit, with its stor
     CHECK(covered > 0);
     CHECK(worst <= 1e-4f * brightest);
     CHECK(unlitWorst <= 1e-4f * 5.0f);
+}
+
+// Back-face culling (Scene::backfaceCulling, intersect.cl CLRT_RAY_CULL_BACK): the course's 2025 renderer
+// does not see triangles from behind along its camera and reflection rays, and its references show it
+// (2025 hw2 grass_desert: 30.4 -> 51.4 dB; hw3 cornellbox_boxes_dynamic, whose camera looks through the back
+// of the box's front wall); its 2022 XML references do not cull (hw2 grass_desert 51.0 dB, 30.4 culled). So
+// scenes in the JSON form cull, XML scenes do not, and --backface-culling on/off overrides it. Here, seen
+// from z = 5: a red quad at z = 2 facing away (−z) and a green one at z = 0 facing the camera; then the
+// same behind a closed glass box (z from 3 to 4, index 1, absorption 1 per unit): a ray inside the glass
+// must still meet the box's far face from behind to leave it (Beer's law there: e^-length), and the ray that
+// leaves is in air again and culls.
+TEST_CASE("scenes in the 2025 JSON form cull back faces along camera and reflection rays; XML scenes do not",
+          "[orientation][render]") {
+    TempDir dir;
+    const std::string json = R"({"Scene": {"BackgroundColor": "0 0 0",
+ "Cameras": {"Camera": {"_id": "1", "Position": "0 0 5", "Gaze": "0 0 -1", "Up": "0 1 0",
+   "NearPlane": "-0.5 0.5 -0.5 0.5", "NearDistance": "1", "ImageResolution": "8 8", "ImageName": "o.png"}},
+ "Lights": {"AmbientLight": "1 1 1"},
+ "Materials": {"Material": [{"_id": "1", "AmbientReflectance": "1 0 0"}, {"_id": "2", "AmbientReflectance": "0 1 0"},
+   {"_id": "3", "_type": "dielectric", "AmbientReflectance": "0 0 0", "DiffuseReflectance": "0 0 0",
+    "SpecularReflectance": "0 0 0", "AbsorptionCoefficient": "1 1 1", "RefractionIndex": "1"}]},
+ "VertexData": {"_data": "-9 -9 2  9 -9 2  9 9 2  -9 9 2  -9 -9 0  9 -9 0  9 9 0  -9 9 0 -3 -3 3  3 -3 3  3 3 3  -3 3 3  -3 -3 4  3 -3 4  3 3 4  -3 3 4",
+   "_type": "xyz"},
+ "Objects": {"Mesh": [{"_id": "1", "Material": "1", "Faces": {"_data": "1 3 2  1 4 3", "_type": "triangle"}},
+                      {"_id": "2", "Material": "2", "Faces": {"_data": "5 6 7  5 7 8", "_type": "triangle"}}GLASS]}}})";
+    const std::string glassBox = R"(, {"_id": "3", "Material": "3", "Faces": {"_data": "13 14 15  13 15 16  9 11 10  9 12 11  10 11 15  10 15 14  9 13 16  9 16 12  12 16 15  12 15 11  9 10 14  9 14 13",
+      "_type": "triangle"}})";
+    for (const bool withGlass : {false, true}) {
+        std::string text = json;
+        text.replace(text.find("GLASS"), 5, withGlass ? glassBox : "");
+        writeFileBytes(dir.file("cull.json"), text);
+        Scene scene = loadScene(dir.file("cull.json"));
+        CHECK(scene.backfaceCulling);  // the JSON form
+        // Through the glass: e^-L, L = (1 − ε)·|d| for the pixel's direction d = (u, v, −1) (the refracted ray
+        // starts ShadowRayEpsilon ε inside).
+        auto seen = [&](size_t pixel) {
+            if (!withGlass) return 1.0;
+            const double u = -0.5 + (double(pixel % 8) + 0.5) / 8, v = 0.5 - (double(pixel / 8) + 0.5) / 8;
+            return std::exp(-(1.0 - scene.shadowRayEpsilon) * std::sqrt(u * u + v * v + 1));
+        };
+        for (const bool cull : {true, false}) {
+            scene.backfaceCulling = cull;
+            DeviceScene ds = flattenScene(scene);
+            CHECK(ds.features.backfaceCulling == cull);
+            Renderer r(testContext(), ds);
+            for (Pipeline pipeline : {Pipeline::Wavefront, Pipeline::Fused}) {
+                RenderSettings rs;
+                rs.spp = 1;
+                rs.pipeline = pipeline;
+                RenderCounters counters;
+                ImageRGB img = r.render(scene.cameras.at(0), rs, counters);
+                INFO((cull ? "culling" : "not culling") << (withGlass ? ", behind glass" : "")
+                     << (pipeline == Pipeline::Fused ? ", fused" : ", wavefront"));
+                for (size_t i = 0; i < img.pixels.size(); i += 3) {  // culled: green through the red quad's back
+                    CHECK(img.pixels[i] == Approx(cull ? 0.0 : seen(i / 3)).margin(1e-5));
+                    CHECK(img.pixels[i + 1] == Approx(cull ? seen(i / 3) : 0.0).margin(1e-5));
+                }
+            }
+        }
+    }
+    // The XML form does not cull.
+    const std::string xml = R"(<Scene><Cameras><Camera id="1"><Position>0 0 5</Position><Gaze>0 0 -1</Gaze><Up>0 1 0</Up>
+<NearPlane>-0.5 0.5 -0.5 0.5</NearPlane><NearDistance>1</NearDistance><ImageResolution>8 8</ImageResolution>
+<ImageName>o.png</ImageName></Camera></Cameras><Lights><AmbientLight>1 1 1</AmbientLight></Lights>
+<Materials><Material id="1"><AmbientReflectance>1 0 0</AmbientReflectance></Material></Materials>
+<VertexData>-9 -9 2  9 -9 2  9 9 2  -9 9 2</VertexData><Objects><Mesh id="1"><Material>1</Material><Faces>1 3 2  1 4 3</Faces></Mesh></Objects></Scene>)";
+    writeFileBytes(dir.file("cull.xml"), xml);
+    CHECK_FALSE(loadScene(dir.file("cull.xml")).backfaceCulling);
 }

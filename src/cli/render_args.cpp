@@ -44,6 +44,9 @@ const char* const kRenderHelp =
     "                        the course's hw6 references' biased rule (a hit's own light is counted\n"
     "                        undivided when the path dies there; see docs/scene-format.md); ignored\n"
     "                        by MultipleImportanceSampling cameras\n"
+    "  --backface-culling C  whether the classic renderer's camera, reflection and outside rays skip\n"
+    "                        triangles seen from behind: auto (default: on for scenes in the 2025 JSON\n"
+    "                        form, whose course references cull, off for XML scenes), on or off\n"
     "  --target-error X      render in passes until the estimated relMSE of the image is <= X (> 0):\n"
     "                        even and odd passes form two independent half-images, and their\n"
     "                        difference estimates the error (relative to 1, or to 255 for .png\n"
@@ -120,6 +123,9 @@ RenderArgs parseRenderArgs(int argc, char** argv, int start) {
         {{"--rr-rule"}, true, [&](Str f, Str v) {
              if (!parseRouletteRule(v, a.rouletteRule)) throwExpected(f, "unbiased or course", v);
          }},
+        {{"--backface-culling"}, true, [&](Str f, Str v) {
+             a.backfaceCulling = int(parseChoiceArg(f, v, {"auto", "off", "on"})) - 1;
+         }},
         textOption({"--camera"}, a.cameraId),
         {{"--target-error"}, true, [&](Str f, Str v) { a.stop.targetError = parseBoundedArg(f, v, 0, true); }},
         {{"--time-limit"}, true, [&](Str f, Str v) { a.stop.timeLimit = parseBoundedArg(f, v, 0, false); }},
@@ -163,6 +169,7 @@ std::string pixelOptions(const RenderArgs& a) {
     return "env=" + a.envStrategy + ";all-features=" + std::to_string(a.allFeatures) +
            ";sampler=" + pixelSamplerName(a.pixelSampler) +
            (a.rouletteRule == RouletteRule::Course ? ";rr-rule=course" : "") +
+           (a.backfaceCulling >= 0 ? ";backface-culling=" + std::to_string(a.backfaceCulling) : "") +
            ";resolution=" + std::to_string(a.width) + "x" + std::to_string(a.height) +
            ";tile=" + std::to_string(a.dist.tilePixels);
 }

@@ -33,6 +33,7 @@ std::vector<std::string> FeatureSet::defines() const {
     add(pathTracing, "CLRT_HAS_PATH_TRACING");
     add(zsobol, "CLRT_HAS_ZSOBOL");
     add(envRotation, "CLRT_HAS_ENV_ROTATION");
+    add(backfaceCulling, "CLRT_HAS_BACKFACE_CULLING");
     // Rounded up to a multiple of 8 so that scenes of similar depth share a cached program.
     if (bvhStack > 0) d.push_back("-DCLRT_BVH4_STACK_SIZE=" + std::to_string((bvhStack + 7) / 8 * 8));
     return d;

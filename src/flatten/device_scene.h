@@ -31,6 +31,7 @@ struct FeatureSet {
     bool instances = false;         // a two-level BVH (dev::Instance; flatten_instances.cpp)
     bool zsobol = false;            // not the scene's: clrt render --sampler zsobol (ZSobol_2D, common.cl)
     bool envRotation = false;       // an environment light's map is turned by its <Transformations> (lights.cl)
+    bool backfaceCulling = false;   // classic rays skip back faces (Scene::backfaceCulling; intersect.cl Ray_Closest)
     int bvhStack = 0;  // traversal stack entries the scene's BVH needs (0: the header's default)
     void add(dev::LightKind k) { lightKinds |= 1u << k; }
     void add(dev::MaterialKind k) { materialKinds |= 1u << k; }
@@ -44,7 +45,8 @@ struct FeatureSet {
     static FeatureSet all() {
         FeatureSet f;
         f.lightKinds = f.materialKinds = f.brdfKinds = ~0u;
-        f.textures = f.normalMaps = f.bumpMaps = f.mipMaps = f.spheres = f.motionBlur = f.pathTracing = f.instances = f.zsobol = f.envRotation = true;
+        f.textures = f.normalMaps = f.bumpMaps = f.mipMaps = f.spheres = f.motionBlur = f.pathTracing = f.instances = f.zsobol = f.envRotation =
+            f.backfaceCulling = true;
         return f;
     }
 };

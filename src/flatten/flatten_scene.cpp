@@ -32,7 +32,10 @@ DeviceScene flattenScene(const Scene& scene, const FlattenOptions& opts) {
         ds.features.add(l.type);
         ds.features.envRotation = ds.features.envRotation || isEnvironmentTurned(l);
     }
-    for (const Camera& c : scene.cameras) ds.features.pathTracing = ds.features.pathTracing || c.pathMode != 0;
+    for (const Camera& c : scene.cameras) {
+        ds.features.pathTracing = ds.features.pathTracing || c.pathMode != 0;
+        ds.features.backfaceCulling = ds.features.backfaceCulling || (scene.backfaceCulling && c.pathMode == 0);
+    }
     if (opts.onFeaturesKnown) opts.onFeaturesKnown(ds.features);
     flattenLights(scene, ds, atlas);
     dev::SceneParams& p = ds.params;
@@ -40,6 +43,7 @@ DeviceScene flattenScene(const Scene& scene, const FlattenOptions& opts) {
     p.ambient = toFloat4(scene.ambientLight);
     p.maxDepth = std::max(0, scene.maxRecursionDepth);
     p.shadowEpsilon = std::isfinite(scene.shadowRayEpsilon) ? std::max(0.0f, scene.shadowRayEpsilon) : 0.0f;
+    p.cullBackFaces = scene.backfaceCulling ? 1 : 0;
     ds.flattenSeconds = secondsSince(t0) - ds.bvhSeconds;
     return ds;
 }

@@ -128,6 +128,10 @@ struct Scene {
     Vec3 backgroundColor{0, 0, 0};
     int maxRecursionDepth = 6;
     float shadowRayEpsilon = 1e-3f;  // ShadowRayEpsilon (the course's default when absent)
+    // The classic renderer's rays in air skip triangles seen from behind, as the course's 2025 renderer does:
+    // set for scenes in the 2025 JSON form (loadScene), clrt render --backface-culling overrides it
+    // (docs/scene-format.md, conventions).
+    bool backfaceCulling = false;
     Vec3 ambientLight{0, 0, 0};
     std::vector<Camera> cameras;
     std::vector<Light> lights;     // all but ambient

@@ -337,6 +337,8 @@ typedef struct SceneParams {
     int rrMinDepth;        /* Russian roulette only for hits at this depth or deeper (the camera's <MinRecursionDepth>, 2025; 0: every hit) */
     int split;             /* paths per camera sample (the camera's <SplittingFactor>, 2025; 1: one): path sample s
                             * takes camera sample s / split (camera.cl) */
+    int cullBackFaces;     /* 1: the classic renderer's rays in air skip triangles seen from behind (the course's 2025
+                            * renderer; Scene::backfaceCulling; under CLRT_HAS_BACKFACE_CULLING only) */
 } SceneParams;
 
 /* SceneParams.pixelSampler (set per render from RenderSettings::pixelSampler, clrt render --sampler). */
@@ -358,7 +360,8 @@ typedef struct SceneParams {
 /* Ray and hit record of the wavefront. */
 typedef struct Ray {
     float4 origin;         /* xyz; w = shutter time in [0, 1) with CLRT_HAS_MOTION_BLUR, else 0 */
-    float4 direction;      /* xyz; w = tMax */
+    float4 direction;      /* xyz; w = tMax; under CLRT_HAS_BACKFACE_CULLING a negative w is -tMax of a ray that
+                            * skips triangles seen from behind (Ray_Closest, CLRT_RAY_CULL_BACK) */
 } Ray;
 
 typedef struct Hit {
