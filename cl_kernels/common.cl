@@ -41,6 +41,20 @@ inline void makeBasis(float3 n, float3* t, float3* b) {
     *b = (float3)(c, sign + n.y * n.y * a, -n.y);
 }
 
+/* The course's (Shirley's) orthonormal basis across unit r: t = r with its smallest-magnitude component set
+ * to 1, u = unit(t × r), v = r × u. Unlike makeBasis it is not continuous in r, and a square of offsets
+ * spanned by it turns with r: the glossy perturbation's square (Glossy_Perturb) must be this one to match
+ * the course's references (2025 hw3 cornellbox_brushed_metal, roughness 5: see docs/scene-format.md). */
+inline void courseBasis(float3 r, float3* u, float3* v) {
+    float3 t = r;
+    const float ax = fabs(r.x), ay = fabs(r.y), az = fabs(r.z);
+    if (ax <= ay && ax <= az) t.x = 1.0f;
+    else if (ay <= az) t.y = 1.0f;
+    else t.z = 1.0f;
+    *u = normalize(cross(t, r));
+    *v = cross(r, *u);
+}
+
 /* ---- Random numbers --------------------------------------------------------------------------
  * Counter-based: every number is a pure function of (seed, pixel, sample, pathId, dimension), so an
  * image does not depend on how work is split over batches or devices. PCG-style 32-bit hash. */

@@ -26,12 +26,12 @@ inline float Fresnel_Conductor(float cosI, float n, float k) {
 }
 
 /* Glossy perturbation of a reflected or refracted direction (course hw3: r' = normalize(r + roughness·(ξ1·u
- * + ξ2·v)), ξ uniform in [-1/2, 1/2], u, v an orthonormal basis across r). A rough dielectric perturbs both
- * its reflected and its refracted ray, each with its own ξ. */
+ * + ξ2·v)), ξ uniform in [-1/2, 1/2], u, v the course's orthonormal basis across r, courseBasis). A rough
+ * dielectric perturbs both its reflected and its refracted ray, each with its own ξ. */
 inline float3 Glossy_Perturb(float3 r, float roughness, float u1, float u2) {
     if (roughness <= 0.0f) return r;
     float3 a, b;
-    makeBasis(r, &a, &b);
+    courseBasis(r, &a, &b);
     return normalize(r + roughness * ((u1 - 0.5f) * a + (u2 - 0.5f) * b));
 }
 

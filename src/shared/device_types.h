@@ -339,6 +339,7 @@ typedef struct SceneParams {
                             * takes camera sample s / split (camera.cl) */
     int cullBackFaces;     /* 1: the classic renderer's rays in air skip triangles seen from behind (the course's 2025
                             * renderer; Scene::backfaceCulling; under CLRT_HAS_BACKFACE_CULLING only) */
+    int scenePad[3];       /* to a multiple of 16 bytes */
 } SceneParams;
 
 /* SceneParams.pixelSampler (set per render from RenderSettings::pixelSampler, clrt render --sampler). */
