@@ -117,7 +117,10 @@ TEST_CASE("a triangle seen from behind is shaded where it was hit, with its stor
 // (2025 hw2 grass_desert: 30.4 -> 51.4 dB; hw3 cornellbox_boxes_dynamic, whose camera looks through the back
 // of the box's front wall); its 2022 XML references do not cull (hw2 grass_desert 51.0 dB, 30.4 culled). So
 // scenes in the JSON form cull, XML scenes do not, and --backface-culling on/off overrides it. Here, seen
-// from z = 5: a red quad at z = 2 facing away (−z) and a green one at z = 0 facing the camera; then the
+// from z = 5: a red quad at z = 2 facing away (−z; mirrored by Scaling −1 1 1, which
+// keeps the object-space orientation: flattened with its winding reversed, and as a two-level instance, tested
+// in object space) and
+// a green one at z = 0 facing the camera; then the
 // same behind a closed glass box (z from 3 to 4, index 1, absorption 1 per unit): a ray inside the glass
 // must still meet the box's far face from behind to leave it (Beer's law there: e^-length), and the ray that
 // leaves is in air again and culls.
@@ -133,7 +136,8 @@ TEST_CASE("scenes in the 2025 JSON form cull back faces along camera and reflect
     "SpecularReflectance": "0 0 0", "AbsorptionCoefficient": "1 1 1", "RefractionIndex": "1"}]},
  "VertexData": {"_data": "-9 -9 2  9 -9 2  9 9 2  -9 9 2  -9 -9 0  9 -9 0  9 9 0  -9 9 0 -3 -3 3  3 -3 3  3 3 3  -3 3 3  -3 -3 4  3 -3 4  3 3 4  -3 3 4",
    "_type": "xyz"},
- "Objects": {"Mesh": [{"_id": "1", "Material": "1", "Faces": {"_data": "1 3 2  1 4 3", "_type": "triangle"}},
+ "Transformations": {"Scaling": {"_id": "1", "_data": "-1 1 1"}},
+ "Objects": {"Mesh": [{"_id": "1", "Material": "1", "Transformations": "s1", "Faces": {"_data": "1 3 2  1 4 3", "_type": "triangle"}},
                       {"_id": "2", "Material": "2", "Faces": {"_data": "5 6 7  5 7 8", "_type": "triangle"}}GLASS]}}})";
     const std::string glassBox = R"(, {"_id": "3", "Material": "3", "Faces": {"_data": "13 14 15  13 15 16  9 11 10  9 12 11  10 11 15  10 15 14  9 13 16  9 16 12  12 16 15  12 15 11  9 10 14  9 14 13",
       "_type": "triangle"}})";
@@ -151,9 +155,13 @@ TEST_CASE("scenes in the 2025 JSON form cull back faces along camera and reflect
             return std::exp(-(1.0 - scene.shadowRayEpsilon) * std::sqrt(u * u + v * v + 1));
         };
         for (const bool cull : {true, false}) {
+          for (Instancing instancing : {Instancing::Flatten, Instancing::TwoLevel}) {
             scene.backfaceCulling = cull;
-            DeviceScene ds = flattenScene(scene);
+            FlattenOptions opts;
+            opts.instancing = instancing;
+            DeviceScene ds = flattenScene(scene, opts);
             CHECK(ds.features.backfaceCulling == cull);
+            CHECK(ds.params.numInstances == (instancing == Instancing::TwoLevel ? (withGlass ? 3 : 2) : 0));
             Renderer r(testContext(), ds);
             for (Pipeline pipeline : {Pipeline::Wavefront, Pipeline::Fused}) {
                 RenderSettings rs;
@@ -162,12 +170,14 @@ TEST_CASE("scenes in the 2025 JSON form cull back faces along camera and reflect
                 RenderCounters counters;
                 ImageRGB img = r.render(scene.cameras.at(0), rs, counters);
                 INFO((cull ? "culling" : "not culling") << (withGlass ? ", behind glass" : "")
-                     << (pipeline == Pipeline::Fused ? ", fused" : ", wavefront"));
+                     << (pipeline == Pipeline::Fused ? ", fused" : ", wavefront")
+                     << (instancing == Instancing::TwoLevel ? ", two-level" : ", flattened"));
                 for (size_t i = 0; i < img.pixels.size(); i += 3) {  // culled: green through the red quad's back
                     CHECK(img.pixels[i] == Approx(cull ? 0.0 : seen(i / 3)).margin(1e-5));
                     CHECK(img.pixels[i + 1] == Approx(cull ? seen(i / 3) : 0.0).margin(1e-5));
                 }
             }
+          }
         }
     }
     // The XML form does not cull.
