@@ -214,7 +214,6 @@ inline float3 Miss_Radiance(SceneParams scene, const __global TextureMap* textur
     return scene.background.xyz;
 }
 
-/* Child k (0: reflection, 1: refraction) of `parent` into res. */
 /* Whether a classic child ray that travels in air (not inside a dielectric) skips back faces: in scenes that
  * cull them (SceneParams.cullBackFaces, the course's 2025 renderer); a ray inside a dielectric must meet the
  * inside of its surface to leave. */
@@ -226,7 +225,7 @@ inline int Child_Culls(SceneParams scene, int inAir) {
 #endif
 }
 
-/* Child k of a classic hit: the parent's path one bounce deeper, weight times its throughput, the ray from
+/* Child k (0: reflection, 1: refraction) of a classic hit: the parent's path one bounce deeper, weight times its throughput, the ray from
  * org along dir (cull: it skips back faces, Child_Culls). */
 inline void Child_Make(ShadeResult* res, int k, PathState parent, float3 weight, uint childBit, float3 org, float3 dir,
                        int cull) {
@@ -574,7 +573,8 @@ __kernel CLRT_KERNEL_VEC_HINT void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
  * past. The course's references light such points: 2025 hw1 smooth meshes (berserker_smooth 42.4 -> 47.4,
  * tower_smooth 37.9 -> 42.4 dB with the geometric normal no longer required to face the light; every
  * ../shared camera unchanged), hw4 bump_mapping_transformed's sphere (thin lines along the terminators). The
- * ray's geometry is the course's: it starts ShadowRayEpsilon off the surface along ng (Ray_EpsilonOrigin),
+ * ray's geometry is the course's: it starts ShadowRayEpsilon off the surface along ng (Ray_EpsilonOrigin;
+ * at such a point ng may face away from the light, and the ray then starts behind its own surface),
  * is aimed from there at the light's point, and is as long as the distance from p, so a surface through
  * the light's point (2025 hw2 mirror_room: a point light on the ceiling plane, dark in the reference)
  * blocks it. Object lights re-aim it short of their surface (ObjectLight_AimShadow). */
