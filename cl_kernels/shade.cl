@@ -225,8 +225,8 @@ inline int Child_Culls(SceneParams scene, int inAir) {
 #endif
 }
 
-/* Child k (0: reflection, 1: refraction) of a classic hit: the parent's path one bounce deeper, weight times its throughput, the ray from
- * org along dir (cull: it skips back faces, Child_Culls). */
+/* Child k (0: reflection, 1: refraction) of a classic hit: the parent's path one bounce deeper, weight
+ * times its throughput, the ray from org along dir (cull: it skips back faces, Child_Culls). */
 inline void Child_Make(ShadeResult* res, int k, PathState parent, float3 weight, uint childBit, float3 org, float3 dir,
                        int cull) {
     PathState c = parent;
