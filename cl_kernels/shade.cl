@@ -199,11 +199,14 @@ inline float3 Miss_EnvLight(SceneParams scene, PathState path, const __global Li
     return radiance;
 }
 
-/* Radiance of a ray that hits nothing in a scene without environment lights: the background texture
- * (camera rays) or the background colour. */
+/* Radiance of a ray that hits nothing in a scene without environment lights. Only camera rays see the
+ * background (its texture, else its colour); a reflected, refracted or path ray that hits nothing brings
+ * back nothing, as in the course's references (docs/scene-format.md, conventions: hw2 grass_desert's
+ * mirror, the 2025 hw3 glass scenes). */
 inline float3 Miss_Radiance(SceneParams scene, const __global TextureMap* textures, const __global ImageInfo* images,
                             const __global float4* texels, CameraParams cam, PathState path) {
-    if (path.depth == 0 && scene.backgroundTexture != CLRT_INVALID) {
+    if (path.depth > 0) return (float3)(0.0f);
+    if (scene.backgroundTexture != CLRT_INVALID) {
         int x = path.pixel % cam.width, y = path.pixel / cam.width;
         /* The course maps pixel i to texel i·texW/W (its corner, not its centre): texel i exactly when
          * the image has the render's size. */

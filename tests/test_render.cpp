@@ -2,10 +2,13 @@
 // that every classic scene renders without error.
 #include <catch.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 
 #include "flatten/device_scene.h"
+#include "flatten/flatten.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
 #include "test_helpers.h"
@@ -84,12 +87,14 @@ TEST_CASE("every classic scene renders at 1 spp without NaN or Inf", "[render][s
 
 TEST_CASE("<Transparency>: the centre of scenes/transparency.xml equals its closed-form path sum", "[render]") {
     // The centre pixel's ray runs along the sphere's axis (radius 1, n = 1.5, T per unit distance):
-    // every reflection and refraction stays on that line, at normal incidence (Fresnel R = ((n-1)/(n+1))²),
-    // and every ray that leaves the sphere misses all else and returns the background B. Each crossing
-    // of the inside (length 2) keeps a = T². With depth limit D (children only while depth < D):
-    //   L = R·B + (1-R)·I(1),  I(d) = d < D ? a·((1-R)·B + R·I(d+1)) : 0.
-    // Kd = Ks = Ka = 0, so the point light adds nothing there. The split depth is forced to D so both
-    // children of every dielectric hit are traced (no random choice). Every ray inside starts
+    // every reflection and refraction stays on that line, at normal incidence (Fresnel R = ((n-1)/(n+1))²).
+    // A ray that leaves the sphere forwards hits the backdrop, which returns the ambient light B (Ka = 1,
+    // Kd = Ks = 0); one that leaves backwards, towards the camera, hits nothing and returns black (only
+    // camera rays see BackgroundColor). Each crossing of the inside (length 2) keeps a = T². With depth
+    // limit D (children only while depth < D), for a ray inside going forwards (F) or backwards (Bk):
+    //   L = R·0 + (1-R)·F(1),  F(d) = d < D ? a·((1-R)·B + R·Bk(d+1)) : 0,  Bk(d) = d < D ? a·R·F(d+1) : 0.
+    // Kd = Ks = Ka = 0 on the sphere, so the lights add nothing there. The split depth is forced to D so
+    // both children of every dielectric hit are traced (no random choice). Every ray inside starts
     // ShadowRayEpsilon ε (1e-3: the scene gives none) off the surface it left (the course's offset), so a
     // crossing is 2 − ε long and keeps a = T^(2−ε); with a = T² the centre is 0.08% off.
     Scene scene = loadScene(std::string(CLRT_SOURCE_DIR) + "/scenes/transparency.xml");
@@ -112,11 +117,61 @@ TEST_CASE("<Transparency>: the centre of scenes/transparency.xml equals its clos
     REQUIRE(eps == Approx(1e-3));
     size_t centre = (size_t(cam.height / 2) * size_t(cam.width) + size_t(cam.width / 2)) * 3;
     for (int c = 0; c < 3; ++c) {
-        double a = std::pow(T[c], 2.0 - eps), inside = 0;
-        for (int d = depth - 1; d >= 1; --d) inside = a * ((1 - R) * B[c] + R * inside);
-        double expected = R * B[c] + (1 - R) * inside;
+        double a = std::pow(T[c], 2.0 - eps), inside = 0; // F(d) at odd d, Bk(d) at even d, from depth - 1 down
+        for (int d = depth - 1; d >= 1; --d) inside = d % 2 ? a * ((1 - R) * B[c] + R * inside) : a * R * inside;
+        double expected = (1 - R) * inside;
         INFO("channel " << c << ": clrt " << img.pixels[centre + c] << ", closed form " << expected);
         CHECK(img.pixels[centre + c] == Approx(expected).epsilon(1e-4));
+    }
+}
+
+// Only camera rays see BackgroundColor; a reflected, refracted or path ray that hits nothing brings back
+// black (the course's references: hw2 grass_desert's mirror, the 2025 hw3 glass scenes; docs/scene-format.md).
+// A quad at z = -5 fills the left half of the view, facing the camera, which sees the background (100 50 25)
+// on the right. As a mirror, a glass or a path-traced diffuse surface (no light, no ambient), everything it
+// sends out leaves into empty space: its pixels must be black, in both pipelines.
+TEST_CASE("only camera rays see BackgroundColor: rays leaving a mirror, glass or path vertex into the void bring back black",
+          "[render]") {
+    TempDir dir;
+    const char* materials[3] = {
+        R"(<Material id="1" type="mirror"><MirrorReflectance>1 1 1</MirrorReflectance></Material>)",
+        R"(<Material id="1" type="dielectric"><RefractionIndex>1.5</RefractionIndex></Material>)",
+        R"(<Material id="1"><DiffuseReflectance>0.8 0.8 0.8</DiffuseReflectance></Material>)"};
+    for (int k = 0; k < 3; ++k) {
+        const std::string renderer = k == 2 ? "<Renderer>PathTracing</Renderer>" : "";
+        const std::string xml = std::string(R"(<Scene><BackgroundColor>100 50 25</BackgroundColor><MaxRecursionDepth>4</MaxRecursionDepth>
+<Cameras><Camera id="1"><Position>0 0 0</Position><Gaze>0 0 -1</Gaze><Up>0 1 0</Up>
+<NearPlane>-1 1 -1 1</NearPlane><NearDistance>1</NearDistance><ImageResolution>16 16</ImageResolution>
+<NumSamples>4</NumSamples><ImageName>b.exr</ImageName>)") + renderer + R"(</Camera></Cameras>
+<Lights></Lights><Materials>)" + materials[k] + R"(</Materials>
+<VertexData>-20 -20 -5  0 -20 -5  0 20 -5  -20 20 -5</VertexData>
+<Objects><Mesh id="1"><Material>1</Material><Faces>1 2 3 1 3 4</Faces></Mesh></Objects></Scene>)";
+        const std::string path = dir.file("bg" + std::to_string(k) + ".xml");
+        writeFileBytes(path, xml);
+        Scene scene = loadScene(path);
+        DeviceScene ds = flattenScene(scene);
+        for (Pipeline pipeline : {Pipeline::Wavefront, Pipeline::Fused}) {
+            Renderer r(testContext(), ds);
+            RenderSettings rs;
+            rs.spp = 4;
+            rs.pipeline = pipeline;
+            RenderCounters c;
+            ImageRGB img = r.render(scene.cameras.at(0), rs, c);
+            REQUIRE(img.width == 16);
+            float quadMax = 0, skyWorst = 0;
+            for (int y = 0; y < 16; ++y)
+                for (int x = 0; x < 16; ++x)
+                    for (int ch = 0; ch < 3; ++ch) {
+                        const float v = img.pixels[(size_t(y) * 16 + size_t(x)) * 3 + size_t(ch)];
+                        const float bg[3] = {100, 50, 25};
+                        if (x < 8) quadMax = std::max(quadMax, v);
+                        else skyWorst = std::max(skyWorst, std::fabs(v - bg[ch]));
+                    }
+            INFO("material " << k << (pipeline == Pipeline::Fused ? ", fused" : ", wavefront") << ": brightest quad value "
+                             << quadMax << ", worst background error " << skyWorst);
+            CHECK(quadMax == 0.0f);
+            CHECK(skyWorst == 0.0f);
+        }
     }
 }
 
