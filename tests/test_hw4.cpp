@@ -11,6 +11,7 @@
 
 #include "cl/check.h"
 #include "flatten/device_scene.h"
+#include "flatten/flatten.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
 #include "perlin_reference.h"
@@ -389,4 +390,63 @@ TEST_CASE("replace_background maps pixel i to texel i; replace_all pastes texel 
     CHECK(maxNone > 100.0f);  // texel values themselves (0..255), not ×255
     CHECK(maxNone <= 255.0f);
     CHECK(halves);
+}
+
+// degamma="true" on a TextureMap: its image is gamma-encoded; each texel is decoded with gamma 2.2 in the
+// image's own range r (255 for 8-bit, 1 for EXR): c -> r·(c/r)^2.2, before filtering (hw6 veach-ajar,
+// 2020 package: without it the room's textured door and painting rendered about 2× too bright and the
+// image's mean 1.26–1.34×; with it 0.998–0.999). With replace_all and Normalizer r every pixel shows
+// (texel/r), so the degamma'd render must be the plain one raised to 2.2, pixel for pixel.
+TEST_CASE("TextureMap degamma=\"true\" decodes the image's texels with gamma 2.2 in the image's range", "[hw4][render]") {
+    TempDir dir;
+    std::vector<unsigned char> rgb(8 * 8 * 3);
+    for (size_t i = 0; i < rgb.size(); ++i) rgb[i] = (unsigned char)((i * 37 + 11) % 256);
+    writePng8(dir.file("palette.png"), 8, 8, rgb);
+    ImageRGB hdr;
+    hdr.width = hdr.height = 8;
+    hdr.pixels.resize(8 * 8 * 3);
+    for (size_t i = 0; i < hdr.pixels.size(); ++i) hdr.pixels[i] = float((i * 37 + 11) % 97) / 32.0f;  // 0 .. 3
+    writeExr(dir.file("palette.exr"), hdr);
+    auto render = [&](const char* image, const char* normalizer, bool degamma) {
+        std::string t = std::string(R"(<TextureMap id="1" type="image")") + (degamma ? R"( degamma="true")" : "") +
+                        R"(><ImageId>1</ImageId><Interpolation>nearest</Interpolation><DecalMode>replace_all</DecalMode>)" +
+                        "<Normalizer>" + normalizer + "</Normalizer></TextureMap>";
+        std::string xml = paletteScene(t, true);
+        xml.replace(xml.find("palette.png"), 11, image);
+        writeFileBytes(dir.file("d.xml"), xml);
+        Scene s = loadScene(dir.file("d.xml"));
+        return renderCamera(s, s.cameras.at(0), 1, 0);
+    };
+    for (const char* image : {"palette.png", "palette.exr"}) {
+        const bool isExr = std::string(image) == "palette.exr";
+        ImageRGB plain = render(image, isExr ? "1" : "255", false), decoded = render(image, isExr ? "1" : "255", true);
+        REQUIRE(plain.pixels.size() == decoded.pixels.size());
+        float worst = 0, brightest = 0;
+        for (size_t i = 0; i < plain.pixels.size(); ++i) {
+            worst = std::fmax(worst, std::fabs(decoded.pixels[i] - std::pow(plain.pixels[i], 2.2f)));
+            brightest = std::fmax(brightest, plain.pixels[i]);
+        }
+        INFO(image << ": worst |decoded - plain^2.2| " << worst << ", brightest plain pixel " << brightest);
+        CHECK(brightest > (isExr ? 1.5f : 0.5f));  // the texels reach well into the range (past 1 for the EXR)
+        CHECK(worst <= 1e-5f * std::fmax(1.0f, std::pow(brightest, 2.2f)));
+    }
+    // Two maps of one image in one scene, one with degamma: each reads its own texels (the plain ones
+    // unchanged, the decoded copy beside them).
+    std::string xml = paletteScene(R"(<TextureMap id="1" type="image"><ImageId>1</ImageId><DecalMode>replace_kd</DecalMode></TextureMap>
+<TextureMap id="2" type="image" degamma="true"><ImageId>1</ImageId><DecalMode>replace_kd</DecalMode></TextureMap>)", true);
+    xml.replace(xml.find("</Objects>"), 10, R"(<Mesh id="2"><Material>1</Material><Textures>2</Textures><Faces>1 2 3</Faces></Mesh></Objects>)");
+    writeFileBytes(dir.file("two.xml"), xml);
+    DeviceScene ds = flattenScene(loadScene(dir.file("two.xml")));
+    REQUIRE(ds.textures.size() == 2);
+    const dev::ImageInfo a = ds.images.at(size_t(ds.textures[0].image)), b = ds.images.at(size_t(ds.textures[1].image));
+    REQUIRE(ds.textures[0].image != ds.textures[1].image);
+    REQUIRE((a.width == 8 && b.width == 8 && a.height == 8 && b.height == 8));
+    float worstPlain = 0, worstDecoded = 0;
+    for (size_t p = 0; p < 64; ++p) {
+        const dev::float4 ta = ds.texels[size_t(a.offset) + p], tb = ds.texels[size_t(b.offset) + p];
+        worstPlain = std::fmax(worstPlain, std::fabs(ta.x - float(rgb[p * 3])));
+        worstDecoded = std::fmax(worstDecoded, std::fabs(tb.x - 255.0f * std::pow(float(rgb[p * 3]) / 255.0f, 2.2f)));
+    }
+    CHECK(worstPlain == 0.0f);
+    CHECK(worstDecoded <= 1e-3f);
 }

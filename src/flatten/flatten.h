@@ -24,12 +24,16 @@ class ImageAtlas {
 public:
     ImageAtlas(const Scene& scene, DeviceScene& ds) : scene_(scene), ds_(ds) {}
     int use(int sceneImage);  // the device image index of scene image `sceneImage`
+    // A TextureMap's image with degamma="true": a copy of use(sceneImage) decoded with gamma 2.2 in the
+    // image's own range r (255 for 8-bit images, 1 for HDR ones): c -> r·(c/r)^2.2, texel by texel
+    // (before any filtering). Read once per scene image, whichever maps share it.
+    int useDegamma(int sceneImage);
     // The device image an environment map is read from: a half4 copy of use(sceneImage) when every
     // value is a half exactly (the same lookups, half the cache footprint), else use(sceneImage).
     int useEnvironment(int sceneImage);
     // A trilinear texture's images: level 0 (the texels of use(sceneImage)) and its box-filtered
     // levels (mip_pyramid.h) at consecutive device images from the returned one; *levels their count.
-    int useMipChain(int sceneImage, int* levels);
+    int useMipChain(int sceneImage, int* levels, bool degamma = false);
     bool isHdr(int deviceImage) const { return hdr_.at(size_t(deviceImage)); }
 
 private:
@@ -37,7 +41,8 @@ private:
     DeviceScene& ds_;
     std::map<int, int> slot_;  // scene image index -> device image index
     std::map<int, int> envSlot_;  // scene image index -> device image of useEnvironment
-    std::map<int, std::pair<int, int>> mipSlot_;  // scene image index -> (first device image, levels)
+    std::map<int, int> degammaSlot_;  // scene image index -> device image of useDegamma
+    std::map<std::pair<int, bool>, std::pair<int, int>> mipSlot_;  // (scene image, degamma) -> (first image, levels)
     std::vector<bool> hdr_;    // per device image (other images, e.g. flattenTextures' dummy, may follow)
     void setHdr(int deviceImage, bool hdr) {
         if (hdr_.size() <= size_t(deviceImage)) hdr_.resize(size_t(deviceImage) + 1, false);

@@ -1,6 +1,6 @@
 // flatten_textures.cpp — the texel atlas (with the half4 copies of environment maps whose values are all
 // halves, and the mip levels of trilinear textures), texture maps and per-shape texture sets (see
-// flatten.h). Reads the TextureMaps' Interpolation, NumOctaves and the procedural parameters.
+// flatten.h). Reads the TextureMaps' Interpolation, NumOctaves, degamma and the procedural parameters.
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -92,13 +92,36 @@ int ImageAtlas::useEnvironment(int sceneImage) {
     return slot;
 }
 
-int ImageAtlas::useMipChain(int sceneImage, int* levels) {
-    auto it = mipSlot_.find(sceneImage);
+int ImageAtlas::useDegamma(int sceneImage) {
+    auto it = degammaSlot_.find(sceneImage);
+    if (it != degammaSlot_.end()) return it->second;
+    const int plain = use(sceneImage);
+    const dev::ImageInfo info = ds_.images[size_t(plain)];
+    const size_t n = size_t(info.width) * info.height;
+    if (ds_.texels.size() + n > size_t(INT32_MAX)) throw Error(scene_.path + ": textures exceed 2^31 texels");
+    const float range = isHdr(plain) ? 1.0f : 255.0f;
+    auto decode = [range](float c) { return c > 0.0f ? range * std::pow(c / range, 2.2f) : 0.0f; };
+    dev::ImageInfo d = info;
+    d.offset = int(ds_.texels.size());
+    ds_.texels.resize(size_t(d.offset) + n);
+    for (size_t p = 0; p < n; ++p) {
+        const dev::float4 c = ds_.texels[size_t(info.offset) + p];
+        ds_.texels[size_t(d.offset) + p] = {decode(c.x), decode(c.y), decode(c.z), c.w};
+    }
+    const int slot = int(ds_.images.size());
+    ds_.images.push_back(d);
+    setHdr(slot, isHdr(plain));
+    degammaSlot_[sceneImage] = slot;
+    return slot;
+}
+
+int ImageAtlas::useMipChain(int sceneImage, int* levels, bool degamma) {
+    auto it = mipSlot_.find({sceneImage, degamma});
     if (it != mipSlot_.end()) {
         *levels = it->second.second;
         return it->second.first;
     }
-    const int full = use(sceneImage);
+    const int full = degamma ? useDegamma(sceneImage) : use(sceneImage);
     const dev::ImageInfo info = ds_.images[size_t(full)];
     MipLevel level0;
     level0.width = info.width;
@@ -122,7 +145,7 @@ int ImageAtlas::useMipChain(int sceneImage, int* levels) {
         ds_.images.push_back(li);
     }
     *levels = 1 + int(pyramid.size());
-    mipSlot_[sceneImage] = {first, *levels};
+    mipSlot_[{sceneImage, degamma}] = {first, *levels};
     return first;
 }
 
@@ -165,10 +188,10 @@ void flattenTextures(const Scene& scene, DeviceScene& ds, ImageAtlas& atlas) {
         dev::TextureMap d = textureMap(t);
         if (t.type == dev::TEXTURE_IMAGE && t.imageIndex >= 0 && imageUsed(scene, t, int(ti))) {
             if (t.interpolation == dev::INTERP_TRILINEAR && t.decalMode != dev::DECAL_REPLACE_BACKGROUND) {
-                d.image = atlas.useMipChain(t.imageIndex, &d.mipLevels);
+                d.image = atlas.useMipChain(t.imageIndex, &d.mipLevels, t.degamma);
                 ds.features.mipMaps |= d.mipLevels > 1;
             } else {
-                d.image = atlas.use(t.imageIndex);
+                d.image = t.degamma ? atlas.useDegamma(t.imageIndex) : atlas.use(t.imageIndex);
             }
             if (!t.normalizerGiven) d.normalizer = atlas.isHdr(d.image) ? 1.0f : 255.0f;
             // replace_all pastes texel / Normalizer as radiance (the course); without a Normalizer

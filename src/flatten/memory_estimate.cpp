@@ -58,25 +58,28 @@ bool textureImageUsed(const Scene& scene, size_t index) {
     return false;
 }
 
-// Texel atlas: every used image once as float4, plus 1/3 for a mip chain; environment maps also a half4
-// copy (8 B/texel) and their importance distributions (the map's and the cosine tables: at most six
-// floats per texel, in lights).
+// Texel atlas: every used image once as float4, once more decoded for degamma="true" maps, plus 1/3 for
+// a mip chain (of either); environment maps also a half4 copy (8 B/texel) and their importance
+// distributions (the map's and the cosine tables: at most six floats per texel, in lights).
 void addImages(const Scene& scene, MemoryEstimate& e) {
-    std::set<int> plain, mip, env;
+    std::set<int> plain, env, degamma;
+    std::set<std::pair<int, bool>> mip;
     for (size_t ti = 0; ti < scene.textures.size(); ++ti) {
         if (!textureImageUsed(scene, ti)) continue;
         const Texture& t = scene.textures[ti];
-        (t.interpolation == dev::INTERP_TRILINEAR && t.decalMode != dev::DECAL_REPLACE_BACKGROUND ? mip : plain)
-            .insert(t.imageIndex);
+        plain.insert(t.imageIndex);
+        if (t.degamma) degamma.insert(t.imageIndex);
+        if (t.interpolation == dev::INTERP_TRILINEAR && t.decalMode != dev::DECAL_REPLACE_BACKGROUND)
+            mip.insert({t.imageIndex, t.degamma});
     }
     for (const Light& l : scene.lights)
         if (l.type == dev::LIGHT_ENVIRONMENT && l.imageIndex >= 0) env.insert(l.imageIndex);
     std::set<int> all(plain);
-    all.insert(mip.begin(), mip.end());
     all.insert(env.begin(), env.end());
     uint64_t texels = 0, envTexels = 0;
     for (int i : all) texels += imageTexels(scene, i);
-    for (int i : mip) texels += imageTexels(scene, i) / 3 + 1;
+    for (int i : degamma) texels += imageTexels(scene, i);
+    for (const auto& m : mip) texels += imageTexels(scene, m.first) / 3 + 1;
     for (int i : env) envTexels += imageTexels(scene, i);
     e.texels = texels;
     e.addHostArray(e.textures, std::max<uint64_t>(texels, 1) * sizeof(dev::float4) + envTexels * 8);  // never empty
