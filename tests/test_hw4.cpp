@@ -68,8 +68,7 @@ Vec3 bumpPerturb(Vec3 nW, Frame f, float gu, float gv, float factor, const float
     Vec3 t0 = W.transformVector(f.dpdu), b0 = W.transformVector(f.dpdv);
     Vec3 nObj = normalize(M.transposed().transformVector(nW));  // n_w ∝ M^-T n_o
     Vec3 t = t0 + nObj * (factor * gu), b = b0 + nObj * (factor * gv);
-    Vec3 base = cross(b0, t0), nb = cross(b, t);
-    if (dot(base, nObj) < 0) nb = nb - base * 2.0f;
+    Vec3 nb = cross(b, t);  // turned to nW's side below, also where the uvs are mirrored (galactica_static)
     Vec3 out = normalize(W.transposed().transformVector(nb));
     return dot(out, nW) < 0 ? out * -1.0f : out;
 }
