@@ -150,11 +150,18 @@ inline float3 Texture_PerturbNormal(const __global TextureMap* tex, const __glob
 #ifdef CLRT_HAS_BUMP_MAP
     if (tex->decal == DECAL_BUMP_NORMAL) {
         if (tex->kind == TEXTURE_PERLIN) {
-            /* the noise lives in object space: ∇ in world space = Lᵀ·∇ in object space (L = world->object) */
+            /* The noise lives in object space, and so does the bump: the object-space normal is perturbed
+             * by the object-space gradient, then mapped back by the inverse transpose (as image bump maps
+             * on triangles). Under a scaling the bumps keep their object-space strength: hw4 cube_perlin_bump
+             * (scaled by 0.8) matches at 38.2 dB this way, 31.6 dB with the gradient taken in world space. */
             const __global float4* w = worldToObject;
-            float3 pObj = (float3)(dot(w[0].xyz, p) + w[0].w, dot(w[1].xyz, p) + w[1].w, dot(w[2].xyz, p) + w[2].w);
-            float3 g = Perlin_Gradient(tex, pObj);
-            return Bump_PerlinPerturb(n, g.x * w[0].xyz + g.y * w[1].xyz + g.z * w[2].xyz, tex->bumpFactor);
+            float3 r0 = w[0].xyz, r1 = w[1].xyz, r2 = w[2].xyz;
+            float3 pObj = (float3)(dot(r0, p) + w[0].w, dot(r1, p) + w[1].w, dot(r2, p) + w[2].w);
+            float det = dot(r0, cross(r1, r2));
+            float3 nObj = (float3)(dot(cross(r1, r2), n), dot(cross(r2, r0), n), dot(cross(r0, r1), n));
+            nObj = Frame_SafeNormalize(det < 0.0f ? -nObj : nObj, n);
+            float3 nb = Bump_PerlinPerturb(nObj, Perlin_Gradient(tex, pObj), tex->bumpFactor);
+            return Frame_SafeNormalize(nb.x * r0 + nb.y * r1 + nb.z * r2, n);
         }
         if (tex->kind == TEXTURE_IMAGE) {
             return Bump_Perturb(n, f, Bump_ImageGradient(texels, images[tex->image], uv), tex->bumpFactor,

@@ -449,3 +449,47 @@ TEST_CASE("TextureMap degamma=\"true\" decodes the image's texels with gamma 2.2
     CHECK(worstPlain == 0.0f);
     CHECK(worstDecoded <= 1e-3f);
 }
+
+// Perlin bump maps perturb the object-space normal by the object-space gradient of the noise, mapped back
+// by the inverse transpose (hw4 cube_perlin_bump, a cube scaled by 0.8 in the course's 2020 package:
+// 31.6 dB and its luminance mean 2.06% off with the gradient taken in world space; 38.2 dB, 0.06% this
+// way). A quad of half size 1 scaled by 2 with NoiseScale s sees the noise of an unscaled quad of half
+// size 2 with NoiseScale s/2 at every world point, but its object-space gradient is twice as steep: it
+// must render as that quad with twice the BumpFactor (and not as it with the same one, the world-space rule).
+TEST_CASE("Perlin bump maps displace in object space: a scaled mesh keeps its bumps' object-space strength", "[hw4][render]") {
+    TempDir dir;
+    auto render = [&](const char* name, float half, bool scaled, float noiseScale, float bump) {
+        const std::string h = std::to_string(half);
+        std::string xml = std::string(R"(<Scene><BackgroundColor>0 0 0</BackgroundColor>
+<Cameras><Camera id="1"><Position>0 0 6</Position><Gaze>0 0 -1</Gaze><Up>0 1 0</Up>
+<NearPlane>-1 1 -1 1</NearPlane><NearDistance>2</NearDistance><ImageResolution>48 48</ImageResolution>
+<ImageName>p.exr</ImageName></Camera></Cameras>
+<Lights><PointLight id="1"><Position>1 2 6</Position><Intensity>3000 3000 3000</Intensity></PointLight></Lights>
+<Materials><Material id="1"><DiffuseReflectance>1 1 1</DiffuseReflectance><SpecularReflectance>0.5 0.5 0.5</SpecularReflectance>
+<PhongExponent>20</PhongExponent></Material></Materials>
+<Textures><TextureMap id="1" type="perlin"><NoiseConversion>linear</NoiseConversion><DecalMode>bump_normal</DecalMode>
+<NoiseScale>)") + std::to_string(noiseScale) + "</NoiseScale><BumpFactor>" + std::to_string(bump) +
+                          R"(</BumpFactor></TextureMap></Textures>
+<Transformations><Scaling id="1">2 2 2</Scaling></Transformations>
+<VertexData>-)" + h + " -" + h + " 0 " + h + " -" + h + " 0 " + h + " " + h + " 0 -" + h + " " + h + R"( 0</VertexData>
+<Objects><Mesh id="1"><Material>1</Material><Textures>1</Textures>)" +
+                          (scaled ? "<Transformations>s1</Transformations>" : "") + "<Faces>1 2 3 1 3 4</Faces></Mesh></Objects></Scene>";
+        writeFileBytes(dir.file(name), xml);
+        Scene s = loadScene(dir.file(name));
+        return renderCamera(s, s.cameras.at(0));
+    };
+    ImageRGB scaled = render("a.xml", 1, true, 6, 0.05f);
+    ImageRGB twice = render("b.xml", 2, false, 3, 0.1f), same = render("c.xml", 2, false, 3, 0.05f);
+    REQUIRE(scaled.pixels.size() == twice.pixels.size());
+    double worstTwice = 0, worstSame = 0, brightest = 0;
+    for (size_t i = 0; i < scaled.pixels.size(); ++i) {
+        worstTwice = std::fmax(worstTwice, std::fabs(scaled.pixels[i] - twice.pixels[i]));
+        worstSame = std::fmax(worstSame, std::fabs(scaled.pixels[i] - same.pixels[i]));
+        brightest = std::fmax(brightest, scaled.pixels[i]);
+    }
+    INFO("brightest " << brightest << ", worst |scaled - unscaled with 2x BumpFactor| " << worstTwice
+                      << ", with the same BumpFactor " << worstSame);
+    CHECK(brightest > 20.0);
+    CHECK(worstTwice <= 1e-3 * brightest);
+    CHECK(worstSame > 0.05 * brightest);
+}
