@@ -80,7 +80,7 @@ except ImportError:
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 REF_DIR = "_reference_outputs"
 REF_INDEX = None   # --references DIR: image file name (lower case) -> the paths under DIR with that name
-INPUT_EXT = re.compile(r"^[^\s<>]+\.(ply|png|jpe?g|exr|hdr|tga|bmp)$", re.IGNORECASE)
+INPUT_EXT = re.compile(r"^[^\s<>]+\.(ply|png|jpe?g|exr|hdr|tga|bmp|bin)$", re.IGNORECASE)
 KNOWN_EDITED = {
     "hw5/dragon_spot_light_msaa.xml": "the dragon mesh is missing from ../shared (its README: 'lost its dragon'); "
                                       "the reference shows it",

@@ -189,3 +189,33 @@ TEST_CASE("scenes in the 2025 JSON form cull back faces along camera and reflect
     writeFileBytes(dir.file("cull.xml"), xml);
     CHECK_FALSE(loadScene(dir.file("cull.xml")).backfaceCulling);
 }
+
+// Smooth shading: an opaque surface of the classic renderer keeps its interpolated vertex normal as it is,
+// even where it faces away from the geometric normal (the course's 2025 hw1 smooth references:
+// windmill_smooth 39.93 -> 41.42 dB, tower, low_poly, berserker +0.9 to +1.2 dB); dielectrics and the path
+// tracer turn it to the geometric normal's side. A triangle facing the camera (and the light beside it)
+// whose PLY gives every vertex the normal (0, 0, -1): lit by the ambient light alone.
+TEST_CASE("smooth shading keeps a vertex normal that faces away from the geometric normal (classic, opaque)",
+          "[orientation][render]") {
+    TempDir dir;
+    writeFileBytes(dir.file("tri.ply"), "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                         "property float z\nproperty float nx\nproperty float ny\nproperty float nz\n"
+                                         "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                                         "-10 -10 -5 0 0 -1\n10 -10 -5 0 0 -1\n0 10 -5 0 0 -1\n3 0 1 2\n");
+    const std::string path = dir.file("smooth.xml");
+    writeFileBytes(path, orientationScene("", R"(<Mesh id="1" shadingMode="smooth"><Material>1</Material><Faces plyFile="tri.ply"/></Mesh>)"));
+    Scene scene = loadScene(path);
+    DeviceScene ds = flattenScene(scene);
+    for (Pipeline pipeline : {Pipeline::Wavefront, Pipeline::Fused}) {
+        Renderer r(testContext(), ds);
+        RenderSettings rs;
+        rs.spp = 1;
+        rs.pipeline = pipeline;
+        RenderCounters c;
+        ImageRGB img = r.render(scene.cameras.at(0), rs, c);
+        // the centre pixel sees the triangle: ambient (5) only, not 1000/25 + 5
+        const size_t centre = (size_t(img.height / 2) * size_t(img.width) + size_t(img.width / 2)) * 3;
+        INFO((pipeline == Pipeline::Fused ? "fused" : "wavefront") << ": centre " << img.pixels[centre]);
+        CHECK(img.pixels[centre] == Approx(5.0f).epsilon(1e-5));
+    }
+}
