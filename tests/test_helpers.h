@@ -122,6 +122,17 @@ inline ImageRGB renderCamera(const Scene& scene, const Camera& cam, int spp = 1,
     return r.render(cam, rs, c);
 }
 
+// Renders `cam` of the flattened scene `ds` at `spp` samples through `pipeline` (fused or wavefront) on
+// the test device: for tests that check both pipelines.
+inline ImageRGB renderPipeline(const DeviceScene& ds, const Camera& cam, Pipeline pipeline, int spp = 1) {
+    Renderer r(testContext(), ds);
+    RenderSettings rs;
+    rs.spp = spp;
+    rs.pipeline = pipeline;
+    RenderCounters c;
+    return r.render(cam, rs, c);
+}
+
 // The mean over pixels and channels of (a − b)² (images of one size: else an exception, a failed test).
 inline double meanSquaredDiff(const ImageRGB& a, const ImageRGB& b) {
     if (a.pixels.size() != b.pixels.size()) throw std::runtime_error("meanSquaredDiff: images of different sizes");

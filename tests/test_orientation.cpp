@@ -207,12 +207,7 @@ TEST_CASE("smooth shading keeps a vertex normal that faces away from the geometr
     Scene scene = loadScene(path);
     DeviceScene ds = flattenScene(scene);
     for (Pipeline pipeline : {Pipeline::Wavefront, Pipeline::Fused}) {
-        Renderer r(testContext(), ds);
-        RenderSettings rs;
-        rs.spp = 1;
-        rs.pipeline = pipeline;
-        RenderCounters c;
-        ImageRGB img = r.render(scene.cameras.at(0), rs, c);
+        ImageRGB img = renderPipeline(ds, scene.cameras.at(0), pipeline);
         // the centre pixel sees the triangle: ambient (5) only, not 1000/25 + 5
         const size_t centre = (size_t(img.height / 2) * size_t(img.width) + size_t(img.width / 2)) * 3;
         INFO((pipeline == Pipeline::Fused ? "fused" : "wavefront") << ": centre " << img.pixels[centre]);

@@ -151,12 +151,7 @@ TEST_CASE("only camera rays see BackgroundColor: rays leaving a mirror, glass or
         Scene scene = loadScene(path);
         DeviceScene ds = flattenScene(scene);
         for (Pipeline pipeline : {Pipeline::Wavefront, Pipeline::Fused}) {
-            Renderer r(testContext(), ds);
-            RenderSettings rs;
-            rs.spp = 4;
-            rs.pipeline = pipeline;
-            RenderCounters c;
-            ImageRGB img = r.render(scene.cameras.at(0), rs, c);
+            ImageRGB img = renderPipeline(ds, scene.cameras.at(0), pipeline, 4);
             REQUIRE(img.width == 16);
             float quadMax = 0, skyWorst = 0;
             for (int y = 0; y < 16; ++y)
