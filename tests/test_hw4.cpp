@@ -396,7 +396,7 @@ TEST_CASE("replace_background maps pixel i to texel i; replace_all pastes texel 
 // 2020 package: without it the room's textured door and painting rendered about 2× too bright and the
 // image's mean 1.26–1.34×; with it 0.998–0.999). With replace_all and Normalizer r every pixel shows
 // (texel/r), so the degamma'd render must be the plain one raised to 2.2, pixel for pixel.
-TEST_CASE("TextureMap degamma=\"true\" decodes the image's texels with gamma 2.2 in the image's range", "[hw4][render]") {
+TEST_CASE("TextureMap degamma true decodes the image's texels with gamma 2.2 in the image's range", "[hw4][render]") {
     TempDir dir;
     std::vector<unsigned char> rgb(8 * 8 * 3);
     for (size_t i = 0; i < rgb.size(); ++i) rgb[i] = (unsigned char)((i * 37 + 11) % 256);
