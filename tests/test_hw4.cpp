@@ -493,3 +493,31 @@ TEST_CASE("Perlin bump maps displace in object space: a scaled mesh keeps its bu
     CHECK(worstTwice <= 1e-3 * brightest);
     CHECK(worstSame > 0.05 * brightest);
 }
+
+// The checkerboard's tiles: each coordinate's integer part by truncation toward zero (the course's 2020
+// hw5 veach_ajar: 37.47 -> 40.73 dB; floor() flips the pattern's phase on the negative side of a zero plane).
+// A quad at z = -5 seen head-on, 20×20 pixels of 0.5 units: the columns at x = -0.75, -0.25, 0.25 and 0.75
+// share one tile ((int)x = 0), the one at x = -1.25 is the next tile.
+TEST_CASE("the checkerboard takes integer parts by truncation: the tiles beside a zero plane share a colour", "[hw4][render]") {
+    TempDir dir;
+    writeFileBytes(dir.file("c.xml"), R"(<Scene><BackgroundColor>0 0 0</BackgroundColor>
+<Cameras><Camera id="1"><Position>0 0 0</Position><Gaze>0 0 -1</Gaze><Up>0 1 0</Up>
+<NearPlane>-1 1 -1 1</NearPlane><NearDistance>1</NearDistance><ImageResolution>20 20</ImageResolution>
+<ImageName>c.exr</ImageName></Camera></Cameras>
+<Lights><AmbientLight>100 100 100</AmbientLight></Lights>
+<Materials><Material id="1"><AmbientReflectance>1 1 1</AmbientReflectance></Material></Materials>
+<Textures><TextureMap id="1" type="checkerboard"><DecalMode>replace_all</DecalMode><BlackColor>0 0 0</BlackColor>
+<WhiteColor>1 1 1</WhiteColor><Scale>1</Scale><Offset>0</Offset></TextureMap></Textures>
+<VertexData>-20 -20 -5  20 -20 -5  20 20 -5  -20 20 -5</VertexData>
+<Objects><Mesh id="1"><Material>1</Material><Textures>1</Textures><Faces>1 2 3 1 3 4</Faces></Mesh></Objects></Scene>)");
+    Scene s = loadScene(dir.file("c.xml"));
+    ImageRGB img = renderCamera(s, s.cameras.at(0));
+    REQUIRE(img.width == 20);
+    auto at = [&](int col) { return img.at(col, 9, 0); };  // row 9: y = 0.25
+    INFO("columns 7..11 (x = -1.25 .. 0.75): " << at(7) << " " << at(8) << " " << at(9) << " " << at(10) << " " << at(11));
+    CHECK(at(8) == at(9));
+    CHECK(at(9) == at(10));
+    CHECK(at(10) == at(11));
+    CHECK(at(7) != at(8));
+    CHECK(std::fabs(at(7) - at(8)) == 1.0f);  // replace_all pastes the colours 0 and 1
+}
