@@ -317,7 +317,7 @@ inline int Shade_Textures(Hit h, SurfaceHit* s, SceneParams scene, const HitTria
         case DECAL_BUMP_NORMAL: {
             TangentFrame f = Surface_TangentFrame(h, *s, ht, spheres, planes, scene.numTriangles,
                                                   scene.numSpheres);
-            s->ns = Texture_PerturbNormal(tex, images, texels, c, s->uv, s->p, f, s->ns,
+            s->ns = Texture_PerturbNormal(tex, images, texels, c, s->uv, pObj, f, s->ns,
                                           textureSets[s->textureSet].worldToObject);
             break;
         }

@@ -104,6 +104,19 @@ inline float3 Bump_Displaced(float3 t0, float3 b0, float3 n, float2 grad, float 
     return cross(b0 + factor * grad.y * n, t0 + factor * grad.x * n);
 }
 
+/* A world-space normal nW in the object space of the shape whose world->object rows are w (linear part
+ * L): object->world maps normals by the inverse transpose, so nObj ∝ Mᵀ·nW = cof(L)·nW / det(L), unit. */
+inline float3 Normal_ToObject(const __global float4* w, float3 nW) {
+    float3 r0 = w[0].xyz, r1 = w[1].xyz, r2 = w[2].xyz;
+    float det = dot(r0, cross(r1, r2));
+    float3 nObj = (float3)(dot(cross(r1, r2), nW), dot(cross(r2, r0), nW), dot(cross(r0, r1), nW));
+    return Frame_SafeNormalize(det < 0.0f ? -nObj : nObj, nW);
+}
+/* An object-space normal back to world space by Lᵀ (not normalised). */
+inline float3 Normal_ToWorld(const __global float4* w, float3 nObj) {
+    return nObj.x * w[0].xyz + nObj.y * w[1].xyz + nObj.z * w[2].xyz;
+}
+
 /* bump_normal (image). Triangles are displaced in the shape's object space (the bumps keep their
  * depth when the mesh is scaled: bump_mapping_transformed's floor, scaled by 0.05 with BumpFactor 30,
  * matches the reference at 62 dB this way and at 20 dB in world space): with L the linear part of
@@ -117,15 +130,10 @@ inline float3 Bump_Perturb(float3 nW, TangentFrame f, float2 grad, float factor,
     if (!(dot(f.dpdu, f.dpdu) > 0.0f) || !(dot(f.dpdv, f.dpdv) > 0.0f)) return nW;
     float3 nbW;
     if (f.objectSpaceBump) {
-        float3 r0 = worldToObject[0].xyz, r1 = worldToObject[1].xyz, r2 = worldToObject[2].xyz;
+        const float3 r0 = worldToObject[0].xyz, r1 = worldToObject[1].xyz, r2 = worldToObject[2].xyz;
         float3 t0 = (float3)(dot(r0, f.dpdu), dot(r1, f.dpdu), dot(r2, f.dpdu));
         float3 b0 = (float3)(dot(r0, f.dpdv), dot(r1, f.dpdv), dot(r2, f.dpdv));
-        /* object->world maps normals by the inverse transpose, so nObj ∝ Mᵀ·nW = cof(L)·nW / det(L) */
-        float det = dot(r0, cross(r1, r2));
-        float3 nObj = (float3)(dot(cross(r1, r2), nW), dot(cross(r2, r0), nW), dot(cross(r0, r1), nW));
-        nObj = Frame_SafeNormalize(det < 0.0f ? -nObj : nObj, nW);
-        float3 nb = Bump_Displaced(t0, b0, nObj, grad, factor);
-        nbW = nb.x * r0 + nb.y * r1 + nb.z * r2;
+        nbW = Normal_ToWorld(worldToObject, Bump_Displaced(t0, b0, Normal_ToObject(worldToObject, nW), grad, factor));
     } else {  /* a mirroring transform flips B × T: the whole normal is turned to nW's side below */
         nbW = cross(f.dpdv + factor * grad.y * nW, f.dpdu + factor * grad.x * nW);
     }
@@ -139,10 +147,10 @@ inline float3 Bump_PerlinPerturb(float3 n, float3 g, float factor) {
     return Frame_SafeNormalize(n - factor * gt, n);
 }
 
-/* The normal n after a replace_normal or bump_normal texture `tex` (value c at the point, world
- * position p, tangent frame f, the shape's world->object rows); other decal modes keep it. */
+/* The normal n after a replace_normal or bump_normal texture `tex` (value c at the point, object-space
+ * position pObj, tangent frame f, the shape's world->object rows); other decal modes keep it. */
 inline float3 Texture_PerturbNormal(const __global TextureMap* tex, const __global ImageInfo* images,
-                                    const __global float4* texels, float3 c, float2 uv, float3 p, TangentFrame f,
+                                    const __global float4* texels, float3 c, float2 uv, float3 pObj, TangentFrame f,
                                     float3 n, const __global float4* worldToObject) {
 #ifdef CLRT_HAS_NORMAL_MAP
     if (tex->decal == DECAL_REPLACE_NORMAL) return Normal_FromMap(c, f, n);
@@ -154,14 +162,8 @@ inline float3 Texture_PerturbNormal(const __global TextureMap* tex, const __glob
              * by the object-space gradient, then mapped back by the inverse transpose (as image bump maps
              * on triangles). Under a scaling the bumps keep their object-space strength: hw4 cube_perlin_bump
              * (scaled by 0.8) matches at 38.2 dB this way, 31.6 dB with the gradient taken in world space. */
-            const __global float4* w = worldToObject;
-            float3 r0 = w[0].xyz, r1 = w[1].xyz, r2 = w[2].xyz;
-            float3 pObj = (float3)(dot(r0, p) + w[0].w, dot(r1, p) + w[1].w, dot(r2, p) + w[2].w);
-            float det = dot(r0, cross(r1, r2));
-            float3 nObj = (float3)(dot(cross(r1, r2), n), dot(cross(r2, r0), n), dot(cross(r0, r1), n));
-            nObj = Frame_SafeNormalize(det < 0.0f ? -nObj : nObj, n);
-            float3 nb = Bump_PerlinPerturb(nObj, Perlin_Gradient(tex, pObj), tex->bumpFactor);
-            return Frame_SafeNormalize(nb.x * r0 + nb.y * r1 + nb.z * r2, n);
+            float3 nb = Bump_PerlinPerturb(Normal_ToObject(worldToObject, n), Perlin_Gradient(tex, pObj), tex->bumpFactor);
+            return Frame_SafeNormalize(Normal_ToWorld(worldToObject, nb), n);
         }
         if (tex->kind == TEXTURE_IMAGE) {
             return Bump_Perturb(n, f, Bump_ImageGradient(texels, images[tex->image], uv), tex->bumpFactor,
