@@ -4,7 +4,7 @@
  * sampler (CLRT_PIXEL_SAMPLER_STRATIFIED: a scrambled (0,2)-net per pixel; _ZSOBOL: Z-ordered Sobol),
  * else independent uniforms.
  * ApertureSize > 0: thin lens focused at FocusDistance, square aperture as in the course (its 2D sample
- * stratified likewise). */
+ * stratified likewise; under CLRT_PIXEL_SAMPLER_CORRELATED the jitter's own point, Sampler_Camera2D). */
 #ifndef CLRT_CAMERA_CL
 #define CLRT_CAMERA_CL
 
@@ -37,9 +37,9 @@ __attribute__((always_inline)) inline void Camera_GenerateAt(CameraParams cam, S
         const float2 j = ZSobol_2D(scene, pixel, cameraSample, 1u, 0u);
         jx = j.x;
         jy = j.y;
-    } else if (cameraSamples > 1 && scene.pixelSampler == CLRT_PIXEL_SAMPLER_STRATIFIED) {
+    } else if (cameraSamples > 1 && scene.pixelSampler != CLRT_PIXEL_SAMPLER_INDEPENDENT) {
         /* the pixel's samples spread over a (0,2)-net: stratified in x and y alone too (common.cl) */
-        const float2 j = Rng_Stratified2D(key, cameraSample, 0u);
+        const float2 j = Sampler_Camera2D(key, cameraSample);
         jx = j.x;
         jy = j.y;
     } else if (cameraSamples > 1) {
@@ -52,9 +52,10 @@ __attribute__((always_inline)) inline void Camera_GenerateAt(CameraParams cam, S
         float3 dn = normalize(dir);
         float tFocus = cam.focusDistance / dot(dn, -cam.w.xyz);
         float3 focus = org + tFocus * dn;
-        const float2 ab = CLRT_SAMPLER_IS_ZSOBOL(scene)                         ? ZSobol_2D(scene, pixel, cameraSample, 1u, 2u)
-                          : scene.pixelSampler == CLRT_PIXEL_SAMPLER_STRATIFIED ? Rng_Stratified2D(key, cameraSample, 2u)
-                                                                                : (float2)(Rng_Uniform(key, 2), Rng_Uniform(key, 3));
+        const float2 ab = CLRT_SAMPLER_IS_ZSOBOL(scene)                          ? ZSobol_2D(scene, pixel, cameraSample, 1u, 2u)
+                          : scene.pixelSampler == CLRT_PIXEL_SAMPLER_STRATIFIED  ? Rng_Stratified2D(key, cameraSample, 2u)
+                          : CLRT_SAMPLER_IS_CORRELATED(scene)                   ? Sampler_Camera2D(key, cameraSample)
+                                                                                 : (float2)(Rng_Uniform(key, 2), Rng_Uniform(key, 3));
         float a = (ab.x - 0.5f) * cam.apertureSize;
         float b = (ab.y - 0.5f) * cam.apertureSize;
         org = org + a * cam.u.xyz + b * cam.v.xyz;

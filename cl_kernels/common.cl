@@ -209,13 +209,19 @@ inline float2 ZSobol_2D(SceneParams scene, int pixel, int sample, uint pathId, u
 #else
 #define CLRT_SAMPLER_IS_ZSOBOL(scene) 0
 #endif
+/* Likewise CLRT_PIXEL_SAMPLER_CORRELATED's branches, only with CLRT_HAS_CORRELATED_SAMPLER (--sampler correlated). */
+#ifdef CLRT_HAS_CORRELATED_SAMPLER
+#define CLRT_SAMPLER_IS_CORRELATED(scene) ((scene).pixelSampler == CLRT_PIXEL_SAMPLER_CORRELATED)
+#else
+#define CLRT_SAMPLER_IS_CORRELATED(scene) 0
+#endif
 
 /* The 2D sample of dimensions (dim, dim + 1) at a shading point of `path` for light and BSDF samples:
  * stratified over the pixel's samples, Z-ordered Sobol or independent, by scene.pixelSampler.
  * key = Rng_Key(scene.seed, path.pixel, path.sample, path.pathId). */
 inline float2 Sampler_2D(SceneParams scene, PathState path, RngKey key, uint dim) {
     if (CLRT_SAMPLER_IS_ZSOBOL(scene)) return ZSobol_2D(scene, path.pixel, path.sample, path.pathId, dim);
-    if (scene.pixelSampler == CLRT_PIXEL_SAMPLER_STRATIFIED)
+    if (scene.pixelSampler != CLRT_PIXEL_SAMPLER_INDEPENDENT) /* stratified, or correlated's other dimensions */
         return Rng_Stratified2D(key, path.sample, dim);
     return (float2)(Rng_Uniform(key, dim), Rng_Uniform(key, dim + 1u));
 }
@@ -230,6 +236,23 @@ inline float2 Sampler_Other2D(SceneParams scene, PathState path, RngKey key, uin
 inline float Sampler_Other1D(SceneParams scene, PathState path, RngKey key, uint dim) {
     if (CLRT_SAMPLER_IS_ZSOBOL(scene)) return ZSobol_2D(scene, path.pixel, path.sample, path.pathId, dim).x;
     return Rng_Uniform(key, dim);
+}
+
+/* The camera sample's own 2D point (stratified over the pixel's samples: dimensions 0, 1 of path id 1),
+ * key = Rng_Key(seed, pixel, cameraSample, 1u). Its pixel jitter; under CLRT_PIXEL_SAMPLER_CORRELATED also
+ * its lens point and the classic renderer's light samples at every depth (Sampler_Light2D): the course's
+ * renderer until 2022 drew them so, one point for all three (its 2020 and 2022 references show it: an area
+ * light's glow on a box's ceiling, out-of-focus silhouettes; docs/scene-format.md).
+ * That estimates another integral than the scene's (the blur and the penumbrae change shape), so it is a
+ * sampler for reproducing those references, never the default. */
+inline float2 Sampler_Camera2D(RngKey key, int cameraSample) { return Rng_Stratified2D(key, cameraSample, 0u); }
+
+/* The 2D sample of the light sample at dimensions (dim, dim + 1) of `path`: Sampler_2D, or under
+ * CLRT_PIXEL_SAMPLER_CORRELATED in the classic renderer the camera sample's own point. */
+inline float2 Sampler_Light2D(SceneParams scene, PathState path, RngKey key, uint dim) {
+    if (CLRT_SAMPLER_IS_CORRELATED(scene) && scene.pathMode == 0)
+        return Sampler_Camera2D(Rng_Key(scene.seed, path.pixel, path.sample, 1u), path.sample);
+    return Sampler_2D(scene, path, key, dim);
 }
 
 /* ---- Motion blur ------------------------------------------------------------------------------

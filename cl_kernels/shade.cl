@@ -623,7 +623,7 @@ inline void Light_ShadowRays(SceneParams scene, PathState path, ShadingPoint sp,
                              const __global float* envDist, const __global float4* lightData, ShadowRay* sr,
                              ShadowRay* sr2) {
     uint dim = 4u + 32u * (uint)path.depth + 8u + 2u * (uint)l;
-    float2 u = Sampler_2D(scene, path, key, dim);
+    float2 u = Sampler_Light2D(scene, path, key, dim);
     float3 wi;
     float dist;
 #ifdef CLRT_HAS_ENV_LIGHT

@@ -12,8 +12,9 @@ saying so. The rules (issue 29):
   deterministic  PSNR of clrt's 8-bit PNG (--ldr-quantize floor) against the reference >= 40 dB. An EXR
                  reference: PSNR of the linear values with the reference's 99.9th percentile as the peak.
   sampled        (NumSamples > 1, AreaLight/LightMesh/LightSphere, SphericalDirectionalLight, path tracing,
-                 ApertureSize > 0, MotionBlur, Roughness > 0) two clrt renders a, b with --seed 1 and 2,
-                 --sampler independent (the references jitter each sample independently), N spp; the
+                 ApertureSize > 0, MotionBlur, Roughness > 0) two clrt renders a, b with --seed 1 and 2, N spp,
+                 under the reference's sampler (--sampler auto: stratified for a classic camera, whose course
+                 references are jittered, independent for a path-traced one); the
                  reference has R = NumSamples spp. err(x, y) = mean over pixels and channels of
                  w * (x - y)^2, with w = 1 for PNGs (8-bit values: MSE) and w = 1 / (ref^2 + 0.01) for EXRs
                  (relMSE, linear values; the same weights for both errors). Then err(a, ref) ~ v_N + v_R +
@@ -24,7 +25,9 @@ saying so. The rules (issue 29):
                  the figure is the larger ratio err(a, ref) / (err(a, b) * (1 + N / R)), ok when <= 1. At N < R a PNG
                  is judged per pixel only (the 8-bit clamp and floor of the noisier image shift its block means).
                  And the image's mean per channel within 1% + 3 sigma of the reference's (sigma: the standard error
-                 of the difference of the means, from the two renders).
+                 of the difference of the means, from the two renders). A classic camera with depth of field or an
+                 area light that fails is judged again under --sampler correlated (the course's renderer until
+                 2022 drew pixel jitter, lens point and light samples from one 2D point); ok when that passes.
   roulette       (a path camera with RussianRoulette in RendererParams) the course's RR references follow a
                  biased rule that `clrt render --rr-rule course` reproduces, with infinite variance (heavy
                  tails: plain means and MSEs swing by tens of per cent between seeds), so they are judged as
@@ -329,7 +332,25 @@ def judge_perlin(r, scene, cam, ref, hdr):
     return ok, "luminance mean %+.2f%%, std %+.2f%% (within 2%%); PSNR %.2f dB" % (100 * dm, 100 * ds, p)
 
 
-def judge_sampled(r, scene, cam, ref, hdr, reduced):
+def judge_sampled(r, scene, cam, ref, hdr, reduced, sampler, traits):
+    """The noise rule under the reference's sampler: `sampler`, or with "auto" stratified for a classic camera
+    (the course's jittered samples: its references are about as noisy as clrt's stratified renders, several
+    times less than independent ones) and independent for a path-traced one. Where that fails and the
+    course's older sampler could have made the reference (a classic camera with depth of field or an area
+    light), again under --sampler correlated: ok when either holds; the figure names the sampler it is for
+    (both figures when both were judged)."""
+    classic = "path tracing" not in traits
+    if sampler == "auto":
+        sampler = "stratified" if classic else "independent"
+    ok, what = judge_sampled_with(r, scene, cam, ref, hdr, reduced, sampler)
+    if ok or not classic or not traits & {"depth of field", "area/object light"}:
+        return ok, "--sampler %s: %s" % (sampler, what)
+    ok2, what2 = judge_sampled_with(r, scene, cam, ref, hdr, reduced, "correlated")
+    first, second = ((sampler, what), ("correlated", what2)) if not ok2 else (("correlated", what2), (sampler, what))
+    return ok2, "--sampler %s: %s; --sampler %s: %s" % (*first, *second)
+
+
+def judge_sampled_with(r, scene, cam, ref, hdr, reduced, sampler):
     R = cam["spp"]
     N = min(R, REDUCED_SPP_EXR if hdr else REDUCED_SPP_PNG) if reduced else R
     f = 1
@@ -338,10 +359,10 @@ def judge_sampled(r, scene, cam, ref, hdr, reduced):
     if reduced and hdr and w % REDUCED_SCALE == 0 and h % REDUCED_SCALE == 0 and min(w, h) >= 128:
         f = REDUCED_SCALE
         res = (w // f, h // f)
-    a, err = r.render(scene, cam["id"], cam["image"], 1, spp=N, sampler="independent", res=res)
+    a, err = r.render(scene, cam["id"], cam["image"], 1, spp=N, sampler=sampler, res=res)
     if err:
         return False, err
-    b, err = r.render(scene, cam["id"], cam["image"], 2, spp=N, sampler="independent", res=res)
+    b, err = r.render(scene, cam["id"], cam["image"], 2, spp=N, sampler=sampler, res=res)
     if err:
         return False, err
     refd = down(ref, f)
@@ -478,7 +499,7 @@ def judge_camera(r, rel, path, root, cam, reduced, rr_rule="course"):
     if rule == "roulette":
         ok, figure = judge_roulette(r, path, cam, ref, reduced, rr_rule)
     else:
-        ok, figure = judge_sampled(r, path, cam, ref, hdr, reduced)
+        ok, figure = judge_sampled(r, path, cam, ref, hdr, reduced, r.args.sampler, traits)
     return rule, ok, figure + " [" + ", ".join(sorted(traits)) + "]"
 
 
@@ -553,6 +574,10 @@ def main():
     ap.add_argument("--rr-rule", default="course", choices=["course", "unbiased"],
                     help="clrt's --rr-rule for the roulette rule's renders (default course, as the references; "
                          "unbiased shows the rule failing)")
+    ap.add_argument("--sampler", default="auto", choices=["auto", "independent", "stratified"],
+                    help="clrt's --sampler for the sampled rule's renders (default auto: stratified for classic cameras, "
+                         "independent for path-traced ones); where that fails on a classic camera with depth of field or "
+                         "an area light, --sampler correlated is judged too")
     ap.add_argument("--references", default="",
                     help="folder searched (recursively) for each camera's reference image by its file name, instead "
                          "of each scene folder's _reference_outputs/ (course packages laid out as inputs/ and outputs/)")

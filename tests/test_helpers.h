@@ -113,6 +113,7 @@ inline ImageRGB renderCamera(const Scene& scene, const Camera& cam, int spp = 1,
                              PixelSampler pixelSampler = PixelSampler::Stratified) {
     DeviceScene ds = flattenScene(scene);
     ds.features.zsobol = pixelSampler == PixelSampler::ZSobol;  // as clrt render --sampler zsobol builds it
+    ds.features.correlatedSampler = pixelSampler == PixelSampler::Correlated;
     Renderer r(testContext(), ds);
     RenderSettings rs;
     rs.spp = spp;

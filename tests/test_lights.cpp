@@ -558,6 +558,11 @@ TEST_CASE("spot, directional, area and environment Light_Sample kernels match ho
     CHECK(std::fabs(dot(eu, an)) < 1e-5f);
     CHECK(std::fabs(dot(ev, an)) < 1e-5f);
     CHECK(std::fabs(dot(eu, ev)) < 1e-5f);
+    // along the course's basis across the normal (courseBasis: t = n with its smallest-magnitude component set to
+    // 1, here z; u = unit(t × n), v = n × u), signs included: --sampler correlated pairs them with the jitter
+    const Vec3 t(an.x, an.y, 1.0f), uc = normalize(cross(t, an));
+    CHECK(dot(eu, uc) == Approx(2.0f).epsilon(1e-5));
+    CHECK(dot(ev, cross(an, uc)) == Approx(2.0f).epsilon(1e-5));
     CHECK(area.area == Approx(4.0f));
 
     const char* src = R"CLC(

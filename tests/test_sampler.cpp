@@ -250,7 +250,7 @@ TEST_CASE("clrt render --sampler: stratified by default, independent or zsobol o
     const CliResult r = cliResult(rc, readFileBytes(d.file("log")));
     CHECK(r.rc == 1);
     CHECK(r.errorLines == 1);
-    CHECK(readFileBytes(d.file("log")).find("--sampler: expected stratified, independent or zsobol, got 'sobol'") != std::string::npos);
+    CHECK(readFileBytes(d.file("log")).find("--sampler: expected stratified, independent, zsobol or correlated, got 'sobol'") != std::string::npos);
 }
 
 // The Z-ordered Sobol sampler's code is compiled only into programs that run it (CLRT_HAS_ZSOBOL): the

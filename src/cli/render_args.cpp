@@ -35,7 +35,11 @@ const char* const kRenderHelp =
     "                        over a pixel's samples (scrambled (0,2)-sequence); independent: every\n"
     "                        number drawn independently (the noise of a plain Monte Carlo renderer);\n"
     "                        zsobol: every dimension (jitter, lens, time, picks, light, BSDF, roulette)\n"
-    "                        from one Owen-scrambled Sobol sequence in Z order over the pixels\n"
+    "                        from one Owen-scrambled Sobol sequence in Z order over the pixels;\n"
+    "                        correlated: stratified, but each camera sample's one 2D point is its\n"
+    "                        pixel jitter, its lens point and every light sample of the classic\n"
+    "                        renderer, as the course's renderer drew them until 2022 (its 2020 and\n"
+    "                        2022 references; biased, for comparing with them: docs/scene-format.md)\n"
     "  --instancing M        how meshes placed several times are stored: auto (default: once, under\n"
     "                        their own BVH, where their placements hold >= 2^20 triangles), flatten\n"
     "                        (every triangle in world space), two-level (every mesh that is no light\n"
@@ -112,7 +116,7 @@ RenderArgs parseRenderArgs(int argc, char** argv, int start) {
         {{"--spp"}, true, [&](Str f, Str v) { a.spp = parseIntArg(f, v, 1, kMaxSamplesPerPixel); }},
         {{"--seed"}, true, [&](Str f, Str v) { a.seed = uint32_t(parseIntArg(f, v, 0, 2147483647)); }},
         {{"--sampler"}, true, [&](Str f, Str v) {
-             if (!parsePixelSampler(v, a.pixelSampler)) throwExpected(f, "stratified, independent or zsobol", v);
+             if (!parsePixelSampler(v, a.pixelSampler)) throwExpected(f, "stratified, independent, zsobol or correlated", v);
          }},
         {{"--instancing"}, true, [&](Str f, Str v) {
              if (v == "auto") a.instancing = Instancing::Auto;

@@ -275,6 +275,7 @@ int renderScene(RenderArgs a) {
     t = std::chrono::steady_clock::now();
     auto programFeatures = [&a](FeatureSet f) {
         f.zsobol = a.pixelSampler == PixelSampler::ZSobol;  // the sampler's code only where it runs
+        f.correlatedSampler = a.pixelSampler == PixelSampler::Correlated;
         if (!a.allFeatures) return f;
         FeatureSet all = FeatureSet::all();
         all.bvhStack = f.bvhStack;  // not a feature: the tree's own need

@@ -32,6 +32,7 @@ std::vector<std::string> FeatureSet::defines() const {
     add(instances, "CLRT_HAS_INSTANCES");
     add(pathTracing, "CLRT_HAS_PATH_TRACING");
     add(zsobol, "CLRT_HAS_ZSOBOL");
+    add(correlatedSampler, "CLRT_HAS_CORRELATED_SAMPLER");
     add(envRotation, "CLRT_HAS_ENV_ROTATION");
     add(backfaceCulling, "CLRT_HAS_BACKFACE_CULLING");
     // Rounded up to a multiple of 8 so that scenes of similar depth share a cached program.

@@ -30,6 +30,7 @@ struct FeatureSet {
     bool pathTracing = false;       // a camera has <Renderer>PathTracing (cl_kernels/path.cl)
     bool instances = false;         // a two-level BVH (dev::Instance; flatten_instances.cpp)
     bool zsobol = false;            // not the scene's: clrt render --sampler zsobol (ZSobol_2D, common.cl)
+    bool correlatedSampler = false; // not the scene's: clrt render --sampler correlated (Sampler_Light2D, common.cl)
     bool envRotation = false;       // an environment light's map is turned by its <Transformations> (lights.cl)
     bool backfaceCulling = false;   // classic rays skip back faces (Scene::backfaceCulling; intersect.cl Ray_Closest)
     int bvhStack = 0;  // traversal stack entries the scene's BVH needs (0: the header's default)
@@ -46,7 +47,7 @@ struct FeatureSet {
         FeatureSet f;
         f.lightKinds = f.materialKinds = f.brdfKinds = ~0u;
         f.textures = f.normalMaps = f.bumpMaps = f.mipMaps = f.spheres = f.motionBlur = f.pathTracing = f.instances = f.zsobol = f.envRotation =
-            f.backfaceCulling = true;
+            f.backfaceCulling = f.correlatedSampler = true;
         return f;
     }
 };

@@ -105,9 +105,10 @@ void flattenLights(const Scene& scene, DeviceScene& ds, ImageAtlas& atlas) {
             break;
         }
         case dev::LIGHT_AREA: {
-            Vec3 n = normalize(l.direction);
-            Vec3 helper = std::fabs(n.x) > 0.9f ? Vec3(0, 1, 0) : Vec3(1, 0, 0);
-            Vec3 u = normalize(cross(helper, n)), v = cross(n, u);
+            // The square's edges: the course's basis across its normal (courseBasis; docs/scene-format.md), which
+            // --sampler correlated pairs with the pixel jitter's (x, y).
+            Vec3 n = normalize(l.direction), u, v;
+            courseBasis(n, u, v);
             d.edgeU = toFloat4(u * l.size);
             d.edgeV = toFloat4(v * l.size);
             d.area = l.size * l.size;

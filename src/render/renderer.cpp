@@ -228,7 +228,8 @@ const char* renderStageName(int stage) {
 
 // The --sampler names, one row per PixelSampler.
 static const struct { PixelSampler kind; const char* name; } kPixelSamplers[] = {
-    {PixelSampler::Stratified, "stratified"}, {PixelSampler::Independent, "independent"}, {PixelSampler::ZSobol, "zsobol"}};
+    {PixelSampler::Stratified, "stratified"}, {PixelSampler::Independent, "independent"}, {PixelSampler::ZSobol, "zsobol"},
+    {PixelSampler::Correlated, "correlated"}};
 
 bool parsePixelSampler(const std::string& name, PixelSampler& out) {
     for (const auto& row : kPixelSamplers)
@@ -488,6 +489,8 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
         throw Error("camera " + std::to_string(cam.id) + " is path traced but the program was built without CLRT_HAS_PATH_TRACING");
     if (settings.pixelSampler == PixelSampler::ZSobol && !m.ds.features.zsobol)
         throw Error("--sampler zsobol, but the program was built without CLRT_HAS_ZSOBOL (FeatureSet::zsobol)");
+    if (settings.pixelSampler == PixelSampler::Correlated && !m.ds.features.correlatedSampler)
+        throw Error("--sampler correlated, but the program was built without CLRT_HAS_CORRELATED_SAMPLER (FeatureSet::correlatedSampler)");
     const BatchPlan plan = planBatches(m.ds, numPixels, settings, cp, sp);
     m.ensureQueues(plan.capacity, plan.capacity * std::max<size_t>(plan.lightChunk, 1) * size_t(plan.lightSlots));
 

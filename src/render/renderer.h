@@ -25,13 +25,17 @@ namespace clrt {
 // Stratified: camera jitter, lens, light and BSDF 2D samples stratified over a pixel's samples (a
 // scrambled (0,2)-sequence, cl_kernels/common.cl); Independent: every number independent, the noise of
 // renderers that sample so (tests/test_brdf.cpp); ZSobol: every dimension (camera, lens, time, picks,
-// light, BSDF, roulette) from one Owen-scrambled Sobol sequence in Z order over the pixels (common.cl).
+// light, BSDF, roulette) from one Owen-scrambled Sobol sequence in Z order over the pixels (common.cl);
+// Correlated: Stratified, but a camera sample's pixel jitter point is also its lens point and every light
+// sample of the classic renderer, as the course's renderer drew them until 2022 (Sampler_Camera2D in
+// common.cl; biased: only for comparing with those references).
 enum class PixelSampler {
     Independent = CLRT_PIXEL_SAMPLER_INDEPENDENT,
     Stratified = CLRT_PIXEL_SAMPLER_STRATIFIED,
-    ZSobol = CLRT_PIXEL_SAMPLER_ZSOBOL
+    ZSobol = CLRT_PIXEL_SAMPLER_ZSOBOL,
+    Correlated = CLRT_PIXEL_SAMPLER_CORRELATED
 };
-// "stratified", "independent", "zsobol" (the --sampler values); false for any other name.
+// "stratified", "independent", "zsobol", "correlated" (the --sampler values); false for any other name.
 bool parsePixelSampler(const std::string& name, PixelSampler& out);
 const char* pixelSamplerName(PixelSampler s);
 

@@ -346,6 +346,8 @@ typedef struct SceneParams {
 #define CLRT_PIXEL_SAMPLER_INDEPENDENT 0 /* every number an independent uniform (Rng_Uniform) */
 #define CLRT_PIXEL_SAMPLER_STRATIFIED 1  /* light and BSDF 2D samples stratified over a pixel's samples */
 #define CLRT_PIXEL_SAMPLER_ZSOBOL 2      /* every dimension from an Owen-scrambled Sobol (0,2)-sequence in Z order over pixels */
+#define CLRT_PIXEL_SAMPLER_CORRELATED 3  /* stratified, but a camera sample's one 2D point is its pixel jitter, lens point and
+                                         * every light sample of the classic renderer (the course's renderer until 2022) */
 
 /* SceneParams.pathMode: the camera's <Renderer>PathTracing and its <RendererParams> (set per render). */
 #define CLRT_PATH_ON 1          /* <Renderer>PathTracing</Renderer> */

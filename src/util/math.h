@@ -36,6 +36,18 @@ inline Vec3 normalize(const Vec3& a) {
     float l = length(a);
     return l > 0 ? a / l : Vec3(0, 0, 0);
 }
+// The course's orthonormal basis across unit r (the host twin of cl_kernels/common.cl courseBasis): t = r with
+// its smallest-magnitude component set to 1, u = unit(t × r), v = r × u. Not continuous in r: a square spanned
+// by (u, v) turns with r, as the course's renderer turns its glossy squares and its AreaLight squares.
+inline void courseBasis(const Vec3& r, Vec3& u, Vec3& v) {
+    Vec3 t = r;
+    const float ax = std::fabs(r.x), ay = std::fabs(r.y), az = std::fabs(r.z);
+    if (ax <= ay && ax <= az) t.x = 1.0f;
+    else if (ay <= az) t.y = 1.0f;
+    else t.z = 1.0f;
+    u = normalize(cross(t, r));
+    v = cross(r, u);
+}
 inline Vec3 vmin(const Vec3& a, const Vec3& b) {
     return {std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)};
 }
