@@ -17,6 +17,7 @@
 #include "image/image.h"
 #include "render/renderer.h"
 #include "scene/scene.h"
+#include "util/error.h"
 
 namespace clrt::test {
 
@@ -121,6 +122,23 @@ inline ImageRGB renderCamera(const Scene& scene, const Camera& cam, int spp = 1,
     rs.pixelSampler = pixelSampler;
     RenderCounters c;
     return r.render(cam, rs, c);
+}
+
+// What a Renderer built for the scene's own features (no render option's flags) says when asked to render
+// with `sampler`: the Error's message, "" when it renders.
+inline std::string samplerRefusal(const Scene& scene, PixelSampler sampler) {
+    DeviceScene ds = flattenScene(scene);
+    Renderer r(testContext(), ds);
+    RenderSettings rs;
+    rs.spp = 4;
+    rs.pixelSampler = sampler;
+    RenderCounters c;
+    try {
+        r.render(scene.cameras.at(0), rs, c);
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "";
 }
 
 // Renders `cam` of the flattened scene `ds` at `spp` samples through `pipeline` (fused or wavefront) on
