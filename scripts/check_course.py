@@ -6,7 +6,9 @@ under hw1..hw6 (any depth) whose ImageName has a reference in the scene folder's
 prints one line: scene, camera id, image, rule, figure, ok / FAIL / SKIPPED; then a summary line.
 Scenes may be XML or the 2025 JSON form. --scenes DIR --references DIR check another copy of the course's
 packages (e.g. ones laid out as inputs/ and outputs/): each camera's reference is then the file of its
-ImageName under the --references folder. Folders without references (classic, json2025) get one line each
+ImageName under the --references folder nearest the scene (longest shared path); where several are equally
+near (a student's my_outputs/ beside the course's outputs/) the camera is SKIPPED as ambiguous, naming them,
+and --references-exclude REGEX leaves some out. Folders without references (classic, json2025) get one line each
 saying so. The rules (issue 29):
 
   deterministic  PSNR of clrt's 8-bit PNG (--ldr-quantize floor) against the reference >= 40 dB. An EXR
@@ -84,6 +86,7 @@ except ImportError:
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 REF_DIR = "_reference_outputs"
 REF_INDEX = None   # --references DIR: image file name (lower case) -> the paths under DIR with that name
+REF_ROOT = ""      # --references DIR
 INPUT_EXT = re.compile(r"^[^\s<>]+\.(ply|png|jpe?g|exr|hdr|tga|bmp|bin)$", re.IGNORECASE)
 KNOWN_EDITED = {
     "hw5/dragon_spot_light_msaa.xml": "the dragon mesh is missing from ../shared (its README: 'lost its dragon'); "
@@ -154,22 +157,30 @@ def json_to_element(tag, value):
     return e
 
 
-def reference_path(scene_path, image):
-    """The reference image of a camera of scene_path: its folder's _reference_outputs/IMAGE, or with
-    --references the file of that name under DIR whose path shares the longest prefix with the scene's
-    (packages laid out as inputs/ and outputs/); None when there is none."""
+def reference_candidates(scene_path, image):
+    """The reference images a camera of scene_path may have: [its folder's _reference_outputs/IMAGE], or with
+    --references the files of that name under DIR whose paths share the longest prefix with the scene's
+    (packages laid out as inputs/ and outputs/), sorted; [] when there is none. More than one is ambiguous
+    (e.g. a student's own renders in a folder beside the course's outputs/): see --references-exclude."""
     if REF_INDEX is None:
         p = os.path.join(os.path.dirname(scene_path), REF_DIR, image)
-        return p if os.path.exists(p) else None
+        return [p] if os.path.exists(p) else []
     candidates = REF_INDEX.get(image.lower(), [])
     if not candidates:
-        return None
-    return max(candidates, key=lambda c: len(os.path.commonprefix([c, os.path.abspath(scene_path)])))
+        return []
+    shared = lambda c: len(os.path.commonprefix([c, os.path.abspath(scene_path)]))
+    best = max(shared(c) for c in candidates)
+    return sorted(c for c in candidates if shared(c) == best)
 
 
-def index_references(ref_root):
+def index_references(ref_root, exclude=""):
+    """Image file name (lower case) -> the PNG/EXR paths under ref_root with that name, less those whose path
+    relative to ref_root matches the regular expression exclude."""
     index = {}
-    for p in glob.glob(os.path.join(os.path.abspath(ref_root), "**", "*"), recursive=True):
+    root = os.path.abspath(ref_root)
+    for p in sorted(glob.glob(os.path.join(root, "**", "*"), recursive=True)):
+        if exclude and re.search(exclude, os.path.relpath(p, root)):
+            continue
         if os.path.isfile(p) and p.lower().endswith((".png", ".exr")):
             index.setdefault(os.path.basename(p).lower(), []).append(p)
     return index
@@ -488,7 +499,11 @@ def judge_camera(r, rel, path, root, cam, reduced, rr_rule="course"):
         return rule, None, KNOWN_EDITED[rel]
     if hdr and not HAVE_OPENEXR:
         return rule, None, "no OpenEXR Python module to read the EXR reference (scripts/check_course installs it)"
-    ref = read_image(reference_path(path, cam["image"]))
+    refs = reference_candidates(path, cam["image"])
+    if len(refs) > 1:
+        return rule, None, "ambiguous reference, %d files equally near the scene: %s (--references-exclude)" % (
+            len(refs), ", ".join(os.path.relpath(p, REF_ROOT) for p in refs))
+    ref = read_image(refs[0])
     if rule == "deterministic":
         return (rule, *judge_deterministic(r, path, cam, ref, hdr))
     if rule == "perlin":
@@ -549,7 +564,7 @@ def check_scene(r, tally, rel, path, reduced, rr_rule):
         print("%-44s cam ?   %-36s %-13s FAIL    unreadable scene: %s%s" % (rel, "?", "-", e, tally.add((rel, "?"), "FAIL")))
         return
     for cam in cameras_of(root):
-        if reference_path(path, cam["image"]) is None:
+        if not reference_candidates(path, cam["image"]):
             continue  # this camera has no reference
         t0 = time.time()
         rule, ok, figure = judge_camera(r, rel, path, root, cam, reduced, rr_rule)
@@ -576,11 +591,16 @@ def main():
                          "classic camera with depth of field or an area light, --sampler correlated is judged too")
     ap.add_argument("--references", default="",
                     help="folder searched (recursively) for each camera's reference image by its file name, instead "
-                         "of each scene folder's _reference_outputs/ (course packages laid out as inputs/ and outputs/)")
+                         "of each scene folder's _reference_outputs/ (course packages laid out as inputs/ and outputs/); "
+                         "where several are equally near a scene the camera is SKIPPED as ambiguous")
+    ap.add_argument("--references-exclude", default="", metavar="REGEX",
+                    help="with --references: leave out the images whose path relative to that folder matches REGEX "
+                         "(e.g. 'my_outputs/': a student's own renders beside the course's)")
     args = ap.parse_args()
-    global REF_INDEX
+    global REF_INDEX, REF_ROOT
     if args.references:
-        REF_INDEX = index_references(args.references)
+        REF_ROOT = os.path.abspath(args.references)
+        REF_INDEX = index_references(args.references, args.references_exclude)
     scenes_root = os.path.normpath(args.scenes)
     if not os.path.isdir(scenes_root):
         print("check_course: %s is not there: nothing to check" % scenes_root)

@@ -83,6 +83,10 @@ fi
 [ $# -eq 0 ] && { bash scripts/test_implementations.sh || exit 1; lap implementations; }
 if [ -z "${CLRT_NO_COURSE_CHECK:-}" ] && [ $# -eq 0 ] && [ -d ../shared/scenes ]; then
   # Reduced spp/size for sampled scenes; a listed failure is reported, a new one fails the run.
+  # The check's reference lookup for other packages (--references): ambiguity, --references-exclude.
+  bash tests/check_course_references.sh > build/check-course-references-log.txt 2>&1 \
+    || { cat build/check-course-references-log.txt; exit 1; }
+  tail -1 build/check-course-references-log.txt
   echo "course check (scripts/check_course --reduced --expected tests/course_expected_failures.txt):"
   bash scripts/check_course --reduced --expected tests/course_expected_failures.txt > build/course-check-log.txt 2>&1 \
     || { cat build/course-check-log.txt; echo "course check: a camera failed that tests/course_expected_failures.txt does not list"; exit 1; }
