@@ -52,6 +52,10 @@ saying so. The rules (issue 29):
                  the luminance (0.2126 R + 0.7152 G + 0.0722 B) mean and standard deviation of the whole
                  image each within 2% of the reference's; the PSNR is printed too.
 
+--rows K (full mode): the sampled rule renders cameras with EXR references on every K-th pixel row only, at the
+reference's spp (clrt render --part 1/K --tile-pixels WIDTH), and judges those rows as the image: for references
+whose full spp does not fit (the 2020 Veach Ajar's 6400 spp at 1280x720).
+
 Skipped, with the reason: a scene whose input files are missing (hw5's original environment maps), and the
 scenes in KNOWN_EDITED, which ../shared edited so that its reference no longer shows the same scene.
 --reduced (CI): sampled PNG scenes at N = min(R, 4) spp at full size (their 8-bit values are clamped, so a
@@ -367,13 +371,19 @@ def judge_sampled_with(r, scene, cam, ref, hdr, reduced, sampler):
     if reduced and hdr and w % REDUCED_SCALE == 0 and h % REDUCED_SCALE == 0 and min(w, h) >= 128:
         f = REDUCED_SCALE
         res = (w // f, h // f)
-    a, err = r.render(scene, cam["id"], cam["image"], 1, spp=N, sampler=sampler, res=res)
+    # --rows K (full mode, EXR): every K-th pixel row only, at the reference's spp (a --part 1/K file), judged
+    # on those rows as if they were the image (its 8x8 blocks then span 8K rows).
+    k_rows = r.args.rows if (hdr and not reduced and r.args.rows > 1) else 1
+    rows_of = (k_rows, w) if k_rows > 1 else None
+    a, err = r.render(scene, cam["id"], cam["image"], 1, spp=N, sampler=sampler, res=res, rows_of=rows_of)
     if err:
         return False, err
-    b, err = r.render(scene, cam["id"], cam["image"], 2, spp=N, sampler=sampler, res=res)
+    b, err = r.render(scene, cam["id"], cam["image"], 2, spp=N, sampler=sampler, res=res, rows_of=rows_of)
     if err:
         return False, err
     refd = down(ref, f)
+    if k_rows > 1 and a.shape == refd.shape:
+        a, b, refd = (x[::k_rows] for x in (a, b, refd))
     if a.shape != refd.shape:
         return False, "size %dx%d, reference %dx%d" % (a.shape[1], a.shape[0], refd.shape[1], refd.shape[0])
     # Noise of the reference at clrt's pixel size: v_R per clrt pixel = v_N * N / (R f^2).
@@ -392,8 +402,9 @@ def judge_sampled_with(r, scene, cam, ref, hdr, reduced, sampler):
     ok_means, mean_text = judge_means(a, b, refd, k)
     worst = max(ratios)
     block = "%dx%d block %.2f" % (BLOCK, BLOCK, ratios[1]) if len(ratios) > 1 else "blocks not judged at N < R"
-    what = "%s err/limit %.2f (pixel %.2f, %s; %d vs %d spp%s); %s" % (
-        "relMSE" if hdr else "MSE", worst, ratios[0], block, N, R, ", 1/%d res" % f if f > 1 else "", mean_text)
+    what = "%s err/limit %.2f (pixel %.2f, %s; %d vs %d spp%s%s); %s" % (
+        "relMSE" if hdr else "MSE", worst, ratios[0], block, N, R, ", 1/%d res" % f if f > 1 else "",
+        ", every %dth row" % k_rows if k_rows > 1 else "", mean_text)
     return worst <= 1.0 and ok_means, what
 
 
@@ -589,6 +600,10 @@ def main():
     ap.add_argument("--sampler", default="independent", choices=["independent", "stratified"],
                     help="clrt's --sampler for the sampled rule's renders (default independent); where that fails on a "
                          "classic camera with depth of field or an area light, --sampler correlated is judged too")
+    ap.add_argument("--rows", type=int, default=1, metavar="K",
+                    help="full mode: the sampled rule renders cameras with EXR references on every K-th pixel row only, "
+                         "at the reference's spp (clrt render --part 1/K), and judges those rows (e.g. Veach Ajar's "
+                         "6400 spp); default 1: the whole image")
     ap.add_argument("--references", default="",
                     help="folder searched (recursively) for each camera's reference image by its file name, instead "
                          "of each scene folder's _reference_outputs/ (course packages laid out as inputs/ and outputs/); "
