@@ -404,7 +404,7 @@ def judge_sampled_with(r, scene, cam, ref, hdr, reduced, sampler):
     block = "%dx%d block %.2f" % (BLOCK, BLOCK, ratios[1]) if len(ratios) > 1 else "blocks not judged at N < R"
     what = "%s err/limit %.2f (pixel %.2f, %s; %d vs %d spp%s%s); %s" % (
         "relMSE" if hdr else "MSE", worst, ratios[0], block, N, R, ", 1/%d res" % f if f > 1 else "",
-        ", every %dth row" % k_rows if k_rows > 1 else "", mean_text)
+        ", 1 row in %d" % k_rows if k_rows > 1 else "", mean_text)
     return worst <= 1.0 and ok_means, what
 
 
@@ -476,7 +476,7 @@ def judge_roulette(r, scene, cam, ref, reduced, rr_rule):
             "of its %.1f%% (row %d col %d %s: %.3f), %d over; %d vs %d spp%s, --rr-rule %s") % (
         *im_ratio, 100 * float(np.max(im_limit / np.maximum(im_ref, 1e-12))), im_worst, RR_GRID, RR_GRID,
         float(ratio.min()), float(ratio.max()), worst, 100 * float(limit[bi, bj, ch] / max(m_ref[bi, bj, ch], 1e-12)),
-        bi, bj, "RGB"[ch], float(ratio[bi, bj, ch]), int((score > 1.0).sum()), R, R, ", every %dth row" % k if k > 1 else "",
+        bi, bj, "RGB"[ch], float(ratio[bi, bj, ch]), int((score > 1.0).sum()), R, R, ", 1 row in %d" % k if k > 1 else "",
         rr_rule)
     return worst <= 1.0 and im_worst <= 1.0, what
 
