@@ -11,7 +11,7 @@ its references, per block of scripts/check_course's 8x8 grid, for kernel variant
 
 Usage (from the repository root; the EXR reader is scripts/check_course's venv):
   build/check-venv/bin/python experiments/rr_glass_blocks.py rr    SCENE CAMS SEEDPAIR K [KERNEL_DIR]
-  build/check-venv/bin/python experiments/rr_glass_blocks.py noise SCENE CAM K [KERNEL_DIR]
+  [SEEDS=1,2] build/check-venv/bin/python experiments/rr_glass_blocks.py noise SCENE CAM K [KERNEL_DIR]
 SCENE: the glass box's XML with its references beside it (e.g. a copy of the course's 2020 package,
 chroma-works/Chroma-RayTracer assets/scenes/hw7/pathTracing). Study: docs/studies/2026-12-03-russian-roulette-
 references.md, addendum 2026-12-05.
@@ -73,7 +73,8 @@ def rr(scene, cams, pair, k, kernel_dir):
 def noise(scene, cam_id, k, kernel_dir):
     cam = [c for c in cc.cameras_of(cc.load_scene_tree(scene)) if c["id"] == cam_id][0]
     ref = cc.read_image(os.path.join(os.path.dirname(scene), cam["image"]))
-    a, b = (x[::k] for x in renders(scene, cam, (1, 2), k, kernel_dir, []))
+    seeds = tuple(int(x) for x in os.environ.get("SEEDS", "1,2").split(","))   # SEEDS=3,4: another pair
+    a, b = (x[::k] for x in renders(scene, cam, seeds, k, kernel_dir, []))
     r = ref[::k]
     wgt = 1.0 / (r ** 2 + 1e-2)
     A, B, R, W = (cc.blocks(x, 8) for x in (a, b, r, wgt))
