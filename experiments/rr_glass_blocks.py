@@ -38,7 +38,7 @@ def renders(scene, cam, seeds, k, kernel_dir, extra):
     with tempfile.TemporaryDirectory() as tmp:
         for seed in seeds:
             cmd = [os.path.join(ROOT, "build", "clrt"), "render", scene, "-o", tmp, "--camera", cam["id"],
-                   "--seed", str(seed), "--sampler", "independent"] + extra
+                   "--seed", str(seed), "--sampler", os.environ.get("SAMPLER", "independent")] + extra
             name = cam["image"]
             if k > 1:
                 cmd += ["--part", "1/%d" % k, "--tile-pixels", "512"]
