@@ -3,7 +3,8 @@
 # preview's browser test (scripts/preview_browser_test.py; skip with CLRT_NO_BROWSER_TEST=1), then the
 # OpenCL-implementation checks (scripts/test_implementations.sh: the device tests on Intel's CPU
 # runtime, the oclgrind suite, GPU-target compiles of every kernel variant), then the course check
-# (scripts/check_course --reduced against tests/course_expected_failures.txt: every course scene with a
+# (tests/check_course_references.sh, the check's reference lookup, then scripts/check_course --reduced against
+# tests/course_expected_failures.txt: every course scene with a
 # reference in ../shared; skip with CLRT_NO_COURSE_CHECK=1), then the deterministic fuzz check of the
 # scene/PLY/image readers (scripts/fuzz.sh --gate: the committed
 # regressions and seeds replayed under ASan/UBSan, then a fixed number of fixed-seed libFuzzer runs;
