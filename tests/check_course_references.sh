@@ -13,8 +13,18 @@ mkdir -p "$pkg/hw1/inputs" "$pkg/hw1/outputs" "$pkg/hw1/my_outputs" "$tmp/render
 cp "$root/scenes/transparency.xml" "$pkg/hw1/inputs/"
 "$root/build/clrt" render "$pkg/hw1/inputs/transparency.xml" -o "$tmp/render" --ldr-quantize floor >/dev/null
 cp "$tmp/render/transparency.png" "$pkg/hw1/outputs/"
-# A black 161x161 PNG, written with Python's standard library (Pillow comes later, with check_course's setup).
-python3 - "$pkg/hw1/my_outputs/transparency.png" <<'PY'
+cp "$tmp/render/transparency.png" "$pkg/hw1/my_outputs/"
+fails=0
+expect() {  # expect WHAT PATTERN [check_course args...]
+  local what=$1 pattern=$2; shift 2
+  local out; out=$(bash "$root/scripts/check_course" --scenes "$pkg" --references "$pkg" "$@" 2>&1 || true)
+  if grep -qE "$pattern" <<<"$out"; then echo "ok: $what"; else echo "FAILED: $what"; echo "$out"; fails=$((fails + 1)); fi
+}
+expect "two equally near references: SKIPPED, both named" \
+  'SKIPPED +ambiguous reference, 2 files .*hw1/my_outputs/transparency.png, hw1/outputs/transparency.png'
+# my_outputs/ becomes a black 161x161 PNG, written with the standard library of the Python that check_course has
+# set up by now (a fresh machine has none before it).
+"$root/build/check-venv/bin/python" - "$pkg/hw1/my_outputs/transparency.png" <<'PY'
 import struct, sys, zlib
 w = h = 161
 def chunk(kind, data):
@@ -24,14 +34,6 @@ png = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2,
        + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
 open(sys.argv[1], "wb").write(png)
 PY
-fails=0
-expect() {  # expect WHAT PATTERN [check_course args...]
-  local what=$1 pattern=$2; shift 2
-  local out; out=$(bash "$root/scripts/check_course" --scenes "$pkg" --references "$pkg" "$@" 2>&1 || true)
-  if grep -qE "$pattern" <<<"$out"; then echo "ok: $what"; else echo "FAILED: $what"; echo "$out"; fails=$((fails + 1)); fi
-}
-expect "two equally near references: SKIPPED, both named" \
-  'SKIPPED +ambiguous reference, 2 files .*hw1/my_outputs/transparency.png, hw1/outputs/transparency.png'
 expect "my_outputs/ left out: judged against outputs/ (clrt's own render)" \
   'transparency.png +deterministic +ok +PSNR' --references-exclude '(^|/)my_outputs/'
 expect "outputs/ left out: judged against my_outputs/ (black)" \
