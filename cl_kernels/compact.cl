@@ -1,8 +1,9 @@
 /* compact.cl — order-preserving compaction of the wavefront's child queue on the device, so the
  * host never reads the children back between bounces (src/render/queue_compact.h drives it).
  * Input: childValid[i] for the child slots i < n = *queueCount * childSlots (shade_hits writes
- * childSlots = 2 slots per parent path). Output: the valid children, in slot order, at [0, total) of
- * paths/rays, and total in *nextCount (the length of the next bounce's queue, read there on the device):
+ * childSlots = CLRT_CHILD_SLOTS(pathMode) slots per parent path). Output: the valid children, in slot
+ * order, at [0, total) of paths/rays, and total in *nextCount (the length of the next bounce's queue,
+ * read there on the device), both cut at queueCapacity (the paths buffer's length):
  *   compact_scan_blocks: per block of CLRT_COMPACT_GROUP * CLRT_COMPACT_ITEMS slots, each slot's
  *                        exclusive prefix of valid slots within its block (compactTarget) and the
  *                        block's count (blockSums);
@@ -82,13 +83,14 @@ void compact_scan_sums(CLRT_KERNEL_PARAMS(compact_scan_sums)) {
         }
         carry += total;
     }
-    if (get_local_id(0) == 0) *nextCount = carry;
+    if (get_local_id(0) == 0) *nextCount = min(carry, queueCapacity);
 }
 
 __kernel void compact_scatter(CLRT_KERNEL_PARAMS(compact_scatter)) {
     const int i = (int)get_global_id(0);
     if (i >= *queueCount * childSlots || childValid[i] == 0) return;
     const int target = blockSums[i / CLRT_COMPACT_BLOCK] + compactTarget[i];
+    if (target >= queueCapacity) return; /* a queue that outgrows the paths buffer keeps its first children */
     paths[target] = nextPaths[i];
     rays[target] = nextRays[i];
 }

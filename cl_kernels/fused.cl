@@ -81,7 +81,14 @@ __kernel CLRT_KERNEL_VEC_HINT void render_fused(CLRT_KERNEL_PARAMS(render_fused)
     if (i >= count) return;
     const int pixel = firstPixel + i;
     /* One path per depth: add each as it comes; else per-depth sums (levels <= CLRT_FUSED_MAX_LEVELS). */
-    const int direct = samples == 1 && scene.splitDepth == 0;
+    /* A path is a tree (a dielectric split, or the course rule's children of a specular material,
+     * Path_CourseSpecularChildren): per-depth sums, in the wavefront's order (FusedPlan::tree). */
+#if defined(CLRT_HAS_MIRROR) || defined(CLRT_HAS_DIELECTRIC) || defined(CLRT_HAS_CONDUCTOR)
+    const int tree = scene.splitDepth > 0 || (scene.pathMode & CLRT_PATH_RR_COURSE) != 0;
+#else
+    const int tree = scene.splitDepth > 0;
+#endif
+    const int direct = samples == 1 && !tree;
 #ifdef CLRT_FUSED_BOUNCES
     const int levels = min(CLRT_LAST_DEPTH(scene.maxDepth, scene.pathMode) + 1, CLRT_FUSED_MAX_LEVELS);
 #else
@@ -113,7 +120,13 @@ __kernel CLRT_KERNEL_VEC_HINT void render_fused(CLRT_KERNEL_PARAMS(render_fused)
                 if (direct) acc.xyz += r;
                 else levelSum[min(path.depth, levels - 1)] += r;
 #ifdef CLRT_FUSED_BOUNCES
-                /* left (reflection) child next, the right one later: each depth in queue order */
+                /* left (reflection) child next, the right ones later: each depth in queue order */
+                if (res.childValid[2] && top < CLRT_FUSED_STACK_SIZE) {
+                    stack[top].path = res.childPath[2];
+                    stack[top].ray = res.childRay[2];
+                    ++top;
+                    ++secondary;
+                }
                 if (res.childValid[1] && top < CLRT_FUSED_STACK_SIZE) {
                     stack[top].path = res.childPath[1];
                     stack[top].ray = res.childRay[1];

@@ -56,14 +56,16 @@ inline float3 Material_EvalDirect(ShadingPoint sp, const __global Material* mate
 
 /* What shading one hit leaves (Shade_Hit in shade.cl, Path_ShadeHit in path.cl): the ShadingPoint for
  * light sampling, the radiance that needs no shadow ray (already times the path throughput) and up to
- * two children (k = 0: reflection or the path tracer's one child, pathId·2; k = 1: refraction,
- * pathId·2 + 1). The wavefront writes them to its queues, the fused kernel (fused.cl) keeps them. */
+ * CLRT_SHADE_CHILDREN children (k = 0: reflection or the path tracer's one child, pathId·2; k = 1:
+ * refraction, pathId·2 + 1; k = 2: only under the course's roulette rule, a specular material's lobe,
+ * Path_CourseSpecularChildren). The wavefront writes them to its queues (SceneParams-independent
+ * childSlots per path: 3 under the course rule, else 2), the fused kernel (fused.cl) keeps them. */
 typedef struct {
     ShadingPoint sp;
     float4 radiance;
-    PathState childPath[2];
-    Ray childRay[2];
-    int childValid[2];
+    PathState childPath[CLRT_SHADE_CHILDREN];
+    Ray childRay[CLRT_SHADE_CHILDREN];
+    int childValid[CLRT_SHADE_CHILDREN];
 } ShadeResult;
 
 #endif /* CLRT_MATERIAL_CL */

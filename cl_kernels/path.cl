@@ -27,7 +27,8 @@
  * un-normalized Blinn-Phong), so NEE and BSDF sampling estimate the same integral.
  * Mirror, conductor, dielectric: their specular child (a dielectric picks reflection or refraction by
  * its Fresnel weight, never splits), chosen with probability 1/2 against the non-specular part when
- * the material has kd or ks, else always. */
+ * the material has kd or ks, else always. Under the course rule instead every child is traced
+ * (Path_CourseSpecularChildren: a dielectric's reflection and refraction, and the lobe as child 2). */
 #ifndef CLRT_PATH_CL
 #define CLRT_PATH_CL
 
@@ -229,12 +230,45 @@ inline int Path_CourseRoulette(float3 throughput, float w, float u, float* scale
 }
 
 /* The child's throughput.w under the course rule: ±sigma with T' = T·f (f: the BRDF values of the
- * bounce, fVec), so that the child's throughput / sigma' = T'. 0 when T' vanishes. */
+ * bounce, fVec), so that the child's throughput / sigma' = T'. T' = 0 (a lobe of a material without a
+ * diffuse part, Path_CourseDiffuseF) gives sigma' = +inf: q = 0 at the child's hit, which ends it there
+ * after its radiance. 0 (no child) when the child carries nothing. */
 inline float Path_CourseChildW(float3 throughput, float w, float3 next, float3 fVec, int specularBounce) {
     float tNext = maxComponent(throughput / Path_CourseSigma(w) * fVec);
-    if (!(tNext > 0.0f) || !isfinite(tNext)) return 0.0f;
-    float sigma = maxComponent(next) / tNext;
+    if (!(maxComponent(next) > 0.0f) || !isfinite(tNext)) return 0.0f;
+    float sigma = tNext > 0.0f ? maxComponent(next) / tNext : INFINITY;
     return specularBounce ? -sigma : sigma;
+}
+
+/* What the course rule's T takes from a non-specular bounce towards dirWorld: the BRDF's diffuse part
+ * (the BRDF with ks = 0: kd/π for the course's BRDFs, kd for a classic material). The hw6 diffuse box
+ * (ks = 0 everywhere) cannot tell it from the whole f; the glass box can: its dielectric's lobe (kd = 0)
+ * takes T to 0 (docs/studies/2026-12-03-russian-roulette-references.md, addendum of 2026-12-05, session 25). */
+inline float3 Path_CourseDiffuseF(ShadingPoint sp, const __global Material* materials, float3 dirWorld) {
+    float c = dot(sp.normal.xyz, dirWorld);
+    if (!(c > 0.0f)) return (float3)(0.0f);
+    sp.ks = (float4)(0.0f, 0.0f, 0.0f, sp.ks.w);
+    return Material_EvalDirect(sp, materials, dirWorld, c) / c;
+}
+
+/* A dielectric's two specular directions at a hit (wo, ns facing wo): reflection and, unless the ray is
+ * totally reflected, refraction; *fresnel: the reflected share (1 under total reflection); *att: Beer's
+ * law over the distance t the ray travelled inside. */
+inline void Path_DielectricSplit(Material m, float3 wo, float3 ns, float t, int inside, float3* dirR, float3* dirT,
+                                 float* fresnel, float3* att) {
+    float cosI = dot(wo, ns);
+    *att = inside ? exp(-m.absorption.xyz * t) : (float3)(1.0f);
+    float n1 = inside ? m.refractionIndex : 1.0f, n2 = inside ? 1.0f : m.refractionIndex;
+    float eta = n1 / n2, c = clamp(cosI, 0.0f, 1.0f);
+    float sin2T = eta * eta * fmax(0.0f, 1.0f - c * c);
+    *dirR = normalize(2.0f * cosI * ns - wo);
+    *dirT = (float3)(0.0f);
+    *fresnel = 1.0f;
+    if (sin2T < 1.0f) {
+        float cosT = sqrt(1.0f - sin2T);
+        *fresnel = Fresnel_Dielectric(c, cosT, n1, n2);
+        *dirT = normalize(-eta * wo + (eta * c - cosT) * ns);
+    }
 }
 
 /* The specular child of a mirror, conductor or dielectric (weight w), the same directions as
@@ -248,22 +282,73 @@ inline int Path_SpecularBounce(Material m, float3 wo, float3 ns, float3 ng, floa
     if (m.kind == MATERIAL_CONDUCTOR) {
         *weight = m.mirror.xyz * Fresnel_Conductor(clamp(cosI, 0.0f, 1.0f), m.refractionIndex, m.absorptionIndex);
     } else if (m.kind == MATERIAL_DIELECTRIC) {
-        *weight = inside ? exp(-m.absorption.xyz * t) : (float3)(1.0f);
-        float n1 = inside ? m.refractionIndex : 1.0f, n2 = inside ? 1.0f : m.refractionIndex;
-        float eta = n1 / n2, c = clamp(cosI, 0.0f, 1.0f);
-        float sin2T = eta * eta * fmax(0.0f, 1.0f - c * c);
-        if (sin2T < 1.0f) {
-            float cosT = sqrt(1.0f - sin2T);
-            if (u >= Fresnel_Dielectric(c, cosT, n1, n2)) {
-                *dir = normalize(-eta * wo + (eta * c - cosT) * ns);
-                *org = Ray_OffsetOrigin(p, -ng);
-            }
+        float3 dirT;
+        float fr;
+        Path_DielectricSplit(m, wo, ns, t, inside, dir, &dirT, &fr, weight);
+        if (u >= fr) { /* refraction, picked by its Fresnel weight (never under total reflection: fr = 1) */
+            *dir = dirT;
+            *org = Ray_OffsetOrigin(p, -ng);
         }
     } else if (m.kind != MATERIAL_MIRROR) {
         return 0;
     }
     *dir = Glossy_Perturb(*dir, m.roughness, uGlossy.x, uGlossy.y);  /* Roughness: reflected or refracted */
     return allFinite3(*dir);
+}
+
+/* Child k of a path-traced hit: the path one bounce deeper with throughput next and throughput.w w, the
+ * ray from org along dir. pathId: children 2i (reflection, or the one child), 2i + 1 (refraction); the
+ * course rule's lobe child of a specular material (k = 2) 2i with the top bit set (a lineage of its own;
+ * saturated ids keep theirs). */
+inline void Path_Child(ShadeResult* res, int k, PathState path, float3 next, float w, float3 org, float3 dir) {
+    PathState c = path;
+    c.throughput = (float4)(next, w);
+    c.depth = path.depth + 1;
+    uint id = path.pathId;
+    c.pathId = k == 2 ? (id < 0x40000000u ? (id * 2u) | 0x80000000u : id) : (id < 0x80000000u ? id * 2u + (uint)(k & 1) : id);
+    Ray r;
+    r.origin = (float4)(org, 0.0f);
+    r.direction = (float4)(dir, INFINITY);
+    res->childPath[k] = c;
+    res->childRay[k] = r;
+    res->childValid[k] = maxComponent(next) > 0.0f && allFinite3(next) && allFinite3(dir) ? 1 : 0;
+}
+
+/* Under the course rule a specular material traces all its children, as the course's glass box shows
+ * (its RR references' sample values are Le·kd/(1 − F) on the glass: docs/studies/2026-12-03-russian-roulette-
+ * references.md, addendum of session 25): the specular ones (a mirror's or conductor's reflection; a
+ * dielectric's reflection and refraction, weights F and 1 − F, times Beer's law), each with T times its
+ * weight, and, when the material has a BRDF part (kd or ks), a lobe child (k = 2) sampled as any bounce,
+ * with T times the BRDF's diffuse part (Path_CourseDiffuseF). */
+inline void Path_CourseSpecularChildren(SceneParams scene, PathState path, float3 throughput, Material m, ShadingPoint sp,
+                                        const __global Material* materials, float3 wo, float3 ns, float3 ng,
+                                        float3 pWorld, float t, int inside, int lobe, RngKey key, uint dim,
+                                        ShadeResult* res) {
+    const float3 T = path.throughput.xyz;
+    if (m.kind == MATERIAL_DIELECTRIC) {
+        float3 dirR, dirT, att;
+        float fr;
+        Path_DielectricSplit(m, wo, ns, t, inside, &dirR, &dirT, &fr, &att);
+        float2 uR = Sampler_Other2D(scene, path, key, dim), uT = Sampler_Other2D(scene, path, key, dim + 2u);
+        float3 wR = att * fr, wT = att * (1.0f - fr);
+        Path_Child(res, 0, path, throughput * wR, Path_CourseChildW(T, path.throughput.w, throughput * wR, wR, 1),
+                   Ray_OffsetOrigin(pWorld, ng), Glossy_Perturb(dirR, m.roughness, uR.x, uR.y));
+        if (fr < 1.0f)
+            Path_Child(res, 1, path, throughput * wT, Path_CourseChildW(T, path.throughput.w, throughput * wT, wT, 1),
+                       Ray_OffsetOrigin(pWorld, -ng), Glossy_Perturb(dirT, m.roughness, uT.x, uT.y));
+    } else {
+        float3 w, org, dir;
+        if (Path_SpecularBounce(m, wo, ns, ng, pWorld, t, inside, 0.0f, Sampler_Other2D(scene, path, key, dim), &w, &org, &dir))
+            Path_Child(res, 0, path, throughput * w, Path_CourseChildW(T, path.throughput.w, throughput * w, w, 1), org, dir);
+    }
+    if (!lobe) return;
+    float3 dir;
+    float pdf = 0.0f;
+    float3 fCos = Path_SampleBounce(sp, materials, scene.pathMode, Sampler_2D(scene, path, key, dim + 5u), &dir, &pdf);
+    if (!(maxComponent(fCos) > 0.0f) || !(pdf > 0.0f)) return;
+    float3 next = throughput * fCos / pdf;
+    float w = Path_CourseChildW(T, path.throughput.w, next, Path_CourseDiffuseF(sp, materials, dir), 0);
+    if (w != 0.0f) Path_Child(res, 2, path, next, w, Ray_OffsetOrigin(pWorld, ng), dir);
 }
 
 /* One path-traced hit (see the file comment) at pWorld, reached over distance t along -wo; ng, ns:
@@ -297,6 +382,10 @@ inline void Path_ShadeHit(SceneParams scene, PathState path, Material m, float3 
     res->sp = sp;
     if (course && !courseSurvives) return;
     if (emissionOnly || (lastVertex && !(mode & CLRT_PATH_MIS)) || (!specular && !diffuse)) return;
+    if (course && specular) {
+        Path_CourseSpecularChildren(scene, path, throughput, m, sp, materials, wo, ns, ng, pWorld, t, inside, diffuse, key, dim, res);
+        return;
+    }
     float pSpecular = specular ? (diffuse ? 0.5f : 1.0f) : 0.0f;
     int pickSpecular = Sampler_Other1D(scene, path, key, dim + 3u) < pSpecular;
     if (pickSpecular && lastVertex) return;
@@ -318,8 +407,8 @@ inline void Path_ShadeHit(SceneParams scene, PathState path, Material m, float3 
     float3 next = throughput * weight;
     float childW = pickSpecular ? 0.0f : pdf;
     if (course) {
-        /* the bounce's BRDF values: f·cosθ / cosθ, or the specular weight before the 1/pSpecular pick */
-        float3 fVec = pickSpecular ? weight * pSpecular : weight * pdf * (1.0f - pSpecular) / dot(sp.normal.xyz, dir);
+        /* the bounce's BRDF diffuse part (a specular material's children are Path_CourseSpecularChildren's) */
+        float3 fVec = Path_CourseDiffuseF(sp, materials, dir);
         childW = Path_CourseChildW(path.throughput.xyz, path.throughput.w, next, fVec, pickSpecular);
         if (childW == 0.0f) return;
     } else if ((mode & CLRT_PATH_RR) && roulette && !Path_RussianRoulette(&next, Sampler_Other1D(scene, path, key, dim + 4u))) {

@@ -180,7 +180,7 @@ inline float3 MotionBlur_HitShift(Hit h, Ray r, const HitTriangle* ht, const __g
 
 /* Motion blur: the children of a path see the scene at its shutter time. */
 inline void MotionBlur_StampChildren(ShadeResult* res, float time) {
-    for (int k = 0; k < 2; ++k)
+    for (int k = 0; k < CLRT_SHADE_CHILDREN; ++k)
         if (res->childValid[k]) res->childRay[k].origin.w = time;
 }
 
@@ -446,7 +446,7 @@ inline void Shade_Hit(SceneParams scene, CameraParams cam, PathState path, Ray r
                       const __global ImageInfo* images, const __global float4* texels, const __global Light* lights,
                       const __global float* envDist, ShadeResult* res) {
     float3 throughput = path.throughput.xyz;
-    res->childValid[0] = res->childValid[1] = 0;
+    res->childValid[0] = res->childValid[1] = res->childValid[2] = 0;
     ShadingPoint sp;  /* every field set: misses and dielectric interiors store it whole (oclgrind) */
     sp.position = sp.normal = sp.geomNormal = sp.wo = sp.kd = sp.ks = (float4)(0.0f);
     sp.material = 0;
@@ -563,13 +563,14 @@ __kernel CLRT_KERNEL_VEC_HINT void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
     const ShadingPoint sp = res.sp;
     points[i] = sp;
     pathRadiance[i] = res.radiance;
-    for (int k = 0; k < 2; ++k) {
-        childValid[2 * i + k] = res.childValid[k];
+    const int slots = CLRT_CHILD_SLOTS(scene.pathMode);
+    for (int k = 0; k < slots; ++k) {
+        childValid[slots * i + k] = res.childValid[k];
         if (res.childValid[k]) {  /* compact_paths reads only the valid children */
             const PathState child = res.childPath[k];
             const Ray childRay = res.childRay[k];
-            nextPaths[2 * i + k] = child;
-            nextRays[2 * i + k] = childRay;
+            nextPaths[slots * i + k] = child;
+            nextRays[slots * i + k] = childRay;
         }
     }
 }

@@ -8,10 +8,15 @@ its references, per block of scripts/check_course's 8x8 grid, for kernel variant
        block values are over.
   noise a camera without roulette: per block mse(a, ref) / mse(a, b) (relMSE weights) of two renders: about 1 where
        the reference is as noisy as clrt, 0.5 where it has no noise.
+  values the glass sphere's pixel values (green, x 130-229, y 320-419) times the spp, as a histogram with 1-wide
+       bins (the bins holding at least 8 pixels), for the reference and one clrt render (--seed SEED, --rr-rule
+       course on roulette cameras): a pixel whose 100 samples are one light hit and 99 zeros shows that sample's
+       value, so the peaks are the rule's sample values (Le·kd/(1 - F) = 26.8 on camera 8: both Fresnel children).
 
 Usage (from the repository root; the EXR reader is scripts/check_course's venv):
   build/check-venv/bin/python experiments/rr_glass_blocks.py rr    SCENE CAMS SEEDPAIR K [KERNEL_DIR]
   [SEEDS=1,2] build/check-venv/bin/python experiments/rr_glass_blocks.py noise SCENE CAM K [KERNEL_DIR]
+  build/check-venv/bin/python experiments/rr_glass_blocks.py values SCENE CAM SEED [KERNEL_DIR]
 SCENE: the glass box's XML with its references beside it (e.g. a copy of the course's 2020 package,
 chroma-works/Chroma-RayTracer assets/scenes/hw7/pathTracing). Study: docs/studies/2026-12-03-russian-roulette-
 references.md, addendum 2026-12-05.
@@ -84,9 +89,25 @@ def noise(scene, cam_id, k, kernel_dir):
     print(ratio)
 
 
+def values(scene, cam_id, seed, kernel_dir):
+    cam = [c for c in cc.cameras_of(cc.load_scene_tree(scene)) if c["id"] == cam_id][0]
+    ref = cc.read_image(os.path.join(os.path.dirname(scene), cam["image"]))
+    extra = ["--rr-rule", "course"] if cam["rr"] else []
+    img = renders(scene, cam, (seed,), 1, kernel_dir, extra)[0]
+    spp = float(cam["spp"])
+    for name, x in (("reference", ref), ("clrt", img)):
+        v = x[320:420, 130:230, 1].ravel() * spp
+        h, e = np.histogram(v, bins=np.arange(0.5, 130.5, 1.0))
+        print("%s: zero pixels %.3f, clipped (95th pct) mean %.2f" % (name, np.mean(v == 0),
+                                                                    np.minimum(v, np.percentile(v, 95)).mean()))
+        print("  " + "  ".join("%.1f:%d" % (a, b) for a, b in zip(e, h) if b >= 8))
+
+
 if __name__ == "__main__":
     if len(sys.argv) >= 6 and sys.argv[1] == "rr":
         rr(sys.argv[2], sys.argv[3].split(","), int(sys.argv[4]), int(sys.argv[5]), sys.argv[6] if len(sys.argv) > 6 else "")
+    elif len(sys.argv) >= 5 and sys.argv[1] == "values":
+        values(sys.argv[2], sys.argv[3], int(sys.argv[4]), sys.argv[5] if len(sys.argv) > 5 else "")
     elif len(sys.argv) >= 5 and sys.argv[1] == "noise":
         noise(sys.argv[2], sys.argv[3], int(sys.argv[4]), sys.argv[5] if len(sys.argv) > 5 else "")
     else:

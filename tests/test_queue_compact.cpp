@@ -2,7 +2,9 @@
 // against a host reference: for random valid masks of awkward lengths (empty, one slot, around the
 // work-group and block sizes, several chunks of block sums), densities (none, all, half, sparse) and
 // launch bounds above the true length, the device writes exactly the valid children, in slot order,
-// to [0, total), leaves every slot beyond untouched, and writes total to the next-count int.
+// to [0, total), leaves every slot beyond untouched, and writes total to the next-count int; with a paths
+// buffer shorter than the valid children (the course rule's three-way splits) it keeps the first ones, in
+// slot order, writes nothing beyond the buffer's length and counts only those.
 #include <catch.hpp>
 
 #include <random>
@@ -20,9 +22,10 @@ namespace {
 
 struct CompactCase {
     size_t slots;        // mask length: queue length * childSlots
-    int childSlots;      // 1 or 2
+    int childSlots;      // 1, 2 or 3
     double density;      // probability of a valid slot
     size_t extraBound;   // the launch bound exceeds the mask by this much
+    size_t pathCapacity = 0;  // the paths buffer's length given to the compactor (0: the whole buffer)
 };
 
 // Compacts a random mask on the device; checks against std's stable order on the host.
@@ -54,7 +57,8 @@ void checkCompaction(QueueCompactor& qc, const CompactCase& c, uint32_t seed) {
                outRayBuf = buf(outRays);
     std::vector<int> count{int(n / size_t(c.childSlots))}, nextCount{-1};
     cl::Buffer countBuf = buf(count), nextCountBuf = buf(nextCount);
-    qc.setBuffers(ctx, cap, maskBuf, nextBuf, nextRayBuf, outBuf, outRayBuf);
+    const size_t pathCapacity = c.pathCapacity ? c.pathCapacity : cap;
+    qc.setBuffers(ctx, cap, pathCapacity, maskBuf, nextBuf, nextRayBuf, outBuf, outRayBuf);
     const QueueCompactor::Launch launch = [&](KernelArgs& k, size_t items, size_t local) {
         CL_CPP(q.enqueueNDRangeKernel(k.ready(), cl::NullRange, cl::NDRange(items), cl::NDRange(local)));
     };
@@ -65,7 +69,7 @@ void checkCompaction(QueueCompactor& qc, const CompactCase& c, uint32_t seed) {
 
     std::vector<int> expected;  // the host reference: valid slots in order
     for (size_t i = 0; i < n; ++i)
-        if (mask[i] != 0) expected.push_back(int(i));
+        if (mask[i] != 0 && expected.size() < pathCapacity) expected.push_back(int(i));
     INFO("slots " << n << ", childSlots " << c.childSlots << ", density " << c.density << ", bound +" << c.extraBound);
     REQUIRE(nextCount[0] == int(expected.size()));
     size_t wrong = 0, touched = 0;
@@ -95,6 +99,11 @@ TEST_CASE("queue compaction on the device equals the host's stable compaction", 
         for (size_t slots : {size_t(2), size_t(256), size_t(258), size_t(100000)})
             for (size_t extra : {size_t(0), size_t(1), size_t(600), size_t(5000)})
                 checkCompaction(qc, {slots, 2, 0.5, extra}, seed++);
+    }
+    SECTION("three child slots per path, and a paths buffer shorter than the children (kept: the first ones)") {
+        for (size_t slots : {size_t(3), size_t(300), size_t(100002)})
+            for (size_t capacity : {size_t(0), size_t(1), size_t(100), slots / 3})
+                checkCompaction(qc, {slots, 3, 0.6, 7, capacity}, seed++);
     }
     SECTION("more blocks than one work-group scans at once (the block-sum scan loops)") {
         const size_t slots = block * block + 3 * block + 17;  // 516 blocks and a partial one

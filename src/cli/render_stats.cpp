@@ -33,8 +33,12 @@ void sumDeviceCounters(const std::vector<DeviceWork>& work, RenderCounters& coun
         counters.secondaryRays += w.counters.secondaryRays;
         counters.shadowRays += w.counters.shadowRays;
         counters.pathSegments += w.counters.pathSegments;
+        counters.fullQueues += w.counters.fullQueues;
         deviceSeconds = std::max(deviceSeconds, w.counters.seconds);
     }
+    if (counters.fullQueues > 0)
+        warn(std::to_string(counters.fullQueues) + " bounce queue(s) of --rr-rule course's splits were full: the "
+             "children beyond them were dropped, so the image is darker than the rule's");
     if (work.size() == 1) counters.seconds = deviceSeconds;
     if (work.size() > 1)
         for (const DeviceWork& w : work) {

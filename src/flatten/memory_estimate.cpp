@@ -169,8 +169,9 @@ uint64_t renderBytes(const Scene& scene, const MemoryPlan& plan, const Camera& c
     const int maxDepth = std::min(kMaxRecursionDepth, cam.maxRecursionDepth >= 0 ? cam.maxRecursionDepth : scene.maxRecursionDepth);
     if (dielectric && spp <= 4 && cam.pathMode == 0)
         for (int split = 0; split < maxDepth && (capacity << 1) <= (uint64_t(1) << 21); ++split) capacity <<= 1;
-    const uint64_t perPath = 3 * sizeof(dev::PathState) + 3 * sizeof(dev::Ray) + sizeof(dev::Hit) +
-                             sizeof(dev::ShadingPoint) + sizeof(dev::float4) + 4 * sizeof(int) +
+    // paths and rays, and their child slots: 2 per path, 3 under --rr-rule course (its batch is a quarter)
+    const uint64_t perPath = 4 * sizeof(dev::PathState) + 4 * sizeof(dev::Ray) + sizeof(dev::Hit) +
+                             sizeof(dev::ShadingPoint) + sizeof(dev::float4) + 5 * sizeof(int) +
                              sizeof(int);  // hitInstances (with instances)
     uint64_t bytes = capacity * perPath;
     const uint64_t lights = scene.lights.size();

@@ -51,7 +51,7 @@ std::string fusedUnsupported(const dev::SceneParams& sp, const FusedPlan& plan) 
     if (!plan.bounces) return "";
     if (sp.splitDepth > CLRT_FUSED_STACK_SIZE)
         return "dielectric split depth " + std::to_string(sp.splitDepth) + " > " + std::to_string(CLRT_FUSED_STACK_SIZE);
-    const bool perDepthSums = plan.group > 1 || sp.splitDepth > 0;  // as render_fused's `direct`
+    const bool perDepthSums = plan.group > 1 || sp.splitDepth > 0 || plan.tree;  // as render_fused's `direct`
     const int depths = CLRT_LAST_DEPTH(sp.maxDepth, sp.pathMode) + 1;
     if (perDepthSums && depths > CLRT_FUSED_MAX_LEVELS)
         return "per-depth sums of " + std::to_string(depths) + " depths > " + std::to_string(CLRT_FUSED_MAX_LEVELS);

@@ -26,6 +26,8 @@ struct FusedPlan {
     int group = 1;       // samples of each pixel per pass (the wavefront's batch group: same sums)
     int lightSlots = 1;  // shadow-ray slots per light (2: multi-sample MIS environment light)
     bool bounces = false;
+    bool tree = false;   // a path may have several children beyond the split depth (--rr-rule course with a
+                         // mirror, conductor or dielectric): per-depth sums, as with a split
 };
 
 // Auto: fused on CPU devices for images of at least kFusedMinPixels pixels (the fused kernel has one

@@ -19,8 +19,9 @@ QueueCompactor::QueueCompactor(const cl::Program& program)
     : scanBlocks_(program, "compact_scan_blocks"), scanSums_(program, "compact_scan_sums"),
       scatter_(program, "compact_scatter") {}
 
-void QueueCompactor::setBuffers(cl::Context& ctx, size_t maxSlots, const cl::Buffer& valid, const cl::Buffer& nextP,
-                                const cl::Buffer& nextR, const cl::Buffer& p, const cl::Buffer& r) {
+void QueueCompactor::setBuffers(cl::Context& ctx, size_t maxSlots, size_t pathCapacity, const cl::Buffer& valid,
+                                const cl::Buffer& nextP, const cl::Buffer& nextR, const cl::Buffer& p, const cl::Buffer& r) {
+    queueCapacity = int(std::min<size_t>(pathCapacity, size_t(INT32_MAX)));
     childValid = valid;
     nextPaths = nextP;
     nextRays = nextR;

@@ -26,8 +26,9 @@ public:
 
     // The queue buffers, named as the kernel parameters they are bound to, and scratch for up to
     // `maxSlots` child slots (allocated on growth only).
-    void setBuffers(cl::Context& ctx, size_t maxSlots, const cl::Buffer& childValid, const cl::Buffer& nextPaths,
-                    const cl::Buffer& nextRays, const cl::Buffer& paths, const cl::Buffer& rays);
+    // `pathCapacity`: the length of paths/rays; children beyond it (in slot order) are dropped.
+    void setBuffers(cl::Context& ctx, size_t maxSlots, size_t pathCapacity, const cl::Buffer& childValid,
+                    const cl::Buffer& nextPaths, const cl::Buffer& nextRays, const cl::Buffer& paths, const cl::Buffer& rays);
 
     // Enqueues the compaction of the *queueCount * childSlots slots (the host knows only the bound
     // `slotBound` >= that many, <= maxSlots; launches are sized by it) and writes the survivors'
@@ -38,6 +39,7 @@ public:
     // Members named as the parameters of cl_kernels/compact.cl's kernels (CLRT_BIND_GROUP reads them).
     cl::Buffer queueCount, nextCount, childValid, compactTarget, blockSums, nextPaths, nextRays, paths, rays;
     int childSlots = 2;
+    int queueCapacity = 0;
 
 private:
     KernelArgs scanBlocks_, scanSums_, scatter_;

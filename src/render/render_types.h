@@ -35,6 +35,8 @@ struct RenderCounters {
     double extendSeconds[kDepthBins] = {}, shadowSeconds[kDepthBins] = {};
     bool profiled = false;
     bool fused = false;  // the fused path traced them: its one kernel has no per-depth split
+    uint64_t fullQueues = 0;   // bounces whose child queue reached its capacity (--rr-rule course's three-way
+                               // splits, renderer.cpp kCourseQueueGrowth): children beyond it were dropped
     int stoppedAtSample = -1;  // >= 0: RenderSettings::stop ended the render early; the fewest samples
                                // any pixel got (tiles in progress finish their current pass, >= 1)
 };

@@ -38,7 +38,8 @@ struct Renderer::Impl {
     // bindAll() binds each kernel's whole parameter list from these members, by name.
     cl::Buffer nodes, leaves, tris, triShading, triAttributes, spheres, planes, instances, materials, textureSets, textures, images, texels, lights, envDist, lightData;
     // Queue buffers (sized per render).
-    size_t queueCapacity = 0, shadowCapacity = 0;
+    size_t queueCapacity = 0, childCapacity = 0, shadowCapacity = 0;
+    int childSlots = 2;  // child slots per path of the current render (CLRT_CHILD_SLOTS)
     cl::Buffer paths, rays, hits, hitInstances, points, pathRadiance, nextPaths, nextRays, childValid, shadows;
     // The queue length on the device (one int each): the current bounce's, and the next one's that
     // the compaction writes (swapped after it). hostCounts[d]: the length at depth d, read back
@@ -106,11 +107,13 @@ struct Renderer::Impl {
         }
     }
 
-    void ensureQueues(size_t capacity, size_t shadowSlots) {
+    // `capacity` paths per queue, `childSlots` child slots per path, `shadowSlots` shadow rays.
+    void ensureQueues(size_t capacity, int slotsPerPath, size_t shadowSlots) {
         cl::Context& ctx = dc.context();
         auto rw = [&](size_t bytes) { return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, std::max<size_t>(bytes, 16))); };
-        if (capacity > queueCapacity) {
-            queueCapacity = capacity;
+        if (capacity > queueCapacity || capacity * size_t(slotsPerPath) > childCapacity) {
+            queueCapacity = std::max(queueCapacity, capacity);
+            childCapacity = std::max(childCapacity, capacity * size_t(slotsPerPath));
             paths = rw(sizeof(dev::PathState) * capacity);
             rays = rw(sizeof(dev::Ray) * capacity);
             hits = rw(sizeof(dev::Hit) * capacity);
@@ -119,10 +122,10 @@ struct Renderer::Impl {
             hitInstances = rw(ds.features.instances ? sizeof(int) * capacity : 0);
             points = rw(sizeof(dev::ShadingPoint) * capacity);
             pathRadiance = rw(sizeof(dev::float4) * capacity);
-            nextPaths = rw(sizeof(dev::PathState) * capacity * 2);
-            nextRays = rw(sizeof(dev::Ray) * capacity * 2);
-            childValid = rw(sizeof(int) * capacity * 2);
-            compactor.setBuffers(ctx, capacity * 2, childValid, nextPaths, nextRays, paths, rays);
+            nextPaths = rw(sizeof(dev::PathState) * childCapacity);
+            nextRays = rw(sizeof(dev::Ray) * childCapacity);
+            childValid = rw(sizeof(int) * childCapacity);
+            compactor.setBuffers(ctx, childCapacity, queueCapacity, childValid, nextPaths, nextRays, paths, rays);
         }
         if (shadowSlots > shadowCapacity) {
             shadowCapacity = shadowSlots;
@@ -307,17 +310,36 @@ struct BatchPlan {
     int group = 1;          // samples of each pixel per batch
     size_t batch = 1;       // pixels per batch
     size_t capacity = 0;    // queue slots: batch * group paths, times 2^splitDepth when materials bounce
+                            // (times kCourseQueueGrowth under the course rule's three-way splits)
+    int childSlots = 2;     // child slots per path (CLRT_CHILD_SLOTS)
+    int maxChildren = 1;    // children a path may have beyond the split depth: 3 under courseSplit
     size_t lightChunk = 0;  // lights per sample_lights launch (0: the scene has none)
     int lightSlots = 1;     // shadow-ray slots per light: 2 with a multi-sample MIS environment light
     bool bounces = false;   // some material spawns children
 };
 
+// Under the course rule's three-way splits (planBatches) the queue holds this many times a batch's camera
+// paths; a deeper queue keeps its first paths (compact.cl), which the course's glass box never reaches
+// (its children mostly end at their next hit).
+constexpr size_t kCourseQueueGrowth = 4;
+
 // The plan for `numPixels` pixels at cp.spp samples; sets the split depth (and seed, depth cap) in `sp`.
 static BatchPlan planBatches(const DeviceScene& ds, size_t numPixels, const RenderSettings& settings,
                              const dev::CameraParams& cp, dev::SceneParams& sp) {
     BatchPlan plan;
+    // --rr-rule course: the course references' roulette (needs the BSDF pdf slot MIS uses: not with MIS)
+    if ((sp.pathMode & CLRT_PATH_RR) && !(sp.pathMode & CLRT_PATH_MIS) && settings.rouletteRule == RouletteRule::Course)
+        sp.pathMode |= CLRT_PATH_RR_COURSE;
+    // Under it a specular material traces all its children (up to three, Path_CourseSpecularChildren): the
+    // queue holds kCourseQueueGrowth times a batch's paths, the batch shrinking by as much (same memory).
+    const bool courseSplit = (sp.pathMode & CLRT_PATH_RR_COURSE) &&
+                             (ds.features.has(dev::MATERIAL_DIELECTRIC) || ds.features.has(dev::MATERIAL_MIRROR) ||
+                              ds.features.has(dev::MATERIAL_CONDUCTOR));
+    const size_t growth = courseSplit ? kCourseQueueGrowth : 1;
+    plan.childSlots = CLRT_CHILD_SLOTS(sp.pathMode);
+    plan.maxChildren = courseSplit ? 3 : 1;
     plan.group = samplesPerBatch(numPixels, cp.spp);
-    plan.batch = std::max<size_t>(1, std::min(numPixels, settings.maxBatchPixels / size_t(plan.group)));
+    plan.batch = std::max<size_t>(1, std::min(numPixels, settings.maxBatchPixels / size_t(plan.group) / growth));
     const size_t batchPaths = plan.batch * size_t(plan.group);
     plan.bounces = ds.features.bounces() || sp.pathMode != 0;
     sp.seed = settings.seed;
@@ -328,9 +350,6 @@ static BatchPlan planBatches(const DeviceScene& ds, size_t numPixels, const Rend
     // Path tracing with Russian roulette has no depth cap (the course's references show none): the
     // roulette ends paths, kMaxRecursionDepth is the backstop.
     if (sp.pathMode & CLRT_PATH_RR) sp.maxDepth = kMaxRecursionDepth;
-    // --rr-rule course: the course references' roulette (needs the BSDF pdf slot MIS uses: not with MIS)
-    if ((sp.pathMode & CLRT_PATH_RR) && !(sp.pathMode & CLRT_PATH_MIS) && settings.rouletteRule == RouletteRule::Course)
-        sp.pathMode |= CLRT_PATH_RR_COURSE;
     sp.maxDepth = std::min(sp.maxDepth, kMaxRecursionDepth);
     // Dielectrics split into both children while the queue can hold them and few samples are taken;
     // beyond that (or with many samples) one child is chosen by Fresnel weight (same expectation).
@@ -340,7 +359,7 @@ static BatchPlan planBatches(const DeviceScene& ds, size_t numPixels, const Rend
     }
     if (settings.splitDepthOverride >= 0) split = settings.splitDepthOverride;
     sp.splitDepth = split;
-    plan.capacity = plan.bounces ? batchPaths << split : batchPaths;
+    plan.capacity = plan.bounces ? (batchPaths << split) * growth : batchPaths;
     for (const dev::Light& l : ds.lights)
         if (l.kind == dev::LIGHT_ENVIRONMENT && l.envStrategy == dev::ENV_STRATEGY_MIS && l.distribution != CLRT_INVALID)
             plan.lightSlots = 2;  // sample_lights' EnvLight_SampleMis: a light and a cosine sample
@@ -370,13 +389,13 @@ void Renderer::Impl::enqueueBounce(size_t bound, const BatchPlan& plan) {
     run(kAccumulate, bound, STAGE_ACCUMULATE);
 }
 
-// Compacts the children of depth `depth` (2 slots per path, at most 2 * bound) on the device into the
+// Compacts the children of depth `depth` (childSlots per path, at most childSlots * bound) on the device into the
 // next queue, reads its length into hostCounts[depth + 1] without blocking, and makes it current.
 void Renderer::Impl::enqueueCompaction(int depth, size_t bound) {
     const QueueCompactor::Launch launch = [this](KernelArgs& k, size_t items, size_t local) {
         run(k, items, STAGE_COMPACT, local);
     };
-    compactor.enqueue(launch, queueCount, nextCount, 2, 2 * bound);
+    compactor.enqueue(launch, queueCount, nextCount, childSlots, size_t(childSlots) * bound);
     CL_CPP(dc.queue().enqueueReadBuffer(nextCount, CL_FALSE, 0, sizeof(int), &hostCounts[size_t(depth) + 1], nullptr,
                                         &countReads[size_t(depth) + 1]));
     countReadMarks[size_t(depth) + 1] = events.size();  // the launches before the read
@@ -421,11 +440,13 @@ void Renderer::Impl::traceBatch(int n, const BatchPlan& plan, RenderCounters& co
         if (!last) enqueueCompaction(depth, bound);
         if (depth > 0 && !exactBounds) length = queueLength(depth, counters);
         countBounce(depth, length, plan, counters);
+        if (depth > 0 && size_t(length) >= plan.capacity && plan.maxChildren > 1) ++counters.fullQueues;
         if (last || length == 0) break;
-        bound = std::min(plan.capacity, size_t(length) * (depth < scene.splitDepth ? 2 : 1));
+        bound = std::min(plan.capacity, size_t(length) * size_t(depth < scene.splitDepth ? 2 : plan.maxChildren));
         if (!exactBounds) continue;
         length = queueLength(depth + 1, counters);  // waits for this bounce's compaction
         bound = size_t(length);
+        if (length > 0 && size_t(length) >= plan.capacity && plan.maxChildren > 1) ++counters.fullQueues;
         if (length == 0) break;
     }
 }
@@ -492,7 +513,8 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     if (settings.pixelSampler == PixelSampler::Correlated && !m.ds.features.correlatedSampler)
         throw Error("--sampler correlated, but the program was built without CLRT_HAS_CORRELATED_SAMPLER (FeatureSet::correlatedSampler)");
     const BatchPlan plan = planBatches(m.ds, numPixels, settings, cp, sp);
-    m.ensureQueues(plan.capacity, plan.capacity * std::max<size_t>(plan.lightChunk, 1) * size_t(plan.lightSlots));
+    m.ensureQueues(plan.capacity, plan.childSlots, plan.capacity * std::max<size_t>(plan.lightChunk, 1) * size_t(plan.lightSlots));
+    m.childSlots = plan.childSlots;
 
     cl::Buffer image = CL_CPP(cl::Buffer(m.dc.context(), CL_MEM_READ_WRITE, imageBytes));
     CL_CPP(m.dc.queue().enqueueFillBuffer(image, dev::float4{0, 0, 0, 0}, 0, imageBytes));
@@ -503,7 +525,7 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     const int stoppedBefore = counters.stoppedAtSample;
     counters.stoppedAtSample = -1;
     // Fused (CPU devices) or wavefront: the same image either way (fused_renderer.h).
-    const FusedPlan fusedPlan{plan.group, plan.lightSlots, plan.bounces};
+    const FusedPlan fusedPlan{plan.group, plan.lightSlots, plan.bounces, plan.maxChildren > 1};
     std::string why;
     Pipeline pipeline = choosePipeline(settings.pipeline, m.dc.info(), numPixels, &why);
     const std::string notFused = pipeline == Pipeline::Fused ? fusedUnsupported(sp, fusedPlan) : "";

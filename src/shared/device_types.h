@@ -360,6 +360,12 @@ typedef struct SceneParams {
  * the last vertex's BSDF sample (cl_kernels/path.cl, Path_ShadeHit). Host and device. */
 #define CLRT_LAST_DEPTH(maxDepth, pathMode) ((maxDepth) + (((pathMode) & CLRT_PATH_MIS) ? 1 : 0))
 
+/* Children one shaded hit may leave (ShadeResult, cl_kernels/material.cl): reflection, refraction and,
+ * under the course's roulette rule only, a specular material's BRDF lobe (Path_CourseSpecularChildren).
+ * The wavefront's child queue has CLRT_CHILD_SLOTS(pathMode) slots per path. Host and device. */
+#define CLRT_SHADE_CHILDREN 3
+#define CLRT_CHILD_SLOTS(pathMode) (((pathMode) & CLRT_PATH_RR_COURSE) ? 3 : 2)
+
 /* Ray and hit record of the wavefront. */
 typedef struct Ray {
     float4 origin;         /* xyz; w = shutter time in [0, 1) with CLRT_HAS_MOTION_BLUR, else 0 */

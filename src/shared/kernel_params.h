@@ -69,8 +69,9 @@
 #define CLRT_KERNEL_accumulate(P)                                                                  \
     P(IN, int, queueCount) P(IN, PathState, paths) P(IN, float4, pathRadiance) P(BUF, float4, image)
 
-/* Compaction (compact.cl): the child slots i < *queueCount * childSlots; nextCount gets the survivors. */
-#define CLRT_PARAMS_COMPACT(P) P(IN, int, queueCount) P(VAL, int, childSlots)
+/* Compaction (compact.cl): the child slots i < *queueCount * childSlots; nextCount gets the survivors,
+ * at most queueCapacity (the paths queue's length; the first ones in slot order are kept). */
+#define CLRT_PARAMS_COMPACT(P) P(IN, int, queueCount) P(VAL, int, childSlots) P(VAL, int, queueCapacity)
 
 #define CLRT_KERNEL_compact_scan_blocks(P)                                                         \
     CLRT_PARAMS_COMPACT(P) P(IN, int, childValid) P(BUF, int, compactTarget) P(BUF, int, blockSums)
