@@ -1,6 +1,7 @@
-// Smooth-shading vertex normals (src/flatten/vertex_normals.h): the object-space rule (area-weighted
-// face normals summed per vertex index, given PLY normals as they are) against hand-computed values
-// that tell it from the other candidates (unweighted, angle-weighted, shared by position), and the
+// Smooth-shading vertex normals (src/flatten/vertex_normals.h): the object-space rules (area-weighted or
+// unweighted face normals summed per vertex index, given PLY normals as they are) against hand-computed
+// values that tell them from the other candidates (angle-weighted, shared by position); which one a scene
+// gets (unweighted in XML, area in the 2025 JSON form, --vertex-normals over both); and the
 // flattened world-space normals: the object-space ones by the inverse transpose, for a mesh and an
 // instance of it under non-uniform scalings, which for area weighting equals averaging in world space.
 // And where they are stored (TriangleShading.attributes): only for smooth meshes, uvs only for meshes
@@ -56,6 +57,30 @@ TEST_CASE("object-space vertex normals: area-weighted face normals summed per ve
     const std::vector<Vec3> g = objectVertexNormals(given);
     CHECK(near(g[0], Vec3(0, 0, 1)));  // given normals win, normalised
     CHECK(g[2] == Vec3(0, 0, 0));      // a zero given normal: none
+    // Unweighted (the XML form's rule): each face's unit normal, so vertex 0 gets (1, 0, 1)/√2 where the
+    // area rule gives (4, 0, 1) (angle weighting too: both angles are 90°), and vertex 6 (1, −1, 0)/√2, where
+    // its faces' angles, 45° and 26.6°, would give angle weighting (0.86, −0.51, 0).
+    const std::vector<Vec3> u = objectVertexNormals(cornerMesh(), VertexNormalWeighting::Unweighted);
+    CHECK(near(u[0], normalize(Vec3(1, 0, 1))));
+    CHECK(near(u[6], normalize(Vec3(1, -1, 0))));
+    CHECK(near(u[4], Vec3(0, -1, 0)));
+    CHECK(u[5] == Vec3(0, 0, 0));
+    CHECK(objectVertexNormals(given, VertexNormalWeighting::Unweighted)[0] == g[0]);  // given normals: as they are
+}
+
+TEST_CASE("vertex-normal weighting by the scene's form, and --vertex-normals", "[flatten][smooth]") {
+    TempDir dir;
+    writeFileBytes(dir.file("s.xml"), "<Scene><Cameras></Cameras></Scene>");
+    writeFileBytes(dir.file("s.json"), R"({"Scene": {"Cameras": {}}})");
+    CHECK(loadScene(dir.file("s.xml")).vertexNormals == VertexNormalWeighting::Unweighted);
+    CHECK(loadScene(dir.file("s.json")).vertexNormals == VertexNormalWeighting::Area);
+    // XML with leading whitespace: the form is read before the XML parser takes the text
+    writeFileBytes(dir.file("ws.xml"), "\n  <Scene><Cameras></Cameras></Scene>");
+    CHECK(loadScene(dir.file("ws.xml")).vertexNormals == VertexNormalWeighting::Unweighted);
+    CHECK_FALSE(loadScene(dir.file("ws.xml")).backfaceCulling);
+    const std::string bad = "render " + dir.file("s.xml") + " -o " + dir.path.string() + " --vertex-normals angle";
+    CHECK(runClrt(bad, dir.file("log")) != 0);
+    CHECK(readFileBytes(dir.file("log")).find("--vertex-normals") != std::string::npos);
 }
 
 // The start of the small scenes below: a 4x4 camera, ambient light, one white material.
@@ -77,7 +102,8 @@ TEST_CASE("flattened smooth normals are the object-space ones by the inverse tra
 <MeshInstance id="2" baseMeshId="1" resetTransform="true"><Transformations>s2 t1</Transformations></MeshInstance></Objects></Scene>)";
     const std::string path = dir.file("smooth.xml");
     writeFileBytes(path, xml);
-    const Scene scene = loadScene(path);
+    Scene scene = loadScene(path);
+    scene.vertexNormals = VertexNormalWeighting::Area;  // the rule for which the place of the transformation does not matter
     const DeviceScene ds = flattenScene(scene);
     REQUIRE(ds.params.numTriangles == 4);
     const Vec3 nObj0 = normalize(Vec3(4, 0, 1));  // vertex 1 of the XML: both faces

@@ -51,6 +51,9 @@ const char* const kRenderHelp =
     "  --backface-culling C  whether the classic renderer's camera, reflection and outside rays skip\n"
     "                        triangles seen from behind: auto (default: on for scenes in the 2025 JSON\n"
     "                        form, whose course references cull, off for XML scenes), on or off\n"
+    "  --vertex-normals W    smooth shading's face-normal weights at a vertex without given normals:\n"
+    "                        auto (default: area in the 2025 JSON form, unweighted in XML, as the\n"
+    "                        course's references of each), area or unweighted\n"
     "  --target-error X      render in passes until the estimated relMSE of the image is <= X (> 0):\n"
     "                        even and odd passes form two independent half-images, and their\n"
     "                        difference estimates the error (relative to 1, or to 255 for .png\n"
@@ -130,6 +133,9 @@ RenderArgs parseRenderArgs(int argc, char** argv, int start) {
         {{"--backface-culling"}, true, [&](Str f, Str v) {
              a.backfaceCulling = int(parseChoiceArg(f, v, {"auto", "off", "on"})) - 1;
          }},
+        {{"--vertex-normals"}, true, [&](Str f, Str v) {
+             a.vertexNormals = int(parseChoiceArg(f, v, {"auto", "area", "unweighted"})) - 1;
+         }},
         textOption({"--camera"}, a.cameraId),
         {{"--target-error"}, true, [&](Str f, Str v) { a.stop.targetError = parseBoundedArg(f, v, 0, true); }},
         {{"--time-limit"}, true, [&](Str f, Str v) { a.stop.timeLimit = parseBoundedArg(f, v, 0, false); }},
@@ -174,6 +180,7 @@ std::string pixelOptions(const RenderArgs& a) {
            ";sampler=" + pixelSamplerName(a.pixelSampler) +
            (a.rouletteRule == RouletteRule::Course ? ";rr-rule=course" : "") +
            (a.backfaceCulling >= 0 ? ";backface-culling=" + std::to_string(a.backfaceCulling) : "") +
+           (a.vertexNormals >= 0 ? ";vertex-normals=" + std::to_string(a.vertexNormals) : "") +
            ";resolution=" + std::to_string(a.width) + "x" + std::to_string(a.height) +
            ";tile=" + std::to_string(a.dist.tilePixels);
 }

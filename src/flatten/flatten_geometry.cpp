@@ -92,7 +92,7 @@ void meshVertices(const Scene& scene, const Shape& s, MeshVertices& out) {
     // inverse transpose; (0, 0, 0) where a vertex has none (the face normal is used there).
     std::vector<Vec3>& nw = out.nw;
     if (s.smooth) {
-        nw = objectVertexNormals(mesh);
+        nw = objectVertexNormals(mesh, scene.vertexNormals);
         Mat4 inv;
         const Mat4 invT = s.transform.inverse(inv) ? inv.transposed() : Mat4::identity();
         for (Vec3& n : nw)

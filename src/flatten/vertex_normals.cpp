@@ -17,7 +17,7 @@ Vec3 unitOrZero(const Vec3& v) {
 
 }  // namespace
 
-std::vector<Vec3> objectVertexNormals(const MeshData& mesh) {
+std::vector<Vec3> objectVertexNormals(const MeshData& mesh, VertexNormalWeighting weighting) {
     const size_t numVertices = mesh.positions.size();
     std::vector<Vec3> nObj(numVertices, Vec3(0, 0, 0));
     if (mesh.normals.size() == numVertices) {
@@ -29,8 +29,9 @@ std::vector<Vec3> objectVertexNormals(const MeshData& mesh) {
         const int a = mesh.indices[t], b = mesh.indices[t + 1], c = mesh.indices[t + 2];
         if (!valid(a) || !valid(b) || !valid(c)) continue;
         const Vec3& pa = mesh.positions[size_t(a)];
-        const Vec3 faceObj = cross(mesh.positions[size_t(b)] - pa, mesh.positions[size_t(c)] - pa);  // 2·area
+        Vec3 faceObj = cross(mesh.positions[size_t(b)] - pa, mesh.positions[size_t(c)] - pa);  // 2·area
         if (!isFinite(faceObj)) continue;
+        if (weighting == VertexNormalWeighting::Unweighted) faceObj = unitOrZero(faceObj);
         nObj[size_t(a)] += faceObj;
         nObj[size_t(b)] += faceObj;
         nObj[size_t(c)] += faceObj;

@@ -13,10 +13,10 @@ namespace clrt {
 // One object-space normal per entry of mesh.positions, unit length, or (0, 0, 0) where none is
 // defined (a vertex no triangle uses, normals that cancel, NaN/Inf input): the caller falls back to
 // the face normal there. Given normals (mesh.normals, one per vertex) are normalised as they are.
-// Otherwise the rule is: each triangle's unnormalised cross product (b − a) × (c − a) of its
-// object-space corners in index order (so weighted by twice its area; degenerate triangles add
-// nothing) summed at its three vertex indices, then normalised. Vertices are shared by index within
-// the mesh, not by position (a PLY's duplicated vertices keep their own normals).
-std::vector<Vec3> objectVertexNormals(const MeshData& mesh);
+// Otherwise the rule is: each triangle's cross product (b − a) × (c − a) of its object-space corners
+// in index order, as it is (Area: weighted by twice its area) or normalised (Unweighted), summed at its
+// three vertex indices, then normalised; degenerate triangles add nothing. Vertices are shared by index
+// within the mesh, not by position (a PLY's duplicated vertices keep their own normals).
+std::vector<Vec3> objectVertexNormals(const MeshData& mesh, VertexNormalWeighting weighting = VertexNormalWeighting::Area);
 
 }  // namespace clrt

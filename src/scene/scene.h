@@ -106,6 +106,10 @@ struct MeshData {
 // One placed shape. Meshes and instances share MeshData by index; spheres carry their own data.
 enum class ShapeType { Mesh, Sphere, Plane };
 
+// Smooth shading's face-normal weights at a vertex (vertex_normals.h): Area, each face's cross product as it
+// is (twice its area); Unweighted, each face's unit normal.
+enum class VertexNormalWeighting { Area, Unweighted };
+
 struct Shape {
     int id = 0;
     ShapeType type = ShapeType::Mesh;
@@ -132,6 +136,10 @@ struct Scene {
     // set for scenes in the 2025 JSON form (loadScene), clrt render --backface-culling overrides it
     // (docs/scene-format.md, conventions).
     bool backfaceCulling = false;
+    // How smooth shading averages face normals at a vertex without given normals (vertex_normals.h): by area
+    // in the 2025 JSON form, unweighted in XML (the course's 2025 and 2020 references; loadScene), clrt render
+    // --vertex-normals overrides it.
+    VertexNormalWeighting vertexNormals = VertexNormalWeighting::Area;
     Vec3 ambientLight{0, 0, 0};
     std::vector<Camera> cameras;
     std::vector<Light> lights;     // all but ambient

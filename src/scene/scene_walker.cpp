@@ -268,11 +268,14 @@ Scene loadScene(const std::string& path) {
     while (i < data.size() && std::isspace(static_cast<unsigned char>(data[i]))) ++i;
     if (i == data.size()) throw Error(path + ": file is empty");
     SceneNodePtr root;
+    const bool json = data[i] == '{';  // read before the XML parser takes the text
     if (data[i] == '<') root = parseXmlScene(path, std::move(data));
-    else if (data[i] == '{') root = parseJsonScene(path, data);
+    else if (json) root = parseJsonScene(path, data);
     else throw Error(path + ": neither XML (starts with '<') nor JSON (starts with '{')");
     Scene scene = walkScene(*root, path);
-    scene.backfaceCulling = data[i] == '{';  // the 2025 form: the course's 2025 renderer culls back faces
+    // The form decides two conventions in which the course's references differ by renderer (docs/scene-format.md):
+    scene.backfaceCulling = json;  // the 2025 renderer culls back faces
+    scene.vertexNormals = json ? VertexNormalWeighting::Area : VertexNormalWeighting::Unweighted;
     return scene;
 }
 
