@@ -214,3 +214,59 @@ TEST_CASE("smooth shading keeps a vertex normal that faces away from the geometr
         CHECK(img.pixels[centre] == Approx(5.0f).epsilon(1e-5));
     }
 }
+
+// Where camera rays start (Camera::raysFromImagePlane, camera.cl): the course's 2022 XML references do not
+// show what lies between the eye and the image plane (hw3 cornellbox_boxes_dynamic: its camera 10 behind the
+// box's front wall, the image plane 0.01 inside it; the wall is unculled in its 2022 grass_desert), its 2025
+// JSON ones do (hw1 simple's floor). Here a red quad between the eye (z = 5) and the image plane (z = 4)
+// and a green one at z = 0, both facing the camera: XML sees green, JSON red, --ray-origin overrides both.
+TEST_CASE("XML cameras' rays start on the image plane, JSON ones at the eye; --ray-origin overrides",
+          "[orientation][render]") {
+    TempDir dir;
+    writeFileBytes(dir.file("o.xml"), R"(<Scene><BackgroundColor>0 0 0</BackgroundColor>
+<Cameras><Camera id="1"><Position>0 0 5</Position><Gaze>0 0 -1</Gaze><Up>0 1 0</Up>
+<NearPlane>-0.5 0.5 -0.5 0.5</NearPlane><NearDistance>1</NearDistance><ImageResolution>4 4</ImageResolution>
+<ImageName>o.png</ImageName></Camera></Cameras><Lights><AmbientLight>1 1 1</AmbientLight></Lights>
+<Materials><Material id="1"><AmbientReflectance>1 0 0</AmbientReflectance></Material>
+<Material id="2"><AmbientReflectance>0 1 0</AmbientReflectance></Material></Materials>
+<VertexData>-9 -9 4.5  9 -9 4.5  9 9 4.5  -9 9 4.5  -9 -9 0  9 -9 0  9 9 0  -9 9 0</VertexData>
+<Objects><Mesh id="1"><Material>1</Material><Faces>1 2 3  1 3 4</Faces></Mesh>
+<Mesh id="2"><Material>2</Material><Faces>5 6 7  5 7 8</Faces></Mesh></Objects></Scene>)");
+    writeFileBytes(dir.file("o.json"), R"({"Scene": {"BackgroundColor": "0 0 0",
+ "Cameras": {"Camera": {"_id": "1", "Position": "0 0 5", "Gaze": "0 0 -1", "Up": "0 1 0",
+   "NearPlane": "-0.5 0.5 -0.5 0.5", "NearDistance": "1", "ImageResolution": "4 4", "ImageName": "o.png"}},
+ "Lights": {"AmbientLight": "1 1 1"},
+ "Materials": {"Material": [{"_id": "1", "AmbientReflectance": "1 0 0"}, {"_id": "2", "AmbientReflectance": "0 1 0"}]},
+ "VertexData": {"_data": "-9 -9 4.5  9 -9 4.5  9 9 4.5  -9 9 4.5  -9 -9 0  9 -9 0  9 9 0  -9 9 0", "_type": "xyz"},
+ "Objects": {"Mesh": [{"_id": "1", "Material": "1", "Faces": {"_data": "1 2 3  1 3 4", "_type": "triangle"}},
+                      {"_id": "2", "Material": "2", "Faces": {"_data": "5 6 7  5 7 8", "_type": "triangle"}}]}}})");
+    // Every pixel red (1) or green (0): the colour of the whole image, or -1 for a mix.
+    auto colour = [](const Scene& scene) {
+        DeviceScene ds = flattenScene(scene);
+        Renderer r(testContext(), ds);
+        RenderSettings rs;
+        rs.spp = 1;
+        RenderCounters counters;
+        const ImageRGB img = r.render(scene.cameras.at(0), rs, counters);
+        int red = 0, green = 0;
+        for (size_t i = 0; i < img.pixels.size(); i += 3) {
+            red += img.pixels[i] == 1.0f && img.pixels[i + 1] == 0.0f;
+            green += img.pixels[i] == 0.0f && img.pixels[i + 1] == 1.0f;
+        }
+        return red == 16 ? 1 : green == 16 ? 0 : -1;
+    };
+    Scene xml = loadScene(dir.file("o.xml")), json = loadScene(dir.file("o.json"));
+    CHECK(xml.cameras.at(0).raysFromImagePlane);
+    CHECK_FALSE(json.cameras.at(0).raysFromImagePlane);
+    CHECK(colour(xml) == 0);
+    CHECK(colour(json) == 1);
+    xml.cameras.at(0).raysFromImagePlane = false;
+    json.cameras.at(0).raysFromImagePlane = true;
+    CHECK(colour(xml) == 1);
+    CHECK(colour(json) == 0);
+    // The command line: --ray-origin eye|plane|auto, anything else a usage error naming the flag.
+    const std::string base = "render " + dir.file("o.xml") + " -o " + dir.path.string() + deviceArg();
+    CHECK(runClrt(base + " --ray-origin eye", dir.file("log")) == 0);
+    CHECK(runClrt(base + " --ray-origin sideways", dir.file("log")) == 1);
+    CHECK(readFileBytes(dir.file("log")).find("--ray-origin") != std::string::npos);
+}

@@ -54,6 +54,9 @@ const char* const kRenderHelp =
     "  --vertex-normals W    smooth shading's face-normal weights at a vertex without given normals:\n"
     "                        auto (default: area in the 2025 JSON form, unweighted in XML, as the\n"
     "                        course's references of each), area or unweighted\n"
+    "  --ray-origin O        where pinhole camera rays start: auto (default: on the image plane in XML\n"
+    "                        scenes, at the eye in the 2025 JSON form, as the course's references of\n"
+    "                        each), plane or eye\n"
     "  --target-error X      render in passes until the estimated relMSE of the image is <= X (> 0):\n"
     "                        even and odd passes form two independent half-images, and their\n"
     "                        difference estimates the error (relative to 1, or to 255 for .png\n"
@@ -136,6 +139,7 @@ RenderArgs parseRenderArgs(int argc, char** argv, int start) {
         {{"--vertex-normals"}, true, [&](Str f, Str v) {
              a.vertexNormals = int(parseChoiceArg(f, v, {"auto", "area", "unweighted"})) - 1;
          }},
+        {{"--ray-origin"}, true, [&](Str f, Str v) { a.rayOrigin = int(parseChoiceArg(f, v, {"auto", "eye", "plane"})) - 1; }},
         textOption({"--camera"}, a.cameraId),
         {{"--target-error"}, true, [&](Str f, Str v) { a.stop.targetError = parseBoundedArg(f, v, 0, true); }},
         {{"--time-limit"}, true, [&](Str f, Str v) { a.stop.timeLimit = parseBoundedArg(f, v, 0, false); }},
@@ -181,6 +185,7 @@ std::string pixelOptions(const RenderArgs& a) {
            (a.rouletteRule == RouletteRule::Course ? ";rr-rule=course" : "") +
            (a.backfaceCulling >= 0 ? ";backface-culling=" + std::to_string(a.backfaceCulling) : "") +
            (a.vertexNormals >= 0 ? ";vertex-normals=" + std::to_string(a.vertexNormals) : "") +
+           (a.rayOrigin >= 0 ? ";ray-origin=" + std::to_string(a.rayOrigin) : "") +
            ";resolution=" + std::to_string(a.width) + "x" + std::to_string(a.height) +
            ";tile=" + std::to_string(a.dist.tilePixels);
 }

@@ -223,7 +223,7 @@ void setRenderInterrupts(const RenderArgs& a) {
 }
 
 // The scene file with the options that change the scene model applied: --env-sampling (every
-// environment light's env strategy), --backface-culling, --vertex-normals and --resolution (every camera at WxH, same view).
+// environment light's env strategy), --backface-culling, --vertex-normals, --ray-origin and --resolution (every camera at WxH, same view).
 Scene loadRenderScene(const RenderArgs& a) {
     Scene scene = loadScene(a.positional[0]);
     if (!a.envStrategy.empty()) {
@@ -233,6 +233,8 @@ Scene loadRenderScene(const RenderArgs& a) {
     }
     if (a.backfaceCulling >= 0) scene.backfaceCulling = a.backfaceCulling == 1;
     if (a.vertexNormals >= 0) scene.vertexNormals = a.vertexNormals == 1 ? VertexNormalWeighting::Unweighted : VertexNormalWeighting::Area;
+    if (a.rayOrigin >= 0)
+        for (Camera& c : scene.cameras) c.raysFromImagePlane = a.rayOrigin == 1;
     if (a.width > 0)
         for (Camera& c : scene.cameras) {
             c.width = a.width;

@@ -31,6 +31,9 @@ struct Camera {
     float nearDistance = 1;
     float focusDistance = 0;  // > 0 with apertureSize > 0: thin lens
     float apertureSize = 0;
+    // Pinhole rays start on the image plane, not at the eye, so what lies between the two is not seen: as the
+    // course's 2022 XML references show; set for XML scenes by loadScene (docs/scene-format.md, conventions).
+    bool raysFromImagePlane = false;
     int width = 0, height = 0;
     int numSamples = 1;
     std::string imageName;

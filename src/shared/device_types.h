@@ -307,7 +307,8 @@ typedef struct CameraParams {
     int width;
     int height;
     int spp;
-    int cameraPad[2];      /* explicit padding to the float4 alignment */
+    int fromImagePlane;    /* 1: pinhole camera rays start on the image plane (XML scenes; Camera::raysFromImagePlane) */
+    int cameraPad;         /* explicit padding to the float4 alignment */
 } CameraParams;
 
 /* Per-scene constants passed to every kernel. */
