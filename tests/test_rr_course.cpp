@@ -206,3 +206,31 @@ TEST_CASE("--rr-rule: unbiased by default; course only changes RussianRoulette c
     CHECK(cliResult(rc, readFileBytes(d.file("log"))).rc == 1);
     CHECK(readFileBytes(d.file("log")).find("--rr-rule: expected unbiased or course, got 'fixed'") != std::string::npos);
 }
+
+TEST_CASE("--rr-rule course: one renderer alternating three-slot and two-slot renders of different sizes", "[path][render][rr]") {
+    // The queues grow to the largest request and never shrink: a smaller render with three child slots per
+    // path between two larger two-slot ones must leave the second large render equal to the first.
+    TempDir d;
+    Scene scene = loadScene(write(d, "plate.xml", glassPlate("ImportanceSampling RussianRoulette", 2.0, 64)));
+    DeviceScene ds = flattenScene(scene);
+    Renderer r(testContext(), ds);
+    Camera big = scene.cameras.at(0), small = big;
+    big.width = big.height = 96;
+    small.width = small.height = 24;
+    auto render = [&](const Camera& cam, RouletteRule rule) {
+        RenderSettings rs;
+        rs.spp = 2;
+        rs.seed = 4;
+        rs.rouletteRule = rule;
+        rs.pipeline = Pipeline::Wavefront;
+        RenderCounters c;
+        ImageRGB img = r.render(cam, rs, c);
+        CHECK(c.fullQueues == 0);
+        return img;
+    };
+    const ImageRGB first = render(big, RouletteRule::Unbiased);
+    const ImageRGB course = render(small, RouletteRule::Course);
+    CHECK(course.pixels.size() == size_t(24 * 24 * 3));
+    CHECK(render(big, RouletteRule::Unbiased).pixels == first.pixels);
+    CHECK(render(big, RouletteRule::Course).pixels.size() == first.pixels.size());
+}

@@ -107,21 +107,23 @@ struct Renderer::Impl {
         }
     }
 
-    // `capacity` paths per queue, `childSlots` child slots per path, `shadowSlots` shadow rays.
+    // `capacity` paths per queue, `slotsPerPath` child slots per path, `shadowSlots` shadow rays.
     void ensureQueues(size_t capacity, int slotsPerPath, size_t shadowSlots) {
         cl::Context& ctx = dc.context();
         auto rw = [&](size_t bytes) { return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, std::max<size_t>(bytes, 16))); };
         if (capacity > queueCapacity || capacity * size_t(slotsPerPath) > childCapacity) {
             queueCapacity = std::max(queueCapacity, capacity);
             childCapacity = std::max(childCapacity, capacity * size_t(slotsPerPath));
-            paths = rw(sizeof(dev::PathState) * capacity);
-            rays = rw(sizeof(dev::Ray) * capacity);
-            hits = rw(sizeof(dev::Hit) * capacity);
+            // Sized by the largest request so far: a render with fewer paths but more child slots per path
+            // than an earlier one reallocates here too, and must not shrink the path buffers.
+            paths = rw(sizeof(dev::PathState) * queueCapacity);
+            rays = rw(sizeof(dev::Ray) * queueCapacity);
+            hits = rw(sizeof(dev::Hit) * queueCapacity);
             // Written by every intersect_closest of a program built with CLRT_HAS_INSTANCES (--all-features
             // too, instances or not: oclgrind caught the writes past a 16 B buffer), read with it.
-            hitInstances = rw(ds.features.instances ? sizeof(int) * capacity : 0);
-            points = rw(sizeof(dev::ShadingPoint) * capacity);
-            pathRadiance = rw(sizeof(dev::float4) * capacity);
+            hitInstances = rw(ds.features.instances ? sizeof(int) * queueCapacity : 0);
+            points = rw(sizeof(dev::ShadingPoint) * queueCapacity);
+            pathRadiance = rw(sizeof(dev::float4) * queueCapacity);
             nextPaths = rw(sizeof(dev::PathState) * childCapacity);
             nextRays = rw(sizeof(dev::Ray) * childCapacity);
             childValid = rw(sizeof(int) * childCapacity);
