@@ -5,8 +5,8 @@
  * else independent uniforms.
  * ApertureSize > 0: thin lens focused at FocusDistance, square aperture as in the course (its 2D sample
  * stratified likewise; under CLRT_PIXEL_SAMPLER_CORRELATED the jitter's own point, Sampler_Camera2D).
- * Pinhole rays start at the eye, or with cam.fromImagePlane (XML scenes) at the pixel's point on the image
- * plane, so that nothing between the eye and the plane is seen. */
+ * Pinhole rays start at the eye, or with cam.fromImagePlane (--ray-origin plane) at the pixel's point on the
+ * image plane, so that nothing between the eye and the plane is seen. */
 #ifndef CLRT_CAMERA_CL
 #define CLRT_CAMERA_CL
 
@@ -63,7 +63,7 @@ __attribute__((always_inline)) inline void Camera_GenerateAt(CameraParams cam, S
         org = org + a * cam.u.xyz + b * cam.v.xyz;
         dir = focus - org;
     } else if (cam.fromImagePlane) {
-        org += dir; /* the pixel's point on the image plane (XML scenes: docs/scene-format.md, conventions) */
+        org += dir; /* the pixel's point on the image plane (docs/scene-format.md, conventions) */
     }
     dir = normalize(dir);
     Ray r;

@@ -215,13 +215,12 @@ TEST_CASE("smooth shading keeps a vertex normal that faces away from the geometr
     }
 }
 
-// Where camera rays start (Camera::raysFromImagePlane, camera.cl): the course's 2022 XML references do not
-// show what lies between the eye and the image plane (hw3 cornellbox_boxes_dynamic: its camera 10 behind the
-// box's front wall, the image plane 0.01 inside it; the wall is unculled in its 2022 grass_desert), its 2025
-// JSON ones do (hw1 simple's floor). Here a red quad between the eye (z = 5) and the image plane (z = 4)
-// and a green one at z = 0, both facing the camera: XML sees green, JSON red, --ray-origin overrides both.
-TEST_CASE("XML cameras' rays start on the image plane, JSON ones at the eye; --ray-origin overrides",
-          "[orientation][render]") {
+// Where camera rays start (Camera::raysFromImagePlane, camera.cl; clrt render --ray-origin): at the eye by
+// default, or on the image plane, as the course's 2022 XML references of hw3 cornellbox_boxes_dynamic show (its
+// camera 10 behind the box's front wall, the image plane 0.01 inside it). Here a red quad between the eye
+// (z = 5) and the image plane (z = 4) and a green one at z = 0, both facing the camera: from the eye red, from
+// the plane green, in either form.
+TEST_CASE("camera rays start at the eye, or on the image plane under --ray-origin plane", "[orientation][render]") {
     TempDir dir;
     writeFileBytes(dir.file("o.xml"), R"(<Scene><BackgroundColor>0 0 0</BackgroundColor>
 <Cameras><Camera id="1"><Position>0 0 5</Position><Gaze>0 0 -1</Gaze><Up>0 1 0</Up>
@@ -256,17 +255,17 @@ TEST_CASE("XML cameras' rays start on the image plane, JSON ones at the eye; --r
         return red == 16 ? 1 : green == 16 ? 0 : -1;
     };
     Scene xml = loadScene(dir.file("o.xml")), json = loadScene(dir.file("o.json"));
-    CHECK(xml.cameras.at(0).raysFromImagePlane);
+    CHECK_FALSE(xml.cameras.at(0).raysFromImagePlane);
     CHECK_FALSE(json.cameras.at(0).raysFromImagePlane);
-    CHECK(colour(xml) == 0);
-    CHECK(colour(json) == 1);
-    xml.cameras.at(0).raysFromImagePlane = false;
-    json.cameras.at(0).raysFromImagePlane = true;
     CHECK(colour(xml) == 1);
+    CHECK(colour(json) == 1);
+    xml.cameras.at(0).raysFromImagePlane = true;
+    json.cameras.at(0).raysFromImagePlane = true;
+    CHECK(colour(xml) == 0);
     CHECK(colour(json) == 0);
     // The command line: --ray-origin eye|plane|auto, anything else a usage error naming the flag.
     const std::string base = "render " + dir.file("o.xml") + " -o " + dir.path.string() + deviceArg();
-    CHECK(runClrt(base + " --ray-origin eye", dir.file("log")) == 0);
+    CHECK(runClrt(base + " --ray-origin plane", dir.file("log")) == 0);
     CHECK(runClrt(base + " --ray-origin sideways", dir.file("log")) == 1);
     CHECK(readFileBytes(dir.file("log")).find("--ray-origin") != std::string::npos);
 }

@@ -31,8 +31,9 @@ struct Camera {
     float nearDistance = 1;
     float focusDistance = 0;  // > 0 with apertureSize > 0: thin lens
     float apertureSize = 0;
-    // Pinhole rays start on the image plane, not at the eye, so what lies between the two is not seen: as the
-    // course's 2022 XML references show; set for XML scenes by loadScene (docs/scene-format.md, conventions).
+    // Pinhole rays start on the image plane, not at the eye, so what lies between the two is not seen, as the
+    // course's 2022 XML references of hw3 cornellbox_boxes_dynamic show; clrt render --ray-origin plane sets
+    // it (docs/scene-format.md, conventions: not the default, since clrt's own XML scenes assume the eye).
     bool raysFromImagePlane = false;
     int width = 0, height = 0;
     int numSamples = 1;

@@ -276,7 +276,6 @@ Scene loadScene(const std::string& path) {
     // The form decides two conventions in which the course's references differ by renderer (docs/scene-format.md):
     scene.backfaceCulling = json;  // the 2025 renderer culls back faces
     scene.vertexNormals = json ? VertexNormalWeighting::Area : VertexNormalWeighting::Unweighted;
-    for (Camera& c : scene.cameras) c.raysFromImagePlane = !json;  // the 2022 renderer; the 2025 one starts at the eye
     return scene;
 }
 

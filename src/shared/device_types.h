@@ -307,7 +307,7 @@ typedef struct CameraParams {
     int width;
     int height;
     int spp;
-    int fromImagePlane;    /* 1: pinhole camera rays start on the image plane (XML scenes; Camera::raysFromImagePlane) */
+    int fromImagePlane;    /* 1: pinhole camera rays start on the image plane (--ray-origin plane; Camera::raysFromImagePlane) */
     int cameraPad;         /* explicit padding to the float4 alignment */
 } CameraParams;
 
