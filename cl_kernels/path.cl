@@ -414,16 +414,7 @@ inline void Path_ShadeHit(SceneParams scene, PathState path, Material m, float3 
     } else if ((mode & CLRT_PATH_RR) && roulette && !Path_RussianRoulette(&next, Sampler_Other1D(scene, path, key, dim + 4u))) {
         return;
     }
-    PathState c = path;
-    c.throughput = (float4)(next, childW);
-    c.depth = path.depth + 1;
-    c.pathId = path.pathId < 0x80000000u ? path.pathId * 2u : path.pathId;
-    Ray r;
-    r.origin = (float4)(org, 0.0f);
-    r.direction = (float4)(dir, INFINITY);
-    res->childPath[0] = c;
-    res->childRay[0] = r;
-    res->childValid[0] = maxComponent(next) > 0.0f && allFinite3(next) && allFinite3(dir) ? 1 : 0;
+    Path_Child(res, 0, path, next, childW, org, dir);
 }
 
 #endif /* CLRT_HAS_PATH_TRACING */
