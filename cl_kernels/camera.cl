@@ -5,8 +5,9 @@
  * else independent uniforms.
  * ApertureSize > 0: thin lens focused at FocusDistance, square aperture as in the course (its 2D sample
  * stratified likewise; under CLRT_PIXEL_SAMPLER_CORRELATED the jitter's own point, Sampler_Camera2D).
- * Pinhole rays start at the eye, or with cam.fromImagePlane (--ray-origin plane) at the pixel's point on the
- * image plane, so that nothing between the eye and the plane is seen. */
+ * Between the eye (or lens) and the image plane camera rays see only triangles' front faces (CLRT_NEAR_FRONT,
+ * the default: back faces closer than the plane are skipped), everything (CLRT_NEAR_ALL), or, for a pinhole,
+ * nothing (CLRT_NEAR_NONE: the ray starts at the pixel's point on the image plane); docs/scene-format.md. */
 #ifndef CLRT_CAMERA_CL
 #define CLRT_CAMERA_CL
 
@@ -62,7 +63,7 @@ __attribute__((always_inline)) inline void Camera_GenerateAt(CameraParams cam, S
         float b = (ab.y - 0.5f) * cam.apertureSize;
         org = org + a * cam.u.xyz + b * cam.v.xyz;
         dir = focus - org;
-    } else if (cam.fromImagePlane) {
+    } else if (cam.nearMode == CLRT_NEAR_NONE) {
         org += dir; /* the pixel's point on the image plane (docs/scene-format.md, conventions) */
     }
     dir = normalize(dir);
@@ -73,8 +74,11 @@ __attribute__((always_inline)) inline void Camera_GenerateAt(CameraParams cam, S
 #endif
     r.direction = (float4)(dir, INFINITY);
 #ifdef CLRT_HAS_BACKFACE_CULLING
-    /* the classic renderer's camera rays skip back faces where the scene culls them (Ray_Closest) */
+    /* Back faces are skipped everywhere where the scene culls them (the classic renderer's camera rays), else
+     * before the image plane, nearDistance along -w from the eye's (or lens's) plane (Ray, Ray_Closest). */
+    const float tPlane = cam.nearDistance / dot(dir, -cam.w.xyz);
     if (scene.cullBackFaces && scene.pathMode == 0) r.direction.w = -INFINITY;
+    else if (cam.nearMode == CLRT_NEAR_FRONT && tPlane > 0.0f && tPlane < INFINITY) r.direction.w = -tPlane;
 #endif
     *ray = r;
     PathState p;

@@ -52,7 +52,6 @@ inline float4 RayShear_Permute(RayShear s, float3 v3) {
 
 /* What a traversal looks for (the flags argument of the functions below): */
 #define CLRT_RAY_ANY_HIT 1   /* any hit before tMax, t >= 0 (shadow rays), else the closest with t > 0 */
-#define CLRT_RAY_CULL_BACK 2 /* triangles seen from behind are not hit (Ray_Closest: the course's 2025 culling) */
 
 /* The course's shadow test counts a triangle that passes exactly through the shadow ray's origin (t = 0,
  * T == 0 in the watertight test) as blocking; every other ray needs t > 0. It decides the points on the
@@ -63,9 +62,9 @@ inline float4 RayShear_Permute(RayShear s, float3 v3) {
 #define TRIANGLE_T_TOO_SMALL(T, flags) (((flags) & CLRT_RAY_ANY_HIT) ? ((T) < 0.0f) : ((T) <= 0.0f))
 
 /* Returns 1 and sets *t, *b1, *b2 (weights of v1, v2) for a hit with 0 < t < tMax (0 <= t for CLRT_RAY_ANY_HIT;
- * none from behind with CLRT_RAY_CULL_BACK). */
+ * none from behind with t < cullBefore under CLRT_HAS_BACKFACE_CULLING: 0 culls nothing, INFINITY every back face). */
 __attribute__((always_inline)) inline int Triangle_Intersect(float3 org, RayShear s, float3 v0, float3 v1, float3 v2, float tMax, int flags,
-                              float* tOut, float* b1Out, float* b2Out) {
+                              float cullBefore, float* tOut, float* b1Out, float* b2Out) {
     /* The vertices relative to the origin, their components permuted to (kx, ky, kz) by whole-vector
      * swizzles and selects (the same values comp() would pick one by one). */
     const float4 A4 = RayShear_Permute(s, v0 - org);
@@ -95,7 +94,7 @@ __attribute__((always_inline)) inline int Triangle_Intersect(float3 org, RayShea
     /* A back-facing hit (det < 0): all of U, V, W, T share det's sign, so the weights V/det, W/det
      * need V and W negated along with T and det. */
 #ifdef CLRT_HAS_BACKFACE_CULLING
-    if (det < 0.0f && (flags & CLRT_RAY_CULL_BACK)) return 0;
+    if (det < 0.0f && T > cullBefore * det) return 0; /* t = T/det < cullBefore, det < 0 */
 #endif
     if (det < 0.0f) { T = -T; det = -det; V = -V; W = -W; }
     if (TRIANGLE_T_TOO_SMALL(T, flags) || T >= tMax * det) return 0;
@@ -200,7 +199,7 @@ inline float3 safeInverse(float3 d) {
  * it), for the ray origin orgK in the shear's axis order (RayShear_Permute). Returns the lanes that
  * pass every test of Triangle_Intersect with tMax (and are triangles: isTri). */
 __attribute__((always_inline)) inline int4 Triangle4_Intersect(const __global float4* vertex, float4 orgK, RayShear s, int4 isTri, float tMax, int flags,
-                                float4* Vout, float4* Wout, float4* Tout, float4* detOut) {
+                                float cullBefore, float4* Vout, float4* Wout, float4* Tout, float4* detOut) {
     float4 Az = vertex[s.kz] - orgK.z, Bz = vertex[3 + s.kz] - orgK.z, Cz = vertex[6 + s.kz] - orgK.z;
     const float4 Ax = (vertex[s.kx] - orgK.x) - s.sx * Az, Ay = (vertex[s.ky] - orgK.y) - s.sy * Az;
     const float4 Bx = (vertex[3 + s.kx] - orgK.x) - s.sx * Bz, By = (vertex[3 + s.ky] - orgK.y) - s.sy * Bz;
@@ -228,7 +227,7 @@ __attribute__((always_inline)) inline int4 Triangle4_Intersect(const __global fl
     *Tout = T; *detOut = det;
     int4 hit = isTri & ~mixed & (det != 0.0f) & ~(TRIANGLE_T_TOO_SMALL(T, flags) | (T >= tMax * det));
 #ifdef CLRT_HAS_BACKFACE_CULLING
-    if (flags & CLRT_RAY_CULL_BACK) hit &= ~back;
+    hit &= ~(back & (T < cullBefore * det)); /* T, det here with det > 0 */
 #endif
     return hit;
 }
@@ -265,7 +264,7 @@ inline int Leaf_Block(const __global Bvh4Leaf* block, int4 prim, int4 candidates
 /* With motion blur every triangle has its own rest-frame origin: one at a time (Triangle_Intersect). */
 inline int Leaf_BlockMoving(const __global int* prim, const __global Triangle* tris, const __global Sphere* spheres,
                             int numTriangles, float3 org, float3 dir, RayShear shear, float time, int flags,
-                            float* tMax, Hit* hit) {
+                            float cullBefore, float* tMax, Hit* hit) {
     int found = 0;
     for (int i = 0; i < 4; ++i) {
         const int ref = prim[i];
@@ -275,7 +274,7 @@ inline int Leaf_BlockMoving(const __global int* prim, const __global Triangle* t
         if (ref < numTriangles) {
             const __global Triangle* tri = &tris[ref];
             const float3 o = MotionBlur_RestOrigin(org, time, Triangle_Motion(tri));
-            h = Triangle_Intersect(o, shear, tri->v0.xyz, tri->v1.xyz, tri->v2.xyz, *tMax, flags, &t, &b1, &b2);
+            h = Triangle_Intersect(o, shear, tri->v0.xyz, tri->v1.xyz, tri->v2.xyz, *tMax, flags, cullBefore, &t, &b1, &b2);
         } else {
             const __global Sphere* sph = &spheres[ref - numTriangles];
             h = Sphere_Intersect(sph, MotionBlur_RestOrigin(org, time, sph->motion.xyz), dir, *tMax, &t);
@@ -294,18 +293,19 @@ inline int Leaf_BlockMoving(const __global int* prim, const __global Triangle* t
  * primitive hit (closer than *tMax, which it lowers; CLRT_RAY_ANY_HIT in flags: stops at the first). */
 __attribute__((always_inline)) inline int Leaf_Intersect(const __global Bvh4Leaf* leaves, int packed, const __global Triangle* tris,
                           const __global Sphere* spheres, int numTriangles, float3 org, float3 dir, float4 orgK,
-                          RayShear shear, float time, int flags, float* tMax, Hit* hit) {
+                          RayShear shear, float time, int flags, float cullBefore, float* tMax,
+                          Hit* hit) {
     const int firstBlock = packed >> 4, count = packed & 15;
     int found = 0;
     for (int b = firstBlock; b < firstBlock + ((count + 3) >> 2); ++b) {
         const __global Bvh4Leaf* block = &leaves[b];
 #ifdef CLRT_HAS_MOTION_BLUR
-        found |= Leaf_BlockMoving((const __global int*)&block->prim, tris, spheres, numTriangles, org, dir, shear, time, flags, tMax, hit);
+        found |= Leaf_BlockMoving((const __global int*)&block->prim, tris, spheres, numTriangles, org, dir, shear, time, flags, cullBefore, tMax, hit);
 #else
         const int4 prim = block->prim;
         const int4 isTri = (prim >= (int4)(0)) & (prim < (int4)(numTriangles));
         float4 V, W, T, det;
-        const int4 cand = Triangle4_Intersect(block->vertex, orgK, shear, isTri, *tMax, flags, &V, &W, &T, &det);
+        const int4 cand = Triangle4_Intersect(block->vertex, orgK, shear, isTri, *tMax, flags, cullBefore, &V, &W, &T, &det);
         /* Spheres are not compiled out without CLRT_HAS_SPHERES: with the sphere test gone, Intel's CPU
          * runtime traced the Audi TT's rays at about half the speed (measured). On every device, not a
          * quirk (docs/quirks.md "Not quirks"). */
@@ -435,13 +435,13 @@ inline int Instance_Enter(const __global Instance* inst, float3 orgW, float3 dir
  * instances, the top-level tree from scene.instanceRoot, descending into an instance's bottom-level
  * tree in its object space (the stack holds both levels: popping back to the height at which the
  * instance was entered returns to the world ray). flags: CLRT_RAY_ANY_HIT stops at the first hit (shadow
- * rays); CLRT_RAY_CULL_BACK skips triangles seen from behind.
+ * rays); triangles seen from behind closer than cullBefore are skipped (under CLRT_HAS_BACKFACE_CULLING).
  * Returns 1 on a hit. time: the ray's shutter time (used only under CLRT_HAS_MOTION_BLUR). The
  * stack's size is the exact worst case the host computed. */
 inline int Bvh_Traverse(const __global Bvh4Node* nodes, const __global Bvh4Leaf* leaves,
                         const __global Triangle* tris, const __global Sphere* spheres,
                         const __global Instance* instances, SceneParams scene, float3 org, float3 dir,
-                        float tMax, float time, int flags, Hit* hit, int* hitInstance) {
+                        float tMax, float time, int flags, float cullBefore, Hit* hit, int* hitInstance) {
     const int numTriangles = scene.numTriangles;
     TraceRay r = TraceRay_Make(org, dir);
     int stackEntry[CLRT_BVH4_STACK_SIZE];
@@ -471,7 +471,7 @@ inline int Bvh_Traverse(const __global Bvh4Node* nodes, const __global Bvh4Leaf*
             continue;
 #endif
         } else if (Leaf_Intersect(leaves, ~entry, tris, spheres, numTriangles, r.org, r.dir, r.orgK, r.shear, time,
-                                  flags, &tMax, hit)) {
+                                  flags, cullBefore, &tMax, hit)) {
             found = 1;
 #ifdef CLRT_HAS_INSTANCES
             *hitInstance = instance;
@@ -521,16 +521,16 @@ inline Hit Ray_Closest(Ray r, SceneParams scene, const __global Bvh4Node* nodes,
     *instance = CLRT_INVALID;
     float3 dir = r.direction.xyz;
     float tMax = r.direction.w;
-    int flags = 0;
+    float cullBefore = 0.0f;
 #ifdef CLRT_HAS_BACKFACE_CULLING
-    if (tMax < 0.0f) { /* a ray that culls back faces (Ray in device_types.h) */
-        tMax = -tMax;
-        flags = CLRT_RAY_CULL_BACK;
+    if (tMax < 0.0f) { /* a ray that skips back faces closer than -tMax (Ray in device_types.h) */
+        cullBefore = -tMax;
+        tMax = INFINITY;
     }
 #endif
     if (allFinite3(r.origin.xyz) && allFinite3(dir) && tMax > 0.0f) {
         if (numPlanes > 0 && Planes_Intersect(planes, numPlanes, firstPlaneRef, r.origin.xyz, dir, tMax, 0, &h)) tMax = h.t;
-        Bvh_Traverse(nodes, leaves, tris, spheres, instances, scene, r.origin.xyz, dir, tMax, Ray_Time(r), flags, &h, instance);
+        Bvh_Traverse(nodes, leaves, tris, spheres, instances, scene, r.origin.xyz, dir, tMax, Ray_Time(r), 0, cullBefore, &h, instance);
     }
     return h;
 }
@@ -545,7 +545,7 @@ inline int Shadow_Occluded(ShadowRay s, SceneParams scene, const __global Bvh4No
     int instance;
     return (numPlanes > 0 && Planes_Intersect(planes, numPlanes, firstPlaneRef, s.origin.xyz, s.direction.xyz, s.origin.w, 1, &h)) ||
            Bvh_Traverse(nodes, leaves, tris, spheres, instances, scene, s.origin.xyz, s.direction.xyz, s.origin.w,
-                        s.direction.w, CLRT_RAY_ANY_HIT, &h, &instance);
+                        s.direction.w, CLRT_RAY_ANY_HIT, 0.0f, &h, &instance);
 }
 
 /* Closest hit for each ray of the queue. */

@@ -45,7 +45,7 @@
     S(CameraParams) M(CameraParams, position) M(CameraParams, u) M(CameraParams, v)               \
         M(CameraParams, w) M(CameraParams, nearPlane) M(CameraParams, nearDistance)               \
         M(CameraParams, focusDistance) M(CameraParams, apertureSize) M(CameraParams, width)       \
-        M(CameraParams, height) M(CameraParams, spp) M(CameraParams, fromImagePlane) M(CameraParams, cameraPad)                   \
+        M(CameraParams, height) M(CameraParams, spp) M(CameraParams, nearMode) M(CameraParams, cameraPad)                   \
     S(SceneParams) M(SceneParams, background) M(SceneParams, ambient)                             \
         M(SceneParams, numTriangles) M(SceneParams, numSpheres) M(SceneParams, numLights)         \
         M(SceneParams, maxDepth) M(SceneParams, backgroundTexture) M(SceneParams, envLight)       \

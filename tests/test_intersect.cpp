@@ -2,7 +2,9 @@
 // (src/bvh/host_intersect.h) on PoCL: closest hits (distance, primitive and barycentrics) and
 // shadow-ray any-hits over random scenes of triangles and spheres, BVH-traversed on both sides, plus
 // two infinite planes; and the same with moving primitives (MotionBlur) at given shutter times, the
-// kernels built with CLRT_HAS_MOTION_BLUR and the host moving each primitive by time·motion.
+// kernels built with CLRT_HAS_MOTION_BLUR and the host moving each primitive by time·motion; and rays that
+// skip back faces closer than a bound (Ray.direction.w = -bound under CLRT_HAS_BACKFACE_CULLING: the course's
+// culling and the camera's near segment), the host skipping triangles seen from behind (d·n > 0) before it.
 #include <catch.hpp>
 
 #include <random>
@@ -91,7 +93,7 @@ float rayTime(int i) { return i % 7 == 0 ? 0.0f : i % 7 == 1 ? 1.0f : float((i *
 // Runs both kernels of `program` over random rays in scene s (each ray at rayTime(i) when timed)
 // and compares them with the host: the primitive, t and barycentrics of the closest hit, and
 // whether the shadow ray is occluded. The host moves each primitive by time·motion.
-void compareWithHost(const cl::Program& program, const RandomScene& s, bool timed) {
+void compareWithHost(const cl::Program& program, const RandomScene& s, bool timed, bool culling = false) {
     DeviceContext& dc = testContext();
     KernelArgs closest(program, "intersect_closest");
     KernelArgs shadow(program, "intersect_shadow");
@@ -101,6 +103,7 @@ void compareWithHost(const cl::Program& program, const RandomScene& s, bool time
     const int numRays = 20000;
     std::vector<dev::Ray> rays(numRays);
     std::vector<dev::ShadowRay> shadows(numRays);
+    std::vector<float> cullBefore(numRays, 0.0f);  // back faces closer than this are skipped
     for (int i = 0; i < numRays; ++i) {
         Vec3 o(pos(rng), pos(rng), pos(rng));
         Vec3 d = normalize(Vec3(unit(rng), unit(rng), unit(rng)));
@@ -108,6 +111,11 @@ void compareWithHost(const cl::Program& program, const RandomScene& s, bool time
         float tMax = (i % 3 == 0) ? 5.0f : INFINITY;
         float time = timed ? rayTime(i) : 0.0f;
         rays[i] = {{o.x, o.y, o.z, time}, {d.x, d.y, d.z, tMax}};
+        if (culling && i % 2 == 1) {  // every back face (the course's culling), or those before a bound
+            tMax = INFINITY;
+            cullBefore[size_t(i)] = i % 6 == 1 ? INFINITY : 20.0f * float((i * 2654435761u) % 1000u) / 1000.0f;
+            rays[i].direction.w = -cullBefore[size_t(i)];
+        }
         shadows[i] = {{o.x, o.y, o.z, tMax}, {d.x, d.y, d.z, time}, {1, 1, 1, 0}};
     }
     cl::Context& ctx = dc.context();
@@ -150,11 +158,12 @@ void compareWithHost(const cl::Program& program, const RandomScene& s, bool time
     CL_CPP(q.enqueueReadBuffer(hitBuf, CL_TRUE, 0, sizeof(dev::Hit) * numRays, hits.data()));
     CL_CPP(q.enqueueReadBuffer(shadowBuf, CL_TRUE, 0, sizeof(dev::ShadowRay) * numRays, shadows.data()));
 
+    int culled = 0;  // triangle hits the host skipped as back faces
     int hitCount = 0, movingHits = 0, primMismatch = 0, tMismatch = 0, baryMismatch = 0, occlusionMismatch = 0;
     for (int i = 0; i < numRays; ++i) {
         Vec3 o(rays[i].origin.x, rays[i].origin.y, rays[i].origin.z);
         Vec3 d(rays[i].direction.x, rays[i].direction.y, rays[i].direction.z);
-        float tMax = rays[i].direction.w;
+        float tMax = cullBefore[size_t(i)] > 0.0f ? INFINITY : rays[i].direction.w;
         const float time = rays[i].origin.w;
         int prim = -1;
         float tBest = tMax, bary1 = 0, bary2 = 0;
@@ -166,6 +175,11 @@ void compareWithHost(const cl::Program& program, const RandomScene& s, bool time
                                                        Vec3(tri->v1.x, tri->v1.y, tri->v1.z) + m,
                                                        Vec3(tri->v2.x, tri->v2.y, tri->v2.z) + m, tm, t, b1, b2)
                          : intersectSphere(o, d, s.sphereCenter[ref - numTris] + m, s.sphereRadius[ref - numTris], tm, t);
+            if (h && tri && t < cullBefore[size_t(i)]) {  // seen from behind: along the geometric normal
+                const Vec3 e1(tri->v1.x - tri->v0.x, tri->v1.y - tri->v0.y, tri->v1.z - tri->v0.z);
+                const Vec3 e2(tri->v2.x - tri->v0.x, tri->v2.y - tri->v0.y, tri->v2.z - tri->v0.z);
+                if (dot(d, cross(e1, e2)) > 0.0f) { ++culled; h = false; }
+            }
             if (h) { tm = t; prim = ref; bary1 = b1; bary2 = b2; }
         });
         for (int k = 0; k < 2; ++k) {  // host reference for the planes
@@ -195,9 +209,11 @@ void compareWithHost(const cl::Program& program, const RandomScene& s, bool time
         if (!occluded) ++occlusionMismatch;  // the ray hit something before tMax: must be occluded
     }
     // Rays the host says miss must not be occluded on the device.
-    for (int i = 0; i < numRays; ++i)
-        if (hits[i].prim < 0 && shadows[i].contribution.x == 0) ++occlusionMismatch;
-    INFO("rays with hits: " << hitCount << " of " << numRays << ", on moving primitives: " << movingHits);
+    for (int i = 0; i < numRays; ++i)  // (a shadow ray sees back faces: only rays that cull none)
+        if (hits[i].prim < 0 && shadows[i].contribution.x == 0 && cullBefore[size_t(i)] == 0.0f) ++occlusionMismatch;
+    INFO("rays with hits: " << hitCount << " of " << numRays << ", on moving primitives: " << movingHits
+                            << ", back faces skipped: " << culled);
+    if (culling) CHECK(culled > numRays / 20);
     CHECK(hitCount > numRays / 10);
     if (timed) CHECK(movingHits > numRays / 20);
     CHECK(primMismatch == 0);
@@ -217,4 +233,10 @@ TEST_CASE("moving primitives (MotionBlur): kernels match the host at given shutt
     cl::Program program = buildProgramFromSources(testContext(), loadKernelSources(KernelProgram::Intersect),
                                                   {"-DCLRT_HAS_MOTION_BLUR=1"});
     compareWithHost(program, makeScene(4321, 3000, 200, true), true);
+}
+
+TEST_CASE("rays that skip back faces closer than a bound: kernels match the host", "[cl][intersect][orientation]") {
+    cl::Program program = buildProgramFromSources(testContext(), loadKernelSources(KernelProgram::Intersect),
+                                                  {"-DCLRT_HAS_BACKFACE_CULLING=1"});
+    compareWithHost(program, makeScene(2468, 3000, 200), false, true);
 }

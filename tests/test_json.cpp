@@ -447,7 +447,7 @@ TEST_CASE("json: classic scenes with a json2025 twin: XML and transliterated JSO
             j->backfaceCulling = fromXml.backfaceCulling;
             j->vertexNormals = fromXml.vertexNormals;
             for (size_t c = 0; c < j->cameras.size() && c < fromXml.cameras.size(); ++c)
-                j->cameras[c].raysFromImagePlane = fromXml.cameras[c].raysFromImagePlane;
+                j->cameras[c].nearMode = fromXml.cameras[c].nearMode;
         }
 
         // The readers agree: the same scene as XML and as JSON gives the same bits.

@@ -112,7 +112,7 @@ TEST_CASE("a triangle seen from behind is shaded where it was hit, with its stor
     CHECK(unlitWorst <= 1e-4f * 5.0f);
 }
 
-// Back-face culling (Scene::backfaceCulling, intersect.cl CLRT_RAY_CULL_BACK): the course's 2025 renderer
+// Back-face culling (Scene::backfaceCulling, intersect.cl cullBefore): the course's 2025 renderer
 // does not see triangles from behind along its camera and reflection rays, and its references show it
 // (2025 hw2 grass_desert: 30.4 -> 51.4 dB; hw3 cornellbox_boxes_dynamic, whose camera looks through the back
 // of the box's front wall); its 2022 XML references do not cull (hw2 grass_desert 51.0 dB, 30.4 culled). So
@@ -147,6 +147,8 @@ TEST_CASE("scenes in the 2025 JSON form cull back faces along camera and reflect
         writeFileBytes(dir.file("cull.json"), text);
         Scene scene = loadScene(dir.file("cull.json"));
         CHECK(scene.backfaceCulling);  // the JSON form
+        // the camera sees everything before its image plane (z = 4), so that culling alone compiles the test in
+        scene.cameras.at(0).nearMode = CLRT_NEAR_ALL;
         // Through the glass: e^-L, L = (1 − ε)·|d| for the pixel's direction d = (u, v, −1) (the refracted ray
         // starts ShadowRayEpsilon ε inside).
         auto seen = [&](size_t pixel) {
@@ -190,6 +192,35 @@ TEST_CASE("scenes in the 2025 JSON form cull back faces along camera and reflect
     CHECK_FALSE(loadScene(dir.file("cull.xml")).backfaceCulling);
 }
 
+// The near segment's culling is compiled in (CLRT_HAS_BACKFACE_CULLING) only where a camera's eye-to-image-plane
+// box meets the BVH (nearSegmentMeetsGeometry, flatten_scene.cpp), flattened or as two-level instances; the
+// program is otherwise the same as before the rule, so scenes without such geometry render as fast.
+TEST_CASE("the near segment's culling is compiled only where geometry lies before an image plane", "[orientation]") {
+    TempDir dir;
+    writeFileBytes(dir.file("near.xml"), R"(<Scene><Cameras><Camera id="1"><Position>0 0 5</Position><Gaze>0 0 -1</Gaze>
+<Up>0 1 0</Up><NearPlane>-0.5 0.5 -0.5 0.5</NearPlane><NearDistance>1</NearDistance><ImageResolution>4 4</ImageResolution>
+<ImageName>o.png</ImageName></Camera></Cameras><Lights><AmbientLight>1 1 1</AmbientLight></Lights>
+<Materials><Material id="1"><AmbientReflectance>1 0 0</AmbientReflectance></Material></Materials>
+<VertexData>-1 -1 2  1 -1 2  1 1 2  -1 1 2</VertexData><Objects><Mesh id="1"><Material>1</Material>
+<Faces>1 2 3  1 3 4</Faces></Mesh></Objects></Scene>)");
+    Scene scene = loadScene(dir.file("near.xml"));
+    for (Instancing instancing : {Instancing::Flatten, Instancing::TwoLevel}) {
+        FlattenOptions opts;
+        opts.instancing = instancing;
+        INFO((instancing == Instancing::TwoLevel ? "two-level" : "flattened"));
+        scene.cameras.at(0).position = Vec3(0, 0, 5);  // the image plane at z = 4, the quad at z = 2
+        CHECK_FALSE(flattenScene(scene, opts).features.backfaceCulling);
+        scene.cameras.at(0).position = Vec3(0, 0, 2.5f);  // the image plane at z = 1.5: the quad before it
+        CHECK(flattenScene(scene, opts).features.backfaceCulling);
+        scene.cameras.at(0).position = Vec3(3, 0, 2.5f);  // beside the quad: the box misses it
+        CHECK_FALSE(flattenScene(scene, opts).features.backfaceCulling);
+        scene.cameras.at(0).apertureSize = 4.0f;  // a lens as wide as the gap: its rays may meet it
+        scene.cameras.at(0).focusDistance = 1.0f;
+        CHECK(flattenScene(scene, opts).features.backfaceCulling);
+        scene.cameras.at(0).apertureSize = 0.0f;
+    }
+}
+
 // Smooth shading: an opaque surface of the classic renderer keeps its interpolated vertex normal as it is,
 // even where it faces away from the geometric normal (the course's 2025 hw1 smooth references:
 // windmill_smooth 39.93 -> 41.42 dB, tower, low_poly, berserker +0.9 to +1.2 dB); dielectrics and the path
@@ -215,30 +246,33 @@ TEST_CASE("smooth shading keeps a vertex normal that faces away from the geometr
     }
 }
 
-// Where camera rays start (Camera::raysFromImagePlane, camera.cl; clrt render --ray-origin): at the eye by
-// default, or on the image plane, as the course's 2022 XML references of hw3 cornellbox_boxes_dynamic show (its
-// camera 10 behind the box's front wall, the image plane 0.01 inside it). Here a red quad between the eye
-// (z = 5) and the image plane (z = 4) and a green one at z = 0, both facing the camera: from the eye red, from
-// the plane green, in either form.
-TEST_CASE("camera rays start at the eye, or on the image plane under --ray-origin plane", "[orientation][render]") {
+// What camera rays see between the eye and the image plane (Camera::nearMode, camera.cl; clrt render
+// --ray-origin): by default only triangles' front faces, as the course's references show (hw3
+// cornellbox_boxes_dynamic: its camera is 10 behind the box's front wall, seen from behind, and the image plane
+// 0.01 inside it: no wall; the 2020 hw1 spheres: the floor the camera looks down on before the plane is seen);
+// --ray-origin eye sees everything, plane nothing. Here a red quad between the eye (z = 5) and the image plane
+// (z = 4), facing the camera or away from it, and a green one at z = 0 facing the camera, in either form: the
+// JSON form's classic renderer culls back faces everywhere (the test above), so the red quad from behind is
+// seen only from an XML scene's eye.
+TEST_CASE("camera rays see only front faces before the image plane; --ray-origin eye all, plane none", "[orientation][render]") {
     TempDir dir;
-    writeFileBytes(dir.file("o.xml"), R"(<Scene><BackgroundColor>0 0 0</BackgroundColor>
+    const std::string xml = R"(<Scene><BackgroundColor>0 0 0</BackgroundColor>
 <Cameras><Camera id="1"><Position>0 0 5</Position><Gaze>0 0 -1</Gaze><Up>0 1 0</Up>
 <NearPlane>-0.5 0.5 -0.5 0.5</NearPlane><NearDistance>1</NearDistance><ImageResolution>4 4</ImageResolution>
 <ImageName>o.png</ImageName></Camera></Cameras><Lights><AmbientLight>1 1 1</AmbientLight></Lights>
 <Materials><Material id="1"><AmbientReflectance>1 0 0</AmbientReflectance></Material>
 <Material id="2"><AmbientReflectance>0 1 0</AmbientReflectance></Material></Materials>
 <VertexData>-9 -9 4.5  9 -9 4.5  9 9 4.5  -9 9 4.5  -9 -9 0  9 -9 0  9 9 0  -9 9 0</VertexData>
-<Objects><Mesh id="1"><Material>1</Material><Faces>1 2 3  1 3 4</Faces></Mesh>
-<Mesh id="2"><Material>2</Material><Faces>5 6 7  5 7 8</Faces></Mesh></Objects></Scene>)");
-    writeFileBytes(dir.file("o.json"), R"({"Scene": {"BackgroundColor": "0 0 0",
+<Objects><Mesh id="1"><Material>1</Material><Faces>RED</Faces></Mesh>
+<Mesh id="2"><Material>2</Material><Faces>5 6 7  5 7 8</Faces></Mesh></Objects></Scene>)";
+    const std::string json = R"({"Scene": {"BackgroundColor": "0 0 0",
  "Cameras": {"Camera": {"_id": "1", "Position": "0 0 5", "Gaze": "0 0 -1", "Up": "0 1 0",
    "NearPlane": "-0.5 0.5 -0.5 0.5", "NearDistance": "1", "ImageResolution": "4 4", "ImageName": "o.png"}},
  "Lights": {"AmbientLight": "1 1 1"},
  "Materials": {"Material": [{"_id": "1", "AmbientReflectance": "1 0 0"}, {"_id": "2", "AmbientReflectance": "0 1 0"}]},
  "VertexData": {"_data": "-9 -9 4.5  9 -9 4.5  9 9 4.5  -9 9 4.5  -9 -9 0  9 -9 0  9 9 0  -9 9 0", "_type": "xyz"},
- "Objects": {"Mesh": [{"_id": "1", "Material": "1", "Faces": {"_data": "1 2 3  1 3 4", "_type": "triangle"}},
-                      {"_id": "2", "Material": "2", "Faces": {"_data": "5 6 7  5 7 8", "_type": "triangle"}}]}}})");
+ "Objects": {"Mesh": [{"_id": "1", "Material": "1", "Faces": {"_data": "RED", "_type": "triangle"}},
+                      {"_id": "2", "Material": "2", "Faces": {"_data": "5 6 7  5 7 8", "_type": "triangle"}}]}}})";
     // Every pixel red (1) or green (0): the colour of the whole image, or -1 for a mix.
     auto colour = [](const Scene& scene) {
         DeviceScene ds = flattenScene(scene);
@@ -254,17 +288,25 @@ TEST_CASE("camera rays start at the eye, or on the image plane under --ray-origi
         }
         return red == 16 ? 1 : green == 16 ? 0 : -1;
     };
-    Scene xml = loadScene(dir.file("o.xml")), json = loadScene(dir.file("o.json"));
-    CHECK_FALSE(xml.cameras.at(0).raysFromImagePlane);
-    CHECK_FALSE(json.cameras.at(0).raysFromImagePlane);
-    CHECK(colour(xml) == 1);
-    CHECK(colour(json) == 1);
-    xml.cameras.at(0).raysFromImagePlane = true;
-    json.cameras.at(0).raysFromImagePlane = true;
-    CHECK(colour(xml) == 0);
-    CHECK(colour(json) == 0);
+    for (const bool facing : {true, false}) {
+        for (const bool isJson : {false, true}) {
+            std::string text = isJson ? json : xml;
+            text.replace(text.find("RED"), 3, facing ? "1 2 3  1 3 4" : "1 3 2  1 4 3");
+            const std::string path = dir.file(isJson ? "o.json" : "o.xml");
+            writeFileBytes(path, text);
+            Scene scene = loadScene(path);
+            INFO((isJson ? "JSON" : "XML") << ", the red quad " << (facing ? "facing the camera" : "facing away"));
+            CHECK(scene.cameras.at(0).nearMode == CLRT_NEAR_FRONT);
+            CHECK(colour(scene) == (facing ? 1 : 0));
+            scene.cameras.at(0).nearMode = CLRT_NEAR_ALL;
+            CHECK(colour(scene) == (facing || !isJson ? 1 : 0));
+            scene.cameras.at(0).nearMode = CLRT_NEAR_NONE;
+            CHECK(colour(scene) == 0);
+        }
+    }
     // The command line: --ray-origin eye|plane|auto, anything else a usage error naming the flag.
     const std::string base = "render " + dir.file("o.xml") + " -o " + dir.path.string() + deviceArg();
+    CHECK(runClrt(base + " --ray-origin eye", dir.file("log")) == 0);
     CHECK(runClrt(base + " --ray-origin plane", dir.file("log")) == 0);
     CHECK(runClrt(base + " --ray-origin sideways", dir.file("log")) == 1);
     CHECK(readFileBytes(dir.file("log")).find("--ray-origin") != std::string::npos);

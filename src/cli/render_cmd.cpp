@@ -234,7 +234,7 @@ Scene loadRenderScene(const RenderArgs& a) {
     if (a.backfaceCulling >= 0) scene.backfaceCulling = a.backfaceCulling == 1;
     if (a.vertexNormals >= 0) scene.vertexNormals = a.vertexNormals == 1 ? VertexNormalWeighting::Unweighted : VertexNormalWeighting::Area;
     if (a.rayOrigin >= 0)
-        for (Camera& c : scene.cameras) c.raysFromImagePlane = a.rayOrigin == 1;
+        for (Camera& c : scene.cameras) c.nearMode = a.rayOrigin == 1 ? CLRT_NEAR_NONE : CLRT_NEAR_ALL;
     if (a.width > 0)
         for (Camera& c : scene.cameras) {
             c.width = a.width;

@@ -50,7 +50,7 @@ dev::CameraParams makeCameraParams(const Camera& cam) {
     c.nearDistance = cam.nearDistance;
     c.focusDistance = cam.focusDistance;
     c.apertureSize = cam.apertureSize;
-    c.fromImagePlane = cam.raysFromImagePlane ? 1 : 0;
+    c.nearMode = cam.nearMode;
     c.width = cam.width;
     c.height = cam.height;
     setSamplesPerPixel(c, cam.numSamples);

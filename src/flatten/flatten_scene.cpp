@@ -14,6 +14,45 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
+namespace {
+
+// Whether some primitive's box in the BVH (world triangles and spheres from nodes[0], instances from the top
+// level's root) overlaps `box`: a conservative test, its leaves' boxes standing for their primitives.
+bool bvhMeets(const Bvh4& bvh, int node, const Aabb& box) {
+    const dev::Bvh4Node& n = bvh.nodes[size_t(node)];
+    const float* mn[3] = {&n.minX.x, &n.minY.x, &n.minZ.x};
+    const float* mx[3] = {&n.maxX.x, &n.maxY.x, &n.maxZ.x};
+    for (int i = 0; i < 4; ++i) {
+        const int child = (&n.child.x)[i];
+        if (child == CLRT_INVALID) continue;
+        bool overlaps = true;
+        for (int a = 0; a < 3; ++a)
+            overlaps = overlaps && mn[a][i] <= (&box.max.x)[a] && mx[a][i] >= (&box.min.x)[a];
+        // a leaf, or an instance (the top level's lanes with a negative child, Entry_Instance in intersect.cl)
+        if (overlaps && ((&n.count.x)[i] > 0 || child < 0 || bvhMeets(bvh, child, box))) return true;
+    }
+    return false;
+}
+
+// Whether camera c's rays may meet a triangle between its eye (or lens) and its image plane, where by
+// default they skip back faces (Camera::nearMode, CLRT_NEAR_FRONT): the box around the eye and the image
+// plane's corners, widened by the aperture, against the BVH. Only then is the culling compiled in.
+bool nearSegmentMeetsGeometry(const Camera& c, const DeviceScene& ds) {
+    if (c.nearMode != CLRT_NEAR_FRONT || ds.bvh4.nodes.empty()) return false;
+    Aabb box;
+    box.grow(c.position);
+    for (float x : {c.left, c.right})
+        for (float y : {c.bottom, c.top}) box.grow(c.position + c.u * x + c.v * y - c.w * c.nearDistance);
+    float widen = 0.0f;
+    if (c.apertureSize > 0.0f && c.focusDistance > 0.0f) widen = c.apertureSize * (1.0f + c.nearDistance / c.focusDistance);
+    if (!std::isfinite(widen)) return true;
+    box.min = box.min - Vec3(widen);
+    box.max = box.max + Vec3(widen);
+    return bvhMeets(ds.bvh4, 0, box) || (ds.params.numInstances > 0 && bvhMeets(ds.bvh4, ds.params.instanceRoot, box));
+}
+
+}  // namespace
+
 // The driver: one function per domain (flatten.h), in an order that fixes where images enter the
 // atlas (textures, then environment maps); opts.onFeaturesKnown between the BVH and the lights.
 DeviceScene flattenScene(const Scene& scene, const FlattenOptions& opts) {
@@ -34,7 +73,9 @@ DeviceScene flattenScene(const Scene& scene, const FlattenOptions& opts) {
     }
     for (const Camera& c : scene.cameras) {
         ds.features.pathTracing = ds.features.pathTracing || c.pathMode != 0;
-        ds.features.backfaceCulling = ds.features.backfaceCulling || (scene.backfaceCulling && c.pathMode == 0);
+        // culling: the classic renderer's in scenes that cull, a camera's before its image plane where it may matter
+        ds.features.backfaceCulling = ds.features.backfaceCulling || (scene.backfaceCulling && c.pathMode == 0) ||
+                                      nearSegmentMeetsGeometry(c, ds);
     }
     if (opts.onFeaturesKnown) opts.onFeaturesKnown(ds.features);
     flattenLights(scene, ds, atlas);

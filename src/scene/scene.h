@@ -31,10 +31,11 @@ struct Camera {
     float nearDistance = 1;
     float focusDistance = 0;  // > 0 with apertureSize > 0: thin lens
     float apertureSize = 0;
-    // Pinhole rays start on the image plane, not at the eye, so what lies between the two is not seen, as the
-    // course's 2022 XML references of hw3 cornellbox_boxes_dynamic show; clrt render --ray-origin plane sets
-    // it (docs/scene-format.md, conventions: not the default, since clrt's own XML scenes assume the eye).
-    bool raysFromImagePlane = false;
+    // What camera rays see between the eye (or lens) and the image plane, dev CLRT_NEAR_*: by default only
+    // triangles' front faces, as the course's references show (hw3 cornellbox_boxes_dynamic hides the wall it
+    // looks through from behind, hw1 spheres shows the floor it looks down on); clrt render --ray-origin eye
+    // (everything) or plane (nothing) overrides it (docs/scene-format.md, conventions).
+    int nearMode = CLRT_NEAR_FRONT;
     int width = 0, height = 0;
     int numSamples = 1;
     std::string imageName;

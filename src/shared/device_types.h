@@ -307,9 +307,15 @@ typedef struct CameraParams {
     int width;
     int height;
     int spp;
-    int fromImagePlane;    /* 1: pinhole camera rays start on the image plane (--ray-origin plane; Camera::raysFromImagePlane) */
+    int nearMode;          /* CLRT_NEAR_*: what camera rays see between the eye and the image plane (Camera::nearMode) */
     int cameraPad;         /* explicit padding to the float4 alignment */
 } CameraParams;
+
+/* What camera rays see between the eye (or lens) and the image plane (CameraParams.nearMode; clrt render
+ * --ray-origin; docs/scene-format.md, conventions). */
+#define CLRT_NEAR_FRONT 0 /* only triangles' front faces: back faces closer than the plane are skipped (the default) */
+#define CLRT_NEAR_ALL 1   /* everything: rays start at the eye (--ray-origin eye) */
+#define CLRT_NEAR_NONE 2  /* nothing: pinhole rays start on the image plane (--ray-origin plane) */
 
 /* Per-scene constants passed to every kernel. */
 typedef struct SceneParams {
@@ -370,8 +376,8 @@ typedef struct SceneParams {
 /* Ray and hit record of the wavefront. */
 typedef struct Ray {
     float4 origin;         /* xyz; w = shutter time in [0, 1) with CLRT_HAS_MOTION_BLUR, else 0 */
-    float4 direction;      /* xyz; w = tMax; under CLRT_HAS_BACKFACE_CULLING a negative w is -tMax of a ray that
-                            * skips triangles seen from behind (Ray_Closest, CLRT_RAY_CULL_BACK) */
+    float4 direction;      /* xyz; w = tMax; under CLRT_HAS_BACKFACE_CULLING a negative w = -c is a ray with tMax = ∞
+                            * that skips triangles seen from behind closer than c (c = ∞: everywhere; Ray_Closest) */
 } Ray;
 
 typedef struct Hit {
