@@ -141,9 +141,9 @@ struct Scene {
     // set for scenes in the 2025 JSON form (loadScene), clrt render --backface-culling overrides it
     // (docs/scene-format.md, conventions).
     bool backfaceCulling = false;
-    // How smooth shading averages face normals at a vertex without given normals (vertex_normals.h): by area
-    // in the 2025 JSON form, unweighted in XML (the course's 2025 and 2020 references; loadScene), clrt render
-    // --vertex-normals overrides it.
+    // How smooth shading averages face normals at a vertex without given normals (vertex_normals.h): by area,
+    // as the course's references since 2022 at least (2022 XML and 2025 JSON); clrt render --vertex-normals
+    // unweighted gives the 2020 references' rule (docs/scene-format.md, conventions).
     VertexNormalWeighting vertexNormals = VertexNormalWeighting::Area;
     Vec3 ambientLight{0, 0, 0};
     std::vector<Camera> cameras;

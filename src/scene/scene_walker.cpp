@@ -273,9 +273,8 @@ Scene loadScene(const std::string& path) {
     else if (json) root = parseJsonScene(path, data);
     else throw Error(path + ": neither XML (starts with '<') nor JSON (starts with '{')");
     Scene scene = walkScene(*root, path);
-    // The form decides two conventions in which the course's references differ by renderer (docs/scene-format.md):
+    // The form decides a convention in which the course's references differ by renderer (docs/scene-format.md):
     scene.backfaceCulling = json;  // the 2025 renderer culls back faces
-    scene.vertexNormals = json ? VertexNormalWeighting::Area : VertexNormalWeighting::Unweighted;
     return scene;
 }
 
