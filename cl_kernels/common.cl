@@ -240,7 +240,7 @@ inline float Sampler_Other1D(SceneParams scene, PathState path, RngKey key, uint
 
 /* The camera sample's own 2D point (stratified over the pixel's samples: dimensions 0, 1 of path id 1),
  * key = Rng_Key(seed, pixel, cameraSample, 1u). Its pixel jitter; under CLRT_PIXEL_SAMPLER_CORRELATED also
- * its lens point and the classic renderer's light samples at every depth (Sampler_Light2D): the course's
+ * its lens point and the classic renderer's light samples at the camera ray's hit (Sampler_Light2D): the course's
  * renderer until 2022 drew them so, one point for all three (its 2020 and 2022 references show it: an area
  * light's glow on a box's ceiling, out-of-focus silhouettes; docs/scene-format.md).
  * That estimates another integral than the scene's (the blur and the penumbrae change shape), so it is a
@@ -248,9 +248,11 @@ inline float Sampler_Other1D(SceneParams scene, PathState path, RngKey key, uint
 inline float2 Sampler_Camera2D(RngKey key, int cameraSample) { return Rng_Stratified2D(key, cameraSample, 0u); }
 
 /* The 2D sample of the light sample at dimensions (dim, dim + 1) of `path`: Sampler_2D, or under
- * CLRT_PIXEL_SAMPLER_CORRELATED in the classic renderer the camera sample's own point. */
+ * CLRT_PIXEL_SAMPLER_CORRELATED in the classic renderer at the camera ray's hit (depth 0) the camera sample's
+ * own point; the light samples of reflected and refracted rays' hits are the path's own, as in the course's
+ * references (hw3 cornellbox_area, the ceiling's glow in the mirror sphere; docs/scene-format.md). */
 inline float2 Sampler_Light2D(SceneParams scene, PathState path, RngKey key, uint dim) {
-    if (CLRT_SAMPLER_IS_CORRELATED(scene) && scene.pathMode == 0)
+    if (CLRT_SAMPLER_IS_CORRELATED(scene) && scene.pathMode == 0 && path.depth == 0)
         return Sampler_Camera2D(Rng_Key(scene.seed, path.pixel, path.sample, 1u), path.sample);
     return Sampler_2D(scene, path, key, dim);
 }
