@@ -75,10 +75,11 @@ def integrator(c):
     r = _camera(c).find("Renderer")
     if r is None or (r.text or "").strip() != "PathTracing":
         c.warn("the camera is not path traced in clrt (no <Renderer>PathTracing): the images will differ")
-    nee = bool(params & {"NextEventEstimation", "MultipleImportanceSampling"})
+    mis = {"MultipleImportanceSampling", "MIS_POWER", "MIS_BALANCE", "MIS_01"}  # clrt's, and the 2025 form's
+    nee = bool(params & ({"NextEventEstimation"} | mis))
     if "RussianRoulette" in params:
         c.warn("RussianRoulette: clrt's roulette lifts the depth cap; Mitsuba renders without roulette at the cap")
-    if not params & {"MultipleImportanceSampling"}:
+    if not params & mis:
         c.warn("RendererParams '%s': Mitsuba's path always uses MIS (same expectation %s)" % (
             " ".join(sorted(params)), "as clrt's NEE" if nee else "only without point lights"))
     max_depth = clrt_depth(c) + (2 if nee else 1)

@@ -45,9 +45,14 @@
 inline int Path_UsesNee(int mode) { return (mode & (CLRT_PATH_NEE | CLRT_PATH_MIS)) != 0; }
 inline int Path_UsesImportance(int mode) { return (mode & (CLRT_PATH_IMPORTANCE | CLRT_PATH_MIS)) != 0; }
 
-/* The power heuristic for one sample of each strategy. */
-inline float Path_PowerHeuristic(float pa, float pb) {
-    float a = pa * pa, b = pb * pb;
+/* The MIS weight of a sample drawn with density pa where the other strategy has density pb, one sample of
+ * each: the power heuristic, or under CLRT_PATH_MIS_BALANCE the balance heuristic, under
+ * CLRT_PATH_MIS_MAXIMUM the maximum heuristic (1 to the larger density, ½ each on a tie). Every one sums
+ * to 1 over the two strategies, so the image's expectation is the same; the noise differs. */
+inline float Path_MisWeight(int mode, float pa, float pb) {
+    if (mode & CLRT_PATH_MIS_MAXIMUM) return pa > pb ? 1.0f : (pa == pb && pa > 0.0f ? 0.5f : 0.0f);
+    const int balance = (mode & CLRT_PATH_MIS_BALANCE) != 0;
+    const float a = balance ? pa : pa * pa, b = balance ? pb : pb * pb;
     return a + b > 0.0f && isfinite(a + b) ? a / (a + b) : (pa > 0.0f ? 1.0f : 0.0f);
 }
 
@@ -57,7 +62,7 @@ inline float Path_EmissionWeight(int mode, float bsdfPdf, float lightPdf) {
     if (!(bsdfPdf > 0.0f) || !Path_UsesNee(mode)) return 1.0f;
     /* course NEE, or a light whose sampling density is not known here: it was sampled there already */
     if (!(mode & CLRT_PATH_MIS) || lightPdf < 0.0f) return 0.0f;
-    return Path_PowerHeuristic(bsdfPdf, lightPdf);
+    return Path_MisWeight(mode, bsdfPdf, lightPdf);
 }
 
 /* The solid-angle density with which sample_lights draws direction dirWorld from an environment light,
@@ -150,7 +155,7 @@ inline float Path_BouncePdf(ShadingPoint sp, const __global Material* materials,
     return c * CLRT_INV_PI;
 }
 
-/* The MIS weight of a light sample (sample_lights) in direction wi: the power heuristic against the
+/* The MIS weight of a light sample (sample_lights) in direction wi: Path_MisWeight against the
  * BSDF sampling of the same direction for lights a BSDF ray can reach (environment lights with a
  * normal-independent env strategy, object lights); 1 for every other light and without
  * MultipleImportanceSampling. e: what Light_Sample returned. */
@@ -168,7 +173,7 @@ inline float Path_LightSampleWeight(int mode, const __global Light* light, Shadi
     }
 #endif
     if (lightPdf < 0.0f) return 1.0f;
-    return Path_PowerHeuristic(lightPdf, Path_BouncePdf(sp, materials, mode, wi));
+    return Path_MisWeight(mode, lightPdf, Path_BouncePdf(sp, materials, mode, wi));
 }
 
 /* Draws the non-specular bounce at sp: *wi, *pdf, and returns f·cosθ (0 when the sample carries nothing). */

@@ -78,6 +78,16 @@ TEST_CASE("Path tracing: <Renderer> and <RendererParams> set the camera's path m
           (CLRT_PATH_ON | CLRT_PATH_NEE | CLRT_PATH_IMPORTANCE | CLRT_PATH_RR));
     CHECK(mode("<Renderer>PathTracing</Renderer><RendererParams>MultipleImportanceSampling</RendererParams>") ==
           (CLRT_PATH_ON | CLRT_PATH_MIS));
+    // The 2025 form's MIS options, by heuristic (its students' readers accept these three).
+    CHECK(mode("<Renderer>PathTracing</Renderer><RendererParams>ImportanceSampling NextEventEstimation MIS_POWER "
+               "RussianRoulette</RendererParams>") ==
+          (CLRT_PATH_ON | CLRT_PATH_IMPORTANCE | CLRT_PATH_NEE | CLRT_PATH_MIS | CLRT_PATH_RR));
+    CHECK(mode("<Renderer>PathTracing</Renderer><RendererParams>MIS_BALANCE</RendererParams>") ==
+          (CLRT_PATH_ON | CLRT_PATH_MIS | CLRT_PATH_MIS_BALANCE));
+    CHECK(mode("<Renderer>PathTracing</Renderer><RendererParams>MIS_01</RendererParams>") ==
+          (CLRT_PATH_ON | CLRT_PATH_MIS | CLRT_PATH_MIS_MAXIMUM));
+    CHECK(mode("<Renderer>PathTracing</Renderer><RendererParams>MIS_POWER MultipleImportanceSampling</RendererParams>") ==
+          (CLRT_PATH_ON | CLRT_PATH_MIS));  // two names of one heuristic
     if (haveShared()) {  // the course's eight cameras, in file order (hw6 README)
         Scene s = loadScene(sharedDir() + "/scenes/hw6/cornellbox_jaroslav_path_diffuse.xml");
         const int N = CLRT_PATH_NEE, I = CLRT_PATH_IMPORTANCE, R = CLRT_PATH_RR;
@@ -96,6 +106,10 @@ TEST_CASE("Path tracing: bad <Renderer> input is one error naming file, line and
                                                               "<RendererParams>NextEventEstimation</RendererParams>")));
     CHECK(e.find("d.xml:1:") != std::string::npos);
     CHECK(e.find("DirectLighting takes none") != std::string::npos);
+    e = loadError(writeText(tmp.file("m.xml"), rendererScene("<Renderer>PathTracing</Renderer>"
+                                                              "<RendererParams>MIS_BALANCE MIS_POWER</RendererParams>")));
+    CHECK(e.find("m.xml:1:") != std::string::npos);
+    CHECK(e.find("two MIS heuristics, 'MIS_BALANCE' and 'MIS_POWER'") != std::string::npos);
     e = loadError(writeText(tmp.file("p.xml"), rendererScene("<Renderer>PathTracing</Renderer>"
                                                               "<RendererParams>NEE</RendererParams>")));
     CHECK(e.find("p.xml:1:") != std::string::npos);
@@ -238,26 +252,33 @@ TEST_CASE("hw6 path_diffuse: the eight path-tracing cameras against the course's
     }
 }
 
-// clrt's MultipleImportanceSampling on camera 3's view (NEE + cosine/BRDF sampling, power heuristic for
-// the LightMesh) has the same expectation as the course's NEE: the same noise-floor rule against
-// diffuse_next_importance.exr, at the reduced size of the test above.
-TEST_CASE("hw6 path_diffuse: MultipleImportanceSampling matches the NEE reference", "[path][render][shared][hw6]") {
+// MIS on camera 3's view (NEE + cosine/BRDF sampling for the LightMesh), under each heuristic (power: clrt's
+// MultipleImportanceSampling and the 2025 MIS_POWER; balance: MIS_BALANCE; maximum: MIS_01), has the same
+// expectation as the course's NEE: the same noise-floor rule against diffuse_next_importance.exr, at the
+// reduced size of the test above; and the heuristics' images differ (each weights otherwise).
+TEST_CASE("hw6 path_diffuse: MIS under each heuristic matches the NEE reference", "[path][render][shared][hw6]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
     Scene scene = loadScene(sharedDir() + "/scenes/hw6/cornellbox_jaroslav_path_diffuse.xml");
     if (flattenScene(scene).params.numLights < 2) {
         WARN("the LightMesh of the path scene is not a light in this build (object lights missing): skipped");
         return;
     }
-    scene.cameras[2].pathMode = CLRT_PATH_ON | CLRT_PATH_MIS;
     const int N = 16, size = 128, f = 8, refF = 32;
     const double r = double(f * f * N) / double(refF * refF * 100);
     ImageRGB ref = readImage(sharedDir() + "/scenes/hw6/_reference_outputs/diffuse_next_importance.exr");
-    ImageRGB ad = boxDownsample(renderPathCamera(scene, 2, size, N, 21), f),
-             bd = boxDownsample(renderPathCamera(scene, 2, size, N, 22), f), rd = boxDownsample(ref, refF);
-    double toRef = relativeMse(ad, rd), floorAB = relativeMse(ad, bd);
-    WARN("MIS on camera 3: relMSE to reference " << toRef << ", between two renders " << floorAB << " (limit "
-                                                 << floorAB * (1 + r) << ")");
-    CHECK(toRef <= floorAB * (1 + r));
+    const ImageRGB rd = boxDownsample(ref, refF);
+    std::vector<ImageRGB> firsts;
+    for (int heuristic : {0, CLRT_PATH_MIS_BALANCE, CLRT_PATH_MIS_MAXIMUM}) {
+        scene.cameras[2].pathMode = CLRT_PATH_ON | CLRT_PATH_MIS | heuristic;
+        ImageRGB a = renderPathCamera(scene, 2, size, N, 21);
+        ImageRGB ad = boxDownsample(a, f), bd = boxDownsample(renderPathCamera(scene, 2, size, N, 22), f);
+        double toRef = relativeMse(ad, rd), floorAB = relativeMse(ad, bd);
+        WARN("MIS (heuristic bits " << heuristic << ") on camera 3: relMSE to reference " << toRef
+                                    << ", between two renders " << floorAB << " (limit " << floorAB * (1 + r) << ")");
+        CHECK(toRef <= floorAB * (1 + r));
+        for (const ImageRGB& other : firsts) CHECK(other.pixels != a.pixels);
+        firsts.push_back(a);
+    }
 }
 
 namespace {

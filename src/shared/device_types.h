@@ -354,15 +354,18 @@ typedef struct SceneParams {
 #define CLRT_PIXEL_SAMPLER_STRATIFIED 1  /* light and BSDF 2D samples stratified over a pixel's samples */
 #define CLRT_PIXEL_SAMPLER_ZSOBOL 2      /* every dimension from an Owen-scrambled Sobol (0,2)-sequence in Z order over pixels */
 #define CLRT_PIXEL_SAMPLER_CORRELATED 3  /* stratified, but a camera sample's one 2D point is its pixel jitter, lens point and
-                                         * every light sample of the classic renderer (the course's renderer until 2022) */
+                                         * the classic renderer's light samples at the camera ray's hit (the course's renderer
+                                         * until 2022) */
 
 /* SceneParams.pathMode: the camera's <Renderer>PathTracing and its <RendererParams> (set per render). */
 #define CLRT_PATH_ON 1          /* <Renderer>PathTracing</Renderer> */
 #define CLRT_PATH_NEE 2         /* NextEventEstimation */
 #define CLRT_PATH_IMPORTANCE 4  /* ImportanceSampling: cosine (classic materials), the BRDF's sampler */
 #define CLRT_PATH_RR 8          /* RussianRoulette (q = max throughput, C = 0, no depth cap) */
-#define CLRT_PATH_MIS 16        /* MultipleImportanceSampling (clrt's): NEE + BSDF sampling, power heuristic */
+#define CLRT_PATH_MIS 16        /* MIS: NEE + BSDF sampling (clrt's MultipleImportanceSampling, the 2025 MIS_*), power heuristic */
 #define CLRT_PATH_RR_COURSE 32  /* with RR, clrt render --rr-rule course: the course references' biased roulette */
+#define CLRT_PATH_MIS_BALANCE 64  /* with MIS: the balance heuristic (2025 MIS_BALANCE) instead of the power heuristic */
+#define CLRT_PATH_MIS_MAXIMUM 128 /* with MIS: the maximum heuristic, weights 0 or 1 (2025 MIS_01) */
 /* The deepest queue depth a path reaches: maxDepth, and under MIS one more, the emission-only segment of
  * the last vertex's BSDF sample (cl_kernels/path.cl, Path_ShadeHit). Host and device. */
 #define CLRT_LAST_DEPTH(maxDepth, pathMode) ((maxDepth) + (((pathMode) & CLRT_PATH_MIS) ? 1 : 0))
