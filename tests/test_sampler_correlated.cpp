@@ -1,6 +1,7 @@
 // The correlated sampler (clrt render --sampler correlated; CLRT_PIXEL_SAMPLER_CORRELATED, Sampler_Camera2D and
 // Sampler_Light2D in cl_kernels/common.cl): a camera sample's one stratified 2D point is its pixel jitter, its
-// lens point and the classic renderer's light samples, as the course's renderer drew them until 2022.
+// lens point and the classic renderer's light samples at the camera ray's hit, as the course's renderer drew them
+// until 2022 (the hits of reflected and refracted rays draw their own).
 // Renders of one-pixel scenes against closed forms and host integrals: the lens and the light take the jitter's
 // point (and the stratified sampler, on the same scenes, the independent points' values); every other
 // dimension is the stratified sampler's, bit for bit; the CLI builds its code only where it runs.
