@@ -25,7 +25,7 @@ struct RenderArgs {
     RouletteRule rouletteRule = RouletteRule::Unbiased;    // --rr-rule
     Instancing instancing = Instancing::Auto;              // --instancing
     int backfaceCulling = -1;  // --backface-culling: -1 auto (the scene's form decides), 0 off, 1 on
-    int vertexNormals = -1;    // --vertex-normals: -1 auto (the scene's form decides), 0 area, 1 unweighted
+    int vertexNormals = -1;    // --vertex-normals: -1 auto (Scene::vertexNormals' default, area), 0 area, 1 unweighted
     int rayOrigin = -1;        // --ray-origin: -1 auto (Camera::nearMode's default), 0 eye, 1 plane
     std::string envStrategy;  // --env-sampling: overrides every environment light's env strategy ("" keeps the scene's)
     StopRule stop;            // --target-error, --time-limit (render/progressive.h)

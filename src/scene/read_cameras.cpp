@@ -172,11 +172,6 @@ int pathOption(const std::string& tok) {
     return 0;
 }
 
-// Which MIS heuristic option a token names (0 for the others), so that two of them are an error.
-int misHeuristicOf(const std::string& tok) {
-    return tok == "MultipleImportanceSampling" || tok == "MIS_POWER" ? 1 : tok == "MIS_BALANCE" ? 2 : tok == "MIS_01" ? 3 : 0;
-}
-
 // <Renderer>PathTracing</Renderer> and its optional <RendererParams> (course hw6): the CLRT_PATH_*
 // bits, or 0 without <Renderer> or with <Renderer>DirectLighting</Renderer> (classic ray tracing).
 // Empty or missing params: uniform sampling. MultipleImportanceSampling is clrt's own option (README
@@ -198,17 +193,18 @@ int readRenderer(const SceneNode& n, const std::string& who) {
     int mode = CLRT_PATH_ON;
     if (!pNode) return mode;
     std::istringstream in(pNode->text());
-    std::string heuristic;  // the MIS option seen, if any
+    const int misBits = CLRT_PATH_MIS | CLRT_PATH_MIS_BALANCE | CLRT_PATH_MIS_MAXIMUM;
+    std::string misToken;  // the MIS option seen, if any
     for (std::string tok; in >> tok;) {
         int bit = pathOption(tok);
         if (!bit)
             fail(*pNode, who + ": unknown RendererParams option '" + tok +
                              "' (NextEventEstimation, ImportanceSampling, RussianRoulette, MIS_POWER, MIS_BALANCE, MIS_01, "
                              "MultipleImportanceSampling)");
-        if (misHeuristicOf(tok)) {
-            if (!heuristic.empty() && misHeuristicOf(heuristic) != misHeuristicOf(tok))
-                fail(*pNode, who + ": RendererParams names two MIS heuristics, '" + heuristic + "' and '" + tok + "'");
-            heuristic = tok;
+        if (bit & CLRT_PATH_MIS) {  // one heuristic per camera, under any of its names
+            if (!misToken.empty() && (mode & misBits) != bit)
+                fail(*pNode, who + ": RendererParams names two MIS heuristics, '" + misToken + "' and '" + tok + "'");
+            misToken = tok;
         }
         mode |= bit;
     }
