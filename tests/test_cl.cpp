@@ -271,7 +271,7 @@ TEST_CASE("kernel sources: each file brings in what it #includes, once, before i
     CHECK(sourceNames(render) == std::vector<std::string>{"device_types.h", "kernel_params.h", "common.cl",
                                                           "intersect.cl", "camera.cl", "textures.cl", "shading_frame.cl",
                                                           "envmap.cl", "object_lights.cl", "lights.cl", "brdf.cl", "material.cl", "path.cl", "shade.cl",
-                                                          "compact.cl", "fused.cl"});
+                                                          "compact.cl", "fused.cl", "lanes.cl"});
     CHECK(sourceNames(loadKernelSources(KernelProgram::Tonemap)) ==
           std::vector<std::string>{"device_types.h", "kernel_params.h", "tonemap.cl"});
     CHECK(sourceNames(loadKernelSources(KernelProgram::Intersect)) ==
@@ -427,8 +427,11 @@ TEST_CASE("every kernel has exactly its declared parameters: names, order, addre
     // hand-made signature, or a declaration no kernel uses, fails here.
     DeviceContext& dc = cpuContext();
     std::set<std::string> seen;
+    // The render program with the lanes kernel's flags (render_lanes exists only in its family's programs).
+    const std::vector<std::string> lanes = {"-cl-kernel-arg-info", "-DCLRT_HAS_LANES=1", "-DCLRT_HAS_PATH_TRACING=1",
+                                            "-DCLRT_HAS_LIGHT_MESH=1", "-DCLRT_HAS_POINT_LIGHT=1"};
     for (KernelProgram p : {KernelProgram::Render, KernelProgram::Tonemap, KernelProgram::Layout}) {
-        cl::Program prog = buildProgram(dc, p, {"-cl-kernel-arg-info"});
+        cl::Program prog = buildProgram(dc, p, p == KernelProgram::Render ? lanes : std::vector<std::string>{"-cl-kernel-arg-info"});
         size_t n = 0;
         REQUIRE(clGetProgramInfo(prog(), CL_PROGRAM_KERNEL_NAMES, 0, nullptr, &n) == CL_SUCCESS);
         std::string names(n, '\0');

@@ -198,5 +198,5 @@ TEST_CASE("clrt render --pipeline: -v names the pipeline, a bad value is a usage
     CliResult bad = cliResult(badRc, readFileBytes(t.file("bad.log")));
     CHECK(bad.rc == 1);
     CHECK(bad.errorLines == 1);
-    CHECK(bad.errorLine.find("--pipeline: expected fused, wavefront or auto, got 'gpu'") != std::string::npos);
+    CHECK(bad.errorLine.find("--pipeline: expected fused, lanes, wavefront or auto, got 'gpu'") != std::string::npos);
 }

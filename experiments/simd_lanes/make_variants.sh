@@ -36,4 +36,9 @@ mk w8h2 '#define PW 8\n#define HYBRID 2\n'
 mk w4real '#define PW 4\n#define REAL_SAMPLER\n'
 mk w4lanereal '#define PW 4\n#define LANE_TRACE\n#define REAL_SAMPLER\n'
 mk w8lanereal '#define PW 8\n#define LANE_TRACE\n#define REAL_SAMPLER\n'
-echo "variants in $root: w4 w8 w16 w4one w4lane w8lane w4h1 w8h1 w8h2 w4real w4lanereal w8lanereal"
+mk w4lanels '#define PW 4\n#define LANE_TRACE\n#define REAL_SAMPLER\n#define LANE_SAMPLER\n'
+mk w4ls '#define PW 4\n#define REAL_SAMPLER\n#define LANE_SAMPLER\n'
+mk w8lanels '#define PW 8\n#define LANE_TRACE\n#define REAL_SAMPLER\n#define LANE_SAMPLER\n'
+mk w4lanelscp '#define PW 4\n#define LANE_TRACE\n#define REAL_SAMPLER\n#define LANE_SAMPLER\n#define CAMERA_PACKETS\n'
+mk w8lanelscp '#define PW 8\n#define LANE_TRACE\n#define REAL_SAMPLER\n#define LANE_SAMPLER\n#define CAMERA_PACKETS\n'
+echo "variants in $root: w4 w8 w16 w4one w4lane w8lane w4h1 w8h1 w8h2 w4real w4lanereal w8lanereal w4lanels w4ls w8lanels w4lanelscp w8lanelscp"

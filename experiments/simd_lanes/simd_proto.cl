@@ -10,7 +10,9 @@
  * simd_variant.h (make_variants.sh) chooses: PW; LANE_TRACE (clrt's scalar traversal, one lane at a
  * time, instead of packet traversal); HYBRID N (packet traversal, a lane alone through a subtree that at
  * most N lanes enter); ONE_PATH (one live lane per packet: the scalar control); REAL_SAMPLER (clrt's
- * stratified sampler's streams, per lane: Sampler_2D at clrt's dimensions, MeshLight_PickTriangle). */
+ * stratified sampler's streams, per lane: Sampler_2D at clrt's dimensions, MeshLight_PickTriangle);
+ * REAL_SAMPLER with LANE_SAMPLER: the same streams, computed for all lanes at once (Lane_Stratified2D);
+ * CAMERA_PACKETS with LANE_TRACE: packet traversal for the camera rays only. */
 #include "simd_variant.h"
 #ifndef PW
 #define PW 4
@@ -24,6 +26,7 @@ typedef uint16 uW;
 #define ldW(a) vload16(0, a)
 #define stW(v, a) vstore16(v, 0, a)
 #define convert_uW convert_uint16
+#define as_uW as_uint16
 #define convert_fW convert_float16
 #define LANES (iW)(0,1,2,3,4,5,6,7,8,9,10,11,12,13,14,15)
 #elif PW == 8
@@ -35,6 +38,7 @@ typedef uint8 uW;
 #define ldW(a) vload8(0, a)
 #define stW(v, a) vstore8(v, 0, a)
 #define convert_uW convert_uint8
+#define as_uW as_uint8
 #define convert_fW convert_float8
 #define LANES (iW)(0,1,2,3,4,5,6,7)
 #else
@@ -46,6 +50,7 @@ typedef uint4 uW;
 #define ldW(a) vload4(0, a)
 #define stW(v, a) vstore4(v, 0, a)
 #define convert_uW convert_uint4
+#define as_uW as_uint4
 #define convert_fW convert_float4
 #define LANES (iW)(0,1,2,3)
 #endif
@@ -139,7 +144,7 @@ inline int SubtreeTrace(const __global Bvh4Node* nodes, const __global Bvh4Leaf*
 #endif
 /* Packet traversal of the 4-wide BVH: closest hit (anyHit 0) or occlusion (anyHit 1: returns the
  * lanes blocked). Lanes not in active are ignored. */
-inline iW PacketTrace(const __global Bvh4Node* nodes, const __global Bvh4Leaf* leaves, const __global Triangle* tris,
+inline iW PacketTraceImpl(const __global Bvh4Node* nodes, const __global Bvh4Leaf* leaves, const __global Triangle* tris,
                       const __global Sphere* spheres, int numTriangles, V3W o, V3W d, fW tMaxIn, iW active,
                       int anyHit, fW* tOut, iW* primOut) {
     const V3W inv = V3(1.0f / d.x, 1.0f / d.y, 1.0f / d.z);
@@ -250,6 +255,10 @@ inline iW PacketTrace(const __global Bvh4Node* nodes, const __global Bvh4Leaf* l
     return blocked;
 }
 
+#ifndef LANE_TRACE
+#define PacketTrace PacketTraceImpl
+#endif
+
 #ifdef LANE_TRACE
 /* the scalar traversal, one lane at a time */
 inline iW LaneTrace(const __global Bvh4Node* nodes, const __global Bvh4Leaf* leaves, const __global Triangle* tris,
@@ -279,6 +288,44 @@ inline iW LaneTrace(const __global Bvh4Node* nodes, const __global Bvh4Leaf* lea
 }
 #define PacketTrace(nodes, leaves, tris, spheres, numTriangles, o, d, tMax, act, any_, t, p) \
     LaneTrace(nodes, leaves, tris, spheres, planes, instances, scene, o, d, tMax, act, any_, t, p)
+#endif
+
+#ifdef LANE_SAMPLER
+/* clrt's stratified sampler (common.cl Rng_Stratified2D) for the PW samples of one pixel at once: the
+ * lanes share the pixel and the path id (every lane's path takes child 0), so the per-dimension hashes
+ * are computed once; only the sample index differs per lane. */
+inline uW LaneBits_Reverse(uW v) {
+    v = ((v >> 1) & 0x55555555u) | ((v & 0x55555555u) << 1);
+    v = ((v >> 2) & 0x33333333u) | ((v & 0x33333333u) << 2);
+    v = ((v >> 4) & 0x0f0f0f0fu) | ((v & 0x0f0f0f0fu) << 4);
+    v = ((v >> 8) & 0x00ff00ffu) | ((v & 0x00ff00ffu) << 8);
+    return (v >> 16) | (v << 16);
+}
+inline uW LaneBits_LaineKarras(uW x, uint seed) {
+    x += seed;
+    x ^= x * 0x6c50b47cu;
+    x ^= x * 0xb82f1e52u;
+    x ^= x * 0xc7afe638u;
+    x ^= x * 0x8d22f6e6u;
+    return x;
+}
+inline uW LaneSobol_Dim1Reversed(uW i) {
+    i ^= (i >> 1) & 0x55555555u;
+    i ^= (i >> 2) & 0x33333333u;
+    i ^= (i >> 4) & 0x0f0f0f0fu;
+    i ^= (i >> 8) & 0x00ff00ffu;
+    i ^= (i >> 16) & 0x0000ffffu;
+    return i;
+}
+inline void Lane_Stratified2D(uint strat, uW sample, uint dim, fW* ux, fW* uy) {
+    const uint sIdx = Rng_Hash(strat ^ dim * 0x9e3779b1u);
+    const uint sX = Rng_Hash(sIdx ^ 0xa54ff53au), sY = Rng_Hash(sIdx ^ 0x510e527fu);
+    const uW idx = LaneBits_Reverse(LaneBits_LaineKarras(LaneBits_Reverse(sample), sIdx));
+    const uW x = LaneBits_Reverse(LaneBits_LaineKarras(idx, sX));
+    const uW y = LaneBits_Reverse(LaneBits_LaineKarras(LaneSobol_Dim1Reversed(idx), sY));
+    *ux = convert_fW(x >> 8) * (1.0f / 16777216.0f);
+    *uy = convert_fW(y >> 8) * (1.0f / 16777216.0f);
+}
 #endif
 #define PW_GATHER_BEGIN float gx[PW], gy[PW], gz[PW]
 
@@ -330,6 +377,11 @@ __kernel CLRT_KERNEL_VEC_HINT void render_fused(CLRT_KERNEL_PARAMS(render_fused)
         fW pdfPrev = (fW)(0.0f); /* bsdf pdf (solid angle) of the ray that led here; 0: camera */
         for (int depth = 0; depth <= depthMax && any(active); ++depth) {
             fW t; iW prim;
+#ifdef CAMERA_PACKETS
+            if (depth == 0) /* camera rays as a packet (the function itself, not LANE_TRACE's macro) */
+                PacketTraceImpl(nodes, leaves, tris, spheres, numTriangles, o, d, (fW)(INFINITY), active, 0, &t, &prim);
+            else
+#endif
             PacketTrace(nodes, leaves, tris, spheres, numTriangles, o, d, (fW)(INFINITY), active, 0, &t, &prim);
             active &= prim >= 0;
             if (!any(active)) break;
@@ -380,6 +432,27 @@ __kernel CLRT_KERNEL_VEC_HINT void render_fused(CLRT_KERNEL_PARAMS(render_fused)
 #ifdef REAL_SAMPLER
             /* clrt's streams: the light sample at dimension 4 + 32·depth + 8 (light 0), the bounce at + 5 */
             float a1[PW], a2[PW], aB0[PW], aB1[PW]; int ak[PW];
+#ifdef LANE_SAMPLER
+            {
+                const uint strat = Rng_Key(scene.seed, pixel, 0, lanePath[0].pathId).strat; /* shared by the lanes */
+                int smp[PW];
+                for (int l = 0; l < PW; ++l) smp[l] = lanePath[l].sample;
+                const uW sampleW = as_uW(ldWi(smp));
+                const uint dim = 4u + 32u * (uint)depth;
+                fW uLx, uLy, uBx, uBy;
+                Lane_Stratified2D(strat, sampleW, dim + 8u, &uLx, &uLy);
+                Lane_Stratified2D(strat, sampleW, dim + 5u, &uBx, &uBy);
+                float lx[PW];
+                stW(uLx, lx); stW(uLy, a2); stW(uBx, aB0); stW(uBy, aB1);
+                for (int l = 0; l < PW; ++l) {
+                    float ux;
+                    ak[l] = MeshLight_PickTriangle(ltri, nl, lx[l], &ux);
+                    a1[l] = ux;
+                    lanePath[l].pathId = lanePath[l].pathId < 0x80000000u ? lanePath[l].pathId * 2u : lanePath[l].pathId;
+                }
+            }
+            if (0)
+#endif
             for (int l = 0; l < PW; ++l) {
                 PathState ps = lanePath[l];
                 ps.depth = depth;

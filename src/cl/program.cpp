@@ -310,7 +310,7 @@ const std::vector<std::string>& kernelProgramRoots(KernelProgram program) {
     // The one list of what each program is made of. Root files only: each brings in what it
     // #includes, before itself (render: device_types.h, common, intersect, camera, textures, envmap,
     // lights, brdf, shade, compact, fused; kernel_params.h after device_types.h).
-    static const std::vector<std::string> render = {"intersect.cl", "camera.cl", "shade.cl", "compact.cl", "fused.cl"};
+    static const std::vector<std::string> render = {"intersect.cl", "camera.cl", "shade.cl", "compact.cl", "fused.cl", "lanes.cl"};
     static const std::vector<std::string> tonemap = {"tonemap.cl"};
     static const std::vector<std::string> intersect = {"intersect.cl"};
     static const std::vector<std::string> layout = {"layout.cl"};

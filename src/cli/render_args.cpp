@@ -74,10 +74,12 @@ const char* const kRenderHelp =
     "                        8 bits; floor is what the course's reference renders do\n"
     "  --env-sampling S      strategy of every SphericalDirectionalLight: uniform, cosine, importance or\n"
     "                        mis (default: the scene's sampler=, else mis)\n"
-    "  --pipeline P          fused (one kernel per sample pass), wavefront (a kernel per stage) or\n"
-    "                        auto (default: fused on CPU devices for images of >= 1024 pixels,\n"
-    "                        wavefront otherwise); the image is\n"
-    "                        the same either way; -v says which one rendered\n"
+    "  --pipeline P          fused (one kernel per sample pass), lanes (fused, four paths per\n"
+    "                        work-item in vector lanes: path-traced scenes of diffuse materials and\n"
+    "                        LightMesh and point lights, else fused), wavefront (a kernel per stage) or auto\n"
+    "                        (default: lanes where it can, else fused, on CPU devices for images of\n"
+    "                        >= 1024 pixels; wavefront otherwise); the image is the same either way\n"
+    "                        (lanes: up to rounding); -v says which one rendered\n"
     "  --all-features        build the kernels with every feature, not only what the scene uses\n"
     "                        (for measuring what specialisation gains)\n"
     "  --exr-half            write .exr outputs with half-float channels (default: float)\n"
@@ -166,7 +168,7 @@ RenderArgs parseRenderArgs(int argc, char** argv, int start) {
              if (!parseByteSize(v, a.maxMemory)) throwExpected(f, "a size such as 512M or 4G", v);
          }},
         {{"--pipeline"}, true, [&](Str f, Str v) {
-             if (!parsePipeline(v, a.pipeline)) throwExpected(f, "fused, wavefront or auto", v);
+             if (!parsePipeline(v, a.pipeline)) throwExpected(f, "fused, lanes, wavefront or auto", v);
          }},
         {{"--env-sampling"}, true, [&](Str f, Str v) {
              dev::EnvStrategy es;

@@ -33,6 +33,7 @@ struct FeatureSet {
     bool correlatedSampler = false; // not the scene's: clrt render --sampler correlated (Sampler_Light2D, common.cl)
     bool envRotation = false;       // an environment light's map is turned by its <Transformations> (lights.cl)
     bool backfaceCulling = false;   // classic rays skip back faces (Scene::backfaceCulling; intersect.cl Ray_Closest)
+    bool lanes = false;             // the scene is of render_lanes' family (lanesFamily below; cl_kernels/lanes.cl)
     int bvhStack = 0;  // traversal stack entries the scene's BVH needs (0: the header's default)
     void add(dev::LightKind k) { lightKinds |= 1u << k; }
     void add(dev::MaterialKind k) { materialKinds |= 1u << k; }
@@ -106,6 +107,11 @@ bool packHalf4Exact(const dev::float4* src, size_t n, std::vector<dev::float4>& 
 std::vector<dev::float4> imageTexels(const DeviceScene& ds, int image);
 
 // Camera frame and image plane for the kernels, and numSamples.
+// Whether a flattened scene is of the lanes kernel's family (cl_kernels/lanes.cl, render_lanes): a
+// path-traced camera; LightMesh lights (and point lights); no textures, motion blur or instances; and every material a shape uses without a specular kind or lobe (kind blinnphong,
+// ks = 0, no Fresnel-weighted kd: its f is direction-free). "" when it is, else the first reason it is not.
+std::string lanesFamily(const DeviceScene& ds);
+
 dev::CameraParams makeCameraParams(const Camera& cam);
 // Sets spp (at least 1).
 void setSamplesPerPixel(dev::CameraParams& c, int spp);

@@ -77,6 +77,7 @@ DeviceScene flattenScene(const Scene& scene, const FlattenOptions& opts) {
         ds.features.backfaceCulling = ds.features.backfaceCulling || (scene.backfaceCulling && c.pathMode == 0) ||
                                       nearSegmentMeetsGeometry(c, ds);
     }
+    ds.features.lanes = lanesFamily(ds).empty();  // the lanes kernel compiled in (cl_kernels/lanes.cl)
     if (opts.onFeaturesKnown) opts.onFeaturesKnown(ds.features);
     flattenLights(scene, ds, atlas);
     dev::SceneParams& p = ds.params;

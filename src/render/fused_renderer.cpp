@@ -15,6 +15,7 @@ namespace clrt {
 const char* pipelineName(Pipeline p) {
     switch (p) {
     case Pipeline::Fused: return "fused";
+    case Pipeline::Lanes: return "lanes";
     case Pipeline::Wavefront: return "wavefront";
     default: return "auto";
     }
@@ -22,6 +23,7 @@ const char* pipelineName(Pipeline p) {
 
 bool parsePipeline(const std::string& s, Pipeline& out) {
     if (s == "fused") out = Pipeline::Fused;
+    else if (s == "lanes") out = Pipeline::Lanes;
     else if (s == "wavefront") out = Pipeline::Wavefront;
     else if (s == "auto") out = Pipeline::Auto;
     else return false;
@@ -45,6 +47,16 @@ Pipeline choosePipeline(Pipeline requested, const DeviceInfo& device, size_t num
     }
     say("auto: CPU device");
     return Pipeline::Fused;
+}
+
+std::string lanesUnsupported(const dev::SceneParams& sp, const FusedPlan& plan, const std::string& notFamily, bool cpuDevice) {
+    if (!cpuDevice) return "not a CPU device";
+    if (!notFamily.empty()) return "scene: " + notFamily;
+    if (sp.pathMode == 0) return "camera not path traced";
+    if (sp.pathMode & CLRT_PATH_RR_COURSE) return "--rr-rule course";
+    if (sp.pixelSampler != CLRT_PIXEL_SAMPLER_STRATIFIED) return "sampler not stratified";
+    if (plan.lightSlots != 1 || plan.tree || sp.splitDepth > 0) return "light slots, or a tree of paths";
+    return "";
 }
 
 std::string fusedUnsupported(const dev::SceneParams& sp, const FusedPlan& plan) {
@@ -73,18 +85,26 @@ void collectEvents(std::vector<cl::Event>& events, RenderCounters& counters) {
 
 FusedPath::FusedPath(cl::Context& ctx, const cl::Program& program, size_t localSize)
     : k_(program, "render_fused"), localSize_(localSize) {
+    size_t n = 0;
+    CL_CHECK(clGetProgramInfo(program(), CL_PROGRAM_KERNEL_NAMES, 0, nullptr, &n));
+    std::string names(n, '\0');
+    CL_CHECK(clGetProgramInfo(program(), CL_PROGRAM_KERNEL_NAMES, n, &names[0], nullptr));
+    hasLanes_ = (";" + std::string(names.c_str()) + ";").find(";render_lanes;") != std::string::npos;
+    if (hasLanes_) lanes_ = KernelArgs(program, "render_lanes");
     rayCounts_ = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, 16));
 }
 
 int FusedPath::renderTile(cl::CommandQueue& q, bool profiling, size_t tileFirst, size_t tileEnd,
                           size_t maxBatchPixels, int spp, const FusedPlan& plan, const dev::SceneParams& sp,
                           RenderCounters& counters, const std::function<void(size_t, size_t)>& progress,
-                          const std::function<bool()>& stopped) {
+                          const std::function<bool()>& stopped, bool lanes) {
+    KernelArgs& k = lanes ? lanes_ : k_;
     const int group = std::max(1, plan.group);
     const size_t batch = std::max<size_t>(1, std::min(tileEnd - tileFirst, maxBatchPixels / size_t(group)));
     const int allGroups = spp / group;  // whole groups; a partial last one is a launch of its own
-    const int maxPasses = int(std::max<size_t>(
+    int maxPasses = int(std::max<size_t>(
         1, std::min<size_t>(kPathsPerLaunch / (batch * size_t(group)), size_t(allGroups / kLaunchesPerTile))));
+    if (lanes) maxPasses = std::max(maxPasses, std::min(allGroups, (3 + group) / group));  // >= 4 samples per launch
     const size_t pixelBatches = (tileEnd - tileFirst + batch - 1) / batch;
     const size_t steps = size_t((allGroups + maxPasses - 1) / maxPasses) + (spp % group ? 1 : 0);
     const size_t totalBatches = steps * pixelBatches;
@@ -93,7 +113,8 @@ int FusedPath::renderTile(cl::CommandQueue& q, bool profiling, size_t tileFirst,
     std::vector<cl::Event> events;
     const cl_uint zero[4] = {0, 0, 0, 0};
     counters.fused = true;
-    k_.set("lightSlots", plan.lightSlots).set("rayCounts", rayCounts_);
+    counters.lanes = counters.lanes || lanes;
+    k.set("lightSlots", plan.lightSlots).set("rayCounts", rayCounts_);
     for (int sample = 0; sample < spp;) {
         if (sample > 0 && sample % split == 0 && stopped()) {
             counters.stoppedAtSample = counters.stoppedAtSample < 0 ? sample : std::min(counters.stoppedAtSample, sample);
@@ -106,10 +127,10 @@ int FusedPath::renderTile(cl::CommandQueue& q, bool profiling, size_t tileFirst,
         for (size_t first = tileFirst; first < tileEnd; first += batch) {
             const int n = int(std::min(batch, tileEnd - first));
             if (plan.bounces) CL_CPP(q.enqueueWriteBuffer(rayCounts_, CL_FALSE, 0, sizeof zero, zero));
-            k_.set("count", n).set("firstPixel", int(first)).set("firstSample", sampleBase + sample).set("samples", samples);
-            k_.set("passes", passes);
+            k.set("count", n).set("firstPixel", int(first)).set("firstSample", sampleBase + sample).set("samples", samples);
+            k.set("passes", passes);
             cl::Event ev;
-            CL_CPP(q.enqueueNDRangeKernel(k_.ready(), cl::NullRange, cl::NDRange(roundUp(size_t(n), localSize_)),
+            CL_CPP(q.enqueueNDRangeKernel(k.ready(), cl::NullRange, cl::NDRange(roundUp(size_t(n), localSize_)),
                                           localSize_ ? cl::NDRange(localSize_) : cl::NullRange, nullptr,
                                           profiling ? &ev : nullptr));
             const uint64_t cameraRays = uint64_t(n) * uint64_t(samples) * uint64_t(passes);

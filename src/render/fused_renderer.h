@@ -16,9 +16,9 @@
 
 namespace clrt {
 
-// "fused", "wavefront" or "auto".
+// "fused", "lanes", "wavefront" or "auto".
 const char* pipelineName(Pipeline p);
-// Parses "fused" | "wavefront" | "auto"; false for anything else.
+// Parses "fused" | "lanes" | "wavefront" | "auto"; false for anything else.
 bool parsePipeline(const std::string& s, Pipeline& out);
 
 // What the batches of a render look like, as far as the fused path cares (renderer.cpp's BatchPlan).
@@ -37,6 +37,12 @@ constexpr size_t kFusedMinPixels = 1024;
 Pipeline choosePipeline(Pipeline requested, const DeviceInfo& device, size_t numPixels = kFusedMinPixels,
                         std::string* why = nullptr);
 
+// Why render_lanes cannot render this camera ("" when it can): the scene is not of its family
+// (notFamily: lanesFamily's reason, src/flatten/device_scene.h), or the camera or settings ask for what it lacks (no path
+// tracing, the course's roulette, more than one light slot, a sampler other than stratified, a split or
+// tree of paths, a device other than a CPU).
+std::string lanesUnsupported(const dev::SceneParams& sp, const FusedPlan& plan, const std::string& notFamily, bool cpuDevice);
+
 // Why the fused path cannot render this plan ("" when it can): more depths than CLRT_FUSED_MAX_LEVELS
 // with per-depth sums, or a dielectric split deeper than CLRT_FUSED_STACK_SIZE.
 std::string fusedUnsupported(const dev::SceneParams& sp, const FusedPlan& plan);
@@ -48,14 +54,19 @@ public:
     FusedPath(cl::Context& ctx, const cl::Program& program, size_t localSize);
     // The kernel, for binding its scene group (Renderer::Impl::setRenderArgs).
     KernelArgs& kernel() { return k_; }
+    // render_lanes (cl_kernels/lanes.cl), when the program has it (FeatureSet::lanes); null otherwise.
+    KernelArgs* lanesKernel() { return hasLanes_ ? &lanes_ : nullptr; }
 
     // Renders every sample of pixels [tileFirst, tileEnd) into the bound image (as the wavefront's
     // renderTile), in launches of at most kPathsPerLaunch camera paths and at least kLaunchesPerTile
     // launches when there are that many sample groups (progress moves within a tile), unless stopped()
     // turns true between two launches. Returns the samples each pixel got.
+    // lanes: with render_lanes (lanesKernel() must exist), launches of at least four samples per pixel
+    // where the render has them.
     int renderTile(cl::CommandQueue& q, bool profiling, size_t tileFirst, size_t tileEnd, size_t maxBatchPixels,
                    int spp, const FusedPlan& plan, const dev::SceneParams& sp, RenderCounters& counters,
-                   const std::function<void(size_t, size_t)>& progress, const std::function<bool()>& stopped);
+                   const std::function<void(size_t, size_t)>& progress, const std::function<bool()>& stopped,
+                   bool lanes = false);
 
     // RenderSettings::firstSample of the render in progress: samples [sampleBase, sampleBase + spp)
     // (the progressive passes of --target-error / --time-limit, render/progressive.h).
@@ -68,7 +79,8 @@ public:
     static constexpr int kLaunchesPerTile = 32;
 
 private:
-    KernelArgs k_;
+    KernelArgs k_, lanes_;
+    bool hasLanes_ = false;
     cl::Buffer rayCounts_;
     size_t localSize_ = 0;
 };

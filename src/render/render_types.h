@@ -17,7 +17,9 @@ enum RenderStage {
 // Which kernels render: the wavefront (a kernel per stage, queues between them) or the fused path
 // (one kernel per batch of pixels and sample passes, cl_kernels/fused.cl). Auto: fused on CPU
 // devices, wavefront on the others; `clrt render --pipeline` overrides.
-enum class Pipeline { Auto, Wavefront, Fused };
+// Lanes: the fused path with four paths per work-item in vector lanes (cl_kernels/lanes.cl), for scenes
+// of its family (lanesFamily, lanesUnsupported); auto takes it there on CPU devices.
+enum class Pipeline { Auto, Wavefront, Fused, Lanes };
 
 struct RenderCounters {
     uint64_t cameraRays = 0, secondaryRays = 0, shadowRays = 0;
@@ -35,6 +37,7 @@ struct RenderCounters {
     double extendSeconds[kDepthBins] = {}, shadowSeconds[kDepthBins] = {};
     bool profiled = false;
     bool fused = false;  // the fused path traced them: its one kernel has no per-depth split
+    bool lanes = false;  // ... with render_lanes (Pipeline::Lanes)
     uint64_t fullQueues = 0;   // bounces whose child queue reached its capacity (--rr-rule course's three-way
                                // splits, renderer.cpp kCourseQueueGrowth): children beyond it were dropped
     int stoppedAtSample = -1;  // >= 0: RenderSettings::stop ended the render early; the fewest samples

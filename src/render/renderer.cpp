@@ -211,6 +211,12 @@ struct Renderer::Impl {
     std::vector<dev::float4> tilePixels;
 };
 
+// Why the program has no render_lanes: the scene's reason, or a program built without it (--all-features).
+static std::string lanesFamilyOrBuild(const DeviceScene& ds) {
+    const std::string why = lanesFamily(ds);
+    return why.empty() ? "the program was built without CLRT_HAS_LANES" : why;
+}
+
 void Renderer::Impl::setRenderArgs(const dev::CameraParams& cp, const dev::SceneParams& sp, const cl::Buffer& img) {
     cam = cp;
     scene = sp;
@@ -223,6 +229,7 @@ void Renderer::Impl::setRenderArgs(const dev::CameraParams& cp, const dev::Scene
     CLRT_BIND_GROUP(kGather, CLRT_KERNEL_gather_shadows, *this);
     CLRT_BIND_GROUP(kAccumulate, CLRT_KERNEL_accumulate, *this);
     CLRT_BIND_GROUP(fused.kernel(), CLRT_PARAMS_FUSED_SCENE, *this);
+    if (KernelArgs* lanes = fused.lanesKernel()) CLRT_BIND_GROUP((*lanes), CLRT_PARAMS_FUSED_SCENE, *this);
 }
 
 const char* renderStageName(int stage) {
@@ -530,11 +537,20 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     const FusedPlan fusedPlan{plan.group, plan.lightSlots, plan.bounces, plan.maxChildren > 1};
     std::string why;
     Pipeline pipeline = choosePipeline(settings.pipeline, m.dc.info(), numPixels, &why);
-    const std::string notFused = pipeline == Pipeline::Fused ? fusedUnsupported(sp, fusedPlan) : "";
+    const bool fusedFamily = pipeline == Pipeline::Fused || pipeline == Pipeline::Lanes;
+    const std::string notFused = fusedFamily ? fusedUnsupported(sp, fusedPlan) : "";
     if (!notFused.empty()) pipeline = Pipeline::Wavefront;
+    // Lanes where the camera can have it: on request, and by default on CPU devices (auto chose fused)
+    std::string notLanes;
+    if (pipeline == Pipeline::Lanes || (pipeline == Pipeline::Fused && settings.pipeline == Pipeline::Auto)) {
+        notLanes = lanesUnsupported(sp, fusedPlan, m.fused.lanesKernel() ? "" : lanesFamilyOrBuild(m.ds),
+                                    (m.dc.info().type & CL_DEVICE_TYPE_CPU) != 0);
+        pipeline = notLanes.empty() ? Pipeline::Lanes : Pipeline::Fused;
+    }
     if (verbose())
         info("camera " + std::to_string(cam.id) + " on " + m.dc.info().name + ": pipeline " + pipelineName(pipeline) +
-             " (" + why + ")" + (notFused.empty() ? "" : "; not fused: " + notFused));
+             " (" + why + ")" + (notFused.empty() ? "" : "; not fused: " + notFused) +
+             (notLanes.empty() ? "" : "; not lanes: " + notLanes));
 
     // settings.stop: a tile in progress ends after its current group of samples (at least one), no
     // new tile is started after the first.
@@ -543,9 +559,9 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     while (!(tilesHere++ > 0 && stopped()) && nextTile(tileFirst, tileCount)) {
         const size_t tileEnd = std::min(numPixels, tileFirst + tileCount);
         const int reached =
-            pipeline == Pipeline::Fused
+            pipeline != Pipeline::Wavefront
                 ? m.fused.renderTile(m.dc.queue(), m.profiling, tileFirst, tileEnd, settings.maxBatchPixels, cp.spp,
-                                     fusedPlan, sp, counters, progress, stopped)
+                                     fusedPlan, sp, counters, progress, stopped, pipeline == Pipeline::Lanes)
                 : m.renderTile(tileFirst, tileEnd, plan, counters, progress, stopped);
         m.readTile(image, tileFirst, tileEnd, 1.0f / float(reached), out);
         counters.tiles += 1;

@@ -94,6 +94,8 @@
     P(VAL, int, count) P(VAL, int, firstPixel) P(VAL, int, firstSample) P(VAL, int, samples)       \
     P(VAL, int, passes) P(VAL, int, lightSlots) P(BUF, uint, rayCounts)
 #define CLRT_KERNEL_render_fused(P) CLRT_PARAMS_FUSED_LAUNCH(P) CLRT_PARAMS_FUSED_SCENE(P)
+/* cl_kernels/lanes.cl (only in programs built with CLRT_HAS_LANES): the same parameters */
+#define CLRT_KERNEL_render_lanes(P) CLRT_KERNEL_render_fused(P)
 
 /* ---- tone-mapping program (tonemap.cl) -------------------------------------------------------- */
 
@@ -114,7 +116,7 @@
 /* Every kernel, by program (the host's table and the tests iterate these). */
 #define CLRT_RENDER_KERNELS(K)                                                                     \
     K(generate_camera_rays) K(intersect_closest) K(intersect_shadow) K(shade_hits) K(sample_lights) \
-    K(gather_shadows) K(accumulate) K(compact_scan_blocks) K(compact_scan_sums) K(compact_scatter) K(render_fused)
+    K(gather_shadows) K(accumulate) K(compact_scan_blocks) K(compact_scan_sums) K(compact_scatter) K(render_fused) K(render_lanes)
 #define CLRT_TONEMAP_KERNELS(K) K(Tonemap_Luminance) K(Tonemap_Histogram) K(Tonemap_Map) K(Tonemap_MapFloat)
 #define CLRT_LAYOUT_KERNELS(K) K(layout_report)
 

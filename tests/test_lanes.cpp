@@ -1,0 +1,183 @@
+// The lanes kernel (cl_kernels/lanes.cl, render_lanes; Pipeline::Lanes): four paths per work-item in
+// vector lanes. With the same random streams it computes what render_fused computes, up to rounding:
+// every camera of the course's hw6 path box (NEE, importance sampling, MIS; LightMesh and point light),
+// the bench's MIS box and its balance heuristic, against render_fused's image — the difference a
+// thousandth of a millionth of the noise between two seeds, the same ray counts. Also: which scenes and
+// cameras it takes (lanesFamily, lanesUnsupported, auto), determinism, and the program without it.
+#include <catch.hpp>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <string>
+
+#include "flatten/device_scene.h"
+#include "render/fused_renderer.h"
+#include "render/renderer.h"
+#include "scene/scene_loader.h"
+#include "test_helpers.h"
+
+using namespace clrt;
+using namespace clrt::test;
+
+namespace {
+
+struct Rendered {
+    ImageRGB image;
+    RenderCounters counters;
+};
+
+Rendered renderWith(Renderer& r, Camera cam, int w, int h, int spp, uint32_t seed, Pipeline p) {
+    cam.width = w;
+    cam.height = h;
+    RenderSettings rs;
+    rs.spp = spp;
+    rs.seed = seed;
+    rs.pipeline = p;
+    Rendered out;
+    out.image = r.render(cam, rs, out.counters);
+    return out;
+}
+
+// bench.py's relMSE: mean over pixels and channels of (a − b)² / (b² + 0.01).
+double relMse(const ImageRGB& a, const ImageRGB& b) {
+    double s = 0;
+    for (size_t i = 0; i < a.pixels.size(); ++i) {
+        const double d = double(a.pixels[i]) - double(b.pixels[i]);
+        s += d * d / (double(b.pixels[i]) * double(b.pixels[i]) + 0.01);
+    }
+    return s / double(a.pixels.size());
+}
+
+size_t differingFloats(const ImageRGB& a, const ImageRGB& b) {
+    size_t n = 0;
+    for (size_t i = 0; i < a.pixels.size(); ++i) n += std::memcmp(&a.pixels[i], &b.pixels[i], sizeof(float)) != 0;
+    return n;
+}
+
+const char* kPathBox = "hw6/cornellbox_jaroslav_path_diffuse.xml";
+
+}  // namespace
+
+TEST_CASE("lanes: render_fused's image up to rounding on every path camera of the hw6 box", "[lanes][shared]") {
+    if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
+    Scene scene = loadScene(sharedDir() + "/scenes/" + kPathBox);
+    DeviceScene ds = flattenScene(scene);
+    REQUIRE(lanesFamily(ds).empty());
+    REQUIRE(ds.features.lanes);
+    Renderer r(testContext(), ds);
+    int compared = 0;
+    for (size_t c = 0; c < scene.cameras.size(); ++c) {
+        Camera cam = scene.cameras[c];
+        if (cam.pathMode & CLRT_PATH_RR) continue;  // no depth cap: per-depth sums beyond the fused kernel's
+        for (int mode : {cam.pathMode, CLRT_PATH_ON | CLRT_PATH_MIS, CLRT_PATH_ON | CLRT_PATH_MIS | CLRT_PATH_MIS_BALANCE}) {
+            cam.pathMode = mode;
+            INFO("camera " << cam.id << ", path mode " << mode);
+            Rendered l = renderWith(r, cam, 40, 40, 8, 3, Pipeline::Lanes);
+            Rendered f = renderWith(r, cam, 40, 40, 8, 3, Pipeline::Fused);
+            Rendered f2 = renderWith(r, cam, 40, 40, 8, 4, Pipeline::Fused);
+            CHECK(l.counters.lanes);
+            CHECK_FALSE(f.counters.lanes);
+            const double noise = relMse(f2.image, f.image), diff = relMse(l.image, f.image);
+            INFO("relMSE lanes/fused " << diff << ", between seeds " << noise);
+            CHECK(noise > 1e-3);
+            CHECK(diff < 1e-6 * noise);
+            CHECK(l.counters.cameraRays == f.counters.cameraRays);
+            CHECK(l.counters.secondaryRays == f.counters.secondaryRays);
+            CHECK(l.counters.shadowRays == f.counters.shadowRays);
+            CHECK(l.counters.pathSegments == f.counters.pathSegments);
+            ++compared;
+        }
+    }
+    CHECK(compared >= 12);
+}
+
+TEST_CASE("lanes: deterministic, several launches and sample counts that are no multiple of four", "[lanes][shared]") {
+    if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
+    Scene scene = loadScene(sharedDir() + "/scenes/" + kPathBox);
+    DeviceScene ds = flattenScene(scene);
+    Renderer r(testContext(), ds);
+    Camera cam = scene.cameras.at(0);
+    cam.pathMode = CLRT_PATH_ON | CLRT_PATH_MIS;
+    for (int spp : {1, 3, 6}) {
+        INFO(spp << " spp");
+        Rendered a = renderWith(r, cam, 48, 40, spp, 9, Pipeline::Lanes);
+        Rendered b = renderWith(r, cam, 48, 40, spp, 9, Pipeline::Lanes);
+        Rendered other = renderWith(r, cam, 48, 40, spp, 10, Pipeline::Lanes);
+        Rendered f = renderWith(r, cam, 48, 40, spp, 9, Pipeline::Fused);
+        CHECK(a.counters.lanes);
+        CHECK(differingFloats(a.image, b.image) == 0);
+        CHECK(differingFloats(a.image, other.image) > 0);
+        CHECK(relMse(a.image, f.image) < 1e-6 * relMse(other.image, f.image));
+    }
+    // A large image: one sample per group, four passes in each launch of the lanes kernel.
+    Rendered big = renderWith(r, cam, 300, 256, 8, 9, Pipeline::Lanes);
+    Rendered bigF = renderWith(r, cam, 300, 256, 8, 9, Pipeline::Fused);
+    Rendered bigOther = renderWith(r, cam, 300, 256, 8, 10, Pipeline::Fused);
+    CHECK(big.counters.lanes);
+    INFO("relMSE lanes/fused " << relMse(big.image, bigF.image) << ", between seeds " << relMse(bigOther.image, bigF.image));
+    CHECK(relMse(big.image, bigF.image) < 1e-6 * relMse(bigOther.image, bigF.image));
+    CHECK(big.counters.secondaryRays == bigF.counters.secondaryRays);
+}
+
+TEST_CASE("lanes: which scenes and cameras it takes; auto takes it on CPU devices", "[lanes][shared]") {
+    if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
+    // Out of its family: a glossy lobe (ks > 0), a mirror and glass, a sphere light, no path tracing.
+    for (const char* f : {"hw6/cornellbox_jaroslav_glossy.xml", "classic/cornellbox_recursive.xml",
+                          "hw6/cornellbox_jaroslav_glossy_area_sphere.xml", "hw5/cube_point.xml"}) {
+        INFO(f);
+        Scene scene = loadScene(sharedDir() + "/scenes/" + f);
+        for (Camera& c : scene.cameras) c.pathMode = CLRT_PATH_ON | CLRT_PATH_MIS;
+        if (std::string(f) == "hw5/cube_point.xml") scene.cameras.at(0).pathMode = 0;
+        DeviceScene ds = flattenScene(scene);
+        CHECK_FALSE(lanesFamily(ds).empty());
+        CHECK_FALSE(ds.features.lanes);
+    }
+    Scene scene = loadScene(sharedDir() + "/scenes/" + kPathBox);
+    DeviceScene ds = flattenScene(scene);
+    Renderer r(testContext(), ds);
+    Camera cam = scene.cameras.at(0);
+    cam.pathMode = CLRT_PATH_ON | CLRT_PATH_MIS;
+    Rendered a = renderWith(r, cam, 40, 40, 4, 1, Pipeline::Auto);
+    CHECK(a.counters.lanes == ((testDevice().type & CL_DEVICE_TYPE_CPU) != 0));
+    // Camera and settings it does not take: the fused kernel renders instead.
+    dev::SceneParams sp{};
+    sp.pathMode = CLRT_PATH_ON | CLRT_PATH_MIS;
+    sp.pixelSampler = CLRT_PIXEL_SAMPLER_STRATIFIED;
+    FusedPlan plan;
+    CHECK(lanesUnsupported(sp, plan, "", true).empty());
+    CHECK_FALSE(lanesUnsupported(sp, plan, "", false).empty());        // not a CPU
+    CHECK_FALSE(lanesUnsupported(sp, plan, "planes", true).empty());  // the scene's reason
+    dev::SceneParams course = sp;
+    course.pathMode |= CLRT_PATH_RR | CLRT_PATH_RR_COURSE;
+    CHECK(lanesUnsupported(course, plan, "", true).find("course") != std::string::npos);
+    dev::SceneParams indep = sp;
+    indep.pixelSampler = CLRT_PIXEL_SAMPLER_INDEPENDENT;
+    CHECK_FALSE(lanesUnsupported(indep, plan, "", true).empty());
+    dev::SceneParams classic = sp;
+    classic.pathMode = 0;
+    CHECK_FALSE(lanesUnsupported(classic, plan, "", true).empty());
+    FusedPlan tree = plan;
+    tree.tree = true;
+    CHECK_FALSE(lanesUnsupported(sp, tree, "", true).empty());
+    // Asked for where it cannot run: the fused kernel, the same image as asking for it.
+    RenderSettings rs;
+    rs.spp = 2;
+    rs.seed = 5;
+    rs.pixelSampler = PixelSampler::Independent;
+    rs.pipeline = Pipeline::Lanes;
+    Camera small = cam;
+    small.width = small.height = 40;
+    RenderCounters cl, cf;
+    const ImageRGB l = r.render(small, rs, cl);
+    rs.pipeline = Pipeline::Fused;
+    const ImageRGB f = r.render(small, rs, cf);
+    CHECK_FALSE(cl.lanes);
+    CHECK(differingFloats(l, f) == 0);
+    // --all-features programs are built without it.
+    Pipeline p = Pipeline::Auto;
+    CHECK(parsePipeline("lanes", p));
+    CHECK(p == Pipeline::Lanes);
+    CHECK(std::string(pipelineName(Pipeline::Lanes)) == "lanes");
+    CHECK_FALSE(FeatureSet::all().lanes);
+}
