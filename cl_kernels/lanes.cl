@@ -47,15 +47,15 @@ inline LaneV3 LaneV3_FiniteOrZero(LaneV3 a) {
     return LaneV3_Make(select((LaneF)(0.0f), a.x, isfinite(a.x)), select((LaneF)(0.0f), a.y, isfinite(a.y)),
                        select((LaneF)(0.0f), a.z, isfinite(a.z)));
 }
-/* Lane k of a vector and back (private arrays: OpenCL C has no variable component index). */
+/* Lanes to and from per-lane values (private arrays: OpenCL C has no variable component index). */
 inline LaneV3 LaneV3_Load(const float3* v) {
     return LaneV3_Make((LaneF)(v[0].x, v[1].x, v[2].x, v[3].x), (LaneF)(v[0].y, v[1].y, v[2].y, v[3].y),
                        (LaneF)(v[0].z, v[1].z, v[2].z, v[3].z));
 }
-inline float3 LaneV3_Lane(LaneV3 a, int k) {
+inline void LaneV3_Store(LaneV3 a, float3* out) {
     float x[CLRT_LANES], y[CLRT_LANES], z[CLRT_LANES];
     vstore4(a.x, 0, x); vstore4(a.y, 0, y); vstore4(a.z, 0, z);
-    return (float3)(x[k], y[k], z[k]);
+    for (int k = 0; k < CLRT_LANES; ++k) out[k] = (float3)(x[k], y[k], z[k]);
 }
 inline int Lane_Bits(LaneI m) { return (m.s0 ? 1 : 0) | (m.s1 ? 2 : 0) | (m.s2 ? 4 : 0) | (m.s3 ? 8 : 0); }
 inline LaneI Lane_FromBits(int bits) { return -((LaneI)(bits, bits >> 1, bits >> 2, bits >> 3) & 1); }
@@ -64,6 +64,9 @@ inline LaneI Lane_FromBits(int bits) { return -((LaneI)(bits, bits >> 1, bits >>
  * The lanes share the pixel and the path id (each lane's path is its sample's child 0 at every depth),
  * so the dimension's hashes are one; only the sample index differs. Bit for bit Rng_Stratified2D's. */
 inline LaneU LaneBits_Reverse(LaneU v) {
+#ifdef CLRT_BITS_REVERSE_BY_TABLE /* quirk BIT_REVERSE_TABLE (Oclgrind lacks llvm.bitreverse): per lane, by table */
+    return (LaneU)(Bits_Reverse(v.s0), Bits_Reverse(v.s1), Bits_Reverse(v.s2), Bits_Reverse(v.s3));
+#endif
     v = ((v >> 1) & 0x55555555u) | ((v & 0x55555555u) << 1);
     v = ((v >> 2) & 0x33333333u) | ((v & 0x33333333u) << 2);
     v = ((v >> 4) & 0x0f0f0f0fu) | ((v & 0x0f0f0f0fu) << 4);
@@ -158,13 +161,21 @@ inline LaneHit Lanes_Surface(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) PathStat
     HitTriangle ht;
     if (h.prim < scene.numTriangles) HitTriangle_Load(h, instance, tris, triShading, triAttributes, instances, &ht);
     SurfaceHit s = Surface_FromHit(h, ray, &ht, spheres, planes, scene.numTriangles, scene.numSpheres);
-    const Material m = materials[s.material];
+    const __global Material* m = &materials[s.material];
     if (dot(s.ns, s.ng) < 0.0f) s.ns = -s.ns; /* Shade_OrientsNormalToRay: every material when path traced */
     const float3 ng = s.frontFacing ? s.ng : -s.ng, ns = s.frontFacing ? s.ns : -s.ns;
     float lightPdf = -1.0f;
     const float3 emitted = Path_HitEmission(h.prim, s.frontFacing, scene, triShading, spheres, lights, s.p, s.dir, s.t,
                                             s.ng, path.throughput.w, &lightPdf);
-    const ShadingPoint sp = ShadingPoint_Make(s.p, ns, ng, -s.dir, m.diffuse.xyz, m.specular.xyz, m, s.material);
+    ShadingPoint sp;
+    sp.position = (float4)(s.p, 1.0f);
+    sp.normal = (float4)(ns, 0.0f);
+    sp.geomNormal = (float4)(ng, 0.0f);
+    sp.wo = (float4)(-s.dir, 0.0f);
+    sp.kd = (float4)(m->diffuse.xyz, 0.0f);
+    sp.ks = (float4)(m->specular.xyz, m->phongExponent);
+    sp.material = s.material;
+    sp.pad0 = sp.pad1 = sp.pad2 = 0; /* as ShadingPoint_Make */
     const int mode = scene.pathMode;
     lh.radiance = finiteOrZero(path.throughput.xyz * emitted * Path_EmissionWeight(mode, path.throughput.w, lightPdf));
     const int diffuse = maxComponent(sp.kd.xyz) > 0.0f || maxComponent(sp.ks.xyz) > 0.0f;
@@ -174,21 +185,25 @@ inline LaneHit Lanes_Surface(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) PathStat
     lh.p = s.p;
     lh.ng = ng;
     lh.ns = ns;
-    lh.f = Material_EvalDirect(sp, materials, ns, 1.0f); /* f·cosθ = f·cosθ for every wi (ks = 0) */
+    if (lh.nee || lh.bounce) lh.f = Material_EvalDirect(sp, materials, ns, 1.0f); /* f: the same for every wi (ks = 0) */
     return lh;
 }
 
 /* Which of the lanes in okBits see the shadow ray from org along unit dir unblocked up to tMax
  * (Shadow_Occluded, per lane). */
 inline int Lanes_Unoccluded(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int okBits, LaneV3 org, LaneV3 dir, LaneF tMax) {
+    if (!okBits) return 0;
     float tm[CLRT_LANES];
+    float3 o[CLRT_LANES], d[CLRT_LANES];
     vstore4(tMax, 0, tm);
+    LaneV3_Store(org, o);
+    LaneV3_Store(dir, d);
     int open = 0;
     for (int k = 0; k < CLRT_LANES; ++k) {
         if (!(okBits & (1 << k))) continue;
         ShadowRay sr;
-        sr.origin = (float4)(LaneV3_Lane(org, k), tm[k]);
-        sr.direction = (float4)(LaneV3_Lane(dir, k), 0.0f);
+        sr.origin = (float4)(o[k], tm[k]);
+        sr.direction = (float4)(d[k], 0.0f);
         sr.contribution = (float4)(0.0f);
         if (!Shadow_Occluded(sr, scene, nodes, leaves, tris, spheres, planes, instances)) open |= 1 << k;
     }
@@ -333,22 +348,25 @@ inline uint Lanes_Paths(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int pixel, in
             for (int l = 0; l < scene.numLights; ++l)
                 sum = LaneV3_Add(sum, Lanes_LightSample(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) & lights[l], neeBits, P, Ng, Ns,
                                                         F, throughput, strat, sample, dim + 8u + 2u * (uint)l));
-        for (int k = 0; k < CLRT_LANES; ++k) { /* as render_fused: per depth, in sample order */
-            if (!(live & (1 << k))) continue;
-            levelSum[min(depth, levels - 1)] += finiteOrZero(LaneV3_Lane(sum, k));
-        }
+        float3 out[CLRT_LANES];
+        LaneV3_Store(sum, out);
+        for (int k = 0; k < CLRT_LANES; ++k) /* as render_fused: per depth, in sample order */
+            if (live & (1 << k)) levelSum[min(depth, levels - 1)] += finiteOrZero(out[k]);
         live &= bounceBits;
         if (!live) break;
         LaneF u1, u2, pdf;
         Lanes_Stratified2D(strat, sample, dim + 5u, &u1, &u2);
         LaneV3 dir;
         live &= Lanes_Bounce(mode, live, Ng, Ns, F, u1, u2, &throughput, &dir, &pdf);
-        const LaneV3 org = LaneV3_Add(P, LaneV3_Scale(Ng, Lanes_OffsetDistance(P))); /* Ray_OffsetOrigin */
+        float3 org[CLRT_LANES], dirs[CLRT_LANES], next3[CLRT_LANES];
+        LaneV3_Store(LaneV3_Add(P, LaneV3_Scale(Ng, Lanes_OffsetDistance(P))), org); /* Ray_OffsetOrigin */
+        LaneV3_Store(dir, dirs);
+        LaneV3_Store(throughput, next3);
         for (int k = 0; k < CLRT_LANES; ++k) { /* Path_Child (child 0), after Path_RussianRoulette */
             const uint id = path[k].pathId;
             path[k].pathId = id < 0x80000000u ? id * 2u : id; /* every lane: they share it */
             if (!(live & (1 << k))) continue;
-            float3 next = LaneV3_Lane(throughput, k);
+            float3 next = next3[k];
             if ((mode & CLRT_PATH_RR) && depth >= scene.rrMinDepth) {
                 const RngKey key = Rng_Key(scene.seed, pixel, path[k].sample, id);
                 if (!Path_RussianRoulette(&next, Rng_Uniform(key, dim + 4u))) { live &= ~(1 << k); continue; }
@@ -356,8 +374,8 @@ inline uint Lanes_Paths(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int pixel, in
             if (!(maxComponent(next) > 0.0f) || !allFinite3(next)) { live &= ~(1 << k); continue; }
             path[k].throughput = (float4)(next, ((float*)&pdf)[k]);
             path[k].depth = depth + 1;
-            ray[k].origin = (float4)(LaneV3_Lane(org, k), 0.0f);
-            ray[k].direction = (float4)(LaneV3_Lane(dir, k), INFINITY);
+            ray[k].origin = (float4)(org[k], 0.0f);
+            ray[k].direction = (float4)(dirs[k], INFINITY);
             ++secondary;
         }
     }

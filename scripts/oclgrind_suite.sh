@@ -112,6 +112,13 @@ while read -r scene args; do
     done
   done
 done < scripts/kernel_variants.txt
+# The lanes kernel (cl_kernels/lanes.cl, render_lanes) on a scene of its family: LightMesh and point
+# light, eight path-tracing cameras (NEE, importance, MIS, roulette), four samples so that every lane works.
+for pass in $PASSES; do
+  mkdir -p "$OUT/img/lanes-$pass"
+  spawn lanes "$pass" --pipeline-of lanes build/clrt render "$SCENES/hw6/cornellbox_jaroslav_path_diffuse.xml" \
+    --resolution 8x8 --spp 4 -o "$OUT/img/lanes-$pass" -v --pipeline lanes
+done
 wait
 
 # Tone mapping: every operator, 8-bit and float output, on the tiny HDR render of cube_point_hdr.

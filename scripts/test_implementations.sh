@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The OpenCL-implementation part of scripts/test.sh (issue 17), after the main suite has passed on
 # PoCL:
-#   1. the device tests (Catch2 tags [cl] [lights] [tonemap] [render]: intersection, light and
+#   1. the device tests (Catch2 tags [cl] [lights] [tonemap] [render] [lanes]: intersection, light and
 #      environment sampling, tone mapping against the host references, struct layout, determinism,
 #      course references) on every other CPU implementation present: Intel's OpenCL CPU runtime when
 #      scripts/setup_intel_ocl.sh installed it (build/opencl-env.sh); except the cases tagged
@@ -17,7 +17,7 @@ set -uo pipefail
 cd "$(dirname "$0")/.."
 [ -f build/opencl-env.sh ] && . build/opencl-env.sh
 export CLRT_CACHE_DIR="${CLRT_CACHE_DIR:-$PWD/build/kernel-cache}"
-DEVICE_TAGS="[cl]~[one-implementation],[lights]~[one-implementation],[tonemap]~[one-implementation],[render]~[one-implementation]"
+DEVICE_TAGS="[cl]~[one-implementation],[lights]~[one-implementation],[tonemap]~[one-implementation],[render]~[one-implementation],[lanes]"
 rc=0
 
 # 1. Device tests on each CPU platform other than PoCL.

@@ -1,9 +1,10 @@
 // The lanes kernel (cl_kernels/lanes.cl, render_lanes; Pipeline::Lanes): four paths per work-item in
 // vector lanes. With the same random streams it computes what render_fused computes, up to rounding:
-// every camera of the course's hw6 path box (NEE, importance sampling, MIS; LightMesh and point light),
-// the bench's MIS box and its balance heuristic, against render_fused's image — the difference a
-// thousandth of a millionth of the noise between two seeds, the same ray counts. Also: which scenes and
-// cameras it takes (lanesFamily, lanesUnsupported, auto), determinism, and the program without it.
+// every camera of the course's hw6 path box without roulette (NEE, importance sampling; LightMesh and
+// point light), each also under MIS with the power and the balance heuristic, against render_fused's
+// image: the difference under 1e-5 of the noise between two seeds (PoCL: ~1e-13 of it), the same ray
+// counts. Also: which scenes and cameras it takes (lanesFamily, lanesUnsupported, auto), determinism,
+// sample counts that are no multiple of four, launches of several passes, the fallback to render_fused.
 #include <catch.hpp>
 
 #include <cmath>
@@ -81,7 +82,7 @@ TEST_CASE("lanes: render_fused's image up to rounding on every path camera of th
             const double noise = relMse(f2.image, f.image), diff = relMse(l.image, f.image);
             INFO("relMSE lanes/fused " << diff << ", between seeds " << noise);
             CHECK(noise > 1e-3);
-            CHECK(diff < 1e-6 * noise);
+            CHECK(diff < 1e-5 * noise);  // PoCL ~1e-13 of it, Intel ~1e-7 (other contractions)
             CHECK(l.counters.cameraRays == f.counters.cameraRays);
             CHECK(l.counters.secondaryRays == f.counters.secondaryRays);
             CHECK(l.counters.shadowRays == f.counters.shadowRays);
@@ -108,7 +109,7 @@ TEST_CASE("lanes: deterministic, several launches and sample counts that are no 
         CHECK(a.counters.lanes);
         CHECK(differingFloats(a.image, b.image) == 0);
         CHECK(differingFloats(a.image, other.image) > 0);
-        CHECK(relMse(a.image, f.image) < 1e-6 * relMse(other.image, f.image));
+        CHECK(relMse(a.image, f.image) < 1e-5 * relMse(other.image, f.image));
     }
     // A large image: one sample per group, four passes in each launch of the lanes kernel.
     Rendered big = renderWith(r, cam, 300, 256, 8, 9, Pipeline::Lanes);
@@ -116,7 +117,7 @@ TEST_CASE("lanes: deterministic, several launches and sample counts that are no 
     Rendered bigOther = renderWith(r, cam, 300, 256, 8, 10, Pipeline::Fused);
     CHECK(big.counters.lanes);
     INFO("relMSE lanes/fused " << relMse(big.image, bigF.image) << ", between seeds " << relMse(bigOther.image, bigF.image));
-    CHECK(relMse(big.image, bigF.image) < 1e-6 * relMse(bigOther.image, bigF.image));
+    CHECK(relMse(big.image, bigF.image) < 1e-5 * relMse(bigOther.image, bigF.image));
     CHECK(big.counters.secondaryRays == bigF.counters.secondaryRays);
 }
 
