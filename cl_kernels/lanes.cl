@@ -3,13 +3,15 @@
  * samples four at a time (lane k: sample s0 + k) and steps their paths together, one depth per round:
  *   per lane, scalar: the closest hit (Ray_Closest), the surface and the emission the ray sees
  *     (Lanes_Surface: the path branch of Shade_Hit and the start of Path_ShadeHit), the light triangle
- *     picked (MeshLight_PickTriangle), the shadow rays' occlusion (Shadow_Occluded), roulette;
+ *     picked (MeshLight_PickTriangle), the shadow rays' occlusion (Shadow_Occluded), the specular pick
+ *     and a mirror's, conductor's or dielectric's child (Path_SpecularBounce), roulette;
  *   in lanes: the sampler (Lanes_Stratified2D), the light samples (MeshLight_Sample, Shadow_Make,
  *     Path_LightSampleWeight, ObjectLight_AimShadow) and the bounce (Path_SampleBounce, Path_Child).
  * It computes what render_fused computes for the same random streams, up to rounding (tests/test_lanes.cpp):
  * one lane is one path of the fused kernel. Scenes of its family only (src/flatten/device_scene.h
- * lanesFamily, src/render/fused_renderer.h lanesUnsupported): materials without a specular kind or lobe
- * (ks = 0: f is kd/π or kd, direction-free), LightMesh and point lights, the stratified sampler, no textures, motion
+ * lanesFamily, src/render/fused_renderer.h lanesUnsupported): materials without a specular lobe (ks = 0:
+ * the non-specular f is kd/π or kd, direction-free; mirrors, conductors, dielectrics in), LightMesh and
+ * point lights, the stratified sampler, no textures, motion
  * blur or instances. Why lanes: a path's shading is a
  * chain of dependent sqrt, division, sin/cos and loads; four paths in one chain of vector instructions
  * take about the time of one (docs/studies/2026-12-05-simd-lanes-prototype.md).
@@ -137,19 +139,22 @@ inline LaneF Lanes_MisWeight(int mode, LaneF pa, LaneF pb) {
 
 /* What a lane's hit gives the lane code: the point and normals (facing the ray, as Shade_Hit's path
  * branch orients them), f (the BRDF's value: direction-free in this family), the radiance that needs no
- * shadow ray, and whether the hit samples the lights and bounces. */
+ * shadow ray, whether the hit samples the lights and bounces, and what a specular child needs
+ * (Path_SpecularBounce: the material, wo, the distance the ray travelled, inside a dielectric). */
 typedef struct {
-    float3 p, ng, ns, f;
+    float3 p, ng, ns, f, wo;
     float3 radiance;
-    int nee, bounce;
+    float t;
+    int material, nee, bounce, specular, diffuse, inside, lastVertex;
 } LaneHit;
 
 /* Lane path `path` along ray: the closest hit and Shade_Hit's path branch up to Path_ShadeHit's
  * light-sample and bounce decisions (a miss: the background, Shade_Miss). */
 inline LaneHit Lanes_Surface(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) PathState path, Ray ray) {
     LaneHit lh;
-    lh.p = lh.ng = lh.ns = lh.f = lh.radiance = (float3)(0.0f);
-    lh.nee = lh.bounce = 0;
+    lh.p = lh.ng = lh.ns = lh.f = lh.wo = lh.radiance = (float3)(0.0f);
+    lh.t = 0.0f;
+    lh.material = lh.nee = lh.bounce = lh.specular = lh.diffuse = lh.inside = lh.lastVertex = 0;
     int instance;
     const Hit h = Ray_Closest(ray, scene, nodes, leaves, tris, spheres, planes, instances, &instance);
     if (h.prim == CLRT_INVALID) {
@@ -165,8 +170,14 @@ inline LaneHit Lanes_Surface(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) PathStat
     if (dot(s.ns, s.ng) < 0.0f) s.ns = -s.ns; /* Shade_OrientsNormalToRay: every material when path traced */
     const float3 ng = s.frontFacing ? s.ng : -s.ng, ns = s.frontFacing ? s.ns : -s.ns;
     float lightPdf = -1.0f;
-    const float3 emitted = Path_HitEmission(h.prim, s.frontFacing, scene, triShading, spheres, lights, s.p, s.dir, s.t,
-                                            s.ng, path.throughput.w, &lightPdf);
+    float3 emitted = (float3)(0.0f);
+#ifdef CLRT_HAS_LIGHT_MESH
+    emitted = Path_HitEmission(h.prim, s.frontFacing, scene, triShading, spheres, lights, s.p, s.dir, s.t, s.ng,
+                               path.throughput.w, &lightPdf);
+#endif
+    const int kind = m->kind;
+    lh.inside = kind == MATERIAL_DIELECTRIC && !s.frontFacing; /* Shade_Hit's insideDielectric: no ShadingPoint */
+    lh.specular = kind == MATERIAL_MIRROR || kind == MATERIAL_CONDUCTOR || kind == MATERIAL_DIELECTRIC;
     ShadingPoint sp;
     sp.position = (float4)(s.p, 1.0f);
     sp.normal = (float4)(ns, 0.0f);
@@ -178,14 +189,20 @@ inline LaneHit Lanes_Surface(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) PathStat
     sp.pad0 = sp.pad1 = sp.pad2 = 0; /* as ShadingPoint_Make */
     const int mode = scene.pathMode;
     lh.radiance = finiteOrZero(path.throughput.xyz * emitted * Path_EmissionWeight(mode, path.throughput.w, lightPdf));
-    const int diffuse = maxComponent(sp.kd.xyz) > 0.0f || maxComponent(sp.ks.xyz) > 0.0f;
+    const int diffuse = !lh.inside && (maxComponent(sp.kd.xyz) > 0.0f || maxComponent(sp.ks.xyz) > 0.0f);
     const int emissionOnly = path.depth > scene.maxDepth, lastVertex = path.depth >= scene.maxDepth;
+    /* Path_ShadeHit's decisions: light samples, and whether a child may follow */
     lh.nee = Path_UsesNee(mode) && diffuse && !emissionOnly;
-    lh.bounce = diffuse && !emissionOnly && !(lastVertex && !(mode & CLRT_PATH_MIS));
+    lh.bounce = !emissionOnly && !(lastVertex && !(mode & CLRT_PATH_MIS)) && (lh.specular || diffuse);
+    lh.diffuse = diffuse;
+    lh.lastVertex = lastVertex;
     lh.p = s.p;
     lh.ng = ng;
     lh.ns = ns;
-    if (lh.nee || lh.bounce) lh.f = Material_EvalDirect(sp, materials, ns, 1.0f); /* f: the same for every wi (ks = 0) */
+    lh.wo = -s.dir;
+    lh.t = s.t;
+    lh.material = s.material;
+    if (diffuse && (lh.nee || lh.bounce)) lh.f = Material_EvalDirect(sp, materials, ns, 1.0f); /* f: the same for every wi (ks = 0) */
     return lh;
 }
 
@@ -210,6 +227,7 @@ inline int Lanes_Unoccluded(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int okBit
     return open;
 }
 
+#ifdef CLRT_HAS_LIGHT_MESH
 /* MeshLight_Sample for the lanes at p: *wi, *dist (MeshLight_ShadowLength's), the radiance estimate *e
  * (0 where the sample fails), and the light's point's offset distance; u: the lanes' 2D sample. */
 inline void Lanes_MeshLightSample(const __global Light* light, const __global float4* lightData, LaneV3 p, LaneF u1,
@@ -235,6 +253,7 @@ inline void Lanes_MeshLightSample(const __global Light* light, const __global fl
     const LaneF scale = select((LaneF)(0.0f), light->area * cosLight / d2, (d2 > 0.0f) & (cosLight > 0.0f));
     *e = LaneV3_Scale(LaneV3_Splat(light->radiance.xyz), scale);
 }
+#endif
 
 /* The lanes' light samples of light `light` (LightMesh or PointLight) at their shading points: as
  * Light_ShadowRays and Fused_Shadow, the unoccluded contributions (MIS-weighted, times the throughput). */
@@ -246,10 +265,14 @@ inline LaneV3 Lanes_LightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) const
     LaneF dist;
     const int mesh = light->kind == LIGHT_MESH;
     if (mesh) {
+#ifdef CLRT_HAS_LIGHT_MESH
         if (light->objCount <= 0 || !(light->area > 0.0f)) return zero;
         LaneF u1, u2;
         Lanes_Stratified2D(strat, sample, dim, &u1, &u2);
         Lanes_MeshLightSample(light, lightData, p, u1, u2, &wi, &dist, &e);
+#else
+        return zero;
+#endif
     } else { /* PointLight_Sample */
         const LaneV3 d = LaneV3_Sub(LaneV3_Splat(light->position.xyz), p);
         const LaneF d2 = LaneV3_Dot(d, d);
@@ -283,10 +306,10 @@ inline LaneV3 Lanes_LightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) const
     return LaneV3_Select(zero, contrib, Lane_FromBits(open));
 }
 
-/* The lanes' bounces (Path_SampleBounce, no BRDF lobe): *dir, *pdf and the new throughput; the lanes
- * in the returned bits carry a child. */
-inline int Lanes_Bounce(int mode, int bounceBits, LaneV3 ng, LaneV3 ns, LaneV3 f, LaneF u1, LaneF u2, LaneV3* throughput,
-                        LaneV3* dir, LaneF* pdf) {
+/* The lanes' non-specular bounces (Path_SampleBounce, no BRDF lobe), picked with probability 1 − pSpecular:
+ * *dir, *pdf and the new throughput; the lanes in the returned bits carry a child. */
+inline int Lanes_Bounce(int mode, int bounceBits, LaneV3 ng, LaneV3 ns, LaneV3 f, LaneF pSpecular, LaneF u1, LaneF u2,
+                        LaneV3* throughput, LaneV3* dir, LaneF* pdf) {
     const int cosine = Path_UsesImportance(mode);
     LaneF c2, s2;
     Lanes_SinCos2Pi(u2, &c2, &s2);
@@ -306,7 +329,8 @@ inline int Lanes_Bounce(int mode, int bounceBits, LaneV3 ng, LaneV3 ns, LaneV3 f
     const LaneI ok = Lane_FromBits(bounceBits) & (c > 0.0f) & (LaneV3_Dot(ng, *dir) > 0.0f) & (*pdf > 0.0f) &
                      LaneV3_Finite(*dir);
     const LaneV3 fCos = LaneV3_Scale(f, c);
-    const LaneV3 weight = LaneV3_Make(fCos.x / *pdf, fCos.y / *pdf, fCos.z / *pdf); /* f·cosθ / pdf */
+    const LaneF q = *pdf * (1.0f - pSpecular);
+    const LaneV3 weight = LaneV3_Make(fCos.x / q, fCos.y / q, fCos.z / q); /* f·cosθ / (pdf·(1 − pSpecular)) */
     *throughput = LaneV3_Mul(*throughput, weight);
     return Lane_Bits(ok & (LaneV3_Max(weight) > 0.0f));
 }
@@ -329,15 +353,17 @@ inline uint Lanes_Paths(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int pixel, in
     uint secondary = 0;
     for (int depth = 0; live; ++depth) {
         float3 p[CLRT_LANES], ng[CLRT_LANES], ns[CLRT_LANES], f[CLRT_LANES], rad[CLRT_LANES], thr[CLRT_LANES];
+        LaneHit hit[CLRT_LANES];
         int neeBits = 0, bounceBits = 0;
         for (int k = 0; k < CLRT_LANES; ++k) {
             p[k] = ng[k] = f[k] = rad[k] = thr[k] = (float3)(0.0f);
             ns[k] = (float3)(0.0f, 0.0f, 1.0f);
             if (!(live & (1 << k))) continue;
-            const LaneHit lh = Lanes_Surface(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) path[k], ray[k]);
-            p[k] = lh.p; ng[k] = lh.ng; ns[k] = lh.ns; f[k] = lh.f; rad[k] = lh.radiance; thr[k] = path[k].throughput.xyz;
-            neeBits |= lh.nee << k;
-            bounceBits |= lh.bounce << k;
+            hit[k] = Lanes_Surface(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) path[k], ray[k]);
+            p[k] = hit[k].p; ng[k] = hit[k].ng; ns[k] = hit[k].ns; f[k] = hit[k].f; rad[k] = hit[k].radiance;
+            thr[k] = path[k].throughput.xyz;
+            neeBits |= hit[k].nee << k;
+            bounceBits |= hit[k].bounce << k;
         }
         const LaneV3 P = LaneV3_Load(p), Ng = LaneV3_Load(ng), Ns = LaneV3_Load(ns), F = LaneV3_Load(f);
         LaneV3 throughput = LaneV3_Load(thr);
@@ -354,25 +380,53 @@ inline uint Lanes_Paths(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int pixel, in
             if (live & (1 << k)) levelSum[min(depth, levels - 1)] += finiteOrZero(out[k]);
         live &= bounceBits;
         if (!live) break;
+        /* Path_ShadeHit's pick: a specular child with probability pSpecular (½ beside a diffuse part) */
+        float pSpec[CLRT_LANES];
+        int specBits = 0;
+        for (int k = 0; k < CLRT_LANES; ++k) {
+            pSpec[k] = 0.0f;
+            if (!(live & (1 << k)) || !hit[k].specular) continue;
+            pSpec[k] = hit[k].diffuse ? 0.5f : 1.0f;
+            const RngKey key = Rng_Key(scene.seed, pixel, path[k].sample, path[k].pathId);
+            if (!(Rng_Uniform(key, dim + 3u) < pSpec[k])) continue;
+            if (hit[k].lastVertex) live &= ~(1 << k); /* the last vertex's only child is its BSDF sample */
+            else specBits |= 1 << k;
+        }
         LaneF u1, u2, pdf;
         Lanes_Stratified2D(strat, sample, dim + 5u, &u1, &u2);
         LaneV3 dir;
-        live &= Lanes_Bounce(mode, live, Ng, Ns, F, u1, u2, &throughput, &dir, &pdf);
+        const int diffuseBits = Lanes_Bounce(mode, live & ~specBits, Ng, Ns, F, vload4(0, pSpec), u1, u2, &throughput, &dir, &pdf);
         float3 org[CLRT_LANES], dirs[CLRT_LANES], next3[CLRT_LANES];
+        float pdfs[CLRT_LANES];
         LaneV3_Store(LaneV3_Add(P, LaneV3_Scale(Ng, Lanes_OffsetDistance(P))), org); /* Ray_OffsetOrigin */
         LaneV3_Store(dir, dirs);
         LaneV3_Store(throughput, next3);
+        vstore4(pdf, 0, pdfs);
+        live &= diffuseBits | specBits;
         for (int k = 0; k < CLRT_LANES; ++k) { /* Path_Child (child 0), after Path_RussianRoulette */
             const uint id = path[k].pathId;
             path[k].pathId = id < 0x80000000u ? id * 2u : id; /* every lane: they share it */
             if (!(live & (1 << k))) continue;
+            const RngKey key = Rng_Key(scene.seed, pixel, path[k].sample, id);
             float3 next = next3[k];
-            if ((mode & CLRT_PATH_RR) && depth >= scene.rrMinDepth) {
-                const RngKey key = Rng_Key(scene.seed, pixel, path[k].sample, id);
-                if (!Path_RussianRoulette(&next, Rng_Uniform(key, dim + 4u))) { live &= ~(1 << k); continue; }
+            float childW = pdfs[k];
+            if (specBits & (1 << k)) { /* Path_SpecularBounce, per lane */
+                float3 weight;
+                const float2 uGlossy = (float2)(Rng_Uniform(key, dim), Rng_Uniform(key, dim + 1u));
+                if (!Path_SpecularBounce(materials[hit[k].material], hit[k].wo, hit[k].ns, hit[k].ng, hit[k].p, hit[k].t,
+                                         hit[k].inside, Rng_Uniform(key, dim + 2u), uGlossy, &weight, &org[k], &dirs[k])) {
+                    live &= ~(1 << k);
+                    continue;
+                }
+                next = path[k].throughput.xyz * (weight / pSpec[k]);
+                childW = 0.0f;
             }
-            if (!(maxComponent(next) > 0.0f) || !allFinite3(next)) { live &= ~(1 << k); continue; }
-            path[k].throughput = (float4)(next, ((float*)&pdf)[k]);
+            if ((mode & CLRT_PATH_RR) && depth >= scene.rrMinDepth && !Path_RussianRoulette(&next, Rng_Uniform(key, dim + 4u))) {
+                live &= ~(1 << k);
+                continue;
+            }
+            if (!(maxComponent(next) > 0.0f) || !allFinite3(next) || !allFinite3(dirs[k])) { live &= ~(1 << k); continue; }
+            path[k].throughput = (float4)(next, childW);
             path[k].depth = depth + 1;
             ray[k].origin = (float4)(org[k], 0.0f);
             ray[k].direction = (float4)(dirs[k], INFINITY);

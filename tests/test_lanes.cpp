@@ -3,7 +3,8 @@
 // every camera of the course's hw6 path box without roulette (NEE, importance sampling; LightMesh and
 // point light), each also under MIS with the power and the balance heuristic, against render_fused's
 // image: the difference under 1e-5 of the noise between two seeds (PoCL: ~1e-13 of it), the same ray
-// counts. Also: which scenes and cameras it takes (lanesFamily, lanesUnsupported, auto), determinism,
+// counts; specular children (a mirror beside a diffuse part, glass; the classic Cornell box with a point
+// light only). Also: which scenes and cameras it takes (lanesFamily, lanesUnsupported, auto), determinism,
 // sample counts that are no multiple of four, launches of several passes, the fallback to render_fused.
 #include <catch.hpp>
 
@@ -93,6 +94,45 @@ TEST_CASE("lanes: render_fused's image up to rounding on every path camera of th
     CHECK(compared >= 12);
 }
 
+TEST_CASE("lanes: specular children (mirror beside a diffuse part, glass) as render_fused draws them", "[lanes][shared]") {
+    if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
+    // The hw6 path box with its spheres turned into a mirror with a diffuse part (pSpecular ½) and a
+    // rough-free glass (pSpecular 1, Beer's law inside): the specular picks, Path_SpecularBounce per lane.
+    Scene scene = loadScene(sharedDir() + "/scenes/" + kPathBox);
+    int turned = 0;
+    for (Shape& sh : scene.shapes) {
+        if (sh.type != ShapeType::Sphere) continue;
+        Material m = scene.materials.at(size_t(sh.materialIndex));
+        if (turned == 0) { m.type = dev::MATERIAL_MIRROR; m.mirror = {0.7f, 0.7f, 0.7f}; m.diffuse = {0.2f, 0.3f, 0.2f}; }
+        else { m.type = dev::MATERIAL_DIELECTRIC; m.diffuse = {0, 0, 0}; m.refractionIndex = 1.5f; m.absorptionCoefficient = {0.2f, 0.1f, 0.0f}; }
+        scene.materials.push_back(m);
+        sh.materialIndex = int(scene.materials.size()) - 1;
+        ++turned;
+    }
+    REQUIRE(turned == 2);
+    // And the classic Cornell box with a mirror and a glass sphere, path traced: point light only.
+    Scene recursive = loadScene(sharedDir() + "/scenes/classic/cornellbox_recursive.xml");
+    for (Camera& c : recursive.cameras) c.pathMode = CLRT_PATH_ON | CLRT_PATH_MIS;
+    for (Scene* sc : {&scene, &recursive})
+    for (int mode : {CLRT_PATH_ON | CLRT_PATH_MIS, CLRT_PATH_ON | CLRT_PATH_NEE}) {
+        DeviceScene ds = flattenScene(*sc);
+        REQUIRE(lanesFamily(ds).empty());
+        Renderer r(testContext(), ds);
+        Camera cam = sc->cameras.at(0);
+        cam.pathMode = mode;
+        INFO(sc->path << ", path mode " << mode);
+        Rendered l = renderWith(r, cam, 48, 48, 8, 3, Pipeline::Lanes);
+        Rendered f = renderWith(r, cam, 48, 48, 8, 3, Pipeline::Fused);
+        Rendered f2 = renderWith(r, cam, 48, 48, 8, 4, Pipeline::Fused);
+        CHECK(l.counters.lanes);
+        const double noise = relMse(f2.image, f.image), diff = relMse(l.image, f.image);
+        INFO("relMSE lanes/fused " << diff << ", between seeds " << noise);
+        CHECK(diff < 1e-5 * noise);
+        CHECK(l.counters.secondaryRays == f.counters.secondaryRays);
+        CHECK(l.counters.shadowRays == f.counters.shadowRays);
+    }
+}
+
 TEST_CASE("lanes: deterministic, several launches and sample counts that are no multiple of four", "[lanes][shared]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
     Scene scene = loadScene(sharedDir() + "/scenes/" + kPathBox);
@@ -123,8 +163,8 @@ TEST_CASE("lanes: deterministic, several launches and sample counts that are no 
 
 TEST_CASE("lanes: which scenes and cameras it takes; auto takes it on CPU devices", "[lanes][shared]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
-    // Out of its family: a glossy lobe (ks > 0), a mirror and glass, a sphere light, no path tracing.
-    for (const char* f : {"hw6/cornellbox_jaroslav_glossy.xml", "classic/cornellbox_recursive.xml",
+    // Out of its family: a glossy lobe (ks > 0), an environment light, a sphere light, no path tracing.
+    for (const char* f : {"hw6/cornellbox_jaroslav_glossy.xml", "hw5/sphere_env_light_courtyard.xml",
                           "hw6/cornellbox_jaroslav_glossy_area_sphere.xml", "hw5/cube_point.xml"}) {
         INFO(f);
         Scene scene = loadScene(sharedDir() + "/scenes/" + f);

@@ -45,11 +45,10 @@ std::string lanesFamily(const DeviceScene& ds) {
     const FeatureSet& f = ds.features;
     if (!f.pathTracing) return "no path-traced camera";
     const uint32_t mesh = 1u << dev::LIGHT_MESH, point = 1u << dev::LIGHT_POINT;
-    if (!(f.lightKinds & mesh) || (f.lightKinds & ~(mesh | point)))
-        return "lights other than LightMesh and PointLight, or no LightMesh";
+    if (f.lightKinds & ~(mesh | point)) return "lights other than LightMesh and PointLight";
     if (f.textures || f.normalMaps || f.bumpMaps || f.mipMaps || f.motionBlur || f.instances)
         return "textures, motion blur or instances";
-    auto plain = [&](int k) {  // a material whose f is direction-free (lanes.cl, Lanes_Surface)
+    auto plain = [&](int k) {  // its non-specular part's f is direction-free (lanes.cl, Lanes_Surface)
         if (k < 0 || size_t(k) >= ds.materials.size()) return false;
         const dev::Material& m = ds.materials[size_t(k)];
         // The BRDFs whose value at ks = 0 is kd or kd/π: a new BRDF joins only when it is one of them.
@@ -57,10 +56,9 @@ std::string lanesFamily(const DeviceScene& ds) {
                                m.brdf == dev::BRDF_ORIGINAL_BLINN_PHONG || m.brdf == dev::BRDF_MODIFIED_PHONG ||
                                m.brdf == dev::BRDF_MODIFIED_BLINN_PHONG ||
                                (m.brdf == dev::BRDF_TORRANCE_SPARROW && !(m.brdfFlags & CLRT_BRDF_KD_FRESNEL));
-        return m.kind == dev::MATERIAL_BLINN_PHONG && m.specular.x == 0.0f && m.specular.y == 0.0f &&
-               m.specular.z == 0.0f && knownBrdf;
+        return m.specular.x == 0.0f && m.specular.y == 0.0f && m.specular.z == 0.0f && knownBrdf;
     };
-    const char* specular = "a material with a specular kind or lobe";
+    const char* specular = "a material with a specular (Phong or BRDF) lobe";
     for (int i = 0; i < ds.params.numTriangles; ++i)  // not the arrays' dummy entries (flattenGeometry)
         if (!plain(ds.triangleShading[size_t(i)].material)) return specular;
     for (int i = 0; i < ds.params.numSpheres; ++i)
