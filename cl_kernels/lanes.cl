@@ -335,6 +335,65 @@ inline int Lanes_Bounce(int mode, int bounceBits, LaneV3 ng, LaneV3 ns, LaneV3 f
     return Lane_Bits(ok & (LaneV3_Max(weight) > 0.0f));
 }
 
+/* Path_ShadeHit's pick at the live lanes' hits: a specular child with probability pSpecular (½ beside a
+ * diffuse part, else 1; *pSpec per lane, 0 where no specular material); returns the lanes that take it.
+ * A pick at the last vertex ends the lane's path (its only child there is the BSDF sample). */
+inline int Lanes_PickSpecular(SceneParams scene, int pixel, const PathState* path, const LaneHit* hit, uint dim, int* live,
+                              float* pSpec) {
+    int specBits = 0;
+    for (int k = 0; k < CLRT_LANES; ++k) {
+        pSpec[k] = 0.0f;
+        if (!(*live & (1 << k)) || !hit[k].specular) continue;
+        pSpec[k] = hit[k].diffuse ? 0.5f : 1.0f;
+        const RngKey key = Rng_Key(scene.seed, pixel, path[k].sample, path[k].pathId);
+        if (!(Rng_Uniform(key, dim + 3u) < pSpec[k])) continue;
+        if (hit[k].lastVertex) *live &= ~(1 << k);
+        else specBits |= 1 << k;
+    }
+    return specBits;
+}
+
+/* Path_Child (child 0) of each live lane, after Path_RussianRoulette: the specular lanes' child from
+ * Path_SpecularBounce, the others' from the lanes' bounce (org, dirs, next3, pdfs). Every lane's path id
+ * moves on (they share it). Returns the children made; *live keeps the lanes that have one. */
+inline uint Lanes_Children(SceneParams scene, const __global Material* materials, int pixel, int depth, int specBits,
+                           const LaneHit* hit, const float* pSpec, float3* org, float3* dirs, const float3* next3,
+                           const float* pdfs, PathState* path, Ray* ray, int* live) {
+    const int mode = scene.pathMode;
+    const uint dim = 4u + 32u * (uint)depth;
+    uint children = 0;
+    for (int k = 0; k < CLRT_LANES; ++k) { /* Path_Child (child 0), after Path_RussianRoulette */
+        const uint id = path[k].pathId;
+        path[k].pathId = id < 0x80000000u ? id * 2u : id; /* every lane: they share it */
+        if (!(*live & (1 << k))) continue;
+        const RngKey key = Rng_Key(scene.seed, pixel, path[k].sample, id);
+        float3 next = next3[k];
+        float childW = pdfs[k];
+        if (specBits & (1 << k)) { /* Path_SpecularBounce, per lane */
+            float3 weight;
+            const float2 uGlossy = (float2)(Rng_Uniform(key, dim), Rng_Uniform(key, dim + 1u));
+            if (!Path_SpecularBounce(materials[hit[k].material], hit[k].wo, hit[k].ns, hit[k].ng, hit[k].p, hit[k].t,
+                                     hit[k].inside, Rng_Uniform(key, dim + 2u), uGlossy, &weight, &org[k], &dirs[k])) {
+                *live &= ~(1 << k);
+                continue;
+            }
+            next = path[k].throughput.xyz * (weight / pSpec[k]);
+            childW = 0.0f;
+        }
+        if ((mode & CLRT_PATH_RR) && depth >= scene.rrMinDepth && !Path_RussianRoulette(&next, Rng_Uniform(key, dim + 4u))) {
+            *live &= ~(1 << k);
+            continue;
+        }
+        if (!(maxComponent(next) > 0.0f) || !allFinite3(next) || !allFinite3(dirs[k])) { *live &= ~(1 << k); continue; }
+        path[k].throughput = (float4)(next, childW);
+        path[k].depth = depth + 1;
+        ray[k].origin = (float4)(org[k], 0.0f);
+        ray[k].direction = (float4)(dirs[k], INFINITY);
+        ++children;
+    }
+    return children;
+}
+
 /* Samples s0 .. s0 + n - 1 (n <= 4) of pixel `pixel`: their radiance summed in sample order per depth
  * into levelSum (as render_fused's per-depth sums). Returns the bounce rays traced. */
 inline uint Lanes_Paths(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int pixel, int px, int py, int s0, int n, int levels,
@@ -380,18 +439,8 @@ inline uint Lanes_Paths(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int pixel, in
             if (live & (1 << k)) levelSum[min(depth, levels - 1)] += finiteOrZero(out[k]);
         live &= bounceBits;
         if (!live) break;
-        /* Path_ShadeHit's pick: a specular child with probability pSpecular (½ beside a diffuse part) */
         float pSpec[CLRT_LANES];
-        int specBits = 0;
-        for (int k = 0; k < CLRT_LANES; ++k) {
-            pSpec[k] = 0.0f;
-            if (!(live & (1 << k)) || !hit[k].specular) continue;
-            pSpec[k] = hit[k].diffuse ? 0.5f : 1.0f;
-            const RngKey key = Rng_Key(scene.seed, pixel, path[k].sample, path[k].pathId);
-            if (!(Rng_Uniform(key, dim + 3u) < pSpec[k])) continue;
-            if (hit[k].lastVertex) live &= ~(1 << k); /* the last vertex's only child is its BSDF sample */
-            else specBits |= 1 << k;
-        }
+        const int specBits = Lanes_PickSpecular(scene, pixel, path, hit, dim, &live, pSpec);
         LaneF u1, u2, pdf;
         Lanes_Stratified2D(strat, sample, dim + 5u, &u1, &u2);
         LaneV3 dir;
@@ -403,35 +452,7 @@ inline uint Lanes_Paths(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int pixel, in
         LaneV3_Store(throughput, next3);
         vstore4(pdf, 0, pdfs);
         live &= diffuseBits | specBits;
-        for (int k = 0; k < CLRT_LANES; ++k) { /* Path_Child (child 0), after Path_RussianRoulette */
-            const uint id = path[k].pathId;
-            path[k].pathId = id < 0x80000000u ? id * 2u : id; /* every lane: they share it */
-            if (!(live & (1 << k))) continue;
-            const RngKey key = Rng_Key(scene.seed, pixel, path[k].sample, id);
-            float3 next = next3[k];
-            float childW = pdfs[k];
-            if (specBits & (1 << k)) { /* Path_SpecularBounce, per lane */
-                float3 weight;
-                const float2 uGlossy = (float2)(Rng_Uniform(key, dim), Rng_Uniform(key, dim + 1u));
-                if (!Path_SpecularBounce(materials[hit[k].material], hit[k].wo, hit[k].ns, hit[k].ng, hit[k].p, hit[k].t,
-                                         hit[k].inside, Rng_Uniform(key, dim + 2u), uGlossy, &weight, &org[k], &dirs[k])) {
-                    live &= ~(1 << k);
-                    continue;
-                }
-                next = path[k].throughput.xyz * (weight / pSpec[k]);
-                childW = 0.0f;
-            }
-            if ((mode & CLRT_PATH_RR) && depth >= scene.rrMinDepth && !Path_RussianRoulette(&next, Rng_Uniform(key, dim + 4u))) {
-                live &= ~(1 << k);
-                continue;
-            }
-            if (!(maxComponent(next) > 0.0f) || !allFinite3(next) || !allFinite3(dirs[k])) { live &= ~(1 << k); continue; }
-            path[k].throughput = (float4)(next, childW);
-            path[k].depth = depth + 1;
-            ray[k].origin = (float4)(org[k], 0.0f);
-            ray[k].direction = (float4)(dirs[k], INFINITY);
-            ++secondary;
-        }
+        secondary += Lanes_Children(scene, materials, pixel, depth, specBits, hit, pSpec, org, dirs, next3, pdfs, path, ray, &live);
     }
     return secondary;
 }
