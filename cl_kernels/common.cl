@@ -105,27 +105,41 @@ inline float Rng_Uniform(RngKey k, uint dim) {
 __constant uchar kBitsReversedByte[256] = {CLRT_REV6_(0), CLRT_REV6_(2), CLRT_REV6_(1), CLRT_REV6_(3)};
 #endif
 
+/* The bodies of the three bit functions below, as statements on a variable of type uint or uintN:
+ * lanes.cl's lane forms (LaneBits_*) run the same operations on uint4. */
+#define CLRT_BITS_REVERSE_NETWORK(v)                                                               \
+    v = ((v >> 1) & 0x55555555u) | ((v & 0x55555555u) << 1);                                      \
+    v = ((v >> 2) & 0x33333333u) | ((v & 0x33333333u) << 2);                                      \
+    v = ((v >> 4) & 0x0f0f0f0fu) | ((v & 0x0f0f0f0fu) << 4);                                      \
+    v = ((v >> 8) & 0x00ff00ffu) | ((v & 0x00ff00ffu) << 8);                                      \
+    v = (v >> 16) | (v << 16)
+#define CLRT_LAINE_KARRAS(x, seed)                                                                 \
+    x += seed;                                                                                     \
+    x ^= x * 0x6c50b47cu;                                                                          \
+    x ^= x * 0xb82f1e52u;                                                                          \
+    x ^= x * 0xc7afe638u;                                                                          \
+    x ^= x * 0x8d22f6e6u
+#define CLRT_SOBOL_DIM1_REVERSED(i)                                                                \
+    i ^= (i >> 1) & 0x55555555u;                                                                   \
+    i ^= (i >> 2) & 0x33333333u;                                                                   \
+    i ^= (i >> 4) & 0x0f0f0f0fu;                                                                   \
+    i ^= (i >> 8) & 0x00ff00ffu;                                                                   \
+    i ^= (i >> 16) & 0x0000ffffu
+
 inline uint Bits_Reverse(uint v) {
 #ifdef CLRT_BITS_REVERSE_BY_TABLE
     return ((uint)kBitsReversedByte[v & 0xffu] << 24) | ((uint)kBitsReversedByte[(v >> 8) & 0xffu] << 16) |
            ((uint)kBitsReversedByte[(v >> 16) & 0xffu] << 8) | (uint)kBitsReversedByte[v >> 24];
 #else
-    v = ((v >> 1) & 0x55555555u) | ((v & 0x55555555u) << 1);
-    v = ((v >> 2) & 0x33333333u) | ((v & 0x33333333u) << 2);
-    v = ((v >> 4) & 0x0f0f0f0fu) | ((v & 0x0f0f0f0fu) << 4);
-    v = ((v >> 8) & 0x00ff00ffu) | ((v & 0x00ff00ffu) << 8);
-    return (v >> 16) | (v << 16);
+    CLRT_BITS_REVERSE_NETWORK(v);
+    return v;
 #endif
 }
 
 /* Laine and Karras' hash: each output bit depends on that bit and the ones below it only, so on
  * bit-reversed digits it is a nested uniform (Owen) scramble. Constants from Burley 2020. */
 inline uint Bits_LaineKarras(uint x, uint seed) {
-    x += seed;
-    x ^= x * 0x6c50b47cu;
-    x ^= x * 0xb82f1e52u;
-    x ^= x * 0xc7afe638u;
-    x ^= x * 0x8d22f6e6u;
+    CLRT_LAINE_KARRAS(x, seed);
     return x;
 }
 
@@ -133,11 +147,7 @@ inline uint Bits_LaineKarras(uint x, uint seed) {
  * over the set bits k of i, i.e. bit j is the parity of i's set bits k with j ⊆ k (a superset
  * transform in five steps). */
 inline uint Sobol_Dim1Reversed(uint i) {
-    i ^= (i >> 1) & 0x55555555u;
-    i ^= (i >> 2) & 0x33333333u;
-    i ^= (i >> 4) & 0x0f0f0f0fu;
-    i ^= (i >> 8) & 0x00ff00ffu;
-    i ^= (i >> 16) & 0x0000ffffu;
+    CLRT_SOBOL_DIM1_REVERSED(i);
     return i;
 }
 

@@ -68,27 +68,17 @@ inline LaneI Lane_FromBits(int bits) { return -((LaneI)(bits, bits >> 1, bits >>
 inline LaneU LaneBits_Reverse(LaneU v) {
 #ifdef CLRT_BITS_REVERSE_BY_TABLE /* quirk BIT_REVERSE_TABLE (Oclgrind lacks llvm.bitreverse): per lane, by table */
     return (LaneU)(Bits_Reverse(v.s0), Bits_Reverse(v.s1), Bits_Reverse(v.s2), Bits_Reverse(v.s3));
+#else
+    CLRT_BITS_REVERSE_NETWORK(v);
+    return v;
 #endif
-    v = ((v >> 1) & 0x55555555u) | ((v & 0x55555555u) << 1);
-    v = ((v >> 2) & 0x33333333u) | ((v & 0x33333333u) << 2);
-    v = ((v >> 4) & 0x0f0f0f0fu) | ((v & 0x0f0f0f0fu) << 4);
-    v = ((v >> 8) & 0x00ff00ffu) | ((v & 0x00ff00ffu) << 8);
-    return (v >> 16) | (v << 16);
 }
 inline LaneU LaneBits_LaineKarras(LaneU x, uint seed) {
-    x += seed;
-    x ^= x * 0x6c50b47cu;
-    x ^= x * 0xb82f1e52u;
-    x ^= x * 0xc7afe638u;
-    x ^= x * 0x8d22f6e6u;
+    CLRT_LAINE_KARRAS(x, seed);
     return x;
 }
 inline LaneU LaneSobol_Dim1Reversed(LaneU i) {
-    i ^= (i >> 1) & 0x55555555u;
-    i ^= (i >> 2) & 0x33333333u;
-    i ^= (i >> 4) & 0x0f0f0f0fu;
-    i ^= (i >> 8) & 0x00ff00ffu;
-    i ^= (i >> 16) & 0x0000ffffu;
+    CLRT_SOBOL_DIM1_REVERSED(i);
     return i;
 }
 inline void Lanes_Stratified2D(uint strat, LaneU sample, uint dim, LaneF* u1, LaneF* u2) {

@@ -24,30 +24,6 @@ using namespace clrt::test;
 
 namespace {
 
-struct Rendered {
-    ImageRGB image;
-    RenderCounters counters;
-};
-
-Rendered renderWith(Renderer& r, Camera cam, int w, int h, int spp, uint32_t seed, Pipeline p) {
-    cam.width = w;
-    cam.height = h;
-    RenderSettings rs;
-    rs.spp = spp;
-    rs.seed = seed;
-    rs.pipeline = p;
-    Rendered out;
-    out.image = r.render(cam, rs, out.counters);
-    return out;
-}
-
-size_t differingFloats(const ImageRGB& a, const ImageRGB& b) {
-    if (a.pixels.size() != b.pixels.size()) return size_t(-1);
-    size_t n = 0;
-    for (size_t i = 0; i < a.pixels.size(); ++i) n += std::memcmp(&a.pixels[i], &b.pixels[i], sizeof(float)) != 0;
-    return n;
-}
-
 double imageSum(const ImageRGB& img) {
     double s = 0;
     for (float v : img.pixels) s += v;

@@ -3,6 +3,7 @@
 #pragma once
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -150,6 +151,33 @@ inline ImageRGB renderPipeline(const DeviceScene& ds, const Camera& cam, Pipelin
     rs.pipeline = pipeline;
     RenderCounters c;
     return r.render(cam, rs, c);
+}
+
+// An image and the counters of its render (RenderCounters: ray counts, which pipeline rendered).
+struct Rendered {
+    ImageRGB image;
+    RenderCounters counters;
+};
+
+// Renders `cam` at w x h, `spp` samples, `seed`, through pipeline `p` with the Renderer r.
+inline Rendered renderWith(Renderer& r, Camera cam, int w, int h, int spp, uint32_t seed, Pipeline p) {
+    cam.width = w;
+    cam.height = h;
+    RenderSettings rs;
+    rs.spp = spp;
+    rs.seed = seed;
+    rs.pipeline = p;
+    Rendered out;
+    out.image = r.render(cam, rs, out.counters);
+    return out;
+}
+
+// How many floats of two images of one size differ in their bits (size_t(-1) for different sizes).
+inline size_t differingFloats(const ImageRGB& a, const ImageRGB& b) {
+    if (a.pixels.size() != b.pixels.size()) return size_t(-1);
+    size_t n = 0;
+    for (size_t i = 0; i < a.pixels.size(); ++i) n += std::memcmp(&a.pixels[i], &b.pixels[i], sizeof(float)) != 0;
+    return n;
 }
 
 // The mean over pixels and channels of (a − b)² (images of one size: else an exception, a failed test).

@@ -24,23 +24,6 @@ using namespace clrt::test;
 
 namespace {
 
-struct Rendered {
-    ImageRGB image;
-    RenderCounters counters;
-};
-
-Rendered renderWith(Renderer& r, Camera cam, int w, int h, int spp, uint32_t seed, Pipeline p) {
-    cam.width = w;
-    cam.height = h;
-    RenderSettings rs;
-    rs.spp = spp;
-    rs.seed = seed;
-    rs.pipeline = p;
-    Rendered out;
-    out.image = r.render(cam, rs, out.counters);
-    return out;
-}
-
 // bench.py's relMSE: mean over pixels and channels of (a − b)² / (b² + 0.01).
 double relMse(const ImageRGB& a, const ImageRGB& b) {
     double s = 0;
@@ -49,12 +32,6 @@ double relMse(const ImageRGB& a, const ImageRGB& b) {
         s += d * d / (double(b.pixels[i]) * double(b.pixels[i]) + 0.01);
     }
     return s / double(a.pixels.size());
-}
-
-size_t differingFloats(const ImageRGB& a, const ImageRGB& b) {
-    size_t n = 0;
-    for (size_t i = 0; i < a.pixels.size(); ++i) n += std::memcmp(&a.pixels[i], &b.pixels[i], sizeof(float)) != 0;
-    return n;
 }
 
 const char* kPathBox = "hw6/cornellbox_jaroslav_path_diffuse.xml";

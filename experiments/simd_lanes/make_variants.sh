@@ -4,7 +4,9 @@
 # experiments/simd_lanes/simd_proto.cl, with ROOT/VARIANT/cl_kernels/simd_variant.h choosing the lane width
 # (PW 4, 8, 16) and options (LANE_TRACE: clrt's scalar traversal one lane at a time; HYBRID N: packet
 # traversal, a lane alone through a subtree that at most N lanes enter; ONE_PATH: one active lane per packet,
-# the control). Render with CLRT_KERNEL_DIR=ROOT/VARIANT/cl_kernels CLRT_CACHE_DIR=ROOT/VARIANT/cache.
+# the control; REAL_SAMPLER, LANE_SAMPLER, CAMERA_PACKETS: simd_proto.cl's header). Render with
+# CLRT_KERNEL_DIR=ROOT/VARIANT/cl_kernels CLRT_CACHE_DIR=ROOT/VARIANT/cache and --pipeline fused (auto takes
+# render_lanes, the kernel that grew out of this prototype, where it can).
 # The prototype renders only what the hw6 diffuse box needs (see simd_proto.cl's header): other scenes
 # render wrong images with it.
 # usage: experiments/simd_lanes/make_variants.sh ROOT      then time_variants.py build/clrt ROOT SCENES

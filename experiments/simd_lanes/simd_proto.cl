@@ -294,35 +294,15 @@ inline iW LaneTrace(const __global Bvh4Node* nodes, const __global Bvh4Leaf* lea
 /* clrt's stratified sampler (common.cl Rng_Stratified2D) for the PW samples of one pixel at once: the
  * lanes share the pixel and the path id (every lane's path takes child 0), so the per-dimension hashes
  * are computed once; only the sample index differs per lane. */
-inline uW LaneBits_Reverse(uW v) {
-    v = ((v >> 1) & 0x55555555u) | ((v & 0x55555555u) << 1);
-    v = ((v >> 2) & 0x33333333u) | ((v & 0x33333333u) << 2);
-    v = ((v >> 4) & 0x0f0f0f0fu) | ((v & 0x0f0f0f0fu) << 4);
-    v = ((v >> 8) & 0x00ff00ffu) | ((v & 0x00ff00ffu) << 8);
-    return (v >> 16) | (v << 16);
-}
-inline uW LaneBits_LaineKarras(uW x, uint seed) {
-    x += seed;
-    x ^= x * 0x6c50b47cu;
-    x ^= x * 0xb82f1e52u;
-    x ^= x * 0xc7afe638u;
-    x ^= x * 0x8d22f6e6u;
-    return x;
-}
-inline uW LaneSobol_Dim1Reversed(uW i) {
-    i ^= (i >> 1) & 0x55555555u;
-    i ^= (i >> 2) & 0x33333333u;
-    i ^= (i >> 4) & 0x0f0f0f0fu;
-    i ^= (i >> 8) & 0x00ff00ffu;
-    i ^= (i >> 16) & 0x0000ffffu;
-    return i;
-}
+inline uW ProtoBits_Reverse(uW v) { CLRT_BITS_REVERSE_NETWORK(v); return v; }  /* common.cl's bodies */
+inline uW ProtoBits_LaineKarras(uW x, uint seed) { CLRT_LAINE_KARRAS(x, seed); return x; }
+inline uW ProtoSobol_Dim1Reversed(uW i) { CLRT_SOBOL_DIM1_REVERSED(i); return i; }
 inline void Lane_Stratified2D(uint strat, uW sample, uint dim, fW* ux, fW* uy) {
     const uint sIdx = Rng_Hash(strat ^ dim * 0x9e3779b1u);
     const uint sX = Rng_Hash(sIdx ^ 0xa54ff53au), sY = Rng_Hash(sIdx ^ 0x510e527fu);
-    const uW idx = LaneBits_Reverse(LaneBits_LaineKarras(LaneBits_Reverse(sample), sIdx));
-    const uW x = LaneBits_Reverse(LaneBits_LaineKarras(idx, sX));
-    const uW y = LaneBits_Reverse(LaneBits_LaineKarras(LaneSobol_Dim1Reversed(idx), sY));
+    const uW idx = ProtoBits_Reverse(ProtoBits_LaineKarras(ProtoBits_Reverse(sample), sIdx));
+    const uW x = ProtoBits_Reverse(ProtoBits_LaineKarras(idx, sX));
+    const uW y = ProtoBits_Reverse(ProtoBits_LaineKarras(ProtoSobol_Dim1Reversed(idx), sY));
     *ux = convert_fW(x >> 8) * (1.0f / 16777216.0f);
     *uy = convert_fW(y >> 8) * (1.0f / 16777216.0f);
 }

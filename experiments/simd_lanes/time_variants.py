@@ -25,7 +25,8 @@ def run(variant, scene):
     if variant != "base":
         env["CLRT_KERNEL_DIR"] = os.path.join(a.root, variant, "cl_kernels")
         env["CLRT_CACHE_DIR"] = os.path.join(a.root, variant, "cache")
-    p = subprocess.run([a.clrt, "render", scene, "-o", out, "--spp", str(a.spp), "-v", "--device", a.device],
+    # --pipeline fused: the kernel the variants replace (auto would take render_lanes where it can)
+    p = subprocess.run([a.clrt, "render", scene, "-o", out, "--spp", str(a.spp), "-v", "--device", a.device, "--pipeline", "fused"],
                        env=env, capture_output=True, text=True)
     m = re.search(r"fused ([0-9.]+)s", p.stdout + p.stderr)
     if not m:
