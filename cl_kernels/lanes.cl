@@ -1,6 +1,6 @@
 /* lanes.cl — the path tracer with four paths per work-item in float4 lanes (render_lanes; CPU devices,
- * compiled under CLRT_HAS_LANES: FeatureSet::lanes). A work-item takes its pixel's
- * samples four at a time (lane k: sample s0 + k) and steps their paths together, one depth per round:
+ * compiled under CLRT_HAS_LANES: FeatureSet::lanes). A work-item takes its pixel's samples four at a
+ * time (lane k: sample s0 + k) and steps their paths together, one depth per round:
  *   per lane, scalar: the closest hit (Ray_Closest), the surface and the emission the ray sees
  *     (Lanes_Surface: the path branch of Shade_Hit and the start of Path_ShadeHit), the light triangle
  *     picked (MeshLight_PickTriangle), the shadow rays' occlusion (Shadow_Occluded), the specular pick
@@ -11,10 +11,9 @@
  * one lane is one path of the fused kernel. Scenes of its family only (src/flatten/device_scene.h
  * lanesFamily, src/render/fused_renderer.h lanesUnsupported): materials without a specular lobe (ks = 0:
  * the non-specular f is kd/π or kd, direction-free; mirrors, conductors, dielectrics in), LightMesh and
- * point lights, the stratified sampler, no textures, motion
- * blur or instances. Why lanes: a path's shading is a
- * chain of dependent sqrt, division, sin/cos and loads; four paths in one chain of vector instructions
- * take about the time of one (docs/studies/2026-12-05-simd-lanes-prototype.md).
+ * point lights, the stratified sampler, no textures, motion blur or instances. Why lanes: a path's
+ * shading is a chain of dependent sqrt, division, sin/cos and loads; four paths go through it as one
+ * chain of vector instructions (docs/studies/2026-12-05-simd-lanes-prototype.md).
  * Reads: the scene's geometry, materials and lights; writes: image, and rayCounts[0] += the bounce rays. */
 #ifndef CLRT_LANES_CL
 #define CLRT_LANES_CL

@@ -104,7 +104,10 @@ int FusedPath::renderTile(cl::CommandQueue& q, bool profiling, size_t tileFirst,
     const int allGroups = spp / group;  // whole groups; a partial last one is a launch of its own
     int maxPasses = int(std::max<size_t>(
         1, std::min<size_t>(kPathsPerLaunch / (batch * size_t(group)), size_t(allGroups / kLaunchesPerTile))));
-    if (lanes) maxPasses = std::max(maxPasses, std::min(allGroups, (3 + group) / group));  // >= 4 samples per launch
+    // The lanes kernel: launches of four samples per pixel (or one group of more), the same for every tile
+    // and batch, so that a pixel's sums are made in the same order however the image is cut (its per-launch
+    // sums follow the launches, render_fused's the passes).
+    if (lanes) maxPasses = std::max(1, std::min(allGroups, (3 + group) / group));
     const size_t pixelBatches = (tileEnd - tileFirst + batch - 1) / batch;
     const size_t steps = size_t((allGroups + maxPasses - 1) / maxPasses) + (spp % group ? 1 : 0);
     const size_t totalBatches = steps * pixelBatches;

@@ -61,8 +61,8 @@ public:
     // renderTile), in launches of at most kPathsPerLaunch camera paths and at least kLaunchesPerTile
     // launches when there are that many sample groups (progress moves within a tile), unless stopped()
     // turns true between two launches. Returns the samples each pixel got.
-    // lanes: with render_lanes (lanesKernel() must exist), launches of at least four samples per pixel
-    // where the render has them.
+    // lanes: with render_lanes (lanesKernel() must exist), in launches of four samples per pixel (one group
+    // when a group has more), whatever the tile.
     int renderTile(cl::CommandQueue& q, bool profiling, size_t tileFirst, size_t tileEnd, size_t maxBatchPixels,
                    int spp, const FusedPlan& plan, const dev::SceneParams& sp, RenderCounters& counters,
                    const std::function<void(size_t, size_t)>& progress, const std::function<bool()>& stopped,
