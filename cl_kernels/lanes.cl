@@ -355,10 +355,12 @@ inline uint Lanes_Children(SceneParams scene, const __global Material* materials
         const uint id = path[k].pathId;
         path[k].pathId = id < 0x80000000u ? id * 2u : id; /* every lane: they share it */
         if (!(*live & (1 << k))) continue;
-        const RngKey key = Rng_Key(scene.seed, pixel, path[k].sample, id);
+        const int spec = (specBits >> k) & 1, roulette = (mode & CLRT_PATH_RR) && depth >= scene.rrMinDepth;
+        RngKey key;
+        if (spec || roulette) key = Rng_Key(scene.seed, pixel, path[k].sample, id); /* only where a number is drawn */
         float3 next = next3[k];
         float childW = pdfs[k];
-        if (specBits & (1 << k)) { /* Path_SpecularBounce, per lane */
+        if (spec) { /* Path_SpecularBounce, per lane */
             float3 weight;
             const float2 uGlossy = (float2)(Rng_Uniform(key, dim), Rng_Uniform(key, dim + 1u));
             if (!Path_SpecularBounce(materials[hit[k].material], hit[k].wo, hit[k].ns, hit[k].ng, hit[k].p, hit[k].t,
@@ -369,7 +371,7 @@ inline uint Lanes_Children(SceneParams scene, const __global Material* materials
             next = path[k].throughput.xyz * (weight / pSpec[k]);
             childW = 0.0f;
         }
-        if ((mode & CLRT_PATH_RR) && depth >= scene.rrMinDepth && !Path_RussianRoulette(&next, Rng_Uniform(key, dim + 4u))) {
+        if (roulette && !Path_RussianRoulette(&next, Rng_Uniform(key, dim + 4u))) {
             *live &= ~(1 << k);
             continue;
         }

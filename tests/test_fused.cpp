@@ -98,17 +98,8 @@ TEST_CASE("fused path: the demo and motion-blur scenes bit for bit, any batching
     CHECK(differingFloats(a.image, w.image) == 0);       // the wavefront's
     CHECK(differingFloats(a.image, other.image) > 0);    // another seed, another image
     // Small pixel batches and several passes per launch: the same floats.
-    Camera small = cam;
-    small.width = 96;
-    small.height = 72;
-    RenderSettings rs;
-    rs.spp = 3;
-    rs.seed = 7;
-    rs.pipeline = Pipeline::Fused;
-    rs.maxBatchPixels = 1000 + 17;
-    RenderCounters c;
-    ImageRGB batched = r.render(small, rs, c);
-    CHECK(differingFloats(a.image, batched) == 0);
+    Rendered batched = renderWith(r, cam, 96, 72, 3, 7, Pipeline::Fused, 1000 + 17);
+    CHECK(differingFloats(a.image, batched.image) == 0);
     // Motion blur: every ray of a sample at its shutter time.
     Scene mb = loadScene(std::string(CLRT_SOURCE_DIR) + "/scenes/motion_blur.xml");
     DeviceScene mbScene = flattenScene(mb);

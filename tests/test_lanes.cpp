@@ -137,17 +137,9 @@ TEST_CASE("lanes: deterministic, several launches and sample counts that are no 
     CHECK(relMse(big.image, bigF.image) < 1e-5 * relMse(bigOther.image, bigF.image));
     CHECK(big.counters.secondaryRays == bigF.counters.secondaryRays);
     // Small pixel batches: the same floats (a pixel's sums do not depend on how the image is cut).
-    Camera bigCam = cam;
-    bigCam.width = 300;
-    bigCam.height = 256;
-    RenderSettings rs;
-    rs.spp = 8;
-    rs.seed = 9;
-    rs.pipeline = Pipeline::Lanes;
-    rs.maxBatchPixels = 1000 + 17;
-    RenderCounters c;
-    CHECK(differingFloats(r.render(bigCam, rs, c), big.image) == 0);
-    CHECK(c.lanes);
+    Rendered batched = renderWith(r, cam, 300, 256, 8, 9, Pipeline::Lanes, 1000 + 17);
+    CHECK(differingFloats(batched.image, big.image) == 0);
+    CHECK(batched.counters.lanes);
 }
 
 TEST_CASE("lanes: which scenes and cameras it takes; auto takes it on CPU devices", "[lanes][shared]") {
