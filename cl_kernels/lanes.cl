@@ -1,12 +1,14 @@
 /* lanes.cl — the path tracer with four paths per work-item in float4 lanes (render_lanes; CPU devices,
  * compiled under CLRT_HAS_LANES: FeatureSet::lanes). A work-item takes its pixel's samples four at a
  * time (lane k: sample s0 + k) and steps their paths together, one depth per round:
- *   per lane, scalar: the closest hit (Ray_Closest), the surface and the emission the ray sees
- *     (Lanes_Surface: the path branch of Shade_Hit and the start of Path_ShadeHit), the light triangle
- *     picked (MeshLight_PickTriangle), the shadow rays' occlusion (Shadow_Occluded), the specular pick
- *     and a mirror's, conductor's or dielectric's child (Path_SpecularBounce), roulette;
- *   in lanes: the sampler (Lanes_Stratified2D), the light samples (MeshLight_Sample, Shadow_Make,
- *     Path_LightSampleWeight, ObjectLight_AimShadow) and the bounce (Path_SampleBounce, Path_Child).
+ *   per lane, scalar: the closest hit (Ray_Closest) and the loads of what it hit (Lanes_Closest), a
+ *     sphere's or plane's surface (Surface_FromHit), the material's f, the shadow rays' occlusion
+ *     (Shadow_Occluded), the specular pick and a mirror's, conductor's or dielectric's child
+ *     (Path_SpecularBounce), roulette;
+ *   in lanes: a triangle's surface, its facing and the emission the ray sees (Lanes_Surfaces: the path
+ *     branch of Shade_Hit and the start of Path_ShadeHit), the sampler (Lanes_Stratified2D), the light
+ *     samples (MeshLight_PickTriangle, MeshLight_Sample, Shadow_Make, Path_LightSampleWeight,
+ *     ObjectLight_AimShadow) and the bounce (Path_SampleBounce, Path_Child).
  * It computes what render_fused computes for the same random streams, up to rounding (tests/test_lanes.cpp):
  * one lane is one path of the fused kernel. Scenes of its family only (src/flatten/device_scene.h
  * lanesFamily, src/render/fused_renderer.h lanesUnsupported): materials without a specular lobe (ks = 0:
@@ -126,73 +128,169 @@ inline LaneF Lanes_MisWeight(int mode, LaneF pa, LaneF pb) {
 
 /* ---- one depth of the lanes' paths ----------------------------------------------------------- */
 
-/* What a lane's hit gives the lane code: the point and normals (facing the ray, as Shade_Hit's path
- * branch orients them), f (the BRDF's value: direction-free in this family), the radiance that needs no
- * shadow ray, whether the hit samples the lights and bounces, and what a specular child needs
- * (Path_SpecularBounce: the material, wo, the distance the ray travelled, inside a dielectric). */
+/* The lanes' closest hits as Lanes_Closest gathers them: a triangle's corners, corner normals (smooth
+ * triangles) and barycentrics; another primitive's surface from Surface_FromHit (p in v0, ng in n0, ns in
+ * n1); the radiance of a miss (Shade_Miss). Bits: the lanes that hit, hit a triangle, a smooth one. */
 typedef struct {
-    float3 p, ng, ns, f, wo;
-    float3 radiance;
-    float t;
-    int material, nee, bounce, specular, diffuse, inside, lastVertex;
-} LaneHit;
+    float3 v0[CLRT_LANES], v1[CLRT_LANES], v2[CLRT_LANES], n0[CLRT_LANES], n1[CLRT_LANES], n2[CLRT_LANES];
+    float3 radiance[CLRT_LANES];
+    float b1[CLRT_LANES], b2[CLRT_LANES], t[CLRT_LANES];
+    int material[CLRT_LANES], light[CLRT_LANES];
+    int hitBits, triBits, smoothBits;
+} LanesGather;
 
-/* Lane path `path` along ray: the closest hit and Shade_Hit's path branch up to Path_ShadeHit's
- * light-sample and bounce decisions (a miss: the background, Shade_Miss). */
-inline LaneHit Lanes_Surface(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) PathState path, Ray ray) {
-    LaneHit lh;
-    lh.p = lh.ng = lh.ns = lh.f = lh.wo = lh.radiance = (float3)(0.0f);
-    lh.t = 0.0f;
-    lh.material = lh.nee = lh.bounce = lh.specular = lh.diffuse = lh.inside = lh.lastVertex = 0;
-    int instance;
-    const Hit h = Ray_Closest(ray, scene, nodes, leaves, tris, spheres, planes, instances, &instance);
-    if (h.prim == CLRT_INVALID) {
-        ShadeResult res;
-        Shade_Miss(scene, cam, path, ray, textures, images, texels, lights, envDist, &res);
-        lh.radiance = res.radiance.xyz;
-        return lh;
+/* What the lanes' hits give the lane code (Lanes_Surfaces): the point and normals (facing the ray, as
+ * Shade_Hit's path branch orients them), f (the BRDF's value: direction-free in this family), the
+ * radiance that needs no shadow ray; per lane the material and the distance the ray travelled (for
+ * Path_SpecularBounce); and the lanes whose hit samples the lights (nee), may have a child (bounce), is
+ * specular, has a diffuse part, lies inside a dielectric, is the last vertex. */
+typedef struct {
+    LaneV3 p, ng, ns, f, radiance;
+    float t[CLRT_LANES];
+    int material[CLRT_LANES];
+    int nee, bounce, specular, diffuse, inside, lastVertex;
+} LanesHit;
+
+/* The closest hits of the live lanes' rays (Ray_Closest) and what Lanes_Surfaces reads of them, per lane:
+ * loads only, except at spheres and planes (Surface_FromHit) and misses (Shade_Miss). */
+inline void Lanes_Closest(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int live, const PathState* path, const Ray* ray,
+                          LanesGather* g) {
+    g->hitBits = g->triBits = g->smoothBits = 0;
+    for (int k = 0; k < CLRT_LANES; ++k) {
+        g->v0[k] = g->v1[k] = g->v2[k] = g->n0[k] = g->n1[k] = g->n2[k] = g->radiance[k] = (float3)(0.0f);
+        g->b1[k] = g->b2[k] = g->t[k] = 0.0f;
+        g->material[k] = 0;
+        g->light[k] = CLRT_INVALID;
+        if (!(live & (1 << k))) continue;
+        int instance;
+        const Hit h = Ray_Closest(ray[k], scene, nodes, leaves, tris, spheres, planes, instances, &instance);
+        if (h.prim == CLRT_INVALID) {
+            ShadeResult res;
+            Shade_Miss(scene, cam, path[k], ray[k], textures, images, texels, lights, envDist, &res);
+            g->radiance[k] = res.radiance.xyz;
+            continue;
+        }
+        g->hitBits |= 1 << k;
+        g->t[k] = h.t;
+        if (h.prim < scene.numTriangles) { /* HitTriangle_Load's fields that this family reads */
+            const __global Triangle* tri = &tris[h.prim];
+            const __global TriangleShading* sh = &triShading[h.prim];
+            g->v0[k] = tri->v0.xyz; g->v1[k] = tri->v1.xyz; g->v2[k] = tri->v2.xyz;
+            const uint attributes = sh->attributes;
+            if (attributes & CLRT_TRI_NORMALS) {
+                const __global float* corner = triAttributes + (attributes & CLRT_TRI_OFFSET_MASK);
+                g->n0[k] = vload3(0, corner); g->n1[k] = vload3(1, corner); g->n2[k] = vload3(2, corner);
+                g->smoothBits |= 1 << k;
+            }
+            g->b1[k] = h.u; g->b2[k] = h.v;
+            g->material[k] = sh->material;
+            g->light[k] = sh->light;
+            g->triBits |= 1 << k;
+        } else { /* a sphere or a plane (no LightSphere in this family: neither emits) */
+            HitTriangle unread;
+            const SurfaceHit s = Surface_FromHit(h, ray[k], &unread, spheres, planes, scene.numTriangles, scene.numSpheres);
+            g->v0[k] = s.p; g->n0[k] = s.ng; g->n1[k] = s.ns;
+            g->material[k] = s.material;
+        }
     }
-    HitTriangle ht;
-    if (h.prim < scene.numTriangles) HitTriangle_Load(h, instance, tris, triShading, triAttributes, instances, &ht);
-    SurfaceHit s = Surface_FromHit(h, ray, &ht, spheres, planes, scene.numTriangles, scene.numSpheres);
-    const __global Material* m = &materials[s.material];
-    if (dot(s.ns, s.ng) < 0.0f) s.ns = -s.ns; /* Shade_OrientsNormalToRay: every material when path traced */
-    const float3 ng = s.frontFacing ? s.ng : -s.ng, ns = s.frontFacing ? s.ns : -s.ns;
-    float lightPdf = -1.0f;
-    float3 emitted = (float3)(0.0f);
-#ifdef CLRT_HAS_LIGHT_MESH
-    emitted = Path_HitEmission(h.prim, s.frontFacing, scene, triShading, spheres, lights, s.p, s.dir, s.t, s.ng,
-                               path.throughput.w, &lightPdf);
-#endif
-    const int kind = m->kind;
-    lh.inside = kind == MATERIAL_DIELECTRIC && !s.frontFacing; /* Shade_Hit's insideDielectric: no ShadingPoint */
-    lh.specular = kind == MATERIAL_MIRROR || kind == MATERIAL_CONDUCTOR || kind == MATERIAL_DIELECTRIC;
+}
+
+/* The lanes' points and normals (Surface_FromHit for triangles, in lanes; the gathered surface for the
+ * rest): *ngRaw the geometric normal as stored (not yet facing the ray), *ns agreeing with it. */
+inline void Lanes_Geometry(const LanesGather* g, LaneV3* p, LaneV3* ngRaw, LaneV3* ns) {
+    const LaneF b1 = vload4(0, g->b1), b2 = vload4(0, g->b2), b0 = 1.0f - b1 - b2;
+    const LaneV3 v0 = LaneV3_Load(g->v0), v1 = LaneV3_Load(g->v1), v2 = LaneV3_Load(g->v2);
+    const LaneV3 n0 = LaneV3_Load(g->n0), n1 = LaneV3_Load(g->n1);
+    const LaneV3 pTri = LaneV3_Add(LaneV3_Add(LaneV3_Scale(v0, b0), LaneV3_Scale(v1, b1)), LaneV3_Scale(v2, b2));
+    const LaneV3 ngTri = LaneV3_Normalize(LaneV3_Cross(LaneV3_Sub(v1, v0), LaneV3_Sub(v2, v0)));
+    const LaneV3 nsSum = LaneV3_Add(LaneV3_Add(LaneV3_Scale(n0, b0), LaneV3_Scale(n1, b1)), LaneV3_Scale(LaneV3_Load(g->n2), b2));
+    const LaneF len = sqrt(LaneV3_Dot(nsSum, nsSum));
+    /* a flat triangle's corner normals are its face normal: ns = ng */
+    const LaneI smooth = Lane_FromBits(g->smoothBits) & (len > 0.0f) & isfinite(len);
+    const LaneV3 nsTri = LaneV3_Select(ngTri, LaneV3_Scale(nsSum, 1.0f / len), smooth);
+    const LaneI tri = Lane_FromBits(g->triBits);
+    *p = LaneV3_Select(v0, pTri, tri);
+    *ngRaw = LaneV3_Select(n0, ngTri, tri);
+    LaneV3 n = LaneV3_Select(n1, nsTri, tri);
+    *ns = LaneV3_Select(n, LaneV3_Scale(n, -1.0f), LaneV3_Dot(n, *ngRaw) < 0.0f); /* Shade_OrientsNormalToRay */
+}
+
+/* The non-specular f of material `material` (ks = 0: Material_EvalDirect's value for any pair of
+ * directions above the surface; a BRDF's is 0 where wo is below ns, Lanes_Surfaces). */
+inline float3 Lanes_MaterialF(const __global Material* materials, int material) {
+    const __global Material* m = &materials[material];
     ShadingPoint sp;
-    sp.position = (float4)(s.p, 1.0f);
-    sp.normal = (float4)(ns, 0.0f);
-    sp.geomNormal = (float4)(ng, 0.0f);
-    sp.wo = (float4)(-s.dir, 0.0f);
+    sp.position = (float4)(0.0f, 0.0f, 0.0f, 1.0f);
+    sp.normal = sp.geomNormal = sp.wo = (float4)(0.0f, 0.0f, 1.0f, 0.0f);
     sp.kd = (float4)(m->diffuse.xyz, 0.0f);
     sp.ks = (float4)(m->specular.xyz, m->phongExponent);
-    sp.material = s.material;
-    sp.pad0 = sp.pad1 = sp.pad2 = 0; /* as ShadingPoint_Make */
+    sp.material = material;
+    sp.pad0 = sp.pad1 = sp.pad2 = 0;
+    return Material_EvalDirect(sp, materials, (float3)(0.0f, 0.0f, 1.0f), 1.0f);
+}
+
+/* Path_EmissionWeight for lanes. */
+inline LaneF Lanes_EmissionWeight(int mode, LaneF bsdfPdf, LaneF lightPdf) {
+    if (!Path_UsesNee(mode)) return (LaneF)(1.0f);
+    const LaneF w = (mode & CLRT_PATH_MIS) ? select(Lanes_MisWeight(mode, bsdfPdf, lightPdf), (LaneF)(0.0f), lightPdf < 0.0f)
+                                           : (LaneF)(0.0f);
+    return select(w, (LaneF)(1.0f), !(bsdfPdf > 0.0f));
+}
+
+/* The gathered hits (Lanes_Closest) as Shade_Hit's path branch sees them, up to Path_ShadeHit's light-sample
+ * and bounce decisions: geometry, facing and emission (Path_HitEmission: LightMesh, weighted by
+ * Path_EmissionWeight) in lanes, the materials per lane. depth: the lanes' (they step together). */
+inline void Lanes_Surfaces(SceneParams scene, const __global Material* materials, const __global Light* lights,
+                           const LanesGather* g, int depth, const PathState* path, const Ray* ray, LanesHit* lh) {
+    float3 dirs[CLRT_LANES], thr[CLRT_LANES], fMat[CLRT_LANES], emit[CLRT_LANES];
+    float bsdfPdf[CLRT_LANES], area[CLRT_LANES];
+    int dielectric = 0, plain = 0, brdf = 0;
+    lh->specular = 0;
+    for (int k = 0; k < CLRT_LANES; ++k) { /* per lane: loads */
+        dirs[k] = ray[k].direction.xyz;
+        thr[k] = path[k].throughput.xyz;
+        bsdfPdf[k] = path[k].throughput.w;
+        fMat[k] = emit[k] = (float3)(0.0f);
+        area[k] = 0.0f;
+        lh->t[k] = g->t[k];
+        lh->material[k] = g->material[k];
+        if (!(g->hitBits & (1 << k))) continue;
+        const __global Material* m = &materials[g->material[k]];
+        const int kind = m->kind;
+        lh->specular |= (kind == MATERIAL_MIRROR || kind == MATERIAL_CONDUCTOR || kind == MATERIAL_DIELECTRIC) << k;
+        dielectric |= (kind == MATERIAL_DIELECTRIC) << k;
+        brdf |= (m->brdf != CLRT_INVALID) << k;
+        if (maxComponent(m->diffuse.xyz) > 0.0f || maxComponent(m->specular.xyz) > 0.0f) {
+            plain |= 1 << k;
+            int j = 0; /* a lane before with the same material has its f (the pixel's lanes often do) */
+            while (j < k && !((plain >> j) & 1 && g->material[j] == g->material[k])) ++j;
+            fMat[k] = j < k ? fMat[j] : Lanes_MaterialF(materials, g->material[k]);
+        }
+#ifdef CLRT_HAS_LIGHT_MESH
+        if (g->light[k] != CLRT_INVALID) { emit[k] = lights[g->light[k]].radiance.xyz; area[k] = lights[g->light[k]].area; }
+#endif
+    }
+    LaneV3 ngRaw, ns;
+    Lanes_Geometry(g, &lh->p, &ngRaw, &ns);
+    const LaneV3 dir = LaneV3_Load(dirs);
+    const LaneI front = LaneV3_Dot(dir, ngRaw) < 0.0f;
+    lh->ng = LaneV3_Select(LaneV3_Scale(ngRaw, -1.0f), ngRaw, front);
+    lh->ns = LaneV3_Select(LaneV3_Scale(ns, -1.0f), ns, front);
     const int mode = scene.pathMode;
-    lh.radiance = finiteOrZero(path.throughput.xyz * emitted * Path_EmissionWeight(mode, path.throughput.w, lightPdf));
-    const int diffuse = !lh.inside && (maxComponent(sp.kd.xyz) > 0.0f || maxComponent(sp.ks.xyz) > 0.0f);
-    const int emissionOnly = path.depth > scene.maxDepth, lastVertex = path.depth >= scene.maxDepth;
-    /* Path_ShadeHit's decisions: light samples, and whether a child may follow */
-    lh.nee = Path_UsesNee(mode) && diffuse && !emissionOnly;
-    lh.bounce = !emissionOnly && !(lastVertex && !(mode & CLRT_PATH_MIS)) && (lh.specular || diffuse);
-    lh.diffuse = diffuse;
-    lh.lastVertex = lastVertex;
-    lh.p = s.p;
-    lh.ng = ng;
-    lh.ns = ns;
-    lh.wo = -s.dir;
-    lh.t = s.t;
-    lh.material = s.material;
-    if (diffuse && (lh.nee || lh.bounce)) lh.f = Material_EvalDirect(sp, materials, ns, 1.0f); /* f: the same for every wi (ks = 0) */
-    return lh;
+    const LaneF t = vload4(0, g->t), A = vload4(0, area), cosL = fabs(LaneV3_Dot(ngRaw, dir));
+    const LaneF lightPdf = select((LaneF)(0.0f), t * t / (A * cosL), (cosL > 0.0f) & (A > 0.0f));
+    const LaneF weight = Lanes_EmissionWeight(mode, vload4(0, bsdfPdf), lightPdf); /* emit 0 where no light */
+    const LaneV3 radiance = LaneV3_FiniteOrZero(LaneV3_Scale(LaneV3_Mul(LaneV3_Load(thr), LaneV3_Load(emit)), weight));
+    lh->radiance = LaneV3_Select(LaneV3_Load(g->radiance), radiance, Lane_FromBits(g->hitBits));
+    /* a BRDF is 0 where wo lies below ns (Brdf_Eval) */
+    const LaneI fZero = Lane_FromBits(brdf) & !(LaneV3_Dot(lh->ns, dir) < 0.0f);
+    lh->f = LaneV3_Select(LaneV3_Load(fMat), LaneV3_Splat((float3)(0.0f)), fZero);
+    lh->inside = dielectric & ~Lane_Bits(front); /* Shade_Hit's insideDielectric */
+    lh->diffuse = plain & ~lh->inside;
+    const int emissionOnly = depth > scene.maxDepth, lastVertex = depth >= scene.maxDepth;
+    lh->nee = Path_UsesNee(mode) && !emissionOnly ? lh->diffuse : 0;
+    lh->bounce = !emissionOnly && !(lastVertex && !(mode & CLRT_PATH_MIS)) ? (lh->specular | lh->diffuse) : 0;
+    lh->lastVertex = lastVertex ? g->hitBits : 0;
 }
 
 /* Which of the lanes in okBits see the shadow ray from org along unit dir unblocked up to tMax
@@ -217,20 +315,50 @@ inline int Lanes_Unoccluded(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int okBit
 }
 
 #ifdef CLRT_HAS_LIGHT_MESH
+/* MeshLight_PickTriangle for the lanes: the first of the light's n triangles whose cumulative area
+ * fraction (the w of its first vertex) exceeds u (the last if none), by a binary search of fixed steps
+ * (the count of those at or below u: the same triangle for a non-decreasing table); *uRest as there. */
+inline LaneI Lanes_PickTriangle(const __global float4* tri, int n, LaneF u, LaneF* uRest) {
+    LaneI pos = (LaneI)(0);
+    int step = 1;
+    while (step * 2 <= n - 1) step *= 2;
+    for (; step > 0 && n > 1; step >>= 1) {
+        const LaneI next = pos + step;
+        int idx[CLRT_LANES];
+        float c[CLRT_LANES];
+        vstore4(min(next, n - 1) - 1, 0, idx);
+        for (int k = 0; k < CLRT_LANES; ++k) c[k] = tri[3 * idx[k]].w;
+        pos = select(pos, next, (next <= n - 1) & (vload4(0, c) <= u));
+    }
+    int at[CLRT_LANES];
+    float c0[CLRT_LANES], c1[CLRT_LANES];
+    vstore4(pos, 0, at);
+    for (int k = 0; k < CLRT_LANES; ++k) {
+        const int i = at[k];
+        c0[k] = i > 0 ? tri[3 * (i - 1)].w : 0.0f;
+        c1[k] = tri[3 * i].w;
+    }
+    const LaneF lo = vload4(0, c0), hi = vload4(0, c1);
+    *uRest = select((LaneF)(0.5f), clamp((u - lo) / (hi - lo), 0.0f, 0.99999994f), hi > lo);
+    return pos;
+}
+
 /* MeshLight_Sample for the lanes at p: *wi, *dist (MeshLight_ShadowLength's), the radiance estimate *e
  * (0 where the sample fails), and the light's point's offset distance; u: the lanes' 2D sample. */
 inline void Lanes_MeshLightSample(const __global Light* light, const __global float4* lightData, LaneV3 p, LaneF u1,
                                   LaneF u2, LaneV3* wi, LaneF* dist, LaneV3* e) {
     const __global float4* tri = lightData + light->objFirst;
-    float ux[CLRT_LANES], ulx[CLRT_LANES];
+    LaneF ux;
+    const LaneI pick = Lanes_PickTriangle(tri, light->objCount, u1, &ux);
+    int at[CLRT_LANES];
     float3 v0[CLRT_LANES], v1[CLRT_LANES], v2[CLRT_LANES];
-    vstore4(u1, 0, ulx);
-    for (int k = 0; k < CLRT_LANES; ++k) { /* MeshLight_PickTriangle, per lane */
-        const int t = MeshLight_PickTriangle(tri, light->objCount, ulx[k], &ux[k]);
+    vstore4(pick, 0, at);
+    for (int k = 0; k < CLRT_LANES; ++k) {
+        const int t = at[k];
         v0[k] = tri[3 * t].xyz; v1[k] = tri[3 * t + 1].xyz; v2[k] = tri[3 * t + 2].xyz;
     }
     const LaneV3 a = LaneV3_Load(v0), b = LaneV3_Load(v1), c = LaneV3_Load(v2);
-    const LaneF su = sqrt(vload4(0, ux));
+    const LaneF su = sqrt(ux);
     const LaneF b0 = 1.0f - su, b1 = u2 * su;
     const LaneV3 q = LaneV3_Add(LaneV3_Add(LaneV3_Scale(a, b0), LaneV3_Scale(b, b1)), LaneV3_Scale(c, 1.0f - b0 - b1));
     const LaneV3 d = LaneV3_Sub(q, p);
@@ -327,27 +455,47 @@ inline int Lanes_Bounce(int mode, int bounceBits, LaneV3 ng, LaneV3 ns, LaneV3 f
 /* Path_ShadeHit's pick at the live lanes' hits: a specular child with probability pSpecular (½ beside a
  * diffuse part, else 1; *pSpec per lane, 0 where no specular material); returns the lanes that take it.
  * A pick at the last vertex ends the lane's path (its only child there is the BSDF sample). */
-inline int Lanes_PickSpecular(SceneParams scene, int pixel, const PathState* path, const LaneHit* hit, uint dim, int* live,
+inline int Lanes_PickSpecular(SceneParams scene, int pixel, const PathState* path, const LanesHit* hit, uint dim, int* live,
                               float* pSpec) {
     int specBits = 0;
     for (int k = 0; k < CLRT_LANES; ++k) {
         pSpec[k] = 0.0f;
-        if (!(*live & (1 << k)) || !hit[k].specular) continue;
-        pSpec[k] = hit[k].diffuse ? 0.5f : 1.0f;
+        if (!(*live & hit->specular & (1 << k))) continue;
+        pSpec[k] = (hit->diffuse >> k) & 1 ? 0.5f : 1.0f;
         const RngKey key = Rng_Key(scene.seed, pixel, path[k].sample, path[k].pathId);
         if (!(Rng_Uniform(key, dim + 3u) < pSpec[k])) continue;
-        if (hit[k].lastVertex) *live &= ~(1 << k);
+        if ((hit->lastVertex >> k) & 1) *live &= ~(1 << k);
         else specBits |= 1 << k;
     }
     return specBits;
 }
 
+/* Path_SpecularBounce for the lanes in specBits (their hits: hit, p, ns, ng per lane): *org, dirs and
+ * *weight per lane; a lane whose bounce fails leaves specBits (returned). */
+inline int Lanes_SpecularBounces(SceneParams scene, const __global Material* materials, int pixel, uint dim, int specBits,
+                                 const LanesHit* hit, const PathState* path, const Ray* ray, float3* org, float3* dirs,
+                                 float3* weight) {
+    float3 p[CLRT_LANES], ns[CLRT_LANES], ng[CLRT_LANES];
+    LaneV3_Store(hit->p, p);
+    LaneV3_Store(hit->ns, ns);
+    LaneV3_Store(hit->ng, ng);
+    for (int k = 0; k < CLRT_LANES; ++k) {
+        if (!((specBits >> k) & 1)) continue;
+        const RngKey key = Rng_Key(scene.seed, pixel, path[k].sample, path[k].pathId);
+        const float2 uGlossy = (float2)(Rng_Uniform(key, dim), Rng_Uniform(key, dim + 1u));
+        if (!Path_SpecularBounce(materials[hit->material[k]], -ray[k].direction.xyz, ns[k], ng[k], p[k], hit->t[k],
+                                 (hit->inside >> k) & 1, Rng_Uniform(key, dim + 2u), uGlossy, &weight[k], &org[k], &dirs[k]))
+            specBits &= ~(1 << k);
+    }
+    return specBits;
+}
+
 /* Path_Child (child 0) of each live lane, after Path_RussianRoulette: the specular lanes' child from
- * Path_SpecularBounce, the others' from the lanes' bounce (org, dirs, next3, pdfs). Every lane's path id
- * moves on (they share it). Returns the children made; *live keeps the lanes that have one. */
-inline uint Lanes_Children(SceneParams scene, const __global Material* materials, int pixel, int depth, int specBits,
-                           const LaneHit* hit, const float* pSpec, float3* org, float3* dirs, const float3* next3,
-                           const float* pdfs, PathState* path, Ray* ray, int* live) {
+ * Path_SpecularBounce (specWeight), the others' from the lanes' bounce (org, dirs, next3, pdfs). Every
+ * lane's path id moves on (they share it). Returns the children made; *live keeps the lanes that have one. */
+inline uint Lanes_Children(SceneParams scene, int pixel, int depth, int specBits, const float* pSpec, const float3* org,
+                           const float3* dirs, const float3* next3, const float3* specWeight, const float* pdfs,
+                           PathState* path, Ray* ray, int* live) {
     const int mode = scene.pathMode;
     const uint dim = 4u + 32u * (uint)depth;
     uint children = 0;
@@ -356,27 +504,13 @@ inline uint Lanes_Children(SceneParams scene, const __global Material* materials
         path[k].pathId = id < 0x80000000u ? id * 2u : id; /* every lane: they share it */
         if (!(*live & (1 << k))) continue;
         const int spec = (specBits >> k) & 1, roulette = (mode & CLRT_PATH_RR) && depth >= scene.rrMinDepth;
-        RngKey key;
-        if (spec || roulette) key = Rng_Key(scene.seed, pixel, path[k].sample, id); /* only where a number is drawn */
-        float3 next = next3[k];
-        float childW = pdfs[k];
-        if (spec) { /* Path_SpecularBounce, per lane */
-            float3 weight;
-            const float2 uGlossy = (float2)(Rng_Uniform(key, dim), Rng_Uniform(key, dim + 1u));
-            if (!Path_SpecularBounce(materials[hit[k].material], hit[k].wo, hit[k].ns, hit[k].ng, hit[k].p, hit[k].t,
-                                     hit[k].inside, Rng_Uniform(key, dim + 2u), uGlossy, &weight, &org[k], &dirs[k])) {
-                *live &= ~(1 << k);
-                continue;
-            }
-            next = path[k].throughput.xyz * (weight / pSpec[k]);
-            childW = 0.0f;
-        }
-        if (roulette && !Path_RussianRoulette(&next, Rng_Uniform(key, dim + 4u))) {
+        float3 next = spec ? path[k].throughput.xyz * (specWeight[k] / pSpec[k]) : next3[k];
+        if (roulette && !Path_RussianRoulette(&next, Rng_Uniform(Rng_Key(scene.seed, pixel, path[k].sample, id), dim + 4u))) {
             *live &= ~(1 << k);
             continue;
         }
         if (!(maxComponent(next) > 0.0f) || !allFinite3(next) || !allFinite3(dirs[k])) { *live &= ~(1 << k); continue; }
-        path[k].throughput = (float4)(next, childW);
+        path[k].throughput = (float4)(next, spec ? 0.0f : pdfs[k]);
         path[k].depth = depth + 1;
         ray[k].origin = (float4)(org[k], 0.0f);
         ray[k].direction = (float4)(dirs[k], INFINITY);
@@ -402,48 +536,46 @@ inline uint Lanes_Paths(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int pixel, in
     const int mode = scene.pathMode;
     uint secondary = 0;
     for (int depth = 0; live; ++depth) {
-        float3 p[CLRT_LANES], ng[CLRT_LANES], ns[CLRT_LANES], f[CLRT_LANES], rad[CLRT_LANES], thr[CLRT_LANES];
-        LaneHit hit[CLRT_LANES];
-        int neeBits = 0, bounceBits = 0;
-        for (int k = 0; k < CLRT_LANES; ++k) {
-            p[k] = ng[k] = f[k] = rad[k] = thr[k] = (float3)(0.0f);
-            ns[k] = (float3)(0.0f, 0.0f, 1.0f);
-            if (!(live & (1 << k))) continue;
-            hit[k] = Lanes_Surface(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) path[k], ray[k]);
-            p[k] = hit[k].p; ng[k] = hit[k].ng; ns[k] = hit[k].ns; f[k] = hit[k].f; rad[k] = hit[k].radiance;
-            thr[k] = path[k].throughput.xyz;
-            neeBits |= hit[k].nee << k;
-            bounceBits |= hit[k].bounce << k;
-        }
-        const LaneV3 P = LaneV3_Load(p), Ng = LaneV3_Load(ng), Ns = LaneV3_Load(ns), F = LaneV3_Load(f);
+        LanesGather g;
+        Lanes_Closest(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) live, path, ray, &g);
+        LanesHit hit;
+        Lanes_Surfaces(scene, materials, lights, &g, depth, path, ray, &hit);
+        float3 thr[CLRT_LANES];
+        for (int k = 0; k < CLRT_LANES; ++k) thr[k] = path[k].throughput.xyz;
         LaneV3 throughput = LaneV3_Load(thr);
         const uint strat = Rng_Key(scene.seed, pixel, 0, path[0].pathId).strat; /* the lanes' shared path id */
         const uint dim = 4u + 32u * (uint)depth;
-        LaneV3 sum = LaneV3_Load(rad);
-        if (neeBits)
+        LaneV3 sum = hit.radiance;
+        if (hit.nee)
             for (int l = 0; l < scene.numLights; ++l)
-                sum = LaneV3_Add(sum, Lanes_LightSample(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) & lights[l], neeBits, P, Ng, Ns,
-                                                        F, throughput, strat, sample, dim + 8u + 2u * (uint)l));
+                sum = LaneV3_Add(sum, Lanes_LightSample(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) & lights[l], hit.nee, hit.p,
+                                                        hit.ng, hit.ns, hit.f, throughput, strat, sample, dim + 8u + 2u * (uint)l));
         float3 out[CLRT_LANES];
         LaneV3_Store(sum, out);
         for (int k = 0; k < CLRT_LANES; ++k) /* as render_fused: per depth, in sample order */
             if (live & (1 << k)) levelSum[min(depth, levels - 1)] += finiteOrZero(out[k]);
-        live &= bounceBits;
+        live &= hit.bounce;
         if (!live) break;
         float pSpec[CLRT_LANES];
-        const int specBits = Lanes_PickSpecular(scene, pixel, path, hit, dim, &live, pSpec);
+        float3 org[CLRT_LANES], dirs[CLRT_LANES], next3[CLRT_LANES], specWeight[CLRT_LANES];
+        int specBits = Lanes_PickSpecular(scene, pixel, path, &hit, dim, &live, pSpec);
         LaneF u1, u2, pdf;
         Lanes_Stratified2D(strat, sample, dim + 5u, &u1, &u2);
         LaneV3 dir;
-        const int diffuseBits = Lanes_Bounce(mode, live & ~specBits, Ng, Ns, F, vload4(0, pSpec), u1, u2, &throughput, &dir, &pdf);
-        float3 org[CLRT_LANES], dirs[CLRT_LANES], next3[CLRT_LANES];
+        const int diffuseBits = Lanes_Bounce(mode, live & ~specBits, hit.ng, hit.ns, hit.f, vload4(0, pSpec), u1, u2,
+                                             &throughput, &dir, &pdf);
         float pdfs[CLRT_LANES];
-        LaneV3_Store(LaneV3_Add(P, LaneV3_Scale(Ng, Lanes_OffsetDistance(P))), org); /* Ray_OffsetOrigin */
+        LaneV3_Store(LaneV3_Add(hit.p, LaneV3_Scale(hit.ng, Lanes_OffsetDistance(hit.p))), org); /* Ray_OffsetOrigin */
         LaneV3_Store(dir, dirs);
         LaneV3_Store(throughput, next3);
         vstore4(pdf, 0, pdfs);
+        if (specBits) {
+            const int ok = Lanes_SpecularBounces(scene, materials, pixel, dim, specBits, &hit, path, ray, org, dirs, specWeight);
+            live &= ~(specBits & ~ok);
+            specBits = ok;
+        }
         live &= diffuseBits | specBits;
-        secondary += Lanes_Children(scene, materials, pixel, depth, specBits, hit, pSpec, org, dirs, next3, pdfs, path, ray, &live);
+        secondary += Lanes_Children(scene, pixel, depth, specBits, pSpec, org, dirs, next3, specWeight, pdfs, path, ray, &live);
     }
     return secondary;
 }

@@ -48,7 +48,7 @@ std::string lanesFamily(const DeviceScene& ds) {
     if (f.lightKinds & ~(mesh | point)) return "lights other than LightMesh and PointLight";
     if (f.textures || f.normalMaps || f.bumpMaps || f.mipMaps || f.motionBlur || f.instances)
         return "textures, motion blur or instances";
-    auto plain = [&](int k) {  // its non-specular part's f is direction-free (lanes.cl, Lanes_Surface)
+    auto plain = [&](int k) {  // its non-specular part's f is direction-free (lanes.cl, Lanes_MaterialF)
         if (k < 0 || size_t(k) >= ds.materials.size()) return false;
         const dev::Material& m = ds.materials[size_t(k)];
         // The BRDFs whose value at ks = 0 is kd or kd/π: a new BRDF joins only when it is one of them.
