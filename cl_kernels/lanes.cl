@@ -11,9 +11,9 @@
  *     ObjectLight_AimShadow) and the bounce (Path_SampleBounce, Path_Child).
  * It computes what render_fused computes for the same random streams, up to rounding (tests/test_lanes.cpp):
  * one lane is one path of the fused kernel. Scenes of its family only (src/flatten/device_scene.h
- * lanesFamily, src/render/fused_renderer.h lanesUnsupported): materials without a specular lobe (ks = 0:
- * the non-specular f is kd/π or kd, direction-free; mirrors, conductors, dielectrics in), LightMesh and
- * point lights, the stratified sampler, no textures, motion blur or instances. Why lanes: a path's
+ * lanesFamily, src/render/fused_renderer.h lanesUnsupported): LightMesh and point lights, the stratified
+ * sampler, no textures, motion blur or instances; every material: a direction-free f (CLRT_BRDF_LAMBERTIAN)
+ * in lanes, a glossy one per lane (Lanes_GlossyLightTerms, Lanes_GlossyBounces). Why lanes: a path's
  * shading is a chain of dependent sqrt, division, sin/cos and loads; four paths go through it as one
  * chain of vector instructions (docs/studies/2026-12-05-simd-lanes-prototype.md).
  * Reads: the scene's geometry, materials and lights; writes: image, and rayCounts[0] += the bounce rays. */
@@ -140,15 +140,17 @@ typedef struct {
 } LanesGather;
 
 /* What the lanes' hits give the lane code (Lanes_Surfaces): the point and normals (facing the ray, as
- * Shade_Hit's path branch orients them), f (the BRDF's value: direction-free in this family), the
- * radiance that needs no shadow ray; per lane the material and the distance the ray travelled (for
+ * Shade_Hit's path branch orients them), f (the non-specular part's value where it is direction-free),
+ * the radiance that needs no shadow ray; per lane the material and the distance the ray travelled (for
  * Path_SpecularBounce); and the lanes whose hit samples the lights (nee), may have a child (bounce), is
- * specular, has a diffuse part, lies inside a dielectric, is the last vertex. */
+ * specular, has a diffuse part, lies inside a dielectric, is the last vertex, is glossy. */
 typedef struct {
     LaneV3 p, ng, ns, f, radiance;
     float t[CLRT_LANES];
     int material[CLRT_LANES];
     int nee, bounce, specular, diffuse, inside, lastVertex;
+    int glossy;                   /* diffuse lanes whose f depends on the directions (not CLRT_BRDF_LAMBERTIAN) */
+    ShadingPoint sp[CLRT_LANES];  /* the glossy lanes' (ShadingPoint_Make's): their f and pdfs per lane */
 } LanesHit;
 
 /* The closest hits of the live lanes' rays (Ray_Closest) and what Lanes_Surfaces reads of them, per lane:
@@ -237,6 +239,19 @@ inline LaneF Lanes_EmissionWeight(int mode, LaneF bsdfPdf, LaneF lightPdf) {
     return select(w, (LaneF)(1.0f), !(bsdfPdf > 0.0f));
 }
 
+/* The ShadingPoints (ShadingPoint_Make) of the glossy lanes' hits. */
+inline void Lanes_GlossyPoints(const __global Material* materials, int glossy, LanesHit* lh, const float3* dirs) {
+    float3 p[CLRT_LANES], ng[CLRT_LANES], ns[CLRT_LANES];
+    LaneV3_Store(lh->p, p);
+    LaneV3_Store(lh->ng, ng);
+    LaneV3_Store(lh->ns, ns);
+    for (int k = 0; k < CLRT_LANES; ++k) {
+        if (!((glossy >> k) & 1)) continue;
+        const Material m = materials[lh->material[k]];
+        lh->sp[k] = ShadingPoint_Make(p[k], ns[k], ng[k], -dirs[k], m.diffuse.xyz, m.specular.xyz, m, lh->material[k]);
+    }
+}
+
 /* The gathered hits (Lanes_Closest) as Shade_Hit's path branch sees them, up to Path_ShadeHit's light-sample
  * and bounce decisions: geometry, facing and emission (Path_HitEmission: LightMesh, weighted by
  * Path_EmissionWeight) in lanes, the materials per lane. depth: the lanes' (they step together). */
@@ -244,7 +259,7 @@ inline void Lanes_Surfaces(SceneParams scene, const __global Material* materials
                            const LanesGather* g, int depth, const PathState* path, const Ray* ray, LanesHit* lh) {
     float3 dirs[CLRT_LANES], thr[CLRT_LANES], fMat[CLRT_LANES], emit[CLRT_LANES];
     float bsdfPdf[CLRT_LANES], area[CLRT_LANES];
-    int dielectric = 0, plain = 0, brdf = 0;
+    int dielectric = 0, plain = 0, brdf = 0, glossy = 0;
     lh->specular = 0;
     for (int k = 0; k < CLRT_LANES; ++k) { /* per lane: loads */
         dirs[k] = ray[k].direction.xyz;
@@ -262,9 +277,13 @@ inline void Lanes_Surfaces(SceneParams scene, const __global Material* materials
         brdf |= (m->brdf != CLRT_INVALID) << k;
         if (maxComponent(m->diffuse.xyz) > 0.0f || maxComponent(m->specular.xyz) > 0.0f) {
             plain |= 1 << k;
-            int j = 0; /* a lane before with the same material has its f (the pixel's lanes often do) */
-            while (j < k && !((plain >> j) & 1 && g->material[j] == g->material[k])) ++j;
-            fMat[k] = j < k ? fMat[j] : Lanes_MaterialF(materials, g->material[k]);
+            if (!(m->brdfFlags & CLRT_BRDF_LAMBERTIAN)) {
+                glossy |= 1 << k;
+            } else {
+                int j = 0; /* a lane before with the same material has its f (the pixel's lanes often do) */
+                while (j < k && !((plain & ~glossy) >> j & 1 && g->material[j] == g->material[k])) ++j;
+                fMat[k] = j < k ? fMat[j] : Lanes_MaterialF(materials, g->material[k]);
+            }
         }
 #ifdef CLRT_HAS_LIGHT_MESH
         if (g->light[k] != CLRT_INVALID) { emit[k] = lights[g->light[k]].radiance.xyz; area[k] = lights[g->light[k]].area; }
@@ -291,6 +310,8 @@ inline void Lanes_Surfaces(SceneParams scene, const __global Material* materials
     lh->nee = Path_UsesNee(mode) && !emissionOnly ? lh->diffuse : 0;
     lh->bounce = !emissionOnly && !(lastVertex && !(mode & CLRT_PATH_MIS)) ? (lh->specular | lh->diffuse) : 0;
     lh->lastVertex = lastVertex ? g->hitBits : 0;
+    lh->glossy = glossy & lh->diffuse & (lh->nee | lh->bounce);
+    if (lh->glossy) Lanes_GlossyPoints(materials, lh->glossy, lh, dirs);
 }
 
 /* Which of the lanes in okBits see the shadow ray from org along unit dir unblocked up to tMax
@@ -372,12 +393,30 @@ inline void Lanes_MeshLightSample(const __global Light* light, const __global fl
 }
 #endif
 
-/* The lanes' light samples of light `light` (LightMesh or PointLight) at their shading points: as
- * Light_ShadowRays and Fused_Shadow, the unoccluded contributions (MIS-weighted, times the throughput). */
-inline LaneV3 Lanes_LightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) const __global Light* light, int neeBits,
-                                LaneV3 p, LaneV3 ng, LaneV3 ns, LaneV3 f, LaneV3 throughput, uint strat, LaneU sample,
-                                uint dim) {
-    const LaneV3 zero = LaneV3_Splat((float3)(0.0f));
+/* f·cosθ towards wi and Path_BouncePdf's density of wi at the glossy lanes' hits, per lane (Shadow_Make's
+ * Material_EvalDirect, Path_LightSampleWeight's pdf); the other lanes keep *fCos and *bouncePdf. */
+inline void Lanes_GlossyLightTerms(const __global Material* materials, int mode, int glossy, const ShadingPoint* sp,
+                                   LaneV3 wi, LaneF cosTheta, LaneV3* fCos, LaneF* bouncePdf) {
+    float3 w[CLRT_LANES], fc[CLRT_LANES];
+    float c[CLRT_LANES], pdf[CLRT_LANES];
+    LaneV3_Store(wi, w);
+    LaneV3_Store(*fCos, fc);
+    vstore4(cosTheta, 0, c);
+    vstore4(*bouncePdf, 0, pdf);
+    for (int k = 0; k < CLRT_LANES; ++k) {
+        if (!((glossy >> k) & 1)) continue;
+        fc[k] = c[k] > 0.0f ? Material_EvalDirect(sp[k], materials, w[k], c[k]) : (float3)(0.0f);
+        pdf[k] = Path_BouncePdf(sp[k], materials, mode, w[k]);
+    }
+    *fCos = LaneV3_Load(fc);
+    *bouncePdf = vload4(0, pdf);
+}
+
+/* The lanes' light samples of light `light` (LightMesh or PointLight) at their hits (those in hit->nee):
+ * as Light_ShadowRays and Fused_Shadow, the unoccluded contributions (MIS-weighted, times the throughput). */
+inline LaneV3 Lanes_LightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) const __global Light* light, const LanesHit* hit,
+                                LaneV3 throughput, uint strat, LaneU sample, uint dim) {
+    const LaneV3 zero = LaneV3_Splat((float3)(0.0f)), p = hit->p, ng = hit->ng, ns = hit->ns;
     LaneV3 wi, e;
     LaneF dist;
     const int mesh = light->kind == LIGHT_MESH;
@@ -398,13 +437,16 @@ inline LaneV3 Lanes_LightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) const
         e = LaneV3_Scale(LaneV3_Splat(light->radiance.xyz), select((LaneF)(0.0f), 1.0f / d2, d2 > 0.0f));
     }
     /* Shadow_Make */
-    const LaneF cosTheta = LaneV3_Dot(ns, wi);
-    LaneI ok = Lane_FromBits(neeBits) & (cosTheta > 0.0f) & (LaneV3_Max(e) > 0.0f);
-    LaneV3 contrib = LaneV3_FiniteOrZero(LaneV3_Mul(LaneV3_Mul(throughput, LaneV3_Scale(f, cosTheta)), e));
     const int mode = scene.pathMode;
+    const LaneF cosTheta = LaneV3_Dot(ns, wi);
+    LaneI ok = Lane_FromBits(hit->nee) & (cosTheta > 0.0f) & (LaneV3_Max(e) > 0.0f);
+    LaneV3 fCos = LaneV3_Scale(hit->f, cosTheta);
+    LaneF bouncePdf = Path_UsesImportance(mode) ? cosTheta * CLRT_INV_PI : (LaneF)(0.5f * CLRT_INV_PI);
+    if (hit->glossy & hit->nee)
+        Lanes_GlossyLightTerms(materials, mode, hit->glossy & hit->nee, hit->sp, wi, cosTheta, &fCos, &bouncePdf);
+    LaneV3 contrib = LaneV3_FiniteOrZero(LaneV3_Mul(LaneV3_Mul(throughput, fCos), e));
     if (mesh && (mode & CLRT_PATH_MIS)) { /* Path_LightSampleWeight: a point light's weight is 1 */
         const LaneF lightPdf = maxComponent(light->radiance.xyz) / LaneV3_Max(e);
-        const LaneF bouncePdf = Path_UsesImportance(mode) ? cosTheta * CLRT_INV_PI : (LaneF)(0.5f * CLRT_INV_PI);
         contrib = LaneV3_Scale(contrib, Lanes_MisWeight(mode, lightPdf, select((LaneF)(0.0f), bouncePdf, cosTheta > 0.0f)));
     }
     /* The ray: from Ray_EpsilonOrigin aimed at the light's point, as long as from p (a mesh light's:
@@ -423,11 +465,31 @@ inline LaneV3 Lanes_LightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) const
     return LaneV3_Select(zero, contrib, Lane_FromBits(open));
 }
 
-/* The lanes' non-specular bounces (Path_SampleBounce, no BRDF lobe), picked with probability 1 − pSpecular:
- * *dir, *pdf and the new throughput; the lanes in the returned bits carry a child. */
-inline int Lanes_Bounce(int mode, int bounceBits, LaneV3 ng, LaneV3 ns, LaneV3 f, LaneF pSpecular, LaneF u1, LaneF u2,
-                        LaneV3* throughput, LaneV3* dir, LaneF* pdf) {
+/* Path_SampleBounce at the glossy lanes' hits, per lane, with the lanes' sample u: their *dir, *pdf and
+ * *fCos (0 where the sample carries nothing); the other lanes keep theirs. */
+inline void Lanes_GlossyBounces(const __global Material* materials, int mode, int glossy, const ShadingPoint* sp, LaneF u1,
+                                LaneF u2, LaneV3* dir, LaneF* pdf, LaneV3* fCos) {
+    float3 d[CLRT_LANES], fc[CLRT_LANES];
+    float a[CLRT_LANES], b[CLRT_LANES], pd[CLRT_LANES];
+    LaneV3_Store(*dir, d);
+    LaneV3_Store(*fCos, fc);
+    vstore4(u1, 0, a);
+    vstore4(u2, 0, b);
+    vstore4(*pdf, 0, pd);
+    for (int k = 0; k < CLRT_LANES; ++k)
+        if ((glossy >> k) & 1) fc[k] = Path_SampleBounce(sp[k], materials, mode, (float2)(a[k], b[k]), &d[k], &pd[k]);
+    *dir = LaneV3_Load(d);
+    *fCos = LaneV3_Load(fc);
+    *pdf = vload4(0, pd);
+}
+
+/* The lanes' non-specular bounces (Path_SampleBounce; the glossy lanes' per lane) for the lanes in
+ * bounceBits, picked with probability 1 − pSpecular: *dir, *pdf and the new throughput; the lanes in the
+ * returned bits carry a child. */
+inline int Lanes_Bounce(const __global Material* materials, int mode, int bounceBits, const LanesHit* hit, LaneF pSpecular,
+                        LaneF u1, LaneF u2, LaneV3* throughput, LaneV3* dir, LaneF* pdf) {
     const int cosine = Path_UsesImportance(mode);
+    const LaneV3 ng = hit->ng, ns = hit->ns;
     LaneF c2, s2;
     Lanes_SinCos2Pi(u2, &c2, &s2);
     LaneF lx, ly, lz;
@@ -442,10 +504,11 @@ inline int Lanes_Bounce(int mode, int bounceBits, LaneV3 ng, LaneV3 ns, LaneV3 f
     Lanes_Basis(ns, &t, &bt);
     *dir = LaneV3_Normalize(LaneV3_Add(LaneV3_Add(LaneV3_Scale(t, lx), LaneV3_Scale(bt, ly)), LaneV3_Scale(ns, lz)));
     *pdf = cosine ? lz * CLRT_INV_PI : (LaneF)(0.5f * CLRT_INV_PI);
-    const LaneF c = LaneV3_Dot(ns, *dir);
-    const LaneI ok = Lane_FromBits(bounceBits) & (c > 0.0f) & (LaneV3_Dot(ng, *dir) > 0.0f) & (*pdf > 0.0f) &
-                     LaneV3_Finite(*dir);
-    const LaneV3 fCos = LaneV3_Scale(f, c);
+    LaneV3 fCos = LaneV3_Scale(hit->f, LaneV3_Dot(ns, *dir));
+    if (hit->glossy & bounceBits)
+        Lanes_GlossyBounces(materials, mode, hit->glossy & bounceBits, hit->sp, u1, u2, dir, pdf, &fCos);
+    const LaneI ok = Lane_FromBits(bounceBits) & (LaneV3_Dot(ns, *dir) > 0.0f) & (LaneV3_Dot(ng, *dir) > 0.0f) &
+                     (*pdf > 0.0f) & LaneV3_Finite(*dir);
     const LaneF q = *pdf * (1.0f - pSpecular);
     const LaneV3 weight = LaneV3_Make(fCos.x / q, fCos.y / q, fCos.z / q); /* f·cosθ / (pdf·(1 − pSpecular)) */
     *throughput = LaneV3_Mul(*throughput, weight);
@@ -548,8 +611,8 @@ inline uint Lanes_Paths(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int pixel, in
         LaneV3 sum = hit.radiance;
         if (hit.nee)
             for (int l = 0; l < scene.numLights; ++l)
-                sum = LaneV3_Add(sum, Lanes_LightSample(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) & lights[l], hit.nee, hit.p,
-                                                        hit.ng, hit.ns, hit.f, throughput, strat, sample, dim + 8u + 2u * (uint)l));
+                sum = LaneV3_Add(sum, Lanes_LightSample(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) & lights[l], &hit, throughput,
+                                                        strat, sample, dim + 8u + 2u * (uint)l));
         float3 out[CLRT_LANES];
         LaneV3_Store(sum, out);
         for (int k = 0; k < CLRT_LANES; ++k) /* as render_fused: per depth, in sample order */
@@ -562,8 +625,8 @@ inline uint Lanes_Paths(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int pixel, in
         LaneF u1, u2, pdf;
         Lanes_Stratified2D(strat, sample, dim + 5u, &u1, &u2);
         LaneV3 dir;
-        const int diffuseBits = Lanes_Bounce(mode, live & ~specBits, hit.ng, hit.ns, hit.f, vload4(0, pSpec), u1, u2,
-                                             &throughput, &dir, &pdf);
+        const int diffuseBits = Lanes_Bounce(materials, mode, live & ~specBits, &hit, vload4(0, pSpec), u1, u2, &throughput,
+                                             &dir, &pdf);
         float pdfs[CLRT_LANES];
         LaneV3_Store(LaneV3_Add(hit.p, LaneV3_Scale(hit.ng, Lanes_OffsetDistance(hit.p))), org); /* Ray_OffsetOrigin */
         LaneV3_Store(dir, dirs);

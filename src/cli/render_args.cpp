@@ -76,7 +76,7 @@ const char* const kRenderHelp =
     "                        mis (default: the scene's sampler=, else mis)\n"
     "  --pipeline P          fused (one kernel per sample pass), lanes (fused, four paths per\n"
     "                        work-item in vector lanes: path-traced scenes of LightMesh and point\n"
-    "                        lights, materials without a Phong/BRDF lobe; else fused), wavefront (a\n"
+    "                        lights, no textures or instances; else fused), wavefront (a\n"
     "                        kernel per stage) or auto (default: lanes where it can, else fused, on\n"
     "                        CPU devices for images of >= 1024 pixels; wavefront otherwise); the image\n"
     "                        is the same either way (lanes: up to rounding); -v says which rendered\n"

@@ -48,23 +48,6 @@ std::string lanesFamily(const DeviceScene& ds) {
     if (f.lightKinds & ~(mesh | point)) return "lights other than LightMesh and PointLight";
     if (f.textures || f.normalMaps || f.bumpMaps || f.mipMaps || f.motionBlur || f.instances)
         return "textures, motion blur or instances";
-    auto plain = [&](int k) {  // its non-specular part's f is direction-free (lanes.cl, Lanes_MaterialF)
-        if (k < 0 || size_t(k) >= ds.materials.size()) return false;
-        const dev::Material& m = ds.materials[size_t(k)];
-        // The BRDFs whose value at ks = 0 is kd or kd/π: a new BRDF joins only when it is one of them.
-        const bool knownBrdf = m.brdf == CLRT_INVALID || m.brdf == dev::BRDF_ORIGINAL_PHONG ||
-                               m.brdf == dev::BRDF_ORIGINAL_BLINN_PHONG || m.brdf == dev::BRDF_MODIFIED_PHONG ||
-                               m.brdf == dev::BRDF_MODIFIED_BLINN_PHONG ||
-                               (m.brdf == dev::BRDF_TORRANCE_SPARROW && !(m.brdfFlags & CLRT_BRDF_KD_FRESNEL));
-        return m.specular.x == 0.0f && m.specular.y == 0.0f && m.specular.z == 0.0f && knownBrdf;
-    };
-    const char* specular = "a material with a specular (Phong or BRDF) lobe";
-    for (int i = 0; i < ds.params.numTriangles; ++i)  // not the arrays' dummy entries (flattenGeometry)
-        if (!plain(ds.triangleShading[size_t(i)].material)) return specular;
-    for (int i = 0; i < ds.params.numSpheres; ++i)
-        if (!plain(ds.spheres[size_t(i)].material)) return specular;
-    for (const dev::Plane& pl : ds.planes)  // the dummy plane has a zero normal and is never hit
-        if ((pl.normal.x != 0.0f || pl.normal.y != 0.0f || pl.normal.z != 0.0f) && !plain(pl.material)) return specular;
     return "";
 }
 

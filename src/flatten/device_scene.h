@@ -108,10 +108,8 @@ std::vector<dev::float4> imageTexels(const DeviceScene& ds, int image);
 
 // Camera frame and image plane for the kernels, and numSamples.
 // Whether a flattened scene is of the lanes kernel's family (cl_kernels/lanes.cl, render_lanes): a
-// path-traced camera; LightMesh and point lights only; no textures, motion blur or instances; and every
-// material a shape uses without a specular lobe (ks = 0, a BRDF whose value is then kd or kd/π: its
-// non-specular f is direction-free; mirrors, conductors and dielectrics are in). "" when it is, else the
-// first reason it is not.
+// path-traced camera; LightMesh and point lights only; no textures, motion blur or instances (every
+// material and BRDF is in). "" when it is, else the first reason it is not.
 std::string lanesFamily(const DeviceScene& ds);
 
 dev::CameraParams makeCameraParams(const Camera& cam);

@@ -16,6 +16,16 @@ static void flattenBrdf(const Scene& scene, const Material& m, dev::Material& d,
     features.add(b.type);
 }
 
+// Whether d's non-specular f is direction-free (CLRT_BRDF_LAMBERTIAN): ks = 0, and no BRDF or one of those
+// whose value at ks = 0 is kd or kd/π. A new BRDF joins the list only when it is one of them.
+static bool materialIsLambertian(const dev::Material& d) {
+    const bool knownBrdf = d.brdf == CLRT_INVALID || d.brdf == dev::BRDF_ORIGINAL_PHONG ||
+                           d.brdf == dev::BRDF_ORIGINAL_BLINN_PHONG || d.brdf == dev::BRDF_MODIFIED_PHONG ||
+                           d.brdf == dev::BRDF_MODIFIED_BLINN_PHONG ||
+                           (d.brdf == dev::BRDF_TORRANCE_SPARROW && !(d.brdfFlags & CLRT_BRDF_KD_FRESNEL));
+    return d.specular.x == 0.0f && d.specular.y == 0.0f && d.specular.z == 0.0f && knownBrdf;
+}
+
 void flattenMaterials(const Scene& scene, DeviceScene& ds) {
     for (const Material& m : scene.materials) {
         dev::Material d{};
@@ -30,6 +40,7 @@ void flattenMaterials(const Scene& scene, DeviceScene& ds) {
         d.roughness = m.roughness;
         d.kind = m.type;
         flattenBrdf(scene, m, d, ds.features);
+        if (materialIsLambertian(d)) d.brdfFlags |= CLRT_BRDF_LAMBERTIAN;
         ds.materials.push_back(d);
         ds.features.add(m.type);
     }

@@ -537,16 +537,17 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     const FusedPlan fusedPlan{plan.group, plan.lightSlots, plan.bounces, plan.maxChildren > 1};
     std::string why;
     Pipeline pipeline = choosePipeline(settings.pipeline, m.dc.info(), numPixels, &why);
-    const bool fusedFamily = pipeline == Pipeline::Fused || pipeline == Pipeline::Lanes;
-    const std::string notFused = fusedFamily ? fusedUnsupported(sp, fusedPlan) : "";
-    if (!notFused.empty()) pipeline = Pipeline::Wavefront;
-    // Lanes where the camera can have it: on request, and by default on CPU devices (auto chose fused)
+    // Lanes where the camera can have it: on request, and by default on CPU devices (auto chose fused).
+    // They also take cameras whose depths outnumber render_fused's per-depth sums (roulette, several
+    // samples per group): their sums put the deepest levels together, which changes only rounding.
     std::string notLanes;
     if (pipeline == Pipeline::Lanes || (pipeline == Pipeline::Fused && settings.pipeline == Pipeline::Auto)) {
         notLanes = lanesUnsupported(sp, fusedPlan, m.fused.lanesKernel() ? "" : lanesFamilyOrBuild(m.ds),
                                     (m.dc.info().type & CL_DEVICE_TYPE_CPU) != 0);
         pipeline = notLanes.empty() ? Pipeline::Lanes : Pipeline::Fused;
     }
+    const std::string notFused = pipeline == Pipeline::Fused ? fusedUnsupported(sp, fusedPlan) : "";
+    if (!notFused.empty()) pipeline = Pipeline::Wavefront;
     if (verbose())
         info("camera " + std::to_string(cam.id) + " on " + m.dc.info().name + ": pipeline " + pipelineName(pipeline) +
              " (" + why + ")" + (notFused.empty() ? "" : "; not fused: " + notFused) +

@@ -234,12 +234,16 @@ typedef struct Material {
     int kind;           /* MaterialKind */
     int brdf;           /* BrdfKind, or CLRT_INVALID: the classic Blinn-Phong terms */
     float brdfExponent; /* the BRDF's Exponent (Torrance-Sparrow: of the distribution) */
-    int brdfFlags;      /* CLRT_BRDF_NORMALIZED | CLRT_BRDF_KD_FRESNEL */
+    int brdfFlags;      /* CLRT_BRDF_NORMALIZED | CLRT_BRDF_KD_FRESNEL | CLRT_BRDF_LAMBERTIAN */
 } Material;
 
 /* Material.brdfFlags */
 #define CLRT_BRDF_NORMALIZED 1
 #define CLRT_BRDF_KD_FRESNEL 2
+/* Set by flattening (flatten_materials.cpp, materialIsLambertian) on a material whose non-specular f is
+ * direction-free: ks = 0 and no BRDF or one whose value is then kd or kd/π. render_lanes evaluates it
+ * once per hit instead of per direction (cl_kernels/lanes.cl). */
+#define CLRT_BRDF_LAMBERTIAN 4
 
 typedef struct TextureMap {
     float4 blackColor;
