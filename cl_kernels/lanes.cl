@@ -11,9 +11,10 @@
  *     ObjectLight_AimShadow) and the bounce (Path_SampleBounce, Path_Child).
  * It computes what render_fused computes for the same random streams, up to rounding (tests/test_lanes.cpp):
  * one lane is one path of the fused kernel. Scenes of its family only (src/flatten/device_scene.h
- * lanesFamily, src/render/fused_renderer.h lanesUnsupported): LightMesh and point lights, the stratified
- * sampler, no textures, motion blur or instances; every material: a direction-free f (CLRT_BRDF_LAMBERTIAN)
- * in lanes, a glossy one per lane (Lanes_GlossyLightTerms, Lanes_GlossyBounces). Why lanes: a path's
+ * lanesFamily, src/render/fused_renderer.h lanesUnsupported): the stratified sampler, one light slot, no
+ * textures, motion blur or instances; every material (a direction-free f, CLRT_BRDF_LAMBERTIAN, in lanes;
+ * a glossy one per lane: Lanes_GlossyLightTerms, Lanes_GlossyBounces) and every light (LightMesh and point
+ * lights in lanes, the others per lane: Lanes_ScalarLightSample). Why lanes: a path's
  * shading is a chain of dependent sqrt, division, sin/cos and loads; four paths go through it as one
  * chain of vector instructions (docs/studies/2026-12-05-simd-lanes-prototype.md).
  * Reads: the scene's geometry, materials and lights; writes: image, and rayCounts[0] += the bounce rays. */
@@ -130,10 +131,12 @@ inline LaneF Lanes_MisWeight(int mode, LaneF pa, LaneF pb) {
 
 /* The lanes' closest hits as Lanes_Closest gathers them: a triangle's corners, corner normals (smooth
  * triangles) and barycentrics; another primitive's surface from Surface_FromHit (p in v0, ng in n0, ns in
- * n1); the radiance of a miss (Shade_Miss). Bits: the lanes that hit, hit a triangle, a smooth one. */
+ * n1) and emission; the radiance of a miss (Shade_Miss). Bits: the lanes that hit, hit a triangle, a smooth one. */
 typedef struct {
     float3 v0[CLRT_LANES], v1[CLRT_LANES], v2[CLRT_LANES], n0[CLRT_LANES], n1[CLRT_LANES], n2[CLRT_LANES];
     float3 radiance[CLRT_LANES];
+    float3 emitted[CLRT_LANES]; /* a sphere's or plane's: Path_HitEmission (a LightSphere), with lightPdf */
+    float lightPdf[CLRT_LANES];
     float b1[CLRT_LANES], b2[CLRT_LANES], t[CLRT_LANES];
     int material[CLRT_LANES], light[CLRT_LANES];
     int hitBits, triBits, smoothBits;
@@ -150,7 +153,8 @@ typedef struct {
     int material[CLRT_LANES];
     int nee, bounce, specular, diffuse, inside, lastVertex;
     int glossy;                   /* diffuse lanes whose f depends on the directions (not CLRT_BRDF_LAMBERTIAN) */
-    ShadingPoint sp[CLRT_LANES];  /* the glossy lanes' (ShadingPoint_Make's): their f and pdfs per lane */
+    ShadingPoint sp[CLRT_LANES];  /* ShadingPoint_Make's, for the per-lane code: the glossy lanes' (their f and
+                                     pdfs), every nee lane's where a light has no lane form */
 } LanesHit;
 
 /* The closest hits of the live lanes' rays (Ray_Closest) and what Lanes_Surfaces reads of them, per lane:
@@ -161,6 +165,8 @@ inline void Lanes_Closest(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int live, c
     for (int k = 0; k < CLRT_LANES; ++k) {
         g->v0[k] = g->v1[k] = g->v2[k] = g->n0[k] = g->n1[k] = g->n2[k] = g->radiance[k] = (float3)(0.0f);
         g->b1[k] = g->b2[k] = g->t[k] = 0.0f;
+        g->emitted[k] = (float3)(0.0f);
+        g->lightPdf[k] = -1.0f;
         g->material[k] = 0;
         g->light[k] = CLRT_INVALID;
         if (!(live & (1 << k))) continue;
@@ -188,11 +194,15 @@ inline void Lanes_Closest(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int live, c
             g->material[k] = sh->material;
             g->light[k] = sh->light;
             g->triBits |= 1 << k;
-        } else { /* a sphere or a plane (no LightSphere in this family: neither emits) */
+        } else { /* a sphere or a plane: Surface_FromHit and Path_HitEmission, per lane */
             HitTriangle unread;
             const SurfaceHit s = Surface_FromHit(h, ray[k], &unread, spheres, planes, scene.numTriangles, scene.numSpheres);
             g->v0[k] = s.p; g->n0[k] = s.ng; g->n1[k] = s.ns;
             g->material[k] = s.material;
+#if defined(CLRT_HAS_LIGHT_MESH) || defined(CLRT_HAS_LIGHT_SPHERE)
+            g->emitted[k] = Path_HitEmission(h.prim, s.frontFacing, scene, triShading, spheres, lights, s.p, s.dir, s.t, s.ng,
+                                             path[k].throughput.w, &g->lightPdf[k]);
+#endif
         }
     }
 }
@@ -239,14 +249,14 @@ inline LaneF Lanes_EmissionWeight(int mode, LaneF bsdfPdf, LaneF lightPdf) {
     return select(w, (LaneF)(1.0f), !(bsdfPdf > 0.0f));
 }
 
-/* The ShadingPoints (ShadingPoint_Make) of the glossy lanes' hits. */
-inline void Lanes_GlossyPoints(const __global Material* materials, int glossy, LanesHit* lh, const float3* dirs) {
+/* The ShadingPoints (ShadingPoint_Make) of the hits of the lanes in `lanes`. */
+inline void Lanes_ShadingPoints(const __global Material* materials, int lanes, LanesHit* lh, const float3* dirs) {
     float3 p[CLRT_LANES], ng[CLRT_LANES], ns[CLRT_LANES];
     LaneV3_Store(lh->p, p);
     LaneV3_Store(lh->ng, ng);
     LaneV3_Store(lh->ns, ns);
     for (int k = 0; k < CLRT_LANES; ++k) {
-        if (!((glossy >> k) & 1)) continue;
+        if (!((lanes >> k) & 1)) continue;
         const Material m = materials[lh->material[k]];
         lh->sp[k] = ShadingPoint_Make(p[k], ns[k], ng[k], -dirs[k], m.diffuse.xyz, m.specular.xyz, m, lh->material[k]);
     }
@@ -254,9 +264,10 @@ inline void Lanes_GlossyPoints(const __global Material* materials, int glossy, L
 
 /* The gathered hits (Lanes_Closest) as Shade_Hit's path branch sees them, up to Path_ShadeHit's light-sample
  * and bounce decisions: geometry, facing and emission (Path_HitEmission: LightMesh, weighted by
- * Path_EmissionWeight) in lanes, the materials per lane. depth: the lanes' (they step together). */
+ * Path_EmissionWeight) in lanes, the materials per lane. depth: the lanes' (they step together);
+ * scalarLights: some light has no lane form (the nee lanes get ShadingPoints). */
 inline void Lanes_Surfaces(SceneParams scene, const __global Material* materials, const __global Light* lights,
-                           const LanesGather* g, int depth, const PathState* path, const Ray* ray, LanesHit* lh) {
+                           int scalarLights, const LanesGather* g, int depth, const PathState* path, const Ray* ray, LanesHit* lh) {
     float3 dirs[CLRT_LANES], thr[CLRT_LANES], fMat[CLRT_LANES], emit[CLRT_LANES];
     float bsdfPdf[CLRT_LANES], area[CLRT_LANES];
     int dielectric = 0, plain = 0, brdf = 0, glossy = 0;
@@ -297,9 +308,12 @@ inline void Lanes_Surfaces(SceneParams scene, const __global Material* materials
     lh->ns = LaneV3_Select(LaneV3_Scale(ns, -1.0f), ns, front);
     const int mode = scene.pathMode;
     const LaneF t = vload4(0, g->t), A = vload4(0, area), cosL = fabs(LaneV3_Dot(ngRaw, dir));
-    const LaneF lightPdf = select((LaneF)(0.0f), t * t / (A * cosL), (cosL > 0.0f) & (A > 0.0f));
+    const LaneI tri = Lane_FromBits(g->triBits);
+    LaneF lightPdf = select((LaneF)(0.0f), t * t / (A * cosL), (cosL > 0.0f) & (A > 0.0f));
+    lightPdf = select(vload4(0, g->lightPdf), lightPdf, tri);
     const LaneF weight = Lanes_EmissionWeight(mode, vload4(0, bsdfPdf), lightPdf); /* emit 0 where no light */
-    const LaneV3 radiance = LaneV3_FiniteOrZero(LaneV3_Scale(LaneV3_Mul(LaneV3_Load(thr), LaneV3_Load(emit)), weight));
+    const LaneV3 emitted = LaneV3_Select(LaneV3_Load(g->emitted), LaneV3_Load(emit), tri);
+    const LaneV3 radiance = LaneV3_FiniteOrZero(LaneV3_Scale(LaneV3_Mul(LaneV3_Load(thr), emitted), weight));
     lh->radiance = LaneV3_Select(LaneV3_Load(g->radiance), radiance, Lane_FromBits(g->hitBits));
     /* a BRDF is 0 where wo lies below ns (Brdf_Eval) */
     const LaneI fZero = Lane_FromBits(brdf) & !(LaneV3_Dot(lh->ns, dir) < 0.0f);
@@ -311,7 +325,8 @@ inline void Lanes_Surfaces(SceneParams scene, const __global Material* materials
     lh->bounce = !emissionOnly && !(lastVertex && !(mode & CLRT_PATH_MIS)) ? (lh->specular | lh->diffuse) : 0;
     lh->lastVertex = lastVertex ? g->hitBits : 0;
     lh->glossy = glossy & lh->diffuse & (lh->nee | lh->bounce);
-    if (lh->glossy) Lanes_GlossyPoints(materials, lh->glossy, lh, dirs);
+    const int points = lh->glossy | (scalarLights ? lh->nee : 0);
+    if (points) Lanes_ShadingPoints(materials, points, lh, dirs);
 }
 
 /* Which of the lanes in okBits see the shadow ray from org along unit dir unblocked up to tMax
@@ -465,6 +480,27 @@ inline LaneV3 Lanes_LightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) const
     return LaneV3_Select(zero, contrib, Lane_FromBits(open));
 }
 
+/* Whether light l's samples have a lane form (Lanes_LightSample): LightMesh and point lights. */
+inline int Lanes_HasLaneForm(const __global Light* light) { return light->kind == LIGHT_MESH || light->kind == LIGHT_POINT; }
+
+/* Light l's samples at the lanes in hit->nee through clrt's scalar Light_ShadowRays and Fused_Shadow, per lane
+ * (the light kinds without a lane form: area, sphere, spot and directional lights, environment maps with
+ * one light slot): each lane's path, ShadingPoint and random stream as render_fused's. */
+inline LaneV3 Lanes_ScalarLightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int l, const LanesHit* hit,
+                                      const PathState* path, int pixel) {
+    float3 out[CLRT_LANES];
+    for (int k = 0; k < CLRT_LANES; ++k) {
+        out[k] = (float3)(0.0f);
+        if (!((hit->nee >> k) & 1)) continue;
+        const RngKey key = Rng_Key(scene.seed, pixel, path[k].sample, path[k].pathId);
+        ShadowRay sr, unused;
+        Light_ShadowRays(scene, path[k], hit->sp[k], l, 1, key, materials, lights, images, texels, envDist, lightData, &sr,
+                         &unused);
+        out[k] = Fused_Shadow(sr, scene, nodes, leaves, tris, spheres, planes, instances).xyz;
+    }
+    return LaneV3_Load(out);
+}
+
 /* Path_SampleBounce at the glossy lanes' hits, per lane, with the lanes' sample u: their *dir, *pdf and
  * *fCos (0 where the sample carries nothing); the other lanes keep theirs. */
 inline void Lanes_GlossyBounces(const __global Material* materials, int mode, int glossy, const ShadingPoint* sp, LaneF u1,
@@ -597,22 +633,25 @@ inline uint Lanes_Paths(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int pixel, in
     }
     const LaneU sample = as_uint4(vload4(0, sampleIdx));
     const int mode = scene.pathMode;
+    int scalarLights = 0;
+    for (int l = 0; l < scene.numLights; ++l) scalarLights |= !Lanes_HasLaneForm(&lights[l]);
     uint secondary = 0;
     for (int depth = 0; live; ++depth) {
         LanesGather g;
         Lanes_Closest(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) live, path, ray, &g);
         LanesHit hit;
-        Lanes_Surfaces(scene, materials, lights, &g, depth, path, ray, &hit);
+        Lanes_Surfaces(scene, materials, lights, scalarLights, &g, depth, path, ray, &hit);
         float3 thr[CLRT_LANES];
         for (int k = 0; k < CLRT_LANES; ++k) thr[k] = path[k].throughput.xyz;
         LaneV3 throughput = LaneV3_Load(thr);
         const uint strat = Rng_Key(scene.seed, pixel, 0, path[0].pathId).strat; /* the lanes' shared path id */
         const uint dim = 4u + 32u * (uint)depth;
         LaneV3 sum = hit.radiance;
-        if (hit.nee)
-            for (int l = 0; l < scene.numLights; ++l)
-                sum = LaneV3_Add(sum, Lanes_LightSample(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) & lights[l], &hit, throughput,
-                                                        strat, sample, dim + 8u + 2u * (uint)l));
+        for (int l = 0; l < scene.numLights && hit.nee; ++l)
+            sum = LaneV3_Add(sum, Lanes_HasLaneForm(&lights[l])
+                                      ? Lanes_LightSample(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) & lights[l], &hit,
+                                                          throughput, strat, sample, dim + 8u + 2u * (uint)l)
+                                      : Lanes_ScalarLightSample(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) l, &hit, path, pixel));
         float3 out[CLRT_LANES];
         LaneV3_Store(sum, out);
         for (int k = 0; k < CLRT_LANES; ++k) /* as render_fused: per depth, in sample order */

@@ -44,8 +44,6 @@ std::vector<std::string> FeatureSet::defines() const {
 std::string lanesFamily(const DeviceScene& ds) {
     const FeatureSet& f = ds.features;
     if (!f.pathTracing) return "no path-traced camera";
-    const uint32_t mesh = 1u << dev::LIGHT_MESH, point = 1u << dev::LIGHT_POINT;
-    if (f.lightKinds & ~(mesh | point)) return "lights other than LightMesh and PointLight";
     if (f.textures || f.normalMaps || f.bumpMaps || f.mipMaps || f.motionBlur || f.instances)
         return "textures, motion blur or instances";
     return "";
