@@ -12,9 +12,11 @@
  * It computes what render_fused computes for the same random streams, up to rounding (tests/test_lanes.cpp):
  * one lane is one path of the fused kernel. Scenes of its family only (src/flatten/device_scene.h
  * lanesFamily, src/render/fused_renderer.h lanesUnsupported): the stratified sampler, one light slot, no
- * textures, motion blur or instances; every material (a direction-free f, CLRT_BRDF_LAMBERTIAN, in lanes;
- * a glossy one per lane: Lanes_GlossyLightTerms, Lanes_GlossyBounces) and every light (LightMesh and point
- * lights in lanes, the others per lane: Lanes_ScalarLightSample). Why lanes: a path's
+ * motion blur or mip-maps; every surface (a plain world-space triangle's in lanes, the others per lane:
+ * Lanes_ScalarSurface, textures and instances included), every material (a direction-free f,
+ * CLRT_BRDF_LAMBERTIAN, in lanes; a glossy or textured one per lane: Lanes_GlossyLightTerms,
+ * Lanes_GlossyBounces) and every light (LightMesh and point lights in lanes, the others per lane:
+ * Lanes_ScalarLightSample). Why lanes: a path's
  * shading is a chain of dependent sqrt, division, sin/cos and loads; four paths go through it as one
  * chain of vector instructions (docs/studies/2026-12-05-simd-lanes-prototype.md).
  * Reads: the scene's geometry, materials and lights; writes: image, and rayCounts[0] += the bounce rays. */
@@ -129,17 +131,20 @@ inline LaneF Lanes_MisWeight(int mode, LaneF pa, LaneF pb) {
 
 /* ---- one depth of the lanes' paths ----------------------------------------------------------- */
 
-/* The lanes' closest hits as Lanes_Closest gathers them: a triangle's corners, corner normals (smooth
- * triangles) and barycentrics; another primitive's surface from Surface_FromHit (p in v0, ng in n0, ns in
- * n1) and emission; the radiance of a miss (Shade_Miss). Bits: the lanes that hit, hit a triangle, a smooth one. */
+/* The lanes' closest hits as Lanes_Closest gathers them: a plain world-space triangle's corners, corner
+ * normals (smooth triangles) and barycentrics (triBits: the lane code makes its surface); any other hit's
+ * surface made per lane (Lanes_ScalarSurface: p in v0, ng in n0, ns in n1, facing as Shade_Hit leaves them)
+ * and emission; every hit's kd and ks (textureBits: from its textures); the radiance of a miss (Shade_Miss)
+ * or of a replace_all texture. hitBits: the lanes with a surface to shade. */
 typedef struct {
     float3 v0[CLRT_LANES], v1[CLRT_LANES], v2[CLRT_LANES], n0[CLRT_LANES], n1[CLRT_LANES], n2[CLRT_LANES];
     float3 radiance[CLRT_LANES];
-    float3 emitted[CLRT_LANES]; /* a sphere's or plane's: Path_HitEmission (a LightSphere), with lightPdf */
+    float3 emitted[CLRT_LANES]; /* a per-lane surface's: Path_HitEmission (a LightSphere), with lightPdf */
     float lightPdf[CLRT_LANES];
+    float3 kd[CLRT_LANES], ks[CLRT_LANES]; /* the material's, or its textures' */
     float b1[CLRT_LANES], b2[CLRT_LANES], t[CLRT_LANES];
     int material[CLRT_LANES], light[CLRT_LANES];
-    int hitBits, triBits, smoothBits;
+    int hitBits, triBits, smoothBits, textureBits;
 } LanesGather;
 
 /* What the lanes' hits give the lane code (Lanes_Surfaces): the point and normals (facing the ray, as
@@ -157,15 +162,51 @@ typedef struct {
                                      pdfs), every nee lane's where a light has no lane form */
 } LanesHit;
 
+/* Shade_Hit's surface for lane k's hit h (an instance's triangle, a textured one, a sphere or a plane):
+ * Surface_FromHit, the path tracer's facing, the textures (kd, ks, a bump or normal map's ns) and the
+ * emission, into g. A replace_all texture (before the depth cap) gives the lane its radiance and ends it. */
+inline void Lanes_ScalarSurface(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int k, Hit h, int instance, PathState path,
+                                Ray ray, LanesGather* g) {
+    HitTriangle ht;
+    if (h.prim < scene.numTriangles) HitTriangle_Load(h, instance, tris, triShading, triAttributes, instances, &ht);
+    SurfaceHit s = Surface_FromHit(h, ray, &ht, spheres, planes, scene.numTriangles, scene.numSpheres);
+    if (dot(s.ns, s.ng) < 0.0f) s.ns = -s.ns; /* Shade_OrientsNormalToRay: every material when path traced */
+    const __global Material* m = &materials[s.material];
+    float3 kd = m->diffuse.xyz, ks = m->specular.xyz, radiance = (float3)(0.0f);
+    int replaceAll = 0;
+#ifdef CLRT_HAS_TEXTURES
+    if (s.textureSet != CLRT_INVALID) {
+        replaceAll = Shade_Textures(h, &s, scene, &ht, spheres, planes, textureSets, textures, images, texels,
+                                    path.coneWidth, &kd, &ks, &radiance);
+        g->textureBits |= 1 << k;
+    }
+#endif
+    if (replaceAll && !(path.depth > scene.maxDepth)) { /* Shade_Hit's replace_all: no shading, no child */
+#ifdef CLRT_HAS_OBJECT_LIGHTS
+        radiance += ObjectLight_Emission(h.prim, s.frontFacing, scene.numTriangles, scene.numSpheres, triShading, spheres, lights);
+#endif
+        g->radiance[k] = path.throughput.xyz * radiance;
+        return;
+    }
+    g->hitBits |= 1 << k;
+    g->v0[k] = s.p; g->n0[k] = s.ng; g->n1[k] = s.ns;
+    g->kd[k] = kd; g->ks[k] = ks;
+    g->material[k] = s.material;
+#if defined(CLRT_HAS_LIGHT_MESH) || defined(CLRT_HAS_LIGHT_SPHERE)
+    g->emitted[k] = Path_HitEmission(h.prim, s.frontFacing, scene, triShading, spheres, lights, s.p, s.dir, s.t, s.ng,
+                                     path.throughput.w, &g->lightPdf[k]);
+#endif
+}
+
 /* The closest hits of the live lanes' rays (Ray_Closest) and what Lanes_Surfaces reads of them, per lane:
- * loads only, except at spheres and planes (Surface_FromHit) and misses (Shade_Miss). */
+ * loads only for plain triangles; Lanes_ScalarSurface for other hits, Shade_Miss for misses. */
 inline void Lanes_Closest(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int live, const PathState* path, const Ray* ray,
                           LanesGather* g) {
-    g->hitBits = g->triBits = g->smoothBits = 0;
+    g->hitBits = g->triBits = g->smoothBits = g->textureBits = 0;
     for (int k = 0; k < CLRT_LANES; ++k) {
         g->v0[k] = g->v1[k] = g->v2[k] = g->n0[k] = g->n1[k] = g->n2[k] = g->radiance[k] = (float3)(0.0f);
+        g->emitted[k] = g->kd[k] = g->ks[k] = (float3)(0.0f);
         g->b1[k] = g->b2[k] = g->t[k] = 0.0f;
-        g->emitted[k] = (float3)(0.0f);
         g->lightPdf[k] = -1.0f;
         g->material[k] = 0;
         g->light[k] = CLRT_INVALID;
@@ -178,32 +219,28 @@ inline void Lanes_Closest(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int live, c
             g->radiance[k] = res.radiance.xyz;
             continue;
         }
-        g->hitBits |= 1 << k;
         g->t[k] = h.t;
-        if (h.prim < scene.numTriangles) { /* HitTriangle_Load's fields that this family reads */
-            const __global Triangle* tri = &tris[h.prim];
-            const __global TriangleShading* sh = &triShading[h.prim];
-            g->v0[k] = tri->v0.xyz; g->v1[k] = tri->v1.xyz; g->v2[k] = tri->v2.xyz;
-            const uint attributes = sh->attributes;
-            if (attributes & CLRT_TRI_NORMALS) {
-                const __global float* corner = triAttributes + (attributes & CLRT_TRI_OFFSET_MASK);
-                g->n0[k] = vload3(0, corner); g->n1[k] = vload3(1, corner); g->n2[k] = vload3(2, corner);
-                g->smoothBits |= 1 << k;
-            }
-            g->b1[k] = h.u; g->b2[k] = h.v;
-            g->material[k] = sh->material;
-            g->light[k] = sh->light;
-            g->triBits |= 1 << k;
-        } else { /* a sphere or a plane: Surface_FromHit and Path_HitEmission, per lane */
-            HitTriangle unread;
-            const SurfaceHit s = Surface_FromHit(h, ray[k], &unread, spheres, planes, scene.numTriangles, scene.numSpheres);
-            g->v0[k] = s.p; g->n0[k] = s.ng; g->n1[k] = s.ns;
-            g->material[k] = s.material;
-#if defined(CLRT_HAS_LIGHT_MESH) || defined(CLRT_HAS_LIGHT_SPHERE)
-            g->emitted[k] = Path_HitEmission(h.prim, s.frontFacing, scene, triShading, spheres, lights, s.p, s.dir, s.t, s.ng,
-                                             path[k].throughput.w, &g->lightPdf[k]);
-#endif
+        if (h.prim >= scene.numTriangles || instance != CLRT_INVALID || triShading[h.prim].textureSet != CLRT_INVALID) {
+            Lanes_ScalarSurface(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) k, h, instance, path[k], ray[k], g);
+            continue;
         }
+        /* a plain world-space triangle: HitTriangle_Load's fields that the lanes read */
+        const __global Triangle* tri = &tris[h.prim];
+        const __global TriangleShading* sh = &triShading[h.prim];
+        g->v0[k] = tri->v0.xyz; g->v1[k] = tri->v1.xyz; g->v2[k] = tri->v2.xyz;
+        const uint attributes = sh->attributes;
+        if (attributes & CLRT_TRI_NORMALS) {
+            const __global float* corner = triAttributes + (attributes & CLRT_TRI_OFFSET_MASK);
+            g->n0[k] = vload3(0, corner); g->n1[k] = vload3(1, corner); g->n2[k] = vload3(2, corner);
+            g->smoothBits |= 1 << k;
+        }
+        g->b1[k] = h.u; g->b2[k] = h.v;
+        g->material[k] = sh->material;
+        g->kd[k] = materials[sh->material].diffuse.xyz;
+        g->ks[k] = materials[sh->material].specular.xyz;
+        g->light[k] = sh->light;
+        g->hitBits |= 1 << k;
+        g->triBits |= 1 << k;
     }
 }
 
@@ -223,8 +260,9 @@ inline void Lanes_Geometry(const LanesGather* g, LaneV3* p, LaneV3* ngRaw, LaneV
     const LaneI tri = Lane_FromBits(g->triBits);
     *p = LaneV3_Select(v0, pTri, tri);
     *ngRaw = LaneV3_Select(n0, ngTri, tri);
-    LaneV3 n = LaneV3_Select(n1, nsTri, tri);
-    *ns = LaneV3_Select(n, LaneV3_Scale(n, -1.0f), LaneV3_Dot(n, *ngRaw) < 0.0f); /* Shade_OrientsNormalToRay */
+    /* Shade_OrientsNormalToRay (the per-lane surfaces are oriented already, before their bump maps) */
+    const LaneV3 nsFacing = LaneV3_Select(nsTri, LaneV3_Scale(nsTri, -1.0f), LaneV3_Dot(nsTri, ngTri) < 0.0f);
+    *ns = LaneV3_Select(n1, nsFacing, tri);
 }
 
 /* The non-specular f of material `material` (ks = 0: Material_EvalDirect's value for any pair of
@@ -250,7 +288,8 @@ inline LaneF Lanes_EmissionWeight(int mode, LaneF bsdfPdf, LaneF lightPdf) {
 }
 
 /* The ShadingPoints (ShadingPoint_Make) of the hits of the lanes in `lanes`. */
-inline void Lanes_ShadingPoints(const __global Material* materials, int lanes, LanesHit* lh, const float3* dirs) {
+inline void Lanes_ShadingPoints(const __global Material* materials, int lanes, const LanesGather* g, LanesHit* lh,
+                                const float3* dirs) {
     float3 p[CLRT_LANES], ng[CLRT_LANES], ns[CLRT_LANES];
     LaneV3_Store(lh->p, p);
     LaneV3_Store(lh->ng, ng);
@@ -258,7 +297,7 @@ inline void Lanes_ShadingPoints(const __global Material* materials, int lanes, L
     for (int k = 0; k < CLRT_LANES; ++k) {
         if (!((lanes >> k) & 1)) continue;
         const Material m = materials[lh->material[k]];
-        lh->sp[k] = ShadingPoint_Make(p[k], ns[k], ng[k], -dirs[k], m.diffuse.xyz, m.specular.xyz, m, lh->material[k]);
+        lh->sp[k] = ShadingPoint_Make(p[k], ns[k], ng[k], -dirs[k], g->kd[k], g->ks[k], m, lh->material[k]);
     }
 }
 
@@ -286,9 +325,9 @@ inline void Lanes_Surfaces(SceneParams scene, const __global Material* materials
         lh->specular |= (kind == MATERIAL_MIRROR || kind == MATERIAL_CONDUCTOR || kind == MATERIAL_DIELECTRIC) << k;
         dielectric |= (kind == MATERIAL_DIELECTRIC) << k;
         brdf |= (m->brdf != CLRT_INVALID) << k;
-        if (maxComponent(m->diffuse.xyz) > 0.0f || maxComponent(m->specular.xyz) > 0.0f) {
+        if (maxComponent(g->kd[k]) > 0.0f || maxComponent(g->ks[k]) > 0.0f) {
             plain |= 1 << k;
-            if (!(m->brdfFlags & CLRT_BRDF_LAMBERTIAN)) {
+            if (!(m->brdfFlags & CLRT_BRDF_LAMBERTIAN) || ((g->textureBits >> k) & 1)) { /* textures: kd, ks per hit */
                 glossy |= 1 << k;
             } else {
                 int j = 0; /* a lane before with the same material has its f (the pixel's lanes often do) */
@@ -326,7 +365,7 @@ inline void Lanes_Surfaces(SceneParams scene, const __global Material* materials
     lh->lastVertex = lastVertex ? g->hitBits : 0;
     lh->glossy = glossy & lh->diffuse & (lh->nee | lh->bounce);
     const int points = lh->glossy | (scalarLights ? lh->nee : 0);
-    if (points) Lanes_ShadingPoints(materials, points, lh, dirs);
+    if (points) Lanes_ShadingPoints(materials, points, g, lh, dirs);
 }
 
 /* Which of the lanes in okBits see the shadow ray from org along unit dir unblocked up to tMax

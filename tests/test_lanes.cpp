@@ -221,6 +221,49 @@ TEST_CASE("lanes: lights without a lane form (sphere, area, directional, environ
     CHECK(compared == 8);
 }
 
+TEST_CASE("lanes: textures, bump and normal maps, device instances per lane as render_fused", "[lanes][shared]") {
+    if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
+    // A textured, bump-mapped, normal-mapped or instanced hit gets Shade_Hit's surface per lane
+    // (Lanes_ScalarSurface: HitTriangle_Load with the instance, Shade_Textures), its f, pdf and bounce per
+    // lane from the textured kd and ks.
+    // ks = 0: a Lambertian material whose kd comes from a texture (f per hit, not per material).
+    struct Case { const char* file; Instancing instancing; bool ks0; };
+    const Case cases[] = {{"hw4/cube_wall.xml", Instancing::Auto, false}, {"hw4/wood_box.xml", Instancing::Auto, true},
+                          {"hw4/brickwall_with_normalmap.xml", Instancing::Auto, false},
+                          {"hw4/sphere_perlin_bump.xml", Instancing::Auto, false},
+                          {"hw2/metal_glass_plates.xml", Instancing::TwoLevel, false}};
+    int compared = 0;
+    for (const Case& c : cases) {
+        Scene scene = loadScene(sharedDir() + "/scenes/" + c.file);
+        if (c.ks0)
+            for (Material& m : scene.materials) m.specular = {0, 0, 0};
+        for (Camera& cam : scene.cameras) cam.pathMode = CLRT_PATH_ON | CLRT_PATH_MIS;
+        FlattenOptions opts;
+        opts.instancing = c.instancing;
+        DeviceScene ds = flattenScene(scene, opts);
+        INFO(c.file << ": " << lanesFamily(ds));
+        REQUIRE(lanesFamily(ds).empty());
+        if (c.instancing == Instancing::TwoLevel) CHECK(ds.features.instances);
+        else CHECK(ds.features.textures);
+        Renderer r(testContext(), ds);
+        Camera cam = scene.cameras.at(0);
+        cam.maxRecursionDepth = 3;
+        Rendered l = renderWith(r, cam, 40, 40, 8, 3, Pipeline::Lanes);
+        Rendered fu = renderWith(r, cam, 40, 40, 8, 3, Pipeline::Fused);
+        Rendered f2 = renderWith(r, cam, 40, 40, 8, 4, Pipeline::Fused);
+        CHECK(l.counters.lanes);
+        const double noise = relMse(f2.image, fu.image), diff = relMse(l.image, fu.image);
+        INFO("relMSE lanes/fused " << diff << ", between seeds " << noise);
+        CHECK(noise > 1e-4);
+        CHECK(diff < 1e-5 * noise);
+        CHECK(diff < 1e-5);
+        CHECK(l.counters.secondaryRays == fu.counters.secondaryRays);
+        CHECK(l.counters.shadowRays == fu.counters.shadowRays);
+        ++compared;
+    }
+    CHECK(compared == 5);
+}
+
 TEST_CASE("lanes: deterministic, several launches and sample counts that are no multiple of four", "[lanes][shared]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
     Scene scene = loadScene(sharedDir() + "/scenes/" + kPathBox);
@@ -255,12 +298,13 @@ TEST_CASE("lanes: deterministic, several launches and sample counts that are no 
 
 TEST_CASE("lanes: which scenes and cameras it takes; auto takes it on CPU devices", "[lanes][shared]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
-    // Out of its family: textures, no path tracing.
-    for (const char* f : {"hw4/cube_wall.xml", "hw5/cube_point.xml"}) {
+    // Out of its family: motion blur, no path tracing.
+    for (const char* f : {kPathBox, "hw5/cube_point.xml"}) {
         INFO(f);
         Scene scene = loadScene(sharedDir() + "/scenes/" + f);
         for (Camera& c : scene.cameras) c.pathMode = CLRT_PATH_ON | CLRT_PATH_MIS;
         if (std::string(f) == "hw5/cube_point.xml") scene.cameras.at(0).pathMode = 0;
+        else scene.shapes.at(0).motion = {0.1f, 0.0f, 0.0f};
         DeviceScene ds = flattenScene(scene);
         CHECK_FALSE(lanesFamily(ds).empty());
         CHECK_FALSE(ds.features.lanes);

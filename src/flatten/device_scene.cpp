@@ -44,8 +44,8 @@ std::vector<std::string> FeatureSet::defines() const {
 std::string lanesFamily(const DeviceScene& ds) {
     const FeatureSet& f = ds.features;
     if (!f.pathTracing) return "no path-traced camera";
-    if (f.textures || f.normalMaps || f.bumpMaps || f.mipMaps || f.motionBlur || f.instances)
-        return "textures, motion blur or instances";
+    if (f.mipMaps) return "mip-mapped textures";
+    if (f.motionBlur) return "motion blur";
     return "";
 }
 

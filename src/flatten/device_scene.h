@@ -108,8 +108,8 @@ std::vector<dev::float4> imageTexels(const DeviceScene& ds, int image);
 
 // Camera frame and image plane for the kernels, and numSamples.
 // Whether a flattened scene is of the lanes kernel's family (cl_kernels/lanes.cl, render_lanes): a
-// path-traced camera; no textures, motion blur or instances (every light, material and BRDF is in). ""
-// when it is, else the first reason it is not.
+// path-traced camera; no motion blur or mip-maps (every light, material, BRDF, texture and instance is
+// in). "" when it is, else the first reason it is not.
 std::string lanesFamily(const DeviceScene& ds);
 
 dev::CameraParams makeCameraParams(const Camera& cam);
