@@ -242,7 +242,7 @@ typedef struct Material {
 #define CLRT_BRDF_KD_FRESNEL 2
 /* Set by flattening (flatten_materials.cpp, materialIsLambertian) on a material whose non-specular f is
  * direction-free: ks = 0 and no BRDF or one whose value is then kd or kd/π. render_lanes evaluates it
- * once per hit instead of per direction (cl_kernels/lanes.cl). */
+ * once per hit instead of per direction (cl_kernels/lanes_surface.cl). */
 #define CLRT_BRDF_LAMBERTIAN 4
 
 typedef struct TextureMap {
