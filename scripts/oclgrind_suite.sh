@@ -112,12 +112,15 @@ while read -r scene args; do
     done
   done
 done < scripts/kernel_variants.txt
-# The lanes kernel (cl_kernels/lanes.cl, render_lanes) on a scene of its family: LightMesh and point
-# light, eight path-tracing cameras (NEE, importance, MIS, roulette), four samples so that every lane works.
+# The lanes kernel (cl_kernels/lanes.cl, render_lanes), four samples so that every lane works: the hw6 path
+# box (LightMesh and point light, eight cameras: NEE, importance, MIS, roulette), and scenes/lanes_mix.xml
+# (the per-lane code: a textured hit, a glossy BRDF, a mirror, sphere and area lights, misses).
 for pass in $PASSES; do
-  mkdir -p "$OUT/img/lanes-$pass"
+  mkdir -p "$OUT/img/lanes-$pass" "$OUT/img/lanes-mix-$pass"
   spawn lanes "$pass" --pipeline-of lanes build/clrt render "$SCENES/hw6/cornellbox_jaroslav_path_diffuse.xml" \
     --resolution 8x8 --spp 4 -o "$OUT/img/lanes-$pass" -v --pipeline lanes
+  spawn lanes-mix "$pass" --pipeline-of lanes build/clrt render scenes/lanes_mix.xml \
+    --resolution 8x8 --spp 4 -o "$OUT/img/lanes-mix-$pass" -v --pipeline lanes
 done
 wait
 

@@ -264,6 +264,33 @@ TEST_CASE("lanes: textures, bump and normal maps, device instances per lane as r
     CHECK(compared == 5);
 }
 
+TEST_CASE("lanes: scenes/lanes_mix.xml (every per-lane branch at once) as render_fused", "[lanes]") {
+    // A plain floor, a Perlin-textured Lambertian block, a glossy and a mirror sphere, sphere, area and
+    // point lights, an open front: lanes whose hits take different branches side by side.
+    Scene scene = loadScene(std::string(CLRT_SOURCE_DIR) + "/scenes/lanes_mix.xml");
+    DeviceScene ds = flattenScene(scene);
+    REQUIRE(lanesFamily(ds).empty());
+    CHECK(ds.features.textures);
+    Renderer r(testContext(), ds);
+    for (int mode : {CLRT_PATH_ON | CLRT_PATH_MIS, CLRT_PATH_ON | CLRT_PATH_NEE | CLRT_PATH_IMPORTANCE,
+                     CLRT_PATH_ON | CLRT_PATH_IMPORTANCE}) {
+        Camera cam = scene.cameras.at(0);
+        cam.pathMode = mode;
+        INFO("path mode " << mode);
+        Rendered l = renderWith(r, cam, 48, 48, 8, 3, Pipeline::Lanes);
+        Rendered fu = renderWith(r, cam, 48, 48, 8, 3, Pipeline::Fused);
+        Rendered f2 = renderWith(r, cam, 48, 48, 8, 4, Pipeline::Fused);
+        CHECK(l.counters.lanes);
+        const double noise = relMse(f2.image, fu.image), diff = relMse(l.image, fu.image);
+        INFO("relMSE lanes/fused " << diff << ", between seeds " << noise);
+        CHECK(noise > 1e-3);
+        CHECK(diff < 1e-5 * noise);
+        CHECK(diff < 1e-5);
+        CHECK(l.counters.secondaryRays == fu.counters.secondaryRays);
+        CHECK(l.counters.shadowRays == fu.counters.shadowRays);
+    }
+}
+
 TEST_CASE("lanes: deterministic, several launches and sample counts that are no multiple of four", "[lanes][shared]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
     Scene scene = loadScene(sharedDir() + "/scenes/" + kPathBox);
