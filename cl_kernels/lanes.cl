@@ -12,7 +12,7 @@
  *     Path_LightSampleWeight, ObjectLight_AimShadow) and the bounce (Path_SampleBounce, Path_Child).
  * It computes what render_fused computes for the same random streams, up to rounding (tests/test_lanes.cpp):
  * one lane is one path of the fused kernel. Scenes of its family only (src/flatten/device_scene.h
- * lanesFamily, src/render/fused_renderer.h lanesUnsupported): the stratified sampler, one light slot, no
+ * lanesFamily, src/render/fused_renderer.h lanesUnsupported): the stratified sampler, no tree of paths, no
  * motion blur or mip-maps; every surface (a plain world-space triangle's in lanes, the others per lane:
  * Lanes_ScalarSurface, textures and instances included), every material (a direction-free f,
  * CLRT_BRDF_LAMBERTIAN, in lanes; a glossy or textured one per lane: Lanes_GlossyLightTerms,
@@ -186,19 +186,22 @@ inline LaneV3 Lanes_LightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) const
 inline int Lanes_HasLaneForm(const __global Light* light) { return light->kind == LIGHT_MESH || light->kind == LIGHT_POINT; }
 
 /* Light l's samples at the lanes in hit->nee through clrt's scalar Light_ShadowRays and Fused_Shadow, per lane
- * (the light kinds without a lane form: area, sphere, spot and directional lights, environment maps with
- * one light slot): each lane's path, ShadingPoint and random stream as render_fused's. */
-inline LaneV3 Lanes_ScalarLightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int l, const LanesHit* hit,
-                                      const PathState* path, int pixel) {
+ * (the light kinds without a lane form: area, sphere, spot and directional lights, environment maps, with
+ * lightSlots shadow rays each: 2 for an environment light's MIS pair), added to the lanes' sum in
+ * render_fused's order: each lane's path, ShadingPoint and random stream as there. */
+inline LaneV3 Lanes_ScalarLightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int l, int lightSlots, const LanesHit* hit,
+                                      const PathState* path, int pixel, LaneV3 sum) {
     float3 out[CLRT_LANES];
+    LaneV3_Store(sum, out);
     for (int k = 0; k < CLRT_LANES; ++k) {
-        out[k] = (float3)(0.0f);
         if (!((hit->nee >> k) & 1)) continue;
         const RngKey key = Rng_Key(scene.seed, pixel, path[k].sample, path[k].pathId);
-        ShadowRay sr, unused;
-        Light_ShadowRays(scene, path[k], hit->sp[k], l, 1, key, materials, lights, images, texels, envDist, lightData, &sr,
-                         &unused);
-        out[k] = Fused_Shadow(sr, scene, nodes, leaves, tris, spheres, planes, instances).xyz;
+        ShadowRay sr, sr2;
+        sr2.origin = sr2.direction = sr2.contribution = (float4)(0.0f); /* a light with one sample leaves it untraced */
+        Light_ShadowRays(scene, path[k], hit->sp[k], l, lightSlots, key, materials, lights, images, texels, envDist,
+                         lightData, &sr, &sr2);
+        out[k] += Fused_Shadow(sr, scene, nodes, leaves, tris, spheres, planes, instances).xyz;
+        if (lightSlots == 2) out[k] += Fused_Shadow(sr2, scene, nodes, leaves, tris, spheres, planes, instances).xyz;
     }
     return LaneV3_Load(out);
 }
@@ -322,8 +325,8 @@ inline uint Lanes_Children(SceneParams scene, int pixel, int depth, int specBits
 
 /* Samples s0 .. s0 + n - 1 (n <= 4) of pixel `pixel`: their radiance summed in sample order per depth
  * into levelSum (as render_fused's per-depth sums). Returns the bounce rays traced. */
-inline uint Lanes_Paths(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int pixel, int px, int py, int s0, int n, int levels,
-                        float3* levelSum) {
+inline uint Lanes_Paths(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int lightSlots, int pixel, int px, int py, int s0,
+                        int n, int levels, float3* levelSum) {
     PathState path[CLRT_LANES];
     Ray ray[CLRT_LANES];
     int sampleIdx[CLRT_LANES];
@@ -350,10 +353,10 @@ inline uint Lanes_Paths(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int pixel, in
         const uint dim = 4u + 32u * (uint)depth;
         LaneV3 sum = hit.radiance;
         for (int l = 0; l < scene.numLights && hit.nee; ++l)
-            sum = LaneV3_Add(sum, Lanes_HasLaneForm(&lights[l])
-                                      ? Lanes_LightSample(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) & lights[l], &hit,
-                                                          throughput, strat, sample, dim + 8u + 2u * (uint)l)
-                                      : Lanes_ScalarLightSample(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) l, &hit, path, pixel));
+            sum = Lanes_HasLaneForm(&lights[l])
+                      ? LaneV3_Add(sum, Lanes_LightSample(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) & lights[l], &hit,
+                                                          throughput, strat, sample, dim + 8u + 2u * (uint)l))
+                      : Lanes_ScalarLightSample(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) l, lightSlots, &hit, path, pixel, sum);
         float3 out[CLRT_LANES];
         LaneV3_Store(sum, out);
         for (int k = 0; k < CLRT_LANES; ++k) /* as render_fused: per depth, in sample order */
@@ -399,7 +402,7 @@ __kernel CLRT_KERNEL_VEC_HINT void render_lanes(CLRT_KERNEL_PARAMS(render_lanes)
     const int px = pixel % cam.width, py = pixel / cam.width;
     const int total = passes * samples;
     for (int s = 0; s < total; s += CLRT_LANES)
-        secondary += Lanes_Paths(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) pixel, px, py, firstSample + s,
+        secondary += Lanes_Paths(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) lightSlots, pixel, px, py, firstSample + s,
                                  min(CLRT_LANES, total - s), levels, levelSum);
     for (int d = 0; d < levels; ++d) acc.xyz += levelSum[d];
     image[pixel] = acc;

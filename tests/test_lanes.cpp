@@ -187,13 +187,15 @@ TEST_CASE("lanes: lights without a lane form (sphere, area, directional, environ
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
     // Their samples go through the scalar Light_ShadowRays per lane; a LightSphere's emission where a ray
     // hits it through Path_HitEmission per lane; an environment map's through Shade_Miss. The environment
-    // light with one light slot (importance sampling; MIS between its two strategies takes two slots and
-    // render_fused).
+    // light with one light slot (importance sampling) and with two (its default MIS between the light's
+    // and the cosine's samples).
     int compared = 0;
     for (const char* f : {"hw6/cornellbox_jaroslav_glossy_area_sphere.xml", "hw3/cornellbox_area.xml",
-                          "hw5/cube_directional.xml", "hw5/sphere_env_light_courtyard.xml"}) {
+                          "hw5/cube_directional.xml", "hw5/sphere_env_light_courtyard.xml", "env-mis"}) {
+        const bool envMis = std::string(f) == "env-mis";
+        if (envMis) f = "hw5/sphere_env_light_courtyard.xml";
         Scene scene = loadScene(sharedDir() + "/scenes/" + f);
-        for (Light& l : scene.lights) l.envStrategy = dev::ENV_STRATEGY_IMPORTANCE;
+        for (Light& l : scene.lights) l.envStrategy = envMis ? dev::ENV_STRATEGY_MIS : dev::ENV_STRATEGY_IMPORTANCE;
         for (Camera& c : scene.cameras) c.pathMode = CLRT_PATH_ON | CLRT_PATH_MIS;
         DeviceScene ds = flattenScene(scene);
         INFO(f << ": " << lanesFamily(ds));
@@ -218,7 +220,7 @@ TEST_CASE("lanes: lights without a lane form (sphere, area, directional, environ
             ++compared;
         }
     }
-    CHECK(compared == 8);
+    CHECK(compared == 10);
 }
 
 TEST_CASE("lanes: textures, bump and normal maps, device instances per lane as render_fused", "[lanes][shared]") {
@@ -363,6 +365,9 @@ TEST_CASE("lanes: which scenes and cameras it takes; auto takes it on CPU device
     FusedPlan tree = plan;
     tree.tree = true;
     CHECK_FALSE(lanesUnsupported(sp, tree, "", true).empty());
+    FusedPlan twoSlots = plan;  // an environment light's MIS pair: the lanes take it
+    twoSlots.lightSlots = 2;
+    CHECK(lanesUnsupported(sp, twoSlots, "", true).empty());
     // Asked for where it cannot run: the fused kernel, the same image as asking for it.
     RenderSettings rs;
     rs.spp = 2;

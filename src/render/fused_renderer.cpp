@@ -55,7 +55,7 @@ std::string lanesUnsupported(const dev::SceneParams& sp, const FusedPlan& plan, 
     if (sp.pathMode == 0) return "camera not path traced";
     if (sp.pathMode & CLRT_PATH_RR_COURSE) return "--rr-rule course";
     if (sp.pixelSampler != CLRT_PIXEL_SAMPLER_STRATIFIED) return "sampler not stratified";
-    if (plan.lightSlots != 1 || plan.tree || sp.splitDepth > 0) return "light slots, or a tree of paths";
+    if (plan.tree || sp.splitDepth > 0) return "a tree of paths (splits)";
     return "";
 }
 
