@@ -36,6 +36,26 @@ double relMse(const ImageRGB& a, const ImageRGB& b) {
 
 const char* kPathBox = "hw6/cornellbox_jaroslav_path_diffuse.xml";
 
+// Renders cam (size × size, 8 spp) with the lanes and with render_fused at seed 3, and render_fused at
+// seed 4 for the noise between seeds; checks that the lanes computed render_fused's image up to rounding
+// (relMSE under 1e-5 of that noise, which must exceed minNoise, and under maxDiff) with the same rays.
+void checkLanesAsFused(Renderer& r, const Camera& cam, int size, double minNoise, double maxDiff = 1e30) {
+    Rendered l = renderWith(r, cam, size, size, 8, 3, Pipeline::Lanes);
+    Rendered f = renderWith(r, cam, size, size, 8, 3, Pipeline::Fused);
+    Rendered f2 = renderWith(r, cam, size, size, 8, 4, Pipeline::Fused);
+    CHECK(l.counters.lanes);
+    CHECK_FALSE(f.counters.lanes);
+    const double noise = relMse(f2.image, f.image), diff = relMse(l.image, f.image);
+    INFO("relMSE lanes/fused " << diff << ", between seeds " << noise);
+    CHECK(noise > minNoise);
+    CHECK(diff < 1e-5 * noise);  // PoCL ~1e-13 of it, Intel ~1e-7 (other contractions)
+    CHECK(diff < maxDiff);
+    CHECK(l.counters.cameraRays == f.counters.cameraRays);
+    CHECK(l.counters.secondaryRays == f.counters.secondaryRays);
+    CHECK(l.counters.shadowRays == f.counters.shadowRays);
+    CHECK(l.counters.pathSegments == f.counters.pathSegments);
+}
+
 }  // namespace
 
 TEST_CASE("lanes: render_fused's image up to rounding on every path camera of the hw6 box", "[lanes][shared]") {
@@ -53,19 +73,7 @@ TEST_CASE("lanes: render_fused's image up to rounding on every path camera of th
         for (int mode : {cam.pathMode, CLRT_PATH_ON | CLRT_PATH_MIS, CLRT_PATH_ON | CLRT_PATH_MIS | CLRT_PATH_MIS_BALANCE}) {
             cam.pathMode = mode;
             INFO("camera " << cam.id << ", path mode " << mode);
-            Rendered l = renderWith(r, cam, 40, 40, 8, 3, Pipeline::Lanes);
-            Rendered f = renderWith(r, cam, 40, 40, 8, 3, Pipeline::Fused);
-            Rendered f2 = renderWith(r, cam, 40, 40, 8, 4, Pipeline::Fused);
-            CHECK(l.counters.lanes);
-            CHECK_FALSE(f.counters.lanes);
-            const double noise = relMse(f2.image, f.image), diff = relMse(l.image, f.image);
-            INFO("relMSE lanes/fused " << diff << ", between seeds " << noise);
-            CHECK(noise > 1e-3);
-            CHECK(diff < 1e-5 * noise);  // PoCL ~1e-13 of it, Intel ~1e-7 (other contractions)
-            CHECK(l.counters.cameraRays == f.counters.cameraRays);
-            CHECK(l.counters.secondaryRays == f.counters.secondaryRays);
-            CHECK(l.counters.shadowRays == f.counters.shadowRays);
-            CHECK(l.counters.pathSegments == f.counters.pathSegments);
+            checkLanesAsFused(r, cam, 40, 1e-3);
             ++compared;
         }
     }
@@ -99,15 +107,7 @@ TEST_CASE("lanes: specular children (mirror beside a diffuse part, glass) as ren
         Camera cam = sc->cameras.at(0);
         cam.pathMode = mode;
         INFO(sc->path << ", path mode " << mode);
-        Rendered l = renderWith(r, cam, 48, 48, 8, 3, Pipeline::Lanes);
-        Rendered f = renderWith(r, cam, 48, 48, 8, 3, Pipeline::Fused);
-        Rendered f2 = renderWith(r, cam, 48, 48, 8, 4, Pipeline::Fused);
-        CHECK(l.counters.lanes);
-        const double noise = relMse(f2.image, f.image), diff = relMse(l.image, f.image);
-        INFO("relMSE lanes/fused " << diff << ", between seeds " << noise);
-        CHECK(diff < 1e-5 * noise);
-        CHECK(l.counters.secondaryRays == f.counters.secondaryRays);
-        CHECK(l.counters.shadowRays == f.counters.shadowRays);
+        checkLanesAsFused(r, cam, 48, 0.0);
     }
 }
 
@@ -157,16 +157,7 @@ TEST_CASE("lanes: glossy lobes (classic Phong and every BRDF kind) as render_fus
             Camera cam = scene.cameras.at(0);
             cam.pathMode = mode;
             INFO("brdf " << k.brdf << ", path mode " << mode);
-            Rendered l = renderWith(r, cam, 40, 40, 8, 3, Pipeline::Lanes);
-            Rendered f = renderWith(r, cam, 40, 40, 8, 3, Pipeline::Fused);
-            Rendered f2 = renderWith(r, cam, 40, 40, 8, 4, Pipeline::Fused);
-            CHECK(l.counters.lanes);
-            const double noise = relMse(f2.image, f.image), diff = relMse(l.image, f.image);
-            INFO("relMSE lanes/fused " << diff << ", between seeds " << noise);
-            CHECK(noise > 1e-3);
-            CHECK(diff < 1e-5 * noise);
-            CHECK(l.counters.secondaryRays == f.counters.secondaryRays);
-            CHECK(l.counters.shadowRays == f.counters.shadowRays);
+            checkLanesAsFused(r, cam, 40, 1e-3);
             ++compared;
         }
     }
@@ -206,17 +197,7 @@ TEST_CASE("lanes: lights without a lane form (sphere, area, directional, environ
             cam.pathMode = mode;
             cam.maxRecursionDepth = 3;
             INFO(f << ", path mode " << mode);
-            Rendered l = renderWith(r, cam, 40, 40, 8, 3, Pipeline::Lanes);
-            Rendered fu = renderWith(r, cam, 40, 40, 8, 3, Pipeline::Fused);
-            Rendered f2 = renderWith(r, cam, 40, 40, 8, 4, Pipeline::Fused);
-            CHECK(l.counters.lanes);
-            const double noise = relMse(f2.image, fu.image), diff = relMse(l.image, fu.image);
-            INFO("relMSE lanes/fused " << diff << ", between seeds " << noise);
-            CHECK(noise > 1e-4);
-            CHECK(diff < 1e-5 * noise);
-            CHECK(diff < 1e-5);  // fireflies make some of these noises huge (a directional light's: 3e4); seen: below 1e-6
-            CHECK(l.counters.secondaryRays == fu.counters.secondaryRays);
-            CHECK(l.counters.shadowRays == fu.counters.shadowRays);
+            checkLanesAsFused(r, cam, 40, 1e-4, 1e-5);
             ++compared;
         }
     }
@@ -250,17 +231,7 @@ TEST_CASE("lanes: textures, bump and normal maps, device instances per lane as r
         Renderer r(testContext(), ds);
         Camera cam = scene.cameras.at(0);
         cam.maxRecursionDepth = 3;
-        Rendered l = renderWith(r, cam, 40, 40, 8, 3, Pipeline::Lanes);
-        Rendered fu = renderWith(r, cam, 40, 40, 8, 3, Pipeline::Fused);
-        Rendered f2 = renderWith(r, cam, 40, 40, 8, 4, Pipeline::Fused);
-        CHECK(l.counters.lanes);
-        const double noise = relMse(f2.image, fu.image), diff = relMse(l.image, fu.image);
-        INFO("relMSE lanes/fused " << diff << ", between seeds " << noise);
-        CHECK(noise > 1e-4);
-        CHECK(diff < 1e-5 * noise);
-        CHECK(diff < 1e-5);
-        CHECK(l.counters.secondaryRays == fu.counters.secondaryRays);
-        CHECK(l.counters.shadowRays == fu.counters.shadowRays);
+        checkLanesAsFused(r, cam, 40, 1e-4, 1e-5);
         ++compared;
     }
     CHECK(compared == 5);
@@ -279,17 +250,7 @@ TEST_CASE("lanes: scenes/lanes_mix.xml (every per-lane branch at once) as render
         Camera cam = scene.cameras.at(0);
         cam.pathMode = mode;
         INFO("path mode " << mode);
-        Rendered l = renderWith(r, cam, 48, 48, 8, 3, Pipeline::Lanes);
-        Rendered fu = renderWith(r, cam, 48, 48, 8, 3, Pipeline::Fused);
-        Rendered f2 = renderWith(r, cam, 48, 48, 8, 4, Pipeline::Fused);
-        CHECK(l.counters.lanes);
-        const double noise = relMse(f2.image, fu.image), diff = relMse(l.image, fu.image);
-        INFO("relMSE lanes/fused " << diff << ", between seeds " << noise);
-        CHECK(noise > 1e-3);
-        CHECK(diff < 1e-5 * noise);
-        CHECK(diff < 1e-5);
-        CHECK(l.counters.secondaryRays == fu.counters.secondaryRays);
-        CHECK(l.counters.shadowRays == fu.counters.shadowRays);
+        checkLanesAsFused(r, cam, 48, 1e-3, 1e-5);
     }
 }
 
