@@ -64,7 +64,7 @@ inline LaneI Lanes_PickTriangle(const __global float4* tri, int n, LaneF u, Lane
         const LaneI next = pos + step;
         int idx[CLRT_LANES];
         float c[CLRT_LANES];
-        vstore4(min(next, n - 1) - 1, 0, idx);
+        vstore4(min(next, (LaneI)(n - 1)) - 1, 0, idx); /* not min(int4, int): garbage on Oclgrind (docs/quirks.md) */
         for (int k = 0; k < CLRT_LANES; ++k) c[k] = tri[3 * idx[k]].w;
         pos = select(pos, next, (next <= n - 1) & (vload4(0, c) <= u));
     }
