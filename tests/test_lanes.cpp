@@ -152,6 +152,11 @@ TEST_CASE("lanes: glossy lobes (classic Phong and every BRDF kind) as render_fus
         REQUIRE(lanesFamily(ds).empty());
         for (const dev::Material& m : ds.materials) CHECK_FALSE(m.brdfFlags & CLRT_BRDF_LAMBERTIAN);
         Renderer r(testContext(), ds);
+        // Every surface glossy: auto leaves it to render_fused (per lane, the lanes are no faster).
+        CHECK_FALSE(lanesNoGain(ds).empty());
+        Camera autoCam = scene.cameras.at(0);
+        autoCam.pathMode = CLRT_PATH_ON | CLRT_PATH_MIS;
+        CHECK_FALSE(renderWith(r, autoCam, 40, 40, 4, 1, Pipeline::Auto).counters.lanes);
         for (int mode : {CLRT_PATH_ON | CLRT_PATH_MIS, CLRT_PATH_ON | CLRT_PATH_NEE | CLRT_PATH_IMPORTANCE,
                          CLRT_PATH_ON | CLRT_PATH_NEE}) {
             Camera cam = scene.cameras.at(0);
@@ -301,6 +306,7 @@ TEST_CASE("lanes: which scenes and cameras it takes; auto takes it on CPU device
     }
     Scene scene = loadScene(sharedDir() + "/scenes/" + kPathBox);
     DeviceScene ds = flattenScene(scene);
+    CHECK(lanesNoGain(ds).empty());
     Renderer r(testContext(), ds);
     Camera cam = scene.cameras.at(0);
     cam.pathMode = CLRT_PATH_ON | CLRT_PATH_MIS;

@@ -49,6 +49,26 @@ std::string lanesFamily(const DeviceScene& ds) {
     return "";
 }
 
+std::string lanesNoGain(const DeviceScene& ds) {
+    // A surface the lanes shade in lanes: untextured, a diffuse part (kd > 0) whose f is direction-free
+    // (CLRT_BRDF_LAMBERTIAN). A light's black surface has nothing to shade.
+    auto inLanes = [&](int material, int textureSet) {
+        if (textureSet != CLRT_INVALID || material < 0 || size_t(material) >= ds.materials.size()) return false;
+        const dev::Material& m = ds.materials[size_t(material)];
+        return (m.brdfFlags & CLRT_BRDF_LAMBERTIAN) != 0 && (m.diffuse.x > 0.0f || m.diffuse.y > 0.0f || m.diffuse.z > 0.0f);
+    };
+    for (int i = 0; i < ds.params.numTriangles; ++i)  // not the arrays' dummy entries (flattenGeometry)
+        if (inLanes(ds.triangleShading[size_t(i)].material, ds.triangleShading[size_t(i)].textureSet)) return "";
+    for (int i = 0; i < ds.params.numSpheres; ++i)
+        if (inLanes(ds.spheres[size_t(i)].material, ds.spheres[size_t(i)].textureSet)) return "";
+    for (const dev::Plane& pl : ds.planes)  // the dummy plane has a zero normal and is never hit
+        if ((pl.normal.x != 0.0f || pl.normal.y != 0.0f || pl.normal.z != 0.0f) && inLanes(pl.material, pl.textureSet))
+            return "";
+    for (const dev::Instance& in : ds.instances)
+        if (inLanes(in.material, in.textureSet)) return "";
+    return "no untextured Lambertian surface (the rest is shaded per lane: no faster than render_fused)";
+}
+
 dev::CameraParams makeCameraParams(const Camera& cam) {
     dev::CameraParams c{};
     c.position = toFloat4(cam.position);

@@ -112,6 +112,12 @@ std::vector<dev::float4> imageTexels(const DeviceScene& ds, int image);
 // in). "" when it is, else the first reason it is not.
 std::string lanesFamily(const DeviceScene& ds);
 
+// Why `--pipeline auto` leaves a scene of the lanes' family to render_fused ("" when it takes the lanes): no
+// surface is shaded in lanes (no untextured Lambertian one with kd > 0; glossy and textured ones are shaded
+// per lane, where the lanes took 1.02-1.04x render_fused's time on the course's glossy boxes;
+// docs/architecture.md "Paths in lanes").
+std::string lanesNoGain(const DeviceScene& ds);
+
 dev::CameraParams makeCameraParams(const Camera& cam);
 // Sets spp (at least 1).
 void setSamplesPerPixel(dev::CameraParams& c, int spp);
