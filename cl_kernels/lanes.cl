@@ -12,8 +12,8 @@
  *     Path_LightSampleWeight, ObjectLight_AimShadow) and the bounce (Path_SampleBounce, Path_Child).
  * It computes what render_fused computes for the same random streams, up to rounding (tests/test_lanes.cpp):
  * one lane is one path of the fused kernel. Scenes of its family only (src/flatten/device_scene.h
- * lanesFamily, src/render/fused_renderer.h lanesUnsupported): the stratified sampler, no tree of paths, no
- * motion blur or mip-maps; every surface (a plain world-space triangle's in lanes, the others per lane:
+ * lanesFamily, src/render/fused_renderer.h lanesUnsupported): not the correlated sampler (the others: the
+ * lanes' stratified form, or Sampler_2D per lane), no tree of paths, no motion blur or mip-maps; every surface (a plain world-space triangle's in lanes, the others per lane:
  * Lanes_ScalarSurface, textures and instances included), every material (a direction-free f,
  * CLRT_BRDF_LAMBERTIAN, in lanes; a glossy or textured one per lane: Lanes_GlossyLightTerms,
  * Lanes_GlossyBounces) and every light (LightMesh and point lights in lanes, the others per lane:
@@ -30,6 +30,25 @@
 #ifdef CLRT_HAS_LANES
 
 /* ---- one depth of the lanes' paths: lights, bounces, children ----------------------------------- */
+
+/* The lanes' 2D sample of dimension dim, as Sampler_2D draws it for each lane's path: Lanes_Stratified2D
+ * under the stratified sampler (and the correlated one, whose path dimensions are the stratified ones),
+ * else Sampler_2D per lane (zsobol, independent). */
+inline void Lanes_Sample2D(SceneParams scene, uint strat, LaneU sample, const PathState* path, int pixel, uint dim,
+                           LaneF* u1, LaneF* u2) {
+    if (scene.pixelSampler == CLRT_PIXEL_SAMPLER_STRATIFIED || scene.pixelSampler == CLRT_PIXEL_SAMPLER_CORRELATED) {
+        Lanes_Stratified2D(strat, sample, dim, u1, u2);
+        return;
+    }
+    float a[CLRT_LANES], b[CLRT_LANES];
+    for (int k = 0; k < CLRT_LANES; ++k) {
+        const float2 u = Sampler_2D(scene, path[k], Rng_Key(scene.seed, pixel, path[k].sample, path[k].pathId), dim);
+        a[k] = u.x;
+        b[k] = u.y;
+    }
+    *u1 = vload4(0, a);
+    *u2 = vload4(0, b);
+}
 
 /* Which of the lanes in okBits see the shadow ray from org along unit dir unblocked up to tMax
  * (Shadow_Occluded, per lane). */
@@ -132,7 +151,7 @@ inline void Lanes_GlossyLightTerms(const __global Material* materials, int mode,
 /* The lanes' light samples of light `light` (LightMesh or PointLight) at their hits (those in hit->nee):
  * as Light_ShadowRays and Fused_Shadow, the unoccluded contributions (MIS-weighted, times the throughput). */
 inline LaneV3 Lanes_LightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) const __global Light* light, const LanesHit* hit,
-                                LaneV3 throughput, uint strat, LaneU sample, uint dim) {
+                                const PathState* path, int pixel, LaneV3 throughput, uint strat, LaneU sample, uint dim) {
     const LaneV3 zero = LaneV3_Splat((float3)(0.0f)), p = hit->p, ng = hit->ng, ns = hit->ns;
     LaneV3 wi, e;
     LaneF dist;
@@ -141,7 +160,7 @@ inline LaneV3 Lanes_LightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) const
 #ifdef CLRT_HAS_LIGHT_MESH
         if (light->objCount <= 0 || !(light->area > 0.0f)) return zero;
         LaneF u1, u2;
-        Lanes_Stratified2D(strat, sample, dim, &u1, &u2);
+        Lanes_Sample2D(scene, strat, sample, path, pixel, dim, &u1, &u2); /* Sampler_Light2D: path tracing's is Sampler_2D */
         Lanes_MeshLightSample(light, lightData, p, u1, u2, &wi, &dist, &e);
 #else
         return zero;
@@ -267,7 +286,7 @@ inline int Lanes_PickSpecular(SceneParams scene, int pixel, const PathState* pat
         if (!(*live & hit->specular & (1 << k))) continue;
         pSpec[k] = (hit->diffuse >> k) & 1 ? 0.5f : 1.0f;
         const RngKey key = Rng_Key(scene.seed, pixel, path[k].sample, path[k].pathId);
-        if (!(Rng_Uniform(key, dim + 3u) < pSpec[k])) continue;
+        if (!(Sampler_Other1D(scene, path[k], key, dim + 3u) < pSpec[k])) continue;
         if ((hit->lastVertex >> k) & 1) *live &= ~(1 << k);
         else specBits |= 1 << k;
     }
@@ -286,9 +305,9 @@ inline int Lanes_SpecularBounces(SceneParams scene, const __global Material* mat
     for (int k = 0; k < CLRT_LANES; ++k) {
         if (!((specBits >> k) & 1)) continue;
         const RngKey key = Rng_Key(scene.seed, pixel, path[k].sample, path[k].pathId);
-        const float2 uGlossy = (float2)(Rng_Uniform(key, dim), Rng_Uniform(key, dim + 1u));
+        const float2 uGlossy = Sampler_Other2D(scene, path[k], key, dim);
         if (!Path_SpecularBounce(materials[hit->material[k]], -ray[k].direction.xyz, ns[k], ng[k], p[k], hit->t[k],
-                                 (hit->inside >> k) & 1, Rng_Uniform(key, dim + 2u), uGlossy, &weight[k], &org[k], &dirs[k]))
+                                 (hit->inside >> k) & 1, Sampler_Other1D(scene, path[k], key, dim + 2u), uGlossy, &weight[k], &org[k], &dirs[k]))
             specBits &= ~(1 << k);
     }
     return specBits;
@@ -309,7 +328,9 @@ inline uint Lanes_Children(SceneParams scene, int pixel, int depth, int specBits
         if (!(*live & (1 << k))) continue;
         const int spec = (specBits >> k) & 1, roulette = (mode & CLRT_PATH_RR) && depth >= scene.rrMinDepth;
         float3 next = spec ? path[k].throughput.xyz * (specWeight[k] / pSpec[k]) : next3[k];
-        if (roulette && !Path_RussianRoulette(&next, Rng_Uniform(Rng_Key(scene.seed, pixel, path[k].sample, id), dim + 4u))) {
+        PathState drawn = path[k]; /* the path id the depth's numbers were drawn with */
+        drawn.pathId = id;
+        if (roulette && !Path_RussianRoulette(&next, Sampler_Other1D(scene, drawn, Rng_Key(scene.seed, pixel, drawn.sample, id), dim + 4u))) {
             *live &= ~(1 << k);
             continue;
         }
@@ -354,8 +375,8 @@ inline uint Lanes_Paths(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int lightSlot
         LaneV3 sum = hit.radiance;
         for (int l = 0; l < scene.numLights && hit.nee; ++l)
             sum = Lanes_HasLaneForm(&lights[l])
-                      ? LaneV3_Add(sum, Lanes_LightSample(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) & lights[l], &hit,
-                                                          throughput, strat, sample, dim + 8u + 2u * (uint)l))
+                      ? LaneV3_Add(sum, Lanes_LightSample(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) & lights[l], &hit, path,
+                                                          pixel, throughput, strat, sample, dim + 8u + 2u * (uint)l))
                       : Lanes_ScalarLightSample(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) l, lightSlots, &hit, path, pixel, sum);
         float3 out[CLRT_LANES];
         LaneV3_Store(sum, out);
@@ -367,7 +388,7 @@ inline uint Lanes_Paths(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int lightSlot
         float3 org[CLRT_LANES], dirs[CLRT_LANES], next3[CLRT_LANES], specWeight[CLRT_LANES];
         int specBits = Lanes_PickSpecular(scene, pixel, path, &hit, dim, &live, pSpec);
         LaneF u1, u2, pdf;
-        Lanes_Stratified2D(strat, sample, dim + 5u, &u1, &u2);
+        Lanes_Sample2D(scene, strat, sample, path, pixel, dim + 5u, &u1, &u2);
         LaneV3 dir;
         const int diffuseBits = Lanes_Bounce(materials, mode, live & ~specBits, &hit, vload4(0, pSpec), u1, u2, &throughput,
                                              &dir, &pdf);

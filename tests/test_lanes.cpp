@@ -259,6 +259,53 @@ TEST_CASE("lanes: scenes/lanes_mix.xml (every per-lane branch at once) as render
     }
 }
 
+TEST_CASE("lanes: the zsobol and independent samplers draw what render_fused draws", "[lanes][shared]") {
+    if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
+    // Sampler_2D per lane; Sampler_Other1D/2D for the specular pick, the glossy and Fresnel draws and
+    // roulette. The hw6 box with a mirror beside a diffuse part, roulette on.
+    Scene scene = loadScene(sharedDir() + "/scenes/" + kPathBox);
+    for (Shape& sh : scene.shapes) {
+        if (sh.type != ShapeType::Sphere) continue;
+        Material m = scene.materials.at(size_t(sh.materialIndex));
+        m.type = dev::MATERIAL_MIRROR;
+        m.mirror = {0.6f, 0.6f, 0.6f};
+        scene.materials.push_back(m);
+        sh.materialIndex = int(scene.materials.size()) - 1;
+        break;
+    }
+    for (PixelSampler sampler : {PixelSampler::ZSobol, PixelSampler::Independent}) {
+        DeviceScene ds = flattenScene(scene);
+        ds.features.zsobol = sampler == PixelSampler::ZSobol;  // as clrt render --sampler builds it
+        ds.features.correlatedSampler = sampler == PixelSampler::Correlated;
+        Renderer r(testContext(), ds);
+        for (int mode : {CLRT_PATH_ON | CLRT_PATH_MIS, CLRT_PATH_ON | CLRT_PATH_NEE | CLRT_PATH_IMPORTANCE | CLRT_PATH_RR}) {
+            Camera cam = scene.cameras.at(0);
+            cam.pathMode = mode;
+            cam.width = cam.height = 40;
+            INFO("sampler " << int(sampler) << ", path mode " << mode);
+            RenderSettings rs;
+            rs.spp = 8;
+            rs.seed = 3;
+            rs.pixelSampler = sampler;
+            RenderCounters cl, cf, cf2;
+            rs.pipeline = Pipeline::Lanes;
+            const ImageRGB l = r.render(cam, rs, cl);
+            rs.pipeline = Pipeline::Fused;
+            const ImageRGB f = r.render(cam, rs, cf);
+            rs.seed = 4;
+            const ImageRGB f2 = r.render(cam, rs, cf2);
+            CHECK(cl.lanes);
+            const double noise = relMse(f2, f), diff = relMse(l, f);
+            INFO("relMSE lanes/fused " << diff << ", between seeds " << noise);
+            CHECK(noise > 1e-3);
+            CHECK(diff < 1e-5 * noise);
+            CHECK(diff < 1e-5);
+            CHECK(cl.secondaryRays == cf.secondaryRays);
+            CHECK(cl.shadowRays == cf.shadowRays);
+        }
+    }
+}
+
 TEST_CASE("lanes: deterministic, several launches and sample counts that are no multiple of four", "[lanes][shared]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
     Scene scene = loadScene(sharedDir() + "/scenes/" + kPathBox);
@@ -323,9 +370,12 @@ TEST_CASE("lanes: which scenes and cameras it takes; auto takes it on CPU device
     dev::SceneParams course = sp;
     course.pathMode |= CLRT_PATH_RR | CLRT_PATH_RR_COURSE;
     CHECK(lanesUnsupported(course, plan, "", true).find("course") != std::string::npos);
-    dev::SceneParams indep = sp;
+    dev::SceneParams indep = sp;  // test "lanes: the zsobol and independent samplers"
     indep.pixelSampler = CLRT_PIXEL_SAMPLER_INDEPENDENT;
-    CHECK_FALSE(lanesUnsupported(indep, plan, "", true).empty());
+    CHECK(lanesUnsupported(indep, plan, "", true).empty());
+    dev::SceneParams correlated = sp;
+    correlated.pixelSampler = CLRT_PIXEL_SAMPLER_CORRELATED;
+    CHECK_FALSE(lanesUnsupported(correlated, plan, "", true).empty());
     dev::SceneParams classic = sp;
     classic.pathMode = 0;
     CHECK_FALSE(lanesUnsupported(classic, plan, "", true).empty());
@@ -335,13 +385,14 @@ TEST_CASE("lanes: which scenes and cameras it takes; auto takes it on CPU device
     FusedPlan twoSlots = plan;  // an environment light's MIS pair: the lanes take it
     twoSlots.lightSlots = 2;
     CHECK(lanesUnsupported(sp, twoSlots, "", true).empty());
-    // Asked for where it cannot run: the fused kernel, the same image as asking for it.
+    // Asked for where it cannot run (the course's roulette): the fused kernel, the same image as asking for it.
     RenderSettings rs;
     rs.spp = 2;
     rs.seed = 5;
-    rs.pixelSampler = PixelSampler::Independent;
+    rs.rouletteRule = RouletteRule::Course;
     rs.pipeline = Pipeline::Lanes;
     Camera small = cam;
+    small.pathMode = CLRT_PATH_ON | CLRT_PATH_NEE | CLRT_PATH_RR;
     small.width = small.height = 40;
     RenderCounters cl, cf;
     const ImageRGB l = r.render(small, rs, cl);
