@@ -12,8 +12,8 @@
  *     Path_LightSampleWeight, ObjectLight_AimShadow) and the bounce (Path_SampleBounce, Path_Child).
  * It computes what render_fused computes for the same random streams, up to rounding (tests/test_lanes.cpp):
  * one lane is one path of the fused kernel. Scenes of its family only (src/flatten/device_scene.h
- * lanesFamily, src/render/fused_renderer.h lanesUnsupported): not the correlated sampler (the others: the
- * lanes' stratified form, or Sampler_2D per lane), no tree of paths, no motion blur or mip-maps; every surface (a plain world-space triangle's in lanes, the others per lane:
+ * lanesFamily, src/render/fused_renderer.h lanesUnsupported): every sampler (the lanes' stratified form,
+ * or Sampler_2D per lane), no tree of paths, no motion blur or mip-maps; every surface (a plain world-space triangle's in lanes, the others per lane:
  * Lanes_ScalarSurface, textures and instances included), every material (a direction-free f,
  * CLRT_BRDF_LAMBERTIAN, in lanes; a glossy or textured one per lane: Lanes_GlossyLightTerms,
  * Lanes_GlossyBounces) and every light (LightMesh and point lights in lanes, the others per lane:

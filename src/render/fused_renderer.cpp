@@ -54,7 +54,6 @@ std::string lanesUnsupported(const dev::SceneParams& sp, const FusedPlan& plan, 
     if (!notFamily.empty()) return "scene: " + notFamily;
     if (sp.pathMode == 0) return "camera not path traced";
     if (sp.pathMode & CLRT_PATH_RR_COURSE) return "--rr-rule course";
-    if (sp.pixelSampler == CLRT_PIXEL_SAMPLER_CORRELATED) return "the correlated sampler";
     if (plan.tree || sp.splitDepth > 0) return "a tree of paths (splits)";
     return "";
 }
