@@ -36,6 +36,20 @@ double relMse(const ImageRGB& a, const ImageRGB& b) {
 
 const char* kPathBox = "hw6/cornellbox_jaroslav_path_diffuse.xml";
 
+// The scene's first sphere made a mirror of reflectance r that keeps its material's diffuse part (a new
+// material: the others using the old one keep it).
+void mirrorFirstSphere(Scene& scene, float r) {
+    for (Shape& sh : scene.shapes) {
+        if (sh.type != ShapeType::Sphere) continue;
+        Material m = scene.materials.at(size_t(sh.materialIndex));
+        m.type = dev::MATERIAL_MIRROR;
+        m.mirror = {r, r, r};
+        scene.materials.push_back(m);
+        sh.materialIndex = int(scene.materials.size()) - 1;
+        return;
+    }
+}
+
 // Renders cam (size × size, 8 spp) with the lanes and with render_fused at seed 3, and render_fused at
 // seed 4 for the noise between seeds; checks that the lanes computed render_fused's image up to rounding
 // (relMSE under 1e-5 of that noise, which must exceed minNoise, and under maxDiff) with the same rays.
@@ -139,15 +153,7 @@ TEST_CASE("lanes: glossy lobes (classic Phong and every BRDF kind) as render_fus
             m.refractionIndex = 1.6f;
             m.brdf = k.brdf >= 0 ? int(scene.brdfs.size()) - 1 : -1;
         }
-        for (Shape& sh : scene.shapes) {
-            if (sh.type != ShapeType::Sphere) continue;
-            Material m = scene.materials.at(size_t(sh.materialIndex));
-            m.type = dev::MATERIAL_MIRROR;
-            m.mirror = {0.5f, 0.5f, 0.5f};
-            scene.materials.push_back(m);
-            sh.materialIndex = int(scene.materials.size()) - 1;
-            break;
-        }
+        mirrorFirstSphere(scene, 0.5f);
         DeviceScene ds = flattenScene(scene);
         REQUIRE(lanesFamily(ds).empty());
         for (const dev::Material& m : ds.materials) CHECK_FALSE(m.brdfFlags & CLRT_BRDF_LAMBERTIAN);
@@ -265,15 +271,7 @@ TEST_CASE("lanes: the zsobol, independent and correlated samplers draw what rend
     // dimensions are the stratified ones); Sampler_Other1D/2D for the specular pick and the glossy and
     // Fresnel draws. The hw6 box with a mirror beside a diffuse part. (Roulette: the first test case.)
     Scene scene = loadScene(sharedDir() + "/scenes/" + kPathBox);
-    for (Shape& sh : scene.shapes) {
-        if (sh.type != ShapeType::Sphere) continue;
-        Material m = scene.materials.at(size_t(sh.materialIndex));
-        m.type = dev::MATERIAL_MIRROR;
-        m.mirror = {0.6f, 0.6f, 0.6f};
-        scene.materials.push_back(m);
-        sh.materialIndex = int(scene.materials.size()) - 1;
-        break;
-    }
+    mirrorFirstSphere(scene, 0.6f);
     for (PixelSampler sampler : {PixelSampler::ZSobol, PixelSampler::Independent, PixelSampler::Correlated}) {
         DeviceScene ds = flattenScene(scene);
         ds.features.zsobol = sampler == PixelSampler::ZSobol;  // as clrt render --sampler builds it
