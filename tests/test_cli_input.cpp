@@ -395,3 +395,51 @@ TEST_CASE("cli input: extra numbers in <NearPlane> give one warning naming file:
         CHECK(linesWith(r.log, "Scissor") == 1);
     }
 }
+
+// A path-traced camera with Russian roulette has no depth cap, so a surface that gives back more light
+// than it receives makes the image diverge (scenes/lanes_mix.xml's classic walls, kd 0.6: pixels of 1e19
+// under RR). clrt render says so once, naming the material and the camera; nothing below 1 warns.
+TEST_CASE("cli input: a material that gains energy under uncapped path tracing warns once", "[cli][cli-input][path]") {
+    TempDir d;
+    const std::string tri = "<Triangle id=\"1\"><Indices>1 2 3</Indices><Material>1</Material></Triangle>";
+    const std::string base = xmlScene("-1 -1 0 1 -1 0 0 1 0", tri);
+    auto variant = [&](const std::string& params, const std::string& material, const std::string& brdfs = "") {
+        std::string s = sub(base, "<ImageName>out.png</ImageName>",
+                            "<ImageName>out.png</ImageName><NumSamples>1</NumSamples><Renderer>PathTracing</Renderer>"
+                            "<RendererParams>" + params + "</RendererParams>");
+        return sub(s, "<Materials><Material id=\"1\"><DiffuseReflectance>1 1 1</DiffuseReflectance></Material></Materials>",
+                   brdfs + "<Materials>" + material + "</Materials>");
+    };
+    const std::string classic06 = "<Material id=\"1\"><DiffuseReflectance>0.6 0.6 0.6</DiffuseReflectance></Material>";
+    auto warnings = [&](const std::string& xml) {
+        writeFileBytes(d.file("s.xml"), xml);
+        CliRun r = render(d, "s.xml");
+        INFO(r.log);
+        CHECK(r.rc == 0);
+        return r;
+    };
+    SECTION("classic kd 0.6 (pi*kd = 1.88) with RussianRoulette") {
+        CliRun r = warnings(variant("NextEventEstimation RussianRoulette", classic06));
+        CHECK(linesWith(r.log, "warning:") == 1);
+        CHECK(linesWith(r.log, "s.xml: material 1 gives back up to 1.88 times") == 1);
+        CHECK(linesWith(r.log, "camera 1 plays Russian roulette") == 1);
+    }
+    SECTION("a mirror with a diffuse part: pi*0.2 + 0.6 = 1.23") {
+        CliRun r = warnings(variant("RussianRoulette", "<Material id=\"1\" type=\"mirror\"><DiffuseReflectance>0.2 0.2 0.2"
+                                                       "</DiffuseReflectance><MirrorReflectance>0.6 0.6 0.6</MirrorReflectance></Material>"));
+        CHECK(linesWith(r.log, "material 1 gives back up to 1.23 times") == 1);
+    }
+    SECTION("the same material with a depth cap (no roulette): no warning") {
+        CHECK(linesWith(warnings(variant("NextEventEstimation", classic06)).log, "warning:") == 0);
+    }
+    SECTION("classic kd 0.3 (0.94) with RussianRoulette: no warning") {
+        CHECK(linesWith(warnings(variant("RussianRoulette", "<Material id=\"1\"><DiffuseReflectance>0.3 0.3 0.3"
+                                                           "</DiffuseReflectance></Material>")).log, "warning:") == 0);
+    }
+    SECTION("a normalized BRDF with kd 0.9 and RussianRoulette: no warning") {
+        CHECK(linesWith(warnings(variant("RussianRoulette", "<Material id=\"1\" BRDF=\"1\"><DiffuseReflectance>0.9 0.9 0.9"
+                                                           "</DiffuseReflectance></Material>",
+                                         "<BRDFs><ModifiedPhong id=\"1\" normalized=\"true\"><Exponent>10</Exponent>"
+                                         "</ModifiedPhong></BRDFs>")).log, "warning:") == 0);
+    }
+}

@@ -5,6 +5,7 @@
 // do not go together). Reads the scene's cameras (id, size) and its input files.
 #include "cli/render_cmd.h"
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -210,6 +211,21 @@ std::vector<PlannedOutput> plannedOutputs(const RenderArgs& a, const Scene& scen
 // From here on Ctrl-C finishes the pass and writes the partial image; not in an MPI job: a signal
 // there (mpirun ending every rank because one failed, or the job cancelled) exits at once, writing
 // no image of a camera not yet finished, with a line naming the rank.
+// A camera path traced with Russian roulette has no depth cap: a surface that gives back more light than it
+// receives (energyGainingMaterial) makes its image diverge (pixels of 1e10 and more). Said once, naming it.
+void warnEnergyGain(const Scene& scene, const DeviceScene& ds, const std::vector<const Camera*>& cams) {
+    const auto rr = std::find_if(cams.begin(), cams.end(), [](const Camera* c) { return (c->pathMode & CLRT_PATH_RR) != 0; });
+    if (rr == cams.end()) return;
+    const int k = energyGainingMaterial(ds);
+    if (k < 0 || size_t(k) >= scene.materials.size()) return;
+    char albedo[32];
+    std::snprintf(albedo, sizeof albedo, "%.2f", double(pathAlbedoBound(ds.materials[size_t(k)])));
+    warnOnce(scene.path + ": material " + std::to_string(scene.materials[size_t(k)].id) + " gives back up to " + albedo +
+             " times the light it receives on a path (a classic or un-normalized material reflects pi*kd), and camera " +
+             std::to_string((*rr)->id) + " plays Russian roulette without a depth cap: its image may not converge; "
+             "give the material a normalized BRDF or a smaller DiffuseReflectance");
+}
+
 void setRenderInterrupts(const RenderArgs& a) {
     MpiJob& job = MpiJob::get();
     setGracefulInterrupt(!job.distributed());
@@ -300,6 +316,8 @@ int renderScene(RenderArgs a) {
     std::vector<std::unique_ptr<Renderer>>& renderers = dr.renderers;
     times.build = secondsSince(t);
     if (verbose()) printSetup(ds, renderers);
+
+    warnEnergyGain(scene, ds, cams);
 
     RenderCounters counters;
     std::vector<DeviceWork> work(renderers.size());

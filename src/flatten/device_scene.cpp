@@ -49,6 +49,22 @@ std::string lanesFamily(const DeviceScene& ds) {
     return "";
 }
 
+// Whether some primitive of ds (triangle, sphere, plane, instance; not the arrays' dummy entries) has a
+// (material, texture set) for which pred holds.
+template <typename Pred>
+static bool someSurface(const DeviceScene& ds, Pred pred) {
+    for (int i = 0; i < ds.params.numTriangles; ++i)  // not the arrays' dummy entries (flattenGeometry)
+        if (pred(ds.triangleShading[size_t(i)].material, ds.triangleShading[size_t(i)].textureSet)) return true;
+    for (int i = 0; i < ds.params.numSpheres; ++i)
+        if (pred(ds.spheres[size_t(i)].material, ds.spheres[size_t(i)].textureSet)) return true;
+    for (const dev::Plane& pl : ds.planes)  // the dummy plane has a zero normal and is never hit
+        if ((pl.normal.x != 0.0f || pl.normal.y != 0.0f || pl.normal.z != 0.0f) && pred(pl.material, pl.textureSet))
+            return true;
+    for (const dev::Instance& in : ds.instances)
+        if (pred(in.material, in.textureSet)) return true;
+    return false;
+}
+
 std::string lanesNoGain(const DeviceScene& ds) {
     // A surface the lanes shade in lanes: untextured, a diffuse part (kd > 0) whose f is direction-free
     // (CLRT_BRDF_LAMBERTIAN). A light's black surface has nothing to shade.
@@ -57,16 +73,33 @@ std::string lanesNoGain(const DeviceScene& ds) {
         const dev::Material& m = ds.materials[size_t(material)];
         return (m.brdfFlags & CLRT_BRDF_LAMBERTIAN) != 0 && (m.diffuse.x > 0.0f || m.diffuse.y > 0.0f || m.diffuse.z > 0.0f);
     };
-    for (int i = 0; i < ds.params.numTriangles; ++i)  // not the arrays' dummy entries (flattenGeometry)
-        if (inLanes(ds.triangleShading[size_t(i)].material, ds.triangleShading[size_t(i)].textureSet)) return "";
-    for (int i = 0; i < ds.params.numSpheres; ++i)
-        if (inLanes(ds.spheres[size_t(i)].material, ds.spheres[size_t(i)].textureSet)) return "";
-    for (const dev::Plane& pl : ds.planes)  // the dummy plane has a zero normal and is never hit
-        if ((pl.normal.x != 0.0f || pl.normal.y != 0.0f || pl.normal.z != 0.0f) && inLanes(pl.material, pl.textureSet))
-            return "";
-    for (const dev::Instance& in : ds.instances)
-        if (inLanes(in.material, in.textureSet)) return "";
+    if (someSurface(ds, inLanes)) return "";
     return "no untextured Lambertian surface (the rest is shaded per lane: no faster than render_fused)";
+}
+
+float pathAlbedoBound(const dev::Material& m) {
+    // The BRDFs whose diffuse term is kd/π: normalized Modified(Blinn)Phong and TorranceSparrow
+    // (docs/scene-format.md, conventions); the classic model and the others take kd (f·cosθ = kd·cosθ).
+    const bool overPi = ((m.brdf == dev::BRDF_MODIFIED_PHONG || m.brdf == dev::BRDF_MODIFIED_BLINN_PHONG) &&
+                         (m.brdfFlags & CLRT_BRDF_NORMALIZED)) ||
+                        m.brdf == dev::BRDF_TORRANCE_SPARROW;
+    const float kd = std::max(m.diffuse.x, std::max(m.diffuse.y, m.diffuse.z));
+    const float mirror = std::max(m.mirror.x, std::max(m.mirror.y, m.mirror.z));
+    float specular = 0.0f;  // the specular child's weight (a conductor's Fresnel factor is at most 1)
+    if (m.kind == dev::MATERIAL_MIRROR || m.kind == dev::MATERIAL_CONDUCTOR) specular = mirror;
+    if (m.kind == dev::MATERIAL_DIELECTRIC) specular = 1.0f;  // reflection or refraction by Fresnel weight
+    return (overPi ? kd : kd * 3.14159265f) + specular;
+}
+
+int energyGainingMaterial(const DeviceScene& ds) {
+    int worst = -1;
+    someSurface(ds, [&](int material, int) {
+        if (material < 0 || size_t(material) >= ds.materials.size()) return false;
+        const float a = pathAlbedoBound(ds.materials[size_t(material)]);
+        if (a > 1.0f && (worst < 0 || a > pathAlbedoBound(ds.materials[size_t(worst)]))) worst = material;
+        return false;  // visit every surface
+    });
+    return worst;
 }
 
 dev::CameraParams makeCameraParams(const Camera& cam) {

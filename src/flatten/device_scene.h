@@ -117,6 +117,15 @@ std::string lanesFamily(const DeviceScene& ds);
 // per lane, where the lanes took 1.02-1.04x render_fused's time on the course's glossy boxes;
 // docs/architecture.md "Paths in lanes").
 std::string lanesNoGain(const DeviceScene& ds);
+// What a path's throughput gains, in expectation, at a bounce off material m, from its untextured diffuse
+// part and its specular child: π·kd for classic materials and the BRDFs that take kd without 1/π (the
+// course's un-normalized models), kd for the normalized ones and TorranceSparrow; plus the mirror
+// reflectance (mirror, conductor: an upper bound) or 1 (dielectric). The glossy ks lobe is not counted.
+float pathAlbedoBound(const dev::Material& m);
+// The index of the material, among those some primitive uses, with the largest pathAlbedoBound above 1,
+// or -1. A closed scene of such surfaces gains energy at every bounce: a path tracer without a depth cap
+// (RussianRoulette) does not converge there (clrt render warns).
+int energyGainingMaterial(const DeviceScene& ds);
 
 dev::CameraParams makeCameraParams(const Camera& cam);
 // Sets spp (at least 1).
