@@ -148,15 +148,10 @@ inline void Lanes_Geometry(const LanesGather* g, LaneV3* p, LaneV3* ngRaw, LaneV
 /* The non-specular f of material `material` (ks = 0: Material_EvalDirect's value for any pair of
  * directions above the surface; a BRDF's is 0 where wo is below ns, Lanes_Surfaces). */
 inline float3 Lanes_MaterialF(const __global Material* materials, int material) {
-    const __global Material* m = &materials[material];
-    ShadingPoint sp;
-    sp.position = (float4)(0.0f, 0.0f, 0.0f, 1.0f);
-    sp.normal = sp.geomNormal = sp.wo = (float4)(0.0f, 0.0f, 1.0f, 0.0f);
-    sp.kd = (float4)(m->diffuse.xyz, 0.0f);
-    sp.ks = (float4)(m->specular.xyz, m->phongExponent);
-    sp.material = material;
-    sp.pad0 = sp.pad1 = sp.pad2 = 0;
-    return Material_EvalDirect(sp, materials, (float3)(0.0f, 0.0f, 1.0f), 1.0f);
+    const Material m = materials[material];
+    const float3 z = (float3)(0.0f, 0.0f, 1.0f);
+    const ShadingPoint sp = ShadingPoint_Make((float3)(0.0f), z, z, z, m.diffuse.xyz, m.specular.xyz, m, material);
+    return Material_EvalDirect(sp, materials, z, 1.0f);
 }
 
 /* The ShadingPoints (ShadingPoint_Make) of the hits of the lanes in `lanes`. */
