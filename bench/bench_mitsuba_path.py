@@ -441,6 +441,8 @@ def main(B, clrt, a):
     import drjit as dr
     import mitsuba as mi
     mi.set_variant(a.mitsuba_variant)
+    import mitsuba_course_brdf
+    mitsuba_course_brdf.register()  # glossy course materials (to_mitsuba_path.course_brdf)
     a.threads = os.cpu_count() or 2
     dr.set_thread_count(a.threads)
     a.mi_version = mi.__version__

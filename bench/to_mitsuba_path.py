@@ -16,10 +16,12 @@ Conventions (clrt's, docs/scene-format.md "Path tracing" and cl_kernels/path.cl,
 - Diffuse: f = kd/π in normalized Modified(Blinn)Phong and TorranceSparrow (Mitsuba ρ = kd), kd in the
   other BRDFs and in classic materials (ρ = π·kd). A ρ above 1 is a raw 1x1 bitmap (Mitsuba's rgb
   reflectance refuses it).
-- Not mapped (warned, dropped on the Mitsuba side, so a benchmark scene should have none of them): the
-  specular lobe of every BRDF (SpecularReflectance: Phong, Blinn-Phong and Torrance-Sparrow as the
-  course defines them have no Mitsuba 3 plugin; Mitsuba 3 dropped Mitsuba 0.6's phong, and its
-  roughconductor/roughplastic are GGX/Beckmann microfacets with another shape and Fresnel); textures;
+- A material with a specular lobe (SpecularReflectance > 0: Phong, Blinn-Phong, Torrance-Sparrow as the
+  course defines them, or a classic material's Blinn-Phong) is rendered in Mitsuba by the plugin
+  coursebrdf (bench/mitsuba_course_brdf.py: clrt's formulas in Dr.Jit; Mitsuba 3 has no Phong, and its
+  roughconductor/roughplastic are GGX/Beckmann microfacets with another shape and Fresnel); without one,
+  by Mitsuba's diffuse (as before the plugin: the same images).
+- Not mapped (warned, dropped on the Mitsuba side, so a benchmark scene should have none of them): textures;
   Roughness (clrt perturbs the mirror direction uniformly in a square, not a microfacet law); a
   dielectric's AbsorptionCoefficient (Beer's law needs a medium, which `path` does not trace); a
   LightSphere that is not a similarity (Mitsuba's sphere cannot be an ellipsoid).
@@ -131,6 +133,33 @@ def _specular(c, mid, mat, kind, scale):
     return None
 
 
+COURSE_BRDF_KINDS = {"originalphong": "original_phong", "originalblinnphong": "original_blinn_phong",
+                     "modifiedphong": "modified_phong", "modifiedblinnphong": "modified_blinn_phong",
+                     "torrancesparrow": "torrance_sparrow"}
+
+
+def course_brdf(c, mat, kd, ks):
+    """The plugin coursebrdf (bench/mitsuba_course_brdf.py) for a material with a specular lobe: its BRDF
+    (Material BRDF="id"), or a classic material's Blinn-Phong (f = kd + ks cos^p αh / cosθi, p =
+    PhongExponent: OriginalBlinnPhong)."""
+    d = {"type": "coursebrdf", "kind": "original_blinn_phong",
+         "exponent": _nums(mat.find("PhongExponent"), [1.0])[0]}
+    bid = mat.get("BRDF")
+    brdfs = c.root.find("BRDFs")
+    for b in (brdfs if brdfs is not None and bid else []):
+        if b.get("id") == bid:
+            d["kind"] = COURSE_BRDF_KINDS[b.tag.lower()]
+            d["exponent"] = _nums(b.find("Exponent"), [1.0])[0]
+            d["normalized"] = b.get("normalized", "").strip().lower() in ("true", "1", "yes")
+            d["kd_fresnel"] = b.get("kdfresnel", "").strip().lower() in ("true", "1", "yes")
+    d["eta"] = _nums(mat.find("RefractionIndex"), [1.0])[0]
+    d["k"] = _nums(mat.find("AbsorptionIndex"), [0.0])[0]
+    for name, rgb in (("kd", kd), ("ks", ks)):
+        for ch, x in zip("rgb", rgb):
+            d["%s_%s" % (name, ch)] = float(x)
+    return d
+
+
 def bsdf(c, mid):
     """Mitsuba's BSDF of material mid (see the module comment)."""
     mat = next((m for m in (c.root.find("Materials") or []) if m.get("id") == mid), None)
@@ -141,14 +170,15 @@ def bsdf(c, mid):
     ks = _nums(mat.find("SpecularReflectance"), [0, 0, 0])
     if mat.get("degamma", "").lower() == "true":
         kd, ks = [x ** 2.2 for x in kd], [x ** 2.2 for x in ks]
-    if max(ks) > 0:
-        c.warn("material %s: SpecularReflectance (the BRDF's specular lobe) dropped: no Mitsuba 3 equivalent" % mid)
     kind = mat.get("type", "")
     nonspec = max(kd) > 0 or max(ks) > 0  # clrt's pick between the two parts (path.cl) counts ks too
     is_spec = kind in ("mirror", "conductor", "dielectric") or mat.find("Transparency") is not None
     w = 2.0 if (is_spec and nonspec) else 1.0  # each part picked with probability 1/2: blend of twice each
-    rho = [w * diffuse_scale(c, mat) * x for x in kd]
-    diffuse = {"type": "diffuse", "reflectance": value(c, "kd_" + mid, rho)}
+    if max(ks) > 0:  # a specular lobe: the course's BRDF itself (mitsuba_course_brdf.py)
+        diffuse = course_brdf(c, mat, [w * x for x in kd], [w * x for x in ks])
+    else:
+        rho = [w * diffuse_scale(c, mat) * x for x in kd]
+        diffuse = {"type": "diffuse", "reflectance": value(c, "kd_" + mid, rho)}
     spec = _specular(c, mid, mat, kind, w) if is_spec else None
     if spec is None:
         return {"type": "twosided", "bsdf": diffuse}
