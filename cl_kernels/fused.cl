@@ -45,7 +45,7 @@ inline float3 Fused_Path(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int lightSlo
     int instance;
     Hit h = Ray_Closest(ray, scene, nodes, leaves, tris, spheres, planes, instances, &instance);
     Shade_Hit(scene, cam, path, ray, h, instance, tris, triShading, triAttributes, spheres, planes, instances, materials, textureSets, textures, images,
-              texels, lights, envDist, res);
+              texels, lights, envDist, lightData, res);
     float4 sum = res->radiance;
     const ShadingPoint sp = res->sp;
     if (!(sp.position.w > 0.0f)) {

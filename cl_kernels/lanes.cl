@@ -100,13 +100,51 @@ inline LaneI Lanes_PickTriangle(const __global float4* tri, int n, LaneF u, Lane
     return pos;
 }
 
+/* MeshLight_Weight at the lanes' points p, the same operations in lanes. */
+inline LaneF Lanes_MeshLightWeight(float3 a, float3 b, float3 c, LaneV3 p) {
+    const LaneV3 ra = LaneV3_Sub(LaneV3_Splat(a), p), rb = LaneV3_Sub(LaneV3_Splat(b), p), rc = LaneV3_Sub(LaneV3_Splat(c), p);
+    const LaneF la = sqrt(LaneV3_Dot(ra, ra)), lb = sqrt(LaneV3_Dot(rb, rb)), lc = sqrt(LaneV3_Dot(rc, rc));
+    const LaneF num = fabs(LaneV3_Dot(ra, LaneV3_Cross(rb, rc)));
+    const LaneF den = la * lb * lc + LaneV3_Dot(ra, rb) * lc + LaneV3_Dot(ra, rc) * lb + LaneV3_Dot(rb, rc) * la;
+    const LaneF w = select((LaneF)(CLRT_MESHLIGHT_WEIGHT_CAP), num / den, den * CLRT_MESHLIGHT_WEIGHT_CAP > num);
+    return select((LaneF)(0.0f), w, num > 0.0f);
+}
+
+/* MeshLight_PickByWeight for the lanes (n <= CLRT_MESHLIGHT_PICK_MAX): the picked triangles, *uRest, and
+ * *total (Σw) and *wPick (the pick's w) from which the caller makes A·Σw / w; *wPick 0 where nothing is picked. */
+inline LaneI Lanes_PickByWeight(const __global float4* tri, int n, LaneV3 p, LaneF u, LaneF* uRest, LaneF* total,
+                                LaneF* wPick) {
+    LaneF w[CLRT_MESHLIGHT_PICK_MAX];
+    LaneF sum = (LaneF)(0.0f);
+    for (int i = 0; i < n; ++i) {
+        w[i] = Lanes_MeshLightWeight(tri[3 * i].xyz, tri[3 * i + 1].xyz, tri[3 * i + 2].xyz, p);
+        sum += w[i];
+    }
+    const LaneF x = u * sum;
+    LaneF below = (LaneF)(0.0f), wk = w[0];
+    LaneI k = (LaneI)(0), going = (LaneI)(-1);
+    for (int i = 0; i < n - 1; ++i) { /* as the scalar loop: past triangle i while x is not below its end */
+        going &= !(x < below + w[i]);
+        below = select(below, below + w[i], going);
+        k = select(k, (LaneI)(i + 1), going);
+        wk = select(wk, w[i + 1], going);
+    }
+    const LaneI ok = (sum > 0.0f) & isfinite(sum) & (wk > 0.0f);
+    *uRest = select((LaneF)(0.5f), clamp((x - below) / wk, 0.0f, 0.99999994f), ok);
+    *total = sum;
+    *wPick = select((LaneF)(0.0f), wk, ok);
+    return k;
+}
+
 /* MeshLight_Sample for the lanes at p: *wi, *dist (MeshLight_ShadowLength's), the radiance estimate *e
  * (0 where the sample fails), and the light's point's offset distance; u: the lanes' 2D sample. */
 inline void Lanes_MeshLightSample(const __global Light* light, const __global float4* lightData, LaneV3 p, LaneF u1,
                                   LaneF u2, LaneV3* wi, LaneF* dist, LaneV3* e) {
     const __global float4* tri = lightData + light->objFirst;
-    LaneF ux;
-    const LaneI pick = Lanes_PickTriangle(tri, light->objCount, u1, &ux);
+    LaneF ux, total = (LaneF)(0.0f), wPick = (LaneF)(0.0f);
+    const int byWeight = light->objCount <= CLRT_MESHLIGHT_PICK_MAX;
+    const LaneI pick = byWeight ? Lanes_PickByWeight(tri, light->objCount, p, u1, &ux, &total, &wPick)
+                                : Lanes_PickTriangle(tri, light->objCount, u1, &ux);
     int at[CLRT_LANES];
     float3 v0[CLRT_LANES], v1[CLRT_LANES], v2[CLRT_LANES];
     vstore4(pick, 0, at);
@@ -124,7 +162,12 @@ inline void Lanes_MeshLightSample(const __global Light* light, const __global fl
     *wi = LaneV3_Scale(d, 1.0f / len);
     const LaneF cosLight = fabs(LaneV3_Dot(LaneV3_Normalize(LaneV3_Cross(LaneV3_Sub(b, a), LaneV3_Sub(c, a))), *wi));
     *dist = fmax(len - Lanes_OffsetDistance(q) / cosLight, 0.5f * len); /* MeshLight_ShadowLength */
-    const LaneF scale = select((LaneF)(0.0f), light->area * cosLight / d2, (d2 > 0.0f) & (cosLight > 0.0f));
+    LaneF invAreaPdf = (LaneF)(light->area);
+    if (byWeight) { /* MeshLight_TriangleArea · Σw / w */
+        const LaneV3 n = LaneV3_Cross(LaneV3_Sub(b, a), LaneV3_Sub(c, a));
+        invAreaPdf = select((LaneF)(0.0f), 0.5f * sqrt(LaneV3_Dot(n, n)) * total / wPick, wPick > 0.0f);
+    }
+    const LaneF scale = select((LaneF)(0.0f), invAreaPdf * cosLight / d2, (d2 > 0.0f) & (cosLight > 0.0f) & (invAreaPdf > 0.0f));
     *e = LaneV3_Scale(LaneV3_Splat(light->radiance.xyz), scale);
 }
 #endif
@@ -366,7 +409,7 @@ inline uint Lanes_Paths(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int lightSlot
         LanesGather g;
         Lanes_Closest(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) live, path, ray, &g);
         LanesHit hit;
-        Lanes_Surfaces(scene, materials, lights, scalarLights, &g, depth, path, ray, &hit);
+        Lanes_Surfaces(scene, materials, lights, lightData, scalarLights, &g, depth, path, ray, &hit);
         float3 thr[CLRT_LANES];
         for (int k = 0; k < CLRT_LANES; ++k) thr[k] = path[k].throughput.xyz;
         LaneV3 throughput = LaneV3_Load(thr);

@@ -73,7 +73,7 @@ inline void Lanes_ScalarSurface(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int k
     g->kd[k] = kd; g->ks[k] = ks;
     g->material[k] = s.material;
 #if defined(CLRT_HAS_LIGHT_MESH) || defined(CLRT_HAS_LIGHT_SPHERE)
-    g->emitted[k] = Path_HitEmission(h.prim, s.frontFacing, scene, triShading, spheres, lights, s.p, s.dir, s.t, s.ng,
+    g->emitted[k] = Path_HitEmission(h.prim, s.frontFacing, scene, tris, triShading, spheres, lights, lightData, s.p, s.dir, s.t, s.ng,
                                      path.throughput.w, &g->lightPdf[k]);
 #endif
 }
@@ -154,6 +154,22 @@ inline float3 Lanes_MaterialF(const __global Material* materials, int material) 
     return Material_EvalDirect(sp, materials, z, 1.0f);
 }
 
+#ifdef CLRT_HAS_LIGHT_MESH
+/* For the lanes whose ray hit a plain triangle of a LightMesh that picks by weight: area[k] becomes
+ * MeshLight_InvAreaPdf from the ray's origin p − t·dir (Path_ObjectLightPdf's), for the hit's MIS density. */
+inline void Lanes_MeshLightInvAreaPdf(const __global Light* lights, const __global float4* lightData, const LanesGather* g,
+                                      LaneV3 pHit, const float3* dirs, float* area) {
+    float3 p[CLRT_LANES];
+    LaneV3_Store(pHit, p);
+    for (int k = 0; k < CLRT_LANES; ++k) {
+        if (!((g->triBits >> k) & 1) || g->light[k] == CLRT_INVALID) continue;
+        const __global Light* light = &lights[g->light[k]];
+        if (light->objCount <= CLRT_MESHLIGHT_PICK_MAX)
+            area[k] = MeshLight_InvAreaPdf(light, lightData, g->v0[k], g->v1[k], g->v2[k], p[k] - g->t[k] * dirs[k]);
+    }
+}
+#endif
+
 /* The ShadingPoints (ShadingPoint_Make) of the hits of the lanes in `lanes`. */
 inline void Lanes_ShadingPoints(const __global Material* materials, int lanes, const LanesGather* g, LanesHit* lh,
                                 const float3* dirs) {
@@ -173,7 +189,7 @@ inline void Lanes_ShadingPoints(const __global Material* materials, int lanes, c
  * Path_EmissionWeight) in lanes, the materials per lane. depth: the lanes' (they step together);
  * scalarLights: some light has no lane form (the nee lanes get ShadingPoints). */
 inline void Lanes_Surfaces(SceneParams scene, const __global Material* materials, const __global Light* lights,
-                           int scalarLights, const LanesGather* g, int depth, const PathState* path, const Ray* ray, LanesHit* lh) {
+                           const __global float4* lightData, int scalarLights, const LanesGather* g, int depth, const PathState* path, const Ray* ray, LanesHit* lh) {
     float3 dirs[CLRT_LANES], thr[CLRT_LANES], fMat[CLRT_LANES], emit[CLRT_LANES];
     float bsdfPdf[CLRT_LANES], area[CLRT_LANES];
     int dielectric = 0, plain = 0, brdf = 0, glossy = 0;
@@ -208,6 +224,9 @@ inline void Lanes_Surfaces(SceneParams scene, const __global Material* materials
     }
     LaneV3 ngRaw, ns;
     Lanes_Geometry(g, &lh->p, &ngRaw, &ns);
+#ifdef CLRT_HAS_LIGHT_MESH
+    Lanes_MeshLightInvAreaPdf(lights, lightData, g, lh->p, dirs, area);
+#endif
     const LaneV3 dir = LaneV3_Load(dirs);
     const LaneI front = LaneV3_Dot(dir, ngRaw) < 0.0f;
     lh->ng = LaneV3_Select(LaneV3_Scale(ngRaw, -1.0f), ngRaw, front);

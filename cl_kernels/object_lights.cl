@@ -3,9 +3,14 @@
  * area CDF; a sphere's object-space centre, radius and worldToObject rows) is in the lightData buffer,
  * laid out as device_types.h describes next to struct Light (written by src/flatten/flatten_lights.cpp).
  * Both return, like every Light_Sample case, L(wi) / pdf(wi) for the sampled direction wi (solid angle).
- *   LightMesh:   a triangle by area (binary search of the CDF), a uniform point on it: pdf over the
- *                area 1/A, in solid angle d²/(A·|cosθ_L|); both faces emit (the AreaLight rule,
- *                SCENE_FORMAT.md conventions).
+ *   LightMesh:   a triangle, then a uniform point on it; both faces emit (the AreaLight rule,
+ *                SCENE_FORMAT.md conventions). A mesh of at most CLRT_MESHLIGHT_PICK_MAX triangles picks
+ *                triangle k by its weight seen from the shading point p (MeshLight_Weight: about half its
+ *                solid angle, 0 where p lies in its plane), so that the triangles that fill p's view of the
+ *                light get the samples: pdf over the area (w_k / Σw) / A_k. A larger mesh picks by area
+ *                (binary search of the CDF): pdf 1/A. In solid angle: pdf_area·d²/|cosθ_L|. A BSDF ray
+ *                that hits the mesh gets the same density (MeshLight_InvAreaPdf, from its origin:
+ *                path.cl Path_ObjectLightPdf).
  *   LightSphere: under a similarity, a direction uniform in the cone the sphere subtends: pdf
  *                1/(2π(1 − cosθmax)) (from inside: all directions, 1/4π; the inside emits nothing); under
  *                any other transform (an ellipsoid) the same in object space, from the object-space
@@ -36,6 +41,69 @@ inline int MeshLight_PickTriangle(const __global float4* tri, int n, float u, fl
     return lo;
 }
 
+/* A LightMesh of at most this many triangles picks them by MeshLight_Weight from the shading point (their
+ * weights are computed for every light sample: the cost grows with the count); larger ones by area. */
+#define CLRT_MESHLIGHT_PICK_MAX 16
+/* MeshLight_Weight's largest value: tan(Ω/2) at Ω ≈ 0.92π (p close to a large triangle). */
+#define CLRT_MESHLIGHT_WEIGHT_CAP 8.0f
+
+/* The weight of light triangle (a, b, c) seen from p: tan(Ω/2) of its solid angle Ω (Van Oosterom and
+ * Strackee's formula), at most CLRT_MESHLIGHT_WEIGHT_CAP; 0 where p lies in the triangle's plane, which
+ * then shows p nothing (cosθ_L = 0 everywhere on it). For small Ω about Ω/2: a triangle gets samples in
+ * proportion to how much of p's view it fills. Any positive weight keeps the estimate unbiased; the host
+ * reference is tests/test_object_lights.cpp hostWeight. */
+inline float MeshLight_Weight(float3 a, float3 b, float3 c, float3 p) {
+    const float3 ra = a - p, rb = b - p, rc = c - p;
+    const float la = sqrt(dot(ra, ra)), lb = sqrt(dot(rb, rb)), lc = sqrt(dot(rc, rc)); /* as the lanes' */
+    const float num = fabs(dot(ra, cross(rb, rc)));
+    const float den = la * lb * lc + dot(ra, rb) * lc + dot(ra, rc) * lb + dot(rb, rc) * la;
+    if (!(num > 0.0f)) return 0.0f;
+    return den * CLRT_MESHLIGHT_WEIGHT_CAP > num ? num / den : CLRT_MESHLIGHT_WEIGHT_CAP;
+}
+
+/* The area of light triangle (a, b, c). */
+inline float MeshLight_TriangleArea(float3 a, float3 b, float3 c) {
+    const float3 n = cross(b - a, c - a);
+    return 0.5f * sqrt(dot(n, n));
+}
+
+/* The triangle of a LightMesh of n <= CLRT_MESHLIGHT_PICK_MAX triangles picked by u with probability
+ * w_k / Σw (MeshLight_Weight from p), *uRest: u rescaled to [0, 1) inside its share; *invAreaPdf: the
+ * reciprocal of the pick's density over the area, A_k·Σw / w_k (0: nothing to pick, p sees no triangle). */
+inline int MeshLight_PickByWeight(const __global float4* tri, int n, float3 p, float u, float* uRest, float* invAreaPdf) {
+    float w[CLRT_MESHLIGHT_PICK_MAX];
+    float total = 0.0f;
+    for (int i = 0; i < n; ++i) {
+        w[i] = MeshLight_Weight(tri[3 * i].xyz, tri[3 * i + 1].xyz, tri[3 * i + 2].xyz, p);
+        total += w[i];
+    }
+    *invAreaPdf = 0.0f;
+    *uRest = 0.5f;
+    if (!(total > 0.0f) || !isfinite(total)) return 0;
+    const float x = u * total;
+    float below = 0.0f; /* the weights before k */
+    int k = 0;
+    while (k < n - 1 && !(x < below + w[k])) below += w[k++];
+    if (!(w[k] > 0.0f)) return k; /* x at the very end, on a triangle of weight 0: no sample */
+    *uRest = clamp((x - below) / w[k], 0.0f, 0.99999994f);
+    *invAreaPdf = MeshLight_TriangleArea(tri[3 * k].xyz, tri[3 * k + 1].xyz, tri[3 * k + 2].xyz) * total / w[k];
+    return k;
+}
+
+/* 1 / (the density over the area) with which MeshLight_Sample, from shading point p, draws the points of the
+ * light's triangle (v0, v1, v2): A·Σw / w of MeshLight_PickByWeight, or the mesh's area where it picks by
+ * area. The density a BSDF ray that hits the light there needs for MIS (with p its origin). */
+inline float MeshLight_InvAreaPdf(const __global Light* light, const __global float4* data, float3 v0, float3 v1, float3 v2,
+                                  float3 p) {
+    if (light->objCount > CLRT_MESHLIGHT_PICK_MAX) return light->area;
+    const __global float4* tri = data + light->objFirst;
+    float total = 0.0f;
+    for (int i = 0; i < light->objCount; ++i) total += MeshLight_Weight(tri[3 * i].xyz, tri[3 * i + 1].xyz, tri[3 * i + 2].xyz, p);
+    const float w = MeshLight_Weight(v0, v1, v2, p);
+    if (!(w > 0.0f) || !isfinite(total)) return 0.0f;
+    return MeshLight_TriangleArea(v0, v1, v2) * total / w;
+}
+
 /* How far the shadow ray towards q (on a light triangle, reached at cosθ_L over distance d) may go:
  * short of q by Ray_OffsetOrigin's offset off the surface, measured along the ray (offset / cosθ_L).
  * A ray that meets the light's triangle at a grazing angle lies within rounding distance of its plane
@@ -53,8 +121,14 @@ inline float3 MeshLight_Sample(const __global Light* light, const __global float
                                float3* wi, float* dist) {
     if (light->objCount <= 0 || !(light->area > 0.0f)) return (float3)(0.0f);
     const __global float4* tris = data + light->objFirst;
-    float ux;
-    int k = MeshLight_PickTriangle(tris, light->objCount, u.x, &ux);
+    float ux, invAreaPdf = light->area;
+    int k;
+    if (light->objCount <= CLRT_MESHLIGHT_PICK_MAX) {
+        k = MeshLight_PickByWeight(tris, light->objCount, p, u.x, &ux, &invAreaPdf);
+        if (!(invAreaPdf > 0.0f)) return (float3)(0.0f);
+    } else {
+        k = MeshLight_PickTriangle(tris, light->objCount, u.x, &ux);
+    }
     float3 v0 = tris[3 * k].xyz, v1 = tris[3 * k + 1].xyz, v2 = tris[3 * k + 2].xyz;
     float su = sqrt(ux); /* uniform on the triangle: b0 = 1 − √u1, b1 = u2·√u1 */
     float b0 = 1.0f - su, b1 = u.y * su;
@@ -68,7 +142,7 @@ inline float3 MeshLight_Sample(const __global Light* light, const __global float
     float cosLight = fabs(dot(nL, *wi)); /* both faces emit, as an AreaLight's */
     if (!(cosLight > 0.0f)) return (float3)(0.0f);
     *dist = MeshLight_ShadowLength(*dist, q, cosLight);
-    return light->radiance.xyz * (light->area * cosLight / d2);
+    return light->radiance.xyz * (invAreaPdf * cosLight / d2);
 }
 
 /* Distance along unit wi from p to the front (outside) surface of the light sphere, or −1 when the

@@ -92,17 +92,19 @@ inline float Path_MissWeight(SceneParams scene, PathState path, const __global L
 
 #if defined(CLRT_HAS_LIGHT_MESH) || defined(CLRT_HAS_LIGHT_SPHERE)
 /* The solid-angle density with which sample_lights draws the point pHit a ray hit on object light
- * `light` (from pHit − t·dirWorld; ngWorld: the geometric normal there; s: a LightSphere's 7 float4s,
- * object_lights.cl): LightMesh: a point by area, pdf t²/(A·cosθ_L); LightSphere under a similarity: a
- * direction in its cone, 1/(2π(1 − cosθmax)) (1/4π from inside); any other LightSphere: the object-space
- * cone's, times dω_obj/dω_world. */
-inline float Path_ObjectLightPdf(const __global Light* light, const __global float4* s, float3 pHit, float3 dirWorld,
-                                 float t, float3 ngWorld) {
-    if (light->kind == LIGHT_MESH) {
-        float cosL = fabs(dot(ngWorld, dirWorld));
-        return cosL > 0.0f && light->area > 0.0f ? t * t / (light->area * cosL) : 0.0f;
-    }
+ * `light` (from origin = pHit − t·dirWorld; ngWorld: the geometric normal there; s: a LightSphere's 7
+ * float4s, object_lights.cl; tri: a LightMesh's triangle hit): LightMesh: a point of that triangle,
+ * t²/(cosθ_L·MeshLight_InvAreaPdf(origin)); LightSphere under a similarity: a direction in its cone,
+ * 1/(2π(1 − cosθmax)) (1/4π from inside); any other LightSphere: the object-space cone's, times
+ * dω_obj/dω_world. */
+inline float Path_ObjectLightPdf(const __global Light* light, const __global float4* s, const __global Triangle* tri,
+                                 const __global float4* lightData, float3 pHit, float3 dirWorld, float t, float3 ngWorld) {
     float3 origin = pHit - t * dirWorld;
+    if (light->kind == LIGHT_MESH) {
+        const float cosL = fabs(dot(ngWorld, dirWorld));
+        const float invAreaPdf = MeshLight_InvAreaPdf(light, lightData, tri->v0.xyz, tri->v1.xyz, tri->v2.xyz, origin);
+        return cosL > 0.0f && invAreaPdf > 0.0f ? t * t / (invAreaPdf * cosL) : 0.0f;
+    }
     float3 axis = light->position.xyz - origin;
     float R = light->objRadius, scale = 1.0f;
     if (light->objCount != 0) { /* the cone in object space, times dω_obj/dω_world */
@@ -122,8 +124,9 @@ inline float Path_ObjectLightPdf(const __global Light* light, const __global flo
  * density light sampling draws that point with (*lightPdf). bsdfPdf: the pdf of the bounce that made
  * the ray (0: a camera ray or a specular bounce, which see the Radiance itself); after a non-specular
  * bounce a LightSphere gives Radiance·dω_obj/dω_world, as its light samples do. */
-inline float3 Path_HitEmission(int prim, int frontFacing, SceneParams scene, const __global TriangleShading* shading,
-                               const __global Sphere* spheres, const __global Light* lights, float3 pHit,
+inline float3 Path_HitEmission(int prim, int frontFacing, SceneParams scene, const __global Triangle* tris,
+                               const __global TriangleShading* shading, const __global Sphere* spheres,
+                               const __global Light* lights, const __global float4* lightData, float3 pHit,
                                float3 dirWorld, float t, float3 ngWorld, float bsdfPdf, float* lightPdf) {
     int light = CLRT_INVALID;
     const __global float4* s = 0;
@@ -133,7 +136,7 @@ inline float3 Path_HitEmission(int prim, int frontFacing, SceneParams scene, con
         s = (const __global float4*)&spheres[prim - scene.numTriangles]; /* centre/radius, worldToObject, objectToWorld */
     }
     if (light == CLRT_INVALID || (!frontFacing && s != 0)) return (float3)(0.0f); /* a LightSphere's inside */
-    *lightPdf = Path_ObjectLightPdf(&lights[light], s, pHit, dirWorld, t, ngWorld);
+    *lightPdf = Path_ObjectLightPdf(&lights[light], s, prim < scene.numTriangles ? &tris[prim] : tris, lightData, pHit, dirWorld, t, ngWorld);
     float scale = s != 0 && bsdfPdf > 0.0f ? SphereLight_DirectionScale(&lights[light], s, dirWorld) : 1.0f;
     return lights[light].radiance.xyz * scale;
 }

@@ -444,7 +444,7 @@ inline void Shade_Hit(SceneParams scene, CameraParams cam, PathState path, Ray r
                       const __global float* triAttributes, const __global Sphere* spheres, const __global Plane* planes, const __global Instance* instances,
                       const __global Material* materials, const __global TextureSet* textureSets, const __global TextureMap* textures,
                       const __global ImageInfo* images, const __global float4* texels, const __global Light* lights,
-                      const __global float* envDist, ShadeResult* res) {
+                      const __global float* envDist, const __global float4* lightData, ShadeResult* res) {
     float3 throughput = path.throughput.xyz;
     res->childValid[0] = res->childValid[1] = res->childValid[2] = 0;
     ShadingPoint sp;  /* every field set: misses and dielectric interiors store it whole (oclgrind) */
@@ -517,7 +517,7 @@ inline void Shade_Hit(SceneParams scene, CameraParams cam, PathState path, Ray r
         float3 emitted = (float3)(0.0f);
         float lightPdf = -1.0f;
 #if defined(CLRT_HAS_LIGHT_MESH) || defined(CLRT_HAS_LIGHT_SPHERE)
-        emitted = Path_HitEmission(h.prim, s.frontFacing, scene, triShading, spheres, lights, s.p, s.dir, s.t, s.ng,
+        emitted = Path_HitEmission(h.prim, s.frontFacing, scene, tris, triShading, spheres, lights, lightData, s.p, s.dir, s.t, s.ng,
                                    path.throughput.w, &lightPdf);
 #endif
         Path_ShadeHit(scene, path, m, s.p, ng, ns, wo, s.t, insideDielectric, sp, emitted, lightPdf, materials, res);
@@ -557,7 +557,7 @@ __kernel CLRT_KERNEL_VEC_HINT void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
     const int instance = CLRT_INVALID;
 #endif
     Shade_Hit(scene, cam, paths[i], rays[i], hits[i], instance, tris, triShading, triAttributes, spheres, planes, instances, materials, textureSets,
-              textures, images, texels, lights, envDist, &res);
+              textures, images, texels, lights, envDist, lightData, &res);
     /* Whole structs go to global memory from plain locals: oclgrind 21.10's uninitialised-value check
      * (-cl-opt-disable) reports a struct copied straight from a member of res, initialised or not. */
     const ShadingPoint sp = res.sp;

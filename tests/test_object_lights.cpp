@@ -162,20 +162,59 @@ struct Sample {
     double dist = 0;
 };
 
+// MeshLight_Weight (object_lights.cl) in double: tan(Ω/2) of triangle (a, b, c)'s solid angle from p, at most
+// 8 (CLRT_MESHLIGHT_WEIGHT_CAP), 0 where p lies in its plane. Meshes of at most 16 triangles
+// (CLRT_MESHLIGHT_PICK_MAX) pick by it.
+constexpr size_t kPickMax = 16;
+double hostWeight(D3 a, D3 b, D3 c, D3 p) {
+    D3 ra = a - p, rb = b - p, rc = c - p;
+    double la = len(ra), lb = len(rb), lc = len(rc);
+    double num = std::fabs(dot(ra, cross(rb, rc)));
+    double den = la * lb * lc + dot(ra, rb) * lc + dot(ra, rc) * lb + dot(rb, rc) * la;
+    if (!(num > 0)) return 0;
+    return den * 8 > num ? num / den : 8.0;
+}
+
+// 1 / the density over the area with which mesh light h, sampled from p, draws the points of its triangle k:
+// A_k·Σw / w_k (by weight), or the mesh's area (by area, larger meshes).
+double hostInvAreaPdf(const HostLight& h, D3 p, size_t k) {
+    const size_t n = h.v.size() / 3;
+    if (n > kPickMax) return h.area;
+    double total = 0;
+    for (size_t i = 0; i < n; ++i) total += hostWeight(h.v[3 * i], h.v[3 * i + 1], h.v[3 * i + 2], p);
+    double w = hostWeight(h.v[3 * k], h.v[3 * k + 1], h.v[3 * k + 2], p);
+    return w > 0 ? 0.5 * len(cross(h.v[3 * k + 1] - h.v[3 * k], h.v[3 * k + 2] - h.v[3 * k])) * total / w : 0.0;
+}
+
 // The sampler, in double: what Light_Sample should return for point p and uniforms (u1, u2).
 Sample hostSample(const HostLight& h, D3 p, double u1, double u2) {
     Sample s;
     if (!h.sphere) {
         size_t k = 0;
-        while (k + 1 < h.cdf.size() && !(h.cdf[k] > u1)) ++k;
-        double c0 = k ? h.cdf[k - 1] : 0.0, ux = (u1 - c0) / (h.cdf[k] - c0), su = std::sqrt(ux);
+        double ux = 0;
+        const size_t n = h.v.size() / 3;
+        if (n <= kPickMax) {  // by weight: the first k whose share holds u1·Σw
+            std::vector<double> w(n);
+            double total = 0, below = 0;
+            for (size_t i = 0; i < n; ++i) total += (w[i] = hostWeight(h.v[3 * i], h.v[3 * i + 1], h.v[3 * i + 2], p));
+            if (!(total > 0)) return s;
+            double x = u1 * total;
+            while (k + 1 < n && !(x < below + w[k])) below += w[k++];
+            if (!(w[k] > 0)) return s;
+            ux = (x - below) / w[k];
+        } else {
+            while (k + 1 < h.cdf.size() && !(h.cdf[k] > u1)) ++k;
+            double c0 = k ? h.cdf[k - 1] : 0.0;
+            ux = (u1 - c0) / (h.cdf[k] - c0);
+        }
+        double su = std::sqrt(ux);
         double b0 = 1 - su, b1 = u2 * su;
         const D3* v = &h.v[3 * k];
         D3 q = b0 * v[0] + b1 * v[1] + (1 - b0 - b1) * v[2], d = q - p;
         s.dist = len(d);
         s.wi = (1.0 / s.dist) * d;
         double cosL = std::fabs(dot(unit(cross(v[1] - v[0], v[2] - v[0])), s.wi));  // both faces emit
-        if (cosL > 0) s.e = (h.area * cosL / (s.dist * s.dist)) * h.radiance;
+        if (cosL > 0) s.e = (hostInvAreaPdf(h, p, k) * cosL / (s.dist * s.dist)) * h.radiance;
         if (cosL > 0) {  // the shadow ray's length (MeshLight_ShadowLength): short of q by offset / cosθ_L
             double m = std::max({std::fabs(q.x), std::fabs(q.y), std::fabs(q.z)});
             double offset = std::max(16.0 * FLT_EPSILON * m, 1.0 / 65536.0);
@@ -230,8 +269,8 @@ Sample hostSample(const HostLight& h, D3 p, double u1, double u2) {
     return s;
 }
 
-// The sampler's pdf (solid angle) of direction w from p: mesh by area (every triangle the ray crosses,
-// either side), sphere uniform in its cone; an ellipsoid uniform in its object-space cone.
+// The sampler's pdf (solid angle) of direction w from p: mesh by its pick's density over the area (every
+// triangle the ray crosses, either side), sphere uniform in its cone; an ellipsoid uniform in its object-space cone.
 double hostPdf(const HostLight& h, D3 p, D3 w) {
     if (h.ellipsoid) {  // the object-space cone's pdf times dω_obj/dω_world
         D3 f = h.objCenter - affine(h.toObject, p, 1), wo = unit(affine(h.toObject, w, 0));
@@ -253,8 +292,8 @@ double hostPdf(const HostLight& h, D3 p, D3 w) {
         D3 qv = cross(tv, e1);
         double v = dot(w, qv) / det, t = dot(e2, qv) / det;
         if (u < 0 || v < 0 || u + v > 1 || t <= 0) continue;
-        double cosL = std::fabs(dot(unit(cross(e1, e2)), w));
-        pdf += t * t / (h.area * cosL);
+        double cosL = std::fabs(dot(unit(cross(e1, e2)), w)), inv = hostInvAreaPdf(h, p, k / 3);
+        if (inv > 0) pdf += t * t / (inv * cosL);
     }
     return pdf;
 }
@@ -867,6 +906,68 @@ TEST_CASE("an ellipsoidal LightSphere gives the same light by NEE, by MIS and by
                               << " ± " << sigma);
             far += off;
             CHECK(b.at(x, y, 0) == Approx(a.at(x, y, 0)).epsilon(0.03));  // NEE and MIS: both low-noise
+        }
+    CHECK(checked >= 8);  // the floor's blocks (the walls are black)
+    CHECK(far <= 1);
+}
+
+TEST_CASE("a LightMesh box gives the same light by NEE, by MIS and by BSDF rays alone", "[objlight][path][render]") {
+    // A box of LightMesh triangles as the hw6 boxes' light (five faces, open at the top, closed off by the
+    // ceiling), here large and close to the floor so that light and BSDF densities are alike, which picks its triangles by their weight from the shading point (object_lights.cl,
+    // MeshLight_PickByWeight); a BSDF ray that hits it gets the same density for MIS (path.cl
+    // Path_ObjectLightPdf, MeshLight_InvAreaPdf). Depth 1, black walls: the three estimate the floor's
+    // direct light; MIS weights that do not sum to one (a hit density that is not the sampler's) show as a
+    // difference between MIS and NEE. 8×8 blocks within 4 sigmas of the BSDF renders' mean, MIS within 1% of NEE.
+    auto scene = [](const std::string& params) {
+        return "<Scene><MaxRecursionDepth>1</MaxRecursionDepth><BackgroundColor>0 0 0</BackgroundColor><Cameras>"
+               "<Camera id=\"1\" type=\"lookAt\"><Position>0 1 3.9</Position><GazePoint>0 0.6 0</GazePoint><Up>0 1 0</Up>"
+               "<FovY>60</FovY><NearDistance>1</NearDistance><ImageResolution>32 32</ImageResolution>"
+               "<ImageName>e.exr</ImageName><Renderer>PathTracing</Renderer><RendererParams>" + params +
+               "</RendererParams></Camera></Cameras>"
+               "<Materials><Material id=\"1\"><DiffuseReflectance>0 0 0</DiffuseReflectance></Material>"
+               "<Material id=\"2\"><DiffuseReflectance>0.3 0.3 0.3</DiffuseReflectance></Material></Materials>"
+               "<VertexData>-2 0 -2  2 0 -2  2 0 4  -2 0 4  -2 2 -2  2 2 -2  2 2 4  -2 2 4"
+               "  -0.8 1.2 -0.8  0.8 1.2 -0.8  0.8 1.2 0.8  -0.8 1.2 0.8  -0.8 2 -0.8  0.8 2 -0.8  0.8 2 0.8  -0.8 2 0.8</VertexData>"
+               "<Objects><Mesh id=\"1\"><Material>2</Material><Faces>1 3 2  1 4 3</Faces></Mesh>"
+               "<Mesh id=\"2\"><Material>1</Material><Faces>5 6 7  5 7 8  1 2 6  1 6 5"
+               "  1 5 8  1 8 4  2 3 7  2 7 6</Faces></Mesh>"
+               "<LightMesh id=\"1\"><Material>1</Material><Radiance>10 10 10</Radiance><Faces>"
+               "9 10 11  9 11 12  9 13 14  9 14 10  10 14 15  10 15 11  11 15 16  11 16 12  12 16 13  12 13 9"
+               "</Faces></LightMesh></Objects></Scene>";
+    };
+    TempDir d;
+    Scene nee = loadScene(writeText(d, "nee.xml", scene("NextEventEstimation ImportanceSampling")));
+    Scene mis = loadScene(writeText(d, "mis.xml", scene("MultipleImportanceSampling")));
+    Scene bsdf = loadScene(writeText(d, "bsdf.xml", scene("ImportanceSampling")));
+    const int spp = 1024;
+    ImageRGB a = boxDownsample(renderCamera(nee, nee.cameras.at(0), spp, 1), 8);
+    // MIS through each pipeline: the lanes (Lanes_MeshLightInvAreaPdf), render_fused and the wavefront
+    // (Path_ObjectLightPdf) compute the hit's density each.
+    const DeviceScene misDs = flattenScene(mis);
+    std::vector<ImageRGB> bs;
+    for (Pipeline p : {Pipeline::Lanes, Pipeline::Fused, Pipeline::Wavefront})
+        bs.push_back(boxDownsample(renderPipeline(misDs, mis.cameras.at(0), p, spp), 8));
+    const ImageRGB& b = bs[0];
+    std::vector<ImageRGB> c;  // BSDF rays alone: the noisiest, so four seeds give its per-block spread
+    for (uint32_t seed = 3; seed < 7; ++seed) c.push_back(boxDownsample(renderCamera(bsdf, bsdf.cameras.at(0), spp, seed), 8));
+    int checked = 0, far = 0;
+    for (int y = 0; y < a.height; ++y)
+        for (int x = 0; x < a.width; ++x) {
+            double m = 0, v = 0;
+            for (const ImageRGB& img : c) m += img.at(x, y, 0) / c.size();
+            for (const ImageRGB& img : c) v += (img.at(x, y, 0) - m) * (img.at(x, y, 0) - m) / (c.size() - 1);
+            double sigma = std::sqrt(v / c.size()) + 1e-3 * m;  // of the mean of the four
+            if (!(m > 1e-3)) continue;
+            ++checked;
+            INFO("block " << x << "," << y << ": nee " << a.at(x, y, 0) << ", mis " << b.at(x, y, 0) << ", bsdf " << m
+                          << " ± " << sigma);
+            bool off = std::fabs(a.at(x, y, 0) - m) > 4 * sigma || std::fabs(b.at(x, y, 0) - m) > 4 * sigma;
+            if (off && far < 4)
+                WARN("block " << x << "," << y << ": nee " << a.at(x, y, 0) << ", mis " << b.at(x, y, 0) << ", bsdf " << m
+                              << " ± " << sigma);
+            far += off;
+            for (const ImageRGB& bp : bs)  // NEE and MIS: both low-noise
+                CHECK(bp.at(x, y, 0) == Approx(a.at(x, y, 0)).epsilon(0.01));
         }
     CHECK(checked >= 8);  // the floor's blocks (the walls are black)
     CHECK(far <= 1);

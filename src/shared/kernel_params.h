@@ -55,7 +55,8 @@
     P(IN, int, queueCount) P(VAL, SceneParams, scene) P(VAL, CameraParams, cam) P(IN, PathState, paths) \
     P(IN, Ray, rays) P(IN, Hit, hits) P(IN, int, hitInstances) CLRT_PARAMS_SURFACES(P) CLRT_PARAMS_MATERIALS(P)              \
     CLRT_PARAMS_IMAGES(P) P(IN, Light, lights) P(BUF, ShadingPoint, points) P(BUF, float4, pathRadiance) \
-    P(IN, float, envDist) P(BUF, PathState, nextPaths) P(BUF, Ray, nextRays) P(BUF, int, childValid)
+    P(IN, float, envDist) P(IN, float4, lightData) P(BUF, PathState, nextPaths) P(BUF, Ray, nextRays)          \
+    P(BUF, int, childValid)
 
 #define CLRT_KERNEL_sample_lights(P)                                                               \
     P(IN, int, queueCount) P(VAL, int, lightBegin) P(VAL, int, lightEnd) P(VAL, int, lightSlots)       \
