@@ -155,14 +155,15 @@ inline float3 Lanes_MaterialF(const __global Material* materials, int material) 
 }
 
 #ifdef CLRT_HAS_LIGHT_MESH
-/* For the lanes whose ray hit a plain triangle of a LightMesh that picks by weight: area[k] becomes
- * MeshLight_InvAreaPdf from the ray's origin p − t·dir (Path_ObjectLightPdf's), for the hit's MIS density. */
+/* For the lanes whose ray, after a non-specular bounce (bsdfPdf > 0), hit a plain triangle of a LightMesh that
+ * picks by weight: area[k] becomes MeshLight_InvAreaPdf from the ray's origin p − t·dir (Path_ObjectLightPdf's),
+ * for the hit's MIS density (no other lane's emission weight reads it: Lanes_EmissionWeight). */
 inline void Lanes_MeshLightInvAreaPdf(const __global Light* lights, const __global float4* lightData, const LanesGather* g,
-                                      LaneV3 pHit, const float3* dirs, float* area) {
+                                      LaneV3 pHit, const float3* dirs, const float* bsdfPdf, float* area) {
     float3 p[CLRT_LANES];
     LaneV3_Store(pHit, p);
     for (int k = 0; k < CLRT_LANES; ++k) {
-        if (!((g->triBits >> k) & 1) || g->light[k] == CLRT_INVALID) continue;
+        if (!((g->triBits >> k) & 1) || g->light[k] == CLRT_INVALID || !(bsdfPdf[k] > 0.0f)) continue;
         const __global Light* light = &lights[g->light[k]];
         if (light->objCount <= CLRT_MESHLIGHT_PICK_MAX)
             area[k] = MeshLight_InvAreaPdf(light, lightData, g->v0[k], g->v1[k], g->v2[k], p[k] - g->t[k] * dirs[k]);
@@ -225,7 +226,7 @@ inline void Lanes_Surfaces(SceneParams scene, const __global Material* materials
     LaneV3 ngRaw, ns;
     Lanes_Geometry(g, &lh->p, &ngRaw, &ns);
 #ifdef CLRT_HAS_LIGHT_MESH
-    Lanes_MeshLightInvAreaPdf(lights, lightData, g, lh->p, dirs, area);
+    if (scene.pathMode & CLRT_PATH_MIS) Lanes_MeshLightInvAreaPdf(lights, lightData, g, lh->p, dirs, bsdfPdf, area);
 #endif
     const LaneV3 dir = LaneV3_Load(dirs);
     const LaneI front = LaneV3_Dot(dir, ngRaw) < 0.0f;

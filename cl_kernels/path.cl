@@ -136,7 +136,10 @@ inline float3 Path_HitEmission(int prim, int frontFacing, SceneParams scene, con
         s = (const __global float4*)&spheres[prim - scene.numTriangles]; /* centre/radius, worldToObject, objectToWorld */
     }
     if (light == CLRT_INVALID || (!frontFacing && s != 0)) return (float3)(0.0f); /* a LightSphere's inside */
-    *lightPdf = Path_ObjectLightPdf(&lights[light], s, prim < scene.numTriangles ? &tris[prim] : tris, lightData, pHit, dirWorld, t, ngWorld);
+    /* only MIS weighs a BSDF ray's emission by the light's density (Path_EmissionWeight); *lightPdf stays -1 */
+    if ((scene.pathMode & CLRT_PATH_MIS) && bsdfPdf > 0.0f)
+        *lightPdf = Path_ObjectLightPdf(&lights[light], s, prim < scene.numTriangles ? &tris[prim] : tris, lightData, pHit,
+                                        dirWorld, t, ngWorld);
     float scale = s != 0 && bsdfPdf > 0.0f ? SphereLight_DirectionScale(&lights[light], s, dirWorld) : 1.0f;
     return lights[light].radiance.xyz * scale;
 }
