@@ -125,6 +125,44 @@ TEST_CASE("lanes: specular children (mirror beside a diffuse part, glass) as ren
     }
 }
 
+TEST_CASE("lanes: a LightMesh of more than 16 triangles (picked by area) as render_fused", "[lanes][shared]") {
+    if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
+    // The hw6 box's light has 10 triangles, which both pick by weight (Lanes_PickByWeight, MeshLight_PickByWeight);
+    // each cut in four it has 40, more than CLRT_MESHLIGHT_PICK_MAX: the area pick (Lanes_PickTriangle).
+    Scene scene = loadScene(sharedDir() + "/scenes/" + kPathBox);
+    int cut = 0;
+    for (Shape& sh : scene.shapes) {
+        if (sh.lightIndex < 0 || sh.type != ShapeType::Mesh) continue;
+        MeshData& m = scene.meshes.at(size_t(sh.meshIndex));
+        std::vector<int> idx;
+        for (size_t t = 0; t + 2 < m.indices.size(); t += 3) {
+            const int a = m.indices[t], b = m.indices[t + 1], c = m.indices[t + 2];
+            auto mid = [&m](int i, int j) {
+                m.positions.push_back(0.5f * (m.positions[size_t(i)] + m.positions[size_t(j)]));
+                return int(m.positions.size()) - 1;
+            };
+            const int ab = mid(a, b), bc = mid(b, c), ca = mid(c, a);
+            idx.insert(idx.end(), {a, ab, ca, ab, b, bc, ca, bc, c, ab, bc, ca});
+        }
+        m.indices = idx;
+        ++cut;
+    }
+    REQUIRE(cut == 1);
+    DeviceScene ds = flattenScene(scene);
+    bool large = false;
+    for (const dev::Light& l : ds.lights) large = large || (l.kind == dev::LIGHT_MESH && l.objCount > 16);
+    REQUIRE(large);
+    Renderer r(testContext(), ds);
+    for (int c : {0, 2}) {  // NEE, NEE with importance sampling (no roulette: docs/architecture.md); then MIS
+        Camera cam = scene.cameras.at(size_t(c));
+        INFO("camera " << c);
+        checkLanesAsFused(r, cam, 40, 1e-3);
+    }
+    Camera mis = scene.cameras.at(0);
+    mis.pathMode = CLRT_PATH_ON | CLRT_PATH_MIS;
+    checkLanesAsFused(r, mis, 40, 1e-3);
+}
+
 TEST_CASE("lanes: glossy lobes (classic Phong and every BRDF kind) as render_fused evaluates and samples them", "[lanes][shared]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
     // The hw6 path box with every material given a specular lobe: classic Blinn-Phong (no BRDF), then

@@ -55,16 +55,18 @@ void basis(D3 n, D3& t, D3& b) {
 
 // Test scene: light 0 = a square LightMesh (side 2, at y = 3, facing down), light 1 = a LightMesh of
 // three coplanar triangles of areas 0.5, 0.15 and 1.425 (facing −y before a rotation of 30°), light 2 = a LightSphere of radius 0.5 scaled by 2 (radius 1) at
-// (0.5, 3, -0.2), light 3 = a LightSphere scaled (1, 3, 1) (an ellipsoid) at (-3, 1, 0).
+// (0.5, 3, -0.2), light 3 = a LightSphere scaled (1, 3, 1) (an ellipsoid) at (-3, 1, 0), light 4 = a LightMesh of
+// 20 triangles (a fan: a regular 20-gon of radius 1 at y = 4, more than CLRT_MESHLIGHT_PICK_MAX: picked by area).
 const char* kLightsXml = R"(<Scene>
 <Cameras><Camera id="1" type="lookAt"><Position>0 0 5</Position><GazePoint>0 0 0</GazePoint><Up>0 1 0</Up>
 <FovY>60</FovY><NearDistance>1</NearDistance><ImageResolution>4 4</ImageResolution><ImageName>o.exr</ImageName></Camera></Cameras>
 <Materials><Material id="1"><DiffuseReflectance>0 0 0</DiffuseReflectance></Material></Materials>
 <Transformations><Translation id="1">0 3 0</Translation><Translation id="2">0.5 3 -0.2</Translation>
 <Translation id="3">-3 1 0</Translation><Scaling id="1">2 2 2</Scaling><Scaling id="2">1 3 1</Scaling>
-<Rotation id="1">30 1 1 0</Rotation></Transformations>
+<Rotation id="1">30 1 1 0</Rotation><Translation id="4">1.5 4 0.5</Translation></Transformations>
 <VertexData>-1 0 -1  1 0 -1  1 0 1  -1 0 1  0 0 0
-  0 1 0  1 1 0  1 1 1  0.3 1 1  0 1 1  -2 1 -1  -0.1 1 -1  -0.1 1 0.5</VertexData>
+  0 1 0  1 1 0  1 1 1  0.3 1 1  0 1 1  -2 1 -1  -0.1 1 -1  -0.1 1 0.5
+  0 0 0  1.000000 0 0.000000 0.951057 0 0.309017 0.809017 0 0.587785 0.587785 0 0.809017 0.309017 0 0.951057 0.000000 0 1.000000 -0.309017 0 0.951057 -0.587785 0 0.809017 -0.809017 0 0.587785 -0.951057 0 0.309017 -1.000000 0 0.000000 -0.951057 0 -0.309017 -0.809017 0 -0.587785 -0.587785 0 -0.809017 -0.309017 0 -0.951057 -0.000000 0 -1.000000 0.309017 0 -0.951057 0.587785 0 -0.809017 0.809017 0 -0.587785 0.951057 0 -0.309017</VertexData>
 <Objects>
 <LightMesh id="1"><Material>1</Material><Radiance>1 2 3</Radiance><Transformations>t1</Transformations>
   <Faces>1 2 3  1 3 4</Faces></LightMesh>
@@ -74,6 +76,8 @@ const char* kLightsXml = R"(<Scene>
   <Transformations>s1 t2</Transformations></LightSphere>
 <LightSphere id="2"><Material>1</Material><Center>5</Center><Radius>0.5</Radius><Radiance>2 2 2</Radiance>
   <Transformations>s2 t3</Transformations></LightSphere>
+<LightMesh id="3"><Material>1</Material><Radiance>3 2 1</Radiance><Transformations>t4</Transformations>
+  <Faces vertexOffset="13">1 2 3 1 3 4 1 4 5 1 5 6 1 6 7 1 7 8 1 8 9 1 9 10 1 10 11 1 11 12 1 12 13 1 13 14 1 14 15 1 15 16 1 16 17 1 17 18 1 18 19 1 19 20 1 20 21 1 21 2</Faces></LightMesh>
 </Objects></Scene>)";
 
 std::string writeText(const TempDir& dir, const std::string& name, const std::string& text) {
@@ -384,9 +388,9 @@ struct LightsFixture {
 TEST_CASE("object lights: LightMesh and LightSphere parse into a shape and a light each", "[objlight][scene]") {
     LightsFixture f;
     const Scene& s = f.scene;
-    REQUIRE(s.lights.size() == 4);
-    REQUIRE(s.shapes.size() == 4);
-    for (int i = 0; i < 4; ++i) {
+    REQUIRE(s.lights.size() == 5);
+    REQUIRE(s.shapes.size() == 5);
+    for (int i = 0; i < 5; ++i) {
         CHECK(s.lights[size_t(i)].shapeIndex == i);
         CHECK(s.shapes[size_t(i)].lightIndex == i);
     }
@@ -482,7 +486,7 @@ TEST_CASE("object lights: parse errors name the element and its line", "[objligh
 TEST_CASE("object lights: the device samplers equal the host references", "[objlight][lights][cl]") {
     LightsFixture f;
     std::vector<HostLight> hosts = {hostLight(f.scene, 0), hostLight(f.scene, 1), hostLight(f.scene, 2, 1.0),
-                                    hostLight(f.scene, 3, 1.5)};
+                                    hostLight(f.scene, 3, 1.5), hostLight(f.scene, 4)};
     const int n = 4096;
     std::mt19937 rng(5);
     std::uniform_real_distribution<float> px(-3.5f, 2.5f), py(-2.0f, 2.0f), pz(-2.0f, 2.0f), uni(0.0f, 0.99999994f);
@@ -492,7 +496,7 @@ TEST_CASE("object lights: the device samplers equal the host references", "[objl
         pts[size_t(i)] = {px(rng), py(rng), pz(rng), 0};
         u[size_t(i)] = {uni(rng), uni(rng)};
     }
-    for (int l = 0; l < 4; ++l) {
+    for (int l = 0; l < 5; ++l) {
         INFO("light " << l);
         std::vector<dev::float4> out = deviceSamples(f.ds, l, pts, u);
         int bad = 0, lit = 0, unlit = 0, inside = 0;
@@ -530,7 +534,8 @@ TEST_CASE("object lights: samples follow the pdf (chi-square), pdf integrates to
     std::vector<Case> cases = {{"square LightMesh", 0, hostLight(f.scene, 0), {0.3, 0.0, 0.2}},
                                {"three-triangle LightMesh", 1, hostLight(f.scene, 1), {}},
                                {"LightSphere", 2, hostLight(f.scene, 2, 1.0), {0.1, 0.4, 0.3}},
-                               {"ellipsoidal LightSphere", 3, hostLight(f.scene, 3, 1.5), {-1.2, 1.9, 0.4}}};
+                               {"ellipsoidal LightSphere", 3, hostLight(f.scene, 3, 1.5), {-1.2, 1.9, 0.4}},
+                               {"20-triangle LightMesh (by area)", 4, hostLight(f.scene, 4), {1.2, 2.2, 0.9}}};
     REQUIRE(cases[3].h.ellipsoid);
     REQUIRE_FALSE(cases[2].h.ellipsoid);
     {  // the three triangles seen from their front: 2 units from their centroid along their normal
