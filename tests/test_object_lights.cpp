@@ -13,6 +13,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <random>
 #include <regex>
 #include <sstream>
@@ -863,6 +864,65 @@ TEST_CASE("hw6 cornellbox_jaroslav_diffuse_area and glossy_area_sphere (BRDF mat
 #endif
 }
 
+namespace {
+// A depth-1 path-traced scene with RendererParams `params`: a diffuse floor (kd 0.3) in a box of black walls
+// (y 0..2), a 32² camera at (0, 1, 3.9) looking at (0, gazeY, 0), and `light` (an object light) with its
+// `transforms` and the vertices it adds after the box's eight (`extraVertices`: its indices start at 9).
+std::string darkBoxScene(const std::string& params, const std::string& gazeY, const std::string& transforms,
+                         const std::string& extraVertices, const std::string& light) {
+    return "<Scene><MaxRecursionDepth>1</MaxRecursionDepth><BackgroundColor>0 0 0</BackgroundColor><Cameras>"
+           "<Camera id=\"1\" type=\"lookAt\"><Position>0 1 3.9</Position><GazePoint>0 " + gazeY + " 0</GazePoint>"
+           "<Up>0 1 0</Up><FovY>60</FovY><NearDistance>1</NearDistance><ImageResolution>32 32</ImageResolution>"
+           "<ImageName>e.exr</ImageName><Renderer>PathTracing</Renderer><RendererParams>" + params +
+           "</RendererParams></Camera></Cameras>"
+           "<Materials><Material id=\"1\"><DiffuseReflectance>0 0 0</DiffuseReflectance></Material>"
+           "<Material id=\"2\"><DiffuseReflectance>0.3 0.3 0.3</DiffuseReflectance></Material></Materials>" + transforms +
+           "<VertexData>-2 0 -2  2 0 -2  2 0 4  -2 0 4  -2 2 -2  2 2 -2  2 2 4  -2 2 4  " + extraVertices + "</VertexData>"
+           "<Objects><Mesh id=\"1\"><Material>2</Material><Faces>1 3 2  1 4 3</Faces></Mesh>"
+           "<Mesh id=\"2\"><Material>1</Material><Faces>5 6 7  5 7 8  1 2 6  1 6 5  1 5 8  1 8 4  2 3 7  2 7 6</Faces></Mesh>" +
+           light + "</Objects></Scene>";
+}
+
+// The same light three ways, `scene(RendererParams)` (a darkBoxScene) at `spp`: NEE (with importance
+// sampling), MIS through each of `misPipelines`, and BSDF rays alone (four seeds: the noisiest, so they give
+// each block's spread). In 8×8 blocks, every block the BSDF renders light (their mean m, its sigma) holds the
+// NEE render's value a and each MIS render's b within 4 sigmas (at most one block off), and b within
+// `misTol` of a (both low-noise).
+void checkSameLight(const std::function<std::string(const std::string&)>& scene, int spp,
+                    std::initializer_list<Pipeline> misPipelines, double misTol) {
+    TempDir d;
+    Scene nee = loadScene(writeText(d, "nee.xml", scene("NextEventEstimation ImportanceSampling")));
+    Scene mis = loadScene(writeText(d, "mis.xml", scene("MultipleImportanceSampling")));
+    Scene bsdf = loadScene(writeText(d, "bsdf.xml", scene("ImportanceSampling")));
+    const ImageRGB a = boxDownsample(renderCamera(nee, nee.cameras.at(0), spp, 1), 8);
+    const DeviceScene misDs = flattenScene(mis);
+    std::vector<ImageRGB> bs, c;
+    for (Pipeline p : misPipelines) bs.push_back(boxDownsample(renderPipeline(misDs, mis.cameras.at(0), p, spp), 8));
+    for (uint32_t seed = 3; seed < 7; ++seed) c.push_back(boxDownsample(renderCamera(bsdf, bsdf.cameras.at(0), spp, seed), 8));
+    int checked = 0, far = 0;
+    for (int y = 0; y < a.height; ++y)
+        for (int x = 0; x < a.width; ++x) {
+            double m = 0, v = 0;
+            for (const ImageRGB& img : c) m += img.at(x, y, 0) / c.size();
+            for (const ImageRGB& img : c) v += (img.at(x, y, 0) - m) * (img.at(x, y, 0) - m) / (c.size() - 1);
+            double sigma = std::sqrt(v / c.size()) + 1e-3 * m;  // of the mean of the four
+            if (!(m > 1e-3)) continue;
+            ++checked;
+            bool off = std::fabs(a.at(x, y, 0) - m) > 4 * sigma;
+            for (const ImageRGB& b : bs) {
+                INFO("block " << x << "," << y << ": nee " << a.at(x, y, 0) << ", mis " << b.at(x, y, 0) << ", bsdf " << m
+                              << " ± " << sigma);
+                off = off || std::fabs(b.at(x, y, 0) - m) > 4 * sigma;
+                CHECK(b.at(x, y, 0) == Approx(a.at(x, y, 0)).epsilon(misTol));
+            }
+            if (off && far < 4) WARN("block " << x << "," << y << ": nee " << a.at(x, y, 0) << ", bsdf " << m << " ± " << sigma);
+            far += off;
+        }
+    CHECK(checked >= 8);  // the floor's blocks (the walls are black)
+    CHECK(far <= 1);
+}
+}  // namespace
+
 TEST_CASE("an ellipsoidal LightSphere gives the same light by NEE, by MIS and by BSDF rays alone", "[objlight][path][render]") {
     // A box with a diffuse floor and black walls lit by a LightSphere scaled (4, 1, 1) (object_lights.cl:
     // sampled in object space; what it gives the scene is Radiance·dω_obj/dω_world, and BSDF rays that
@@ -870,110 +930,31 @@ TEST_CASE("an ellipsoidal LightSphere gives the same light by NEE, by MIS and by
     // and BSDF sampling alone; with black walls (NEE at the bounce's vertex adds nothing) all three
     // estimate the floor's direct light: 8×8 blocks within 4 sigmas of the BSDF renders' mean.
     auto scene = [](const std::string& params) {
-        return "<Scene><MaxRecursionDepth>1</MaxRecursionDepth><BackgroundColor>0 0 0</BackgroundColor><Cameras>"
-               "<Camera id=\"1\" type=\"lookAt\"><Position>0 1 3.9</Position><GazePoint>0 1 0</GazePoint><Up>0 1 0</Up>"
-               "<FovY>60</FovY><NearDistance>1</NearDistance><ImageResolution>32 32</ImageResolution>"
-               "<ImageName>e.exr</ImageName><Renderer>PathTracing</Renderer><RendererParams>" + params +
-               "</RendererParams></Camera></Cameras>"
-               "<Materials><Material id=\"1\"><DiffuseReflectance>0 0 0</DiffuseReflectance></Material>"
-               "<Material id=\"2\"><DiffuseReflectance>0.3 0.3 0.3</DiffuseReflectance></Material></Materials>"
-               "<Transformations><Scaling id=\"1\">4 1 1</Scaling><Translation id=\"1\">0 1.6 0</Translation></Transformations>"
-               "<VertexData>-2 0 -2  2 0 -2  2 0 4  -2 0 4  -2 2 -2  2 2 -2  2 2 4  -2 2 4  0 0 0</VertexData>"
-               "<Objects><Mesh id=\"1\"><Material>2</Material><Faces>1 3 2  1 4 3</Faces></Mesh>"
-               "<Mesh id=\"2\"><Material>1</Material><Faces>5 6 7  5 7 8  1 2 6  1 6 5"
-               "  1 5 8  1 8 4  2 3 7  2 7 6</Faces></Mesh><LightSphere id=\"1\"><Material>1</Material><Center>9</Center>"
-               "<Radius>0.2</Radius><Radiance>10 10 10</Radiance><Transformations>s1 t1</Transformations></LightSphere>"
-               "</Objects></Scene>";
+        return darkBoxScene(params, "1",
+                            "<Transformations><Scaling id=\"1\">4 1 1</Scaling><Translation id=\"1\">0 1.6 0</Translation>"
+                            "</Transformations>",
+                            "0 0 0",
+                            "<LightSphere id=\"1\"><Material>1</Material><Center>9</Center><Radius>0.2</Radius>"
+                            "<Radiance>10 10 10</Radiance><Transformations>s1 t1</Transformations></LightSphere>");
     };
-    TempDir d;
-    Scene nee = loadScene(writeText(d, "nee.xml", scene("NextEventEstimation ImportanceSampling")));
-    Scene mis = loadScene(writeText(d, "mis.xml", scene("MultipleImportanceSampling")));
-    Scene bsdf = loadScene(writeText(d, "bsdf.xml", scene("ImportanceSampling")));
-    const int spp = 256;
-    ImageRGB a = boxDownsample(renderCamera(nee, nee.cameras.at(0), spp, 1), 8);
-    ImageRGB b = boxDownsample(renderCamera(mis, mis.cameras.at(0), spp, 2), 8);
-    std::vector<ImageRGB> c;  // BSDF rays alone: the noisiest, so four seeds give its per-block spread
-    for (uint32_t seed = 3; seed < 7; ++seed) c.push_back(boxDownsample(renderCamera(bsdf, bsdf.cameras.at(0), spp, seed), 8));
-    int checked = 0, far = 0;
-    for (int y = 0; y < a.height; ++y)
-        for (int x = 0; x < a.width; ++x) {
-            double m = 0, v = 0;
-            for (const ImageRGB& img : c) m += img.at(x, y, 0) / c.size();
-            for (const ImageRGB& img : c) v += (img.at(x, y, 0) - m) * (img.at(x, y, 0) - m) / (c.size() - 1);
-            double sigma = std::sqrt(v / c.size()) + 1e-3 * m;  // of the mean of the four
-            if (!(m > 1e-3)) continue;
-            ++checked;
-            INFO("block " << x << "," << y << ": nee " << a.at(x, y, 0) << ", mis " << b.at(x, y, 0) << ", bsdf " << m
-                          << " ± " << sigma);
-            bool off = std::fabs(a.at(x, y, 0) - m) > 4 * sigma || std::fabs(b.at(x, y, 0) - m) > 4 * sigma;
-            if (off && far < 4)
-                WARN("block " << x << "," << y << ": nee " << a.at(x, y, 0) << ", mis " << b.at(x, y, 0) << ", bsdf " << m
-                              << " ± " << sigma);
-            far += off;
-            CHECK(b.at(x, y, 0) == Approx(a.at(x, y, 0)).epsilon(0.03));  // NEE and MIS: both low-noise
-        }
-    CHECK(checked >= 8);  // the floor's blocks (the walls are black)
-    CHECK(far <= 1);
+    checkSameLight(scene, 256, {Pipeline::Auto}, 0.03);
 }
 
 TEST_CASE("a LightMesh box gives the same light by NEE, by MIS and by BSDF rays alone", "[objlight][path][render]") {
     // A box of LightMesh triangles as the hw6 boxes' light (five faces, open at the top, closed off by the
-    // ceiling), here large and close to the floor so that light and BSDF densities are alike, which picks its triangles by their weight from the shading point (object_lights.cl,
-    // MeshLight_PickByWeight); a BSDF ray that hits it gets the same density for MIS (path.cl
-    // Path_ObjectLightPdf, MeshLight_InvAreaPdf). Depth 1, black walls: the three estimate the floor's
+    // ceiling), here large and close to the floor so that light and BSDF densities are alike, which picks its
+    // triangles by their weight from the shading point (object_lights.cl, MeshLight_PickByWeight); a BSDF ray
+    // that hits it gets the same density for MIS (path.cl Path_ObjectLightPdf, MeshLight_InvAreaPdf). Depth 1, black walls: the three estimate the floor's
     // direct light; MIS weights that do not sum to one (a hit density that is not the sampler's) show as a
     // difference between MIS and NEE. 8×8 blocks within 4 sigmas of the BSDF renders' mean, MIS within 1% of NEE.
     auto scene = [](const std::string& params) {
-        return "<Scene><MaxRecursionDepth>1</MaxRecursionDepth><BackgroundColor>0 0 0</BackgroundColor><Cameras>"
-               "<Camera id=\"1\" type=\"lookAt\"><Position>0 1 3.9</Position><GazePoint>0 0.6 0</GazePoint><Up>0 1 0</Up>"
-               "<FovY>60</FovY><NearDistance>1</NearDistance><ImageResolution>32 32</ImageResolution>"
-               "<ImageName>e.exr</ImageName><Renderer>PathTracing</Renderer><RendererParams>" + params +
-               "</RendererParams></Camera></Cameras>"
-               "<Materials><Material id=\"1\"><DiffuseReflectance>0 0 0</DiffuseReflectance></Material>"
-               "<Material id=\"2\"><DiffuseReflectance>0.3 0.3 0.3</DiffuseReflectance></Material></Materials>"
-               "<VertexData>-2 0 -2  2 0 -2  2 0 4  -2 0 4  -2 2 -2  2 2 -2  2 2 4  -2 2 4"
-               "  -0.8 1.2 -0.8  0.8 1.2 -0.8  0.8 1.2 0.8  -0.8 1.2 0.8  -0.8 2 -0.8  0.8 2 -0.8  0.8 2 0.8  -0.8 2 0.8</VertexData>"
-               "<Objects><Mesh id=\"1\"><Material>2</Material><Faces>1 3 2  1 4 3</Faces></Mesh>"
-               "<Mesh id=\"2\"><Material>1</Material><Faces>5 6 7  5 7 8  1 2 6  1 6 5"
-               "  1 5 8  1 8 4  2 3 7  2 7 6</Faces></Mesh>"
-               "<LightMesh id=\"1\"><Material>1</Material><Radiance>10 10 10</Radiance><Faces>"
-               "9 10 11  9 11 12  9 13 14  9 14 10  10 14 15  10 15 11  11 15 16  11 16 12  12 16 13  12 13 9"
-               "</Faces></LightMesh></Objects></Scene>";
+        return darkBoxScene(params, "0.6", "",
+                            "-0.8 1.2 -0.8  0.8 1.2 -0.8  0.8 1.2 0.8  -0.8 1.2 0.8  -0.8 2 -0.8  0.8 2 -0.8  0.8 2 0.8  -0.8 2 0.8",
+                            "<LightMesh id=\"1\"><Material>1</Material><Radiance>10 10 10</Radiance><Faces>"
+                            "9 10 11  9 11 12  9 13 14  9 14 10  10 14 15  10 15 11  11 15 16  11 16 12  12 16 13  12 13 9"
+                            "</Faces></LightMesh>");
     };
-    TempDir d;
-    Scene nee = loadScene(writeText(d, "nee.xml", scene("NextEventEstimation ImportanceSampling")));
-    Scene mis = loadScene(writeText(d, "mis.xml", scene("MultipleImportanceSampling")));
-    Scene bsdf = loadScene(writeText(d, "bsdf.xml", scene("ImportanceSampling")));
-    const int spp = 1024;
-    ImageRGB a = boxDownsample(renderCamera(nee, nee.cameras.at(0), spp, 1), 8);
     // MIS through each pipeline: the lanes (Lanes_MeshLightInvAreaPdf), render_fused and the wavefront
     // (Path_ObjectLightPdf) compute the hit's density each.
-    const DeviceScene misDs = flattenScene(mis);
-    std::vector<ImageRGB> bs;
-    for (Pipeline p : {Pipeline::Lanes, Pipeline::Fused, Pipeline::Wavefront})
-        bs.push_back(boxDownsample(renderPipeline(misDs, mis.cameras.at(0), p, spp), 8));
-    const ImageRGB& b = bs[0];
-    std::vector<ImageRGB> c;  // BSDF rays alone: the noisiest, so four seeds give its per-block spread
-    for (uint32_t seed = 3; seed < 7; ++seed) c.push_back(boxDownsample(renderCamera(bsdf, bsdf.cameras.at(0), spp, seed), 8));
-    int checked = 0, far = 0;
-    for (int y = 0; y < a.height; ++y)
-        for (int x = 0; x < a.width; ++x) {
-            double m = 0, v = 0;
-            for (const ImageRGB& img : c) m += img.at(x, y, 0) / c.size();
-            for (const ImageRGB& img : c) v += (img.at(x, y, 0) - m) * (img.at(x, y, 0) - m) / (c.size() - 1);
-            double sigma = std::sqrt(v / c.size()) + 1e-3 * m;  // of the mean of the four
-            if (!(m > 1e-3)) continue;
-            ++checked;
-            INFO("block " << x << "," << y << ": nee " << a.at(x, y, 0) << ", mis " << b.at(x, y, 0) << ", bsdf " << m
-                          << " ± " << sigma);
-            bool off = std::fabs(a.at(x, y, 0) - m) > 4 * sigma || std::fabs(b.at(x, y, 0) - m) > 4 * sigma;
-            if (off && far < 4)
-                WARN("block " << x << "," << y << ": nee " << a.at(x, y, 0) << ", mis " << b.at(x, y, 0) << ", bsdf " << m
-                              << " ± " << sigma);
-            far += off;
-            for (const ImageRGB& bp : bs)  // NEE and MIS: both low-noise
-                CHECK(bp.at(x, y, 0) == Approx(a.at(x, y, 0)).epsilon(0.01));
-        }
-    CHECK(checked >= 8);  // the floor's blocks (the walls are black)
-    CHECK(far <= 1);
+    checkSameLight(scene, 1024, {Pipeline::Lanes, Pipeline::Fused, Pipeline::Wavefront}, 0.01);
 }
