@@ -2,7 +2,8 @@
 // contexts -> memory check -> flatten/BVH, with the kernel build on another thread from the moment the
 // BVH fixes the feature set (while the lights are flattened) -> one camera at a time (cli/camera_drivers.cpp) -> stats, and the refusals made
 // before any work (unknown camera, outputs that are inputs, an image no device can hold, options that
-// do not go together). Reads the scene's cameras (id, size) and its input files.
+// do not go together), and the warning for a material that gains energy under uncapped roulette. Reads the
+// scene's cameras (id, size, RendererParams), its materials (for that warning) and its input files.
 #include "cli/render_cmd.h"
 
 #include <algorithm>
@@ -208,9 +209,6 @@ std::vector<PlannedOutput> plannedOutputs(const RenderArgs& a, const Scene& scen
     return out;
 }
 
-// From here on Ctrl-C finishes the pass and writes the partial image; not in an MPI job: a signal
-// there (mpirun ending every rank because one failed, or the job cancelled) exits at once, writing
-// no image of a camera not yet finished, with a line naming the rank.
 // A camera path traced with Russian roulette has no depth cap: a surface that gives back more light than it
 // receives (energyGainingMaterial) makes its image diverge (pixels of 1e10 and more). Said once, naming it.
 void warnEnergyGain(const Scene& scene, const DeviceScene& ds, const std::vector<const Camera*>& cams) {
@@ -226,6 +224,9 @@ void warnEnergyGain(const Scene& scene, const DeviceScene& ds, const std::vector
              "give the material a normalized BRDF or a smaller DiffuseReflectance");
 }
 
+// From here on Ctrl-C finishes the pass and writes the partial image; not in an MPI job: a signal
+// there (mpirun ending every rank because one failed, or the job cancelled) exits at once, writing
+// no image of a camera not yet finished, with a line naming the rank.
 void setRenderInterrupts(const RenderArgs& a) {
     MpiJob& job = MpiJob::get();
     setGracefulInterrupt(!job.distributed());
