@@ -21,7 +21,8 @@ mean(ks) / (mean(kd) + mean(ks)); Phong lobes about the mirrored direction with 
 Blinn-Phong half vectors about n with (p+1)/(2π) cos^p αh, Torrance-Sparrow's with (p+2)/(2π) cos^(p+1) αh.
 
 Properties: kind (one of the names above), exponent, normalized (bool), kd_r/g/b, ks_r/g/b, eta, k,
-kd_fresnel (bool). register() adds the plugin; call it after mitsuba.set_variant (a JIT variant:
+kd_fresnel (bool); kd_tex, ks_tex (textures: kd and ks per point, replacing the constants; the lobe
+choice s keeps the constants'). register() adds the plugin; call it after mitsuba.set_variant (a JIT variant:
 llvm_ad_rgb, as the benchmark uses).
 """
 import math
@@ -54,6 +55,8 @@ def register():
             self.ks = mi.Color3f(*[float(props.get("ks_" + c, 0.0)) for c in "rgb"])
             self.eta, self.k = float(props.get("eta", 1.0)), float(props.get("k", 0.0))
             self.kd_fresnel = bool(props.get("kd_fresnel", False))
+            self.kd_tex = props.get("kd_tex", None)
+            self.ks_tex = props.get("ks_tex", None)
             mkd = sum(float(props.get("kd_" + c, 0.0)) for c in "rgb") / 3.0
             mks = sum(float(props.get("ks_" + c, 0.0)) for c in "rgb") / 3.0
             self.s = mks / (mkd + mks) if mkd + mks > 0.0 else 0.0
@@ -68,11 +71,16 @@ def register():
             rp = (nk * c2 - 2.0 * n * cos_i + 1.0) / (nk * c2 + 2.0 * n * cos_i + 1.0)
             return 0.5 * (rs + rp)
 
-        def f(self, wo, wi):
+        def colours(self, si, active):
+            kd = self.kd_tex.eval(si, active) if self.kd_tex is not None else self.kd
+            ks = self.ks_tex.eval(si, active) if self.ks_tex is not None else self.ks
+            return kd, ks
+
+        def f(self, wo, wi, kd, ks):
             """clrt's f(wo: towards the viewer, wi: towards the light), both local; 0 below the surface."""
             cos_o, cos_i = wo.z, wi.z
             above = (cos_i > 0.0) & (cos_o > 0.0)
-            p, kd, ks = self.p, self.kd, self.ks
+            p = self.p
             cos_r = dr.maximum(dr.dot(mirrored(wi), wo), 0.0)
             cos_h, wo_h, _ = half_cos(wi, wo)
             if self.kind == "original_phong":
@@ -129,11 +137,13 @@ def register():
             bs.sampled_type = mi.UInt32(+mi.BSDFFlags.GlossyReflection)
             bs.sampled_component = mi.UInt32(0)
             ok = active & (wo.z > 0.0) & (wi.z > 0.0) & (bs.pdf > 0.0)
-            value = self.f(wo, wi) * wi.z / bs.pdf
+            kd, ks = self.colours(si, active)
+            value = self.f(wo, wi, kd, ks) * wi.z / bs.pdf
             return bs, dr.select(ok, value, 0.0)
 
         def eval(self, ctx, si, wo, active=True):  # Mitsuba's wo: towards the light (clrt's wi)
-            return dr.select(active, self.f(si.wi, wo) * dr.maximum(wo.z, 0.0), 0.0)
+            kd, ks = self.colours(si, active)
+            return dr.select(active, self.f(si.wi, wo, kd, ks) * dr.maximum(wo.z, 0.0), 0.0)
 
         def pdf(self, ctx, si, wo, active=True):
             return dr.select(active & (si.wi.z > 0.0) & (wo.z > 0.0), self.lobe_pdf(si.wi, wo), 0.0)
@@ -142,7 +152,10 @@ def register():
             return self.eval(ctx, si, wo, active), self.pdf(ctx, si, wo, active)
 
         def traverse(self, callback):
-            pass
+            if self.kd_tex is not None:
+                callback.put("kd_tex", self.kd_tex, mi.ParamFlags.NonDifferentiable)
+            if self.ks_tex is not None:
+                callback.put("ks_tex", self.ks_tex, mi.ParamFlags.NonDifferentiable)
 
         def to_string(self):
             return "CourseBrdf[kind=%s, exponent=%g, normalized=%s]" % (self.kind, self.p, self.normalized)

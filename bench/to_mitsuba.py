@@ -9,7 +9,8 @@ and probe maps resampled to lat-long). Drops, with a warning each: specular/mirr
 terms, textures, spot and ambient lights, MeshInstance, LightMesh/LightSphere, degamma, thin lens.
 With path_tracing=True (bench/bench_mitsuba_path.py) it also converts what a path-traced course scene
 needs (to_mitsuba_path.py: mirrors, dielectrics, conductors, BRDF diffuse scaling, LightMesh,
-LightSphere, two-sided AreaLights, MeshInstance, the depth and roulette settings).
+LightSphere, two-sided AreaLights, MeshInstance, the depth and roulette settings) and the image textures
+of inline meshes with TexCoordData (replace_kd, blend_kd, replace_ks: Converter._image_maps).
 
 Conventions (measured against clrt, see bench/README.md "Against Mitsuba 3"):
 - Radiance: the course's shading model has no 1/π in the diffuse term (L = kd·cosθ·E); Mitsuba's
@@ -66,6 +67,10 @@ class Converter:
                 self.warn("VertexData binaryFile not supported: dropped")
             else:
                 self.vertices = np.array(_nums(vd, []), dtype=np.float64).reshape(-1, 3)
+        tc = self.root.find("TexCoordData")
+        self.uvs = None  # per vertex (the VertexData's indexing), course convention: v grows downwards
+        if tc is not None and not tc.get("binaryFile"):
+            self.uvs = np.array(_nums(tc, []), dtype=np.float64).reshape(-1, 2)
         zb = self.root.find("ZeroBasedIndexing")
         self.zero_based = zb is not None and zb.text.strip().lower() == "true"
         self.transforms = self._read_transforms()
@@ -162,6 +167,13 @@ class Converter:
         self.materials[mid] = b
         return b
 
+    def _texture_exr(self, name, texels):
+        """An H×W float EXR of texels (row 0 at the top): a texture Mitsuba reads as it is (raw)."""
+        import OpenEXR as E
+        path = os.path.join(self.tmp, name + ".exr")
+        E.File({"compression": E.ZIP_COMPRESSION}, {"RGB": np.ascontiguousarray(texels, dtype=np.float32)}).write(path)
+        return path
+
     def _constant_exr(self, name, rgb):
         """A 1x1 float EXR of the value rgb (a texture that Mitsuba does not clamp)."""
         import OpenEXR as E
@@ -170,16 +182,19 @@ class Converter:
         return path
 
     # ------------------------------------------------------------------------------------- geometry
-    def _write_ply(self, name, pos, faces, normals=None):
+    def _write_ply(self, name, pos, faces, normals=None, uv=None):
         path = os.path.join(self.tmp, name + ".ply")
         n = len(pos)
         with open(path, "wb") as f:
             hdr = "ply\nformat binary_little_endian 1.0\nelement vertex %d\nproperty float x\nproperty float y\nproperty float z\n" % n
             if normals is not None:
                 hdr += "property float nx\nproperty float ny\nproperty float nz\n"
+            if uv is not None:
+                hdr += "property float u\nproperty float v\n"
             hdr += "element face %d\nproperty list uchar int vertex_indices\nend_header\n" % len(faces)
             f.write(hdr.encode())
-            v = pos.astype("<f4") if normals is None else np.hstack([pos, normals]).astype("<f4")
+            cols = [pos] + ([normals] if normals is not None else []) + ([uv] if uv is not None else [])
+            v = np.hstack(cols).astype("<f4")
             f.write(v.tobytes())
             fa = np.zeros(len(faces), dtype=[("n", "u1"), ("i", "<i4", 3)])
             fa["n"] = 3
@@ -191,10 +206,16 @@ class Converter:
         mid = el.find("Material").text.strip()
         m = self.object_matrix(el)
         smooth = el.get("shadingMode", "flat") == "smooth"
-        if el.find("Textures") is not None:
-            self.warn("%s %s: textures dropped" % (kind, el.get("id")))
         faces_el = el.find("Faces") if kind == "Mesh" else el.find("Indices")
+        textured = None  # path tracing: the image maps this mesh's material takes (to_mitsuba_path.textured_bsdf)
+        if el.find("Textures") is not None:
+            textured = self._image_maps(el, kind) if self.path_tracing and not faces_el.get("plyFile") else None
+            if not textured:
+                self.warn("%s %s: textures dropped" % (kind, el.get("id")))
         d = {"bsdf": self.bsdf(mid), "to_world": m.tolist()}
+        if textured:
+            import to_mitsuba_path
+            d["bsdf"] = to_mitsuba_path.textured_bsdf(self, mid, textured)
         if kind == "Mesh" and faces_el.get("plyFile"):
             d.update(type="ply", filename=self._abs(faces_el.get("plyFile")), face_normals=not smooth)
         else:
@@ -215,9 +236,55 @@ class Converter:
                 for k in range(3):
                     np.add.at(normals, faces[:, k], fn)
                 normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-30)
-            path = self._write_ply("%s_%s" % (kind, el.get("id")), pos, faces, normals)
+            uv = None
+            if textured:  # clrt's bilinear lookup (textures.cl) has texel corners at integer u·w, Mitsuba's centres;
+                # v as the course's (row 0 at the top, v down): Mitsuba's bitmap reads it so (checked: hw4's wood box)
+                w, h = textured["size"]
+                shift = 0.5 if textured["filter"] == "bilinear" else 0.0
+                uv = self.uvs[used] + np.array([shift / w, shift / h])
+            path = self._write_ply("%s_%s" % (kind, el.get("id")), pos, faces, normals, uv)
             d.update(type="ply", filename=path, face_normals=not smooth)
         shapes["%s_%s" % (kind.lower(), el.get("id"))] = d
+
+    def _image_maps(self, el, kind):
+        """The image TextureMaps of shape el that the path converter maps (replace_kd, blend_kd, replace_ks) as
+        {"kd": (mode, texels), "ks": ..., "size": (w, h), "filter": ...}: texels linear, after degamma and the
+        Normalizer, as clrt's flatten_textures.cpp makes them; None (the caller warns) for anything else."""
+        if self.uvs is None:
+            return None
+        maps = {t.get("id"): t for t in self.root.iter("TextureMap")}
+        out = {}
+        for tid in el.find("Textures").text.split():
+            t = maps.get(tid)
+            mode = (t.findtext("DecalMode") or "").strip() if t is not None else ""
+            if t is None or t.get("type") != "image" or mode not in ("replace_kd", "blend_kd", "replace_ks"):
+                self.warn("%s %s: TextureMap %s (%s) not mapped" % (kind, el.get("id"), tid,
+                                                                   "missing" if t is None else t.get("type", "") + " " + mode))
+                return None
+            path = self.images[t.findtext("ImageId").strip()]
+            hdr = path.lower().endswith((".exr", ".hdr"))
+            if hdr:
+                import OpenEXR as E
+                with E.File(path) as f:
+                    img = np.asarray(next(iter(f.parts[0].channels.values())).pixels, dtype=np.float64)
+            else:
+                from PIL import Image as PILImage
+                img = np.asarray(PILImage.open(path).convert("RGB"), dtype=np.float64)
+            img = img[..., :3]
+            rng = 1.0 if hdr else 255.0
+            if t.get("degamma", "").strip().lower() in ("true", "1", "yes"):
+                img = np.where(img > 0, rng * (img / rng) ** 2.2, 0.0)
+            norm = float(t.findtext("Normalizer")) if t.find("Normalizer") is not None else rng
+            interp = (t.findtext("Interpolation") or "nearest").strip()
+            if interp == "trilinear":
+                self.warn("TextureMap %s: trilinear (mip-maps) mapped as bilinear" % tid)
+            filt = "nearest" if interp == "nearest" else "bilinear"
+            if "filter" in out and out["filter"] != filt or "size" in out and out["size"] != (img.shape[1], img.shape[0]):
+                self.warn("%s %s: texture maps of different sizes or filters" % (kind, el.get("id")))
+                return None
+            out["filter"], out["size"] = filt, (img.shape[1], img.shape[0])
+            out["ks" if mode == "replace_ks" else "kd"] = (mode, img / norm)
+        return out
 
     def shapes(self):
         out = {}

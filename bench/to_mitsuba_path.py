@@ -21,7 +21,14 @@ Conventions (clrt's, docs/scene-format.md "Path tracing" and cl_kernels/path.cl,
   coursebrdf (bench/mitsuba_course_brdf.py: clrt's formulas in Dr.Jit; Mitsuba 3 has no Phong, and its
   roughconductor/roughplastic are GGX/Beckmann microfacets with another shape and Fresnel); without one,
   by Mitsuba's diffuse (as before the plugin: the same images).
-- Not mapped (warned, dropped on the Mitsuba side, so a benchmark scene should have none of them): textures;
+- Image textures of inline meshes (TexCoordData; replace_kd, blend_kd, replace_ks; nearest or bilinear;
+  degamma and Normalizer as clrt applies them): bitmaps of the linear texel values (textured_bsdf; kd and ks
+  of coursebrdf, or the diffuse reflectance), uvs shifted by half a texel for bilinear lookups (clrt's
+  texel corners at integer u·w, Mitsuba's centres). The hw4 wood box path traced (replace_kd and
+  replace_ks, bilinear; 64², 2048 spp each) agrees within 0.01% in the mean, relMSE between the two 0.0023
+  (noise); a diffuse copy with degamma and nearest lookups 0.04%, with blend_kd 0.01%.
+- Not mapped (warned, dropped on the Mitsuba side, so a benchmark scene should have none of them): other
+  textures (procedural, bump and normal maps, replace_all, on spheres, PLY meshes and instances);
   Roughness (clrt perturbs the mirror direction uniformly in a square, not a microfacet law); a
   dielectric's AbsorptionCoefficient (Beer's law needs a medium, which `path` does not trace); a
   LightSphere that is not a similarity (Mitsuba's sphere cannot be an ellipsoid).
@@ -160,8 +167,19 @@ def course_brdf(c, mat, kd, ks):
     return d
 
 
-def bsdf(c, mid):
-    """Mitsuba's BSDF of material mid (see the module comment)."""
+def textured_bsdf(c, mid, maps):
+    """Mitsuba's BSDF of material mid on a shape with image maps (Converter._image_maps: replace_kd, blend_kd,
+    replace_ks, texels linear after degamma and Normalizer): as bsdf(), its kd and ks from the maps."""
+    return bsdf(c, mid, maps)
+
+
+def _map_value(c, name, texels, filt):
+    return {"type": "bitmap", "filename": c._texture_exr(name, texels), "raw": True, "filter_type": filt,
+            "wrap_mode": "repeat"}
+
+
+def bsdf(c, mid, maps=None):
+    """Mitsuba's BSDF of material mid (see the module comment); maps: a textured shape's (textured_bsdf)."""
     mat = next((m for m in (c.root.find("Materials") or []) if m.get("id") == mid), None)
     if mat is None:
         c.warn("material %s not found: black" % mid)
@@ -174,8 +192,25 @@ def bsdf(c, mid):
     nonspec = max(kd) > 0 or max(ks) > 0  # clrt's pick between the two parts (path.cl) counts ks too
     is_spec = kind in ("mirror", "conductor", "dielectric") or mat.find("Transparency") is not None
     w = 2.0 if (is_spec and nonspec) else 1.0  # each part picked with probability 1/2: blend of twice each
-    if max(ks) > 0:  # a specular lobe: the course's BRDF itself (mitsuba_course_brdf.py)
+    kd_map = ks_map = None
+    if maps:
+        c.texture_count = getattr(c, "texture_count", 0) + 1
+        n = "%s_%d" % (mid, c.texture_count)
+        if "kd" in maps:
+            mode, tex = maps["kd"]
+            kd_map = tex if mode == "replace_kd" else 0.5 * (np.asarray(kd) + tex)  # blend_kd: the average
+        if "ks" in maps:
+            ks_map = maps["ks"][1]
+        nonspec = nonspec or kd_map is not None or ks_map is not None
+        w = 2.0 if (is_spec and nonspec) else 1.0
+    if max(ks) > 0 or ks_map is not None:  # a specular lobe: the course's BRDF itself (mitsuba_course_brdf.py)
         diffuse = course_brdf(c, mat, [w * x for x in kd], [w * x for x in ks])
+        if kd_map is not None:
+            diffuse["kd_tex"] = _map_value(c, "kd_" + n, w * kd_map, maps["filter"])
+        if ks_map is not None:
+            diffuse["ks_tex"] = _map_value(c, "ks_" + n, w * ks_map, maps["filter"])
+    elif kd_map is not None:
+        diffuse = {"type": "diffuse", "reflectance": _map_value(c, "kd_" + n, w * diffuse_scale(c, mat) * kd_map, maps["filter"])}
     else:
         rho = [w * diffuse_scale(c, mat) * x for x in kd]
         diffuse = {"type": "diffuse", "reflectance": value(c, "kd_" + mid, rho)}
