@@ -100,21 +100,45 @@ inline LaneI Lanes_PickTriangle(const __global float4* tri, int n, LaneF u, Lane
     return pos;
 }
 
+/* MeshLight_Subtended of the lanes' triangles (a, b, c) at their points p, the same operations in lanes. */
+inline void Lanes_Subtended(LaneV3 a, LaneV3 b, LaneV3 c, LaneV3 p, LaneF* num, LaneF* den) {
+    const LaneV3 ra = LaneV3_Sub(a, p), rb = LaneV3_Sub(b, p), rc = LaneV3_Sub(c, p);
+    const LaneF la = sqrt(LaneV3_Dot(ra, ra)), lb = sqrt(LaneV3_Dot(rb, rb)), lc = sqrt(LaneV3_Dot(rc, rc));
+    *num = fabs(LaneV3_Dot(ra, LaneV3_Cross(rb, rc)));
+    *den = la * lb * lc + LaneV3_Dot(ra, rb) * lc + LaneV3_Dot(ra, rc) * lb + LaneV3_Dot(rb, rc) * la;
+}
+
 /* MeshLight_Weight at the lanes' points p, the same operations in lanes. */
 inline LaneF Lanes_MeshLightWeight(float3 a, float3 b, float3 c, LaneV3 p) {
-    const LaneV3 ra = LaneV3_Sub(LaneV3_Splat(a), p), rb = LaneV3_Sub(LaneV3_Splat(b), p), rc = LaneV3_Sub(LaneV3_Splat(c), p);
-    const LaneF la = sqrt(LaneV3_Dot(ra, ra)), lb = sqrt(LaneV3_Dot(rb, rb)), lc = sqrt(LaneV3_Dot(rc, rc));
-    const LaneF num = fabs(LaneV3_Dot(ra, LaneV3_Cross(rb, rc)));
-    const LaneF den = la * lb * lc + LaneV3_Dot(ra, rb) * lc + LaneV3_Dot(ra, rc) * lb + LaneV3_Dot(rb, rc) * la;
+    LaneF num, den;
+    Lanes_Subtended(LaneV3_Splat(a), LaneV3_Splat(b), LaneV3_Splat(c), p, &num, &den);
     const LaneF w = select((LaneF)(CLRT_MESHLIGHT_WEIGHT_CAP), num / den, den * CLRT_MESHLIGHT_WEIGHT_CAP > num);
     return select((LaneF)(0.0f), w, num > 0.0f);
+}
+
+/* MeshLight_SphericalDirection in lanes (each lane its own spherical triangle a, b, c of half-area halfOmega). */
+inline LaneV3 Lanes_SphericalDirection(LaneV3 a, LaneV3 b, LaneV3 c, LaneF halfOmega, LaneF u1, LaneF u2) {
+    const LaneV3 ca = LaneV3_Sub(c, a), ba = LaneV3_Sub(b, a);
+    const LaneV3 cPerp = LaneV3_Normalize(LaneV3_Sub(ca, LaneV3_Scale(a, LaneV3_Dot(ca, a))));
+    const LaneF g = 1.0f + LaneV3_Dot(a, b), m = LaneV3_Dot(ba, cPerp), k = fabs(LaneV3_Dot(ba, LaneV3_Cross(cPerp, a)));
+    LaneF cosH, sinH;
+    Lanes_SinCos2Pi(u1 * halfOmega * (0.5f * CLRT_INV_PI), &cosH, &sinH);
+    const LaneF n = sinH * g, d = fmax(k * cosH - sinH * m, 0.0f), r = n * n + d * d;
+    const LaneV3 cHat = LaneV3_Add(LaneV3_Scale(a, (d * d - n * n) / r), LaneV3_Scale(cPerp, 2.0f * n * d / r));
+    const LaneV3 bc = LaneV3_Sub(cHat, b);
+    const LaneF oneMinusZ = u2 * 0.5f * LaneV3_Dot(bc, bc);
+    const LaneF sinZ = sqrt(fmax(0.0f, oneMinusZ * (2.0f - oneMinusZ)));
+    const LaneV3 bpRaw = LaneV3_Sub(bc, LaneV3_Scale(b, LaneV3_Dot(bc, b)));
+    const LaneF lbp = LaneV3_Dot(bpRaw, bpRaw);
+    const LaneV3 w = LaneV3_Add(LaneV3_Scale(b, 1.0f - oneMinusZ), LaneV3_Scale(bpRaw, select((LaneF)(0.0f), sinZ * rsqrt(lbp), lbp > 0.0f)));
+    return LaneV3_Select(a, LaneV3_Normalize(w), r > 0.0f);
 }
 
 /* MeshLight_PickByWeight for the lanes (n <= CLRT_MESHLIGHT_PICK_MAX): the picked triangles, *uRest, and
  * *total (Σw) and *wPick (the pick's w) from which the caller makes A·Σw / w; *wPick 0 where nothing is picked. */
 inline LaneI Lanes_PickByWeight(const __global float4* tri, int n, LaneV3 p, LaneF u, LaneF* uRest, LaneF* total,
                                 LaneF* wPick) {
-    LaneF w[CLRT_MESHLIGHT_PICK_MAX];
+    LaneF w[CLRT_MESHLIGHT_PICK_MAX > 0 ? CLRT_MESHLIGHT_PICK_MAX : 1];
     LaneF sum = (LaneF)(0.0f);
     for (int i = 0; i < n; ++i) {
         w[i] = Lanes_MeshLightWeight(tri[3 * i].xyz, tri[3 * i + 1].xyz, tri[3 * i + 2].xyz, p);
@@ -153,6 +177,8 @@ inline void Lanes_MeshLightSample(const __global Light* light, const __global fl
         v0[k] = tri[3 * t].xyz; v1[k] = tri[3 * t + 1].xyz; v2[k] = tri[3 * t + 2].xyz;
     }
     const LaneV3 a = LaneV3_Load(v0), b = LaneV3_Load(v1), c = LaneV3_Load(v2);
+    const LaneV3 nL = LaneV3_Normalize(LaneV3_Cross(LaneV3_Sub(b, a), LaneV3_Sub(c, a)));
+    /* uniform by area (MeshLight_Sample's last part): L·(1/pdf over the area)·cosθ_L/d² */
     const LaneF su = sqrt(ux);
     const LaneF b0 = 1.0f - su, b1 = u2 * su;
     const LaneV3 q = LaneV3_Add(LaneV3_Add(LaneV3_Scale(a, b0), LaneV3_Scale(b, b1)), LaneV3_Scale(c, 1.0f - b0 - b1));
@@ -160,15 +186,33 @@ inline void Lanes_MeshLightSample(const __global Light* light, const __global fl
     const LaneF d2 = LaneV3_Dot(d, d);
     const LaneF len = sqrt(d2);
     *wi = LaneV3_Scale(d, 1.0f / len);
-    const LaneF cosLight = fabs(LaneV3_Dot(LaneV3_Normalize(LaneV3_Cross(LaneV3_Sub(b, a), LaneV3_Sub(c, a))), *wi));
+    const LaneF cosLight = fabs(LaneV3_Dot(nL, *wi));
     *dist = fmax(len - Lanes_OffsetDistance(q) / cosLight, 0.5f * len); /* MeshLight_ShadowLength */
-    LaneF invAreaPdf = (LaneF)(light->area);
+    LaneF invAreaPdf = (LaneF)(light->area), invPick = (LaneF)(0.0f);
     if (byWeight) { /* MeshLight_TriangleArea · Σw / w */
         const LaneV3 n = LaneV3_Cross(LaneV3_Sub(b, a), LaneV3_Sub(c, a));
-        invAreaPdf = select((LaneF)(0.0f), 0.5f * sqrt(LaneV3_Dot(n, n)) * total / wPick, wPick > 0.0f);
+        invPick = select((LaneF)(0.0f), total / wPick, wPick > 0.0f);
+        invAreaPdf = 0.5f * sqrt(LaneV3_Dot(n, n)) * invPick;
     }
-    const LaneF scale = select((LaneF)(0.0f), invAreaPdf * cosLight / d2, (d2 > 0.0f) & (cosLight > 0.0f) & (invAreaPdf > 0.0f));
-    *e = LaneV3_Scale(LaneV3_Splat(light->radiance.xyz), scale);
+    LaneF value = select((LaneF)(0.0f), invAreaPdf * cosLight / d2, (d2 > 0.0f) & (cosLight > 0.0f) & (invAreaPdf > 0.0f));
+    if (byWeight) { /* the lanes whose triangle's Ω is sampled uniformly: L·Ω·Σw/w */
+        LaneF num, den;
+        Lanes_Subtended(a, b, c, p, &num, &den);
+        const LaneF omega = 2.0f * atan2(num, den); /* MeshLight_SolidAngle */
+        const LaneI sph = (omega > CLRT_MESHLIGHT_SPHERICAL_MIN) & (omega < CLRT_MESHLIGHT_SPHERICAL_MAX);
+        if (any(sph)) {
+            const LaneV3 ra = LaneV3_Sub(a, p);
+            const LaneV3 ws = Lanes_SphericalDirection(LaneV3_Normalize(ra), LaneV3_Normalize(LaneV3_Sub(b, p)),
+                                                       LaneV3_Normalize(LaneV3_Sub(c, p)), 0.5f * omega, ux, u2);
+            const LaneF cosS = fabs(LaneV3_Dot(nL, ws)), tS = fabs(LaneV3_Dot(nL, ra)) / cosS; /* to the plane */
+            const LaneF distS = fmax(tS - Lanes_OffsetDistance(LaneV3_Add(p, LaneV3_Scale(ws, tS))) / cosS, 0.5f * tS);
+            const LaneI okS = (cosS > 0.0f) & (tS > 0.0f) & isfinite(tS);
+            *wi = LaneV3_Select(*wi, ws, sph);
+            *dist = select(*dist, distS, sph);
+            value = select(value, select((LaneF)(0.0f), omega * invPick, okS), sph);
+        }
+    }
+    *e = LaneV3_Scale(LaneV3_Splat(light->radiance.xyz), value);
 }
 #endif
 

@@ -156,17 +156,19 @@ inline float3 Lanes_MaterialF(const __global Material* materials, int material) 
 
 #ifdef CLRT_HAS_LIGHT_MESH
 /* For the lanes whose ray, after a non-specular bounce (bsdfPdf > 0), hit a plain triangle of a LightMesh that
- * picks by weight: area[k] becomes MeshLight_InvAreaPdf from the ray's origin p − t·dir (Path_ObjectLightPdf's),
- * for the hit's MIS density (no other lane's emission weight reads it: Lanes_EmissionWeight). */
+ * picks by weight: area[k] becomes MeshLight_InvAreaPdf from the ray's origin p − t·dir (Path_ObjectLightPdf's;
+ * cosLight: the hit's |cosθ_L|), for the hit's MIS density (no other lane's emission weight reads it: Lanes_EmissionWeight). */
 inline void Lanes_MeshLightInvAreaPdf(const __global Light* lights, const __global float4* lightData, const LanesGather* g,
-                                      LaneV3 pHit, const float3* dirs, const float* bsdfPdf, float* area) {
+                                      LaneV3 pHit, const float3* dirs, LaneF cosLight, const float* bsdfPdf, float* area) {
     float3 p[CLRT_LANES];
+    float cosL[CLRT_LANES];
     LaneV3_Store(pHit, p);
+    vstore4(cosLight, 0, cosL);
     for (int k = 0; k < CLRT_LANES; ++k) {
         if (!((g->triBits >> k) & 1) || g->light[k] == CLRT_INVALID || !(bsdfPdf[k] > 0.0f)) continue;
         const __global Light* light = &lights[g->light[k]];
         if (light->objCount <= CLRT_MESHLIGHT_PICK_MAX)
-            area[k] = MeshLight_InvAreaPdf(light, lightData, g->v0[k], g->v1[k], g->v2[k], p[k] - g->t[k] * dirs[k]);
+            area[k] = MeshLight_InvAreaPdf(light, lightData, g->v0[k], g->v1[k], g->v2[k], p[k] - g->t[k] * dirs[k], g->t[k], cosL[k]);
     }
 }
 #endif
@@ -225,15 +227,16 @@ inline void Lanes_Surfaces(SceneParams scene, const __global Material* materials
     }
     LaneV3 ngRaw, ns;
     Lanes_Geometry(g, &lh->p, &ngRaw, &ns);
-#ifdef CLRT_HAS_LIGHT_MESH
-    if (scene.pathMode & CLRT_PATH_MIS) Lanes_MeshLightInvAreaPdf(lights, lightData, g, lh->p, dirs, bsdfPdf, area);
-#endif
     const LaneV3 dir = LaneV3_Load(dirs);
+    const LaneF cosL = fabs(LaneV3_Dot(ngRaw, dir));
+#ifdef CLRT_HAS_LIGHT_MESH
+    if (scene.pathMode & CLRT_PATH_MIS) Lanes_MeshLightInvAreaPdf(lights, lightData, g, lh->p, dirs, cosL, bsdfPdf, area);
+#endif
     const LaneI front = LaneV3_Dot(dir, ngRaw) < 0.0f;
     lh->ng = LaneV3_Select(LaneV3_Scale(ngRaw, -1.0f), ngRaw, front);
     lh->ns = LaneV3_Select(LaneV3_Scale(ns, -1.0f), ns, front);
     const int mode = scene.pathMode;
-    const LaneF t = vload4(0, g->t), A = vload4(0, area), cosL = fabs(LaneV3_Dot(ngRaw, dir));
+    const LaneF t = vload4(0, g->t), A = vload4(0, area);
     const LaneI tri = Lane_FromBits(g->triBits);
     LaneF lightPdf = select((LaneF)(0.0f), t * t / (A * cosL), (cosL > 0.0f) & (A > 0.0f));
     lightPdf = select(vload4(0, g->lightPdf), lightPdf, tri);

@@ -3,14 +3,16 @@
  * area CDF; a sphere's object-space centre, radius and worldToObject rows) is in the lightData buffer,
  * laid out as device_types.h describes next to struct Light (written by src/flatten/flatten_lights.cpp).
  * Both return, like every Light_Sample case, L(wi) / pdf(wi) for the sampled direction wi (solid angle).
- *   LightMesh:   a triangle, then a uniform point on it; both faces emit (the AreaLight rule,
+ *   LightMesh:   a triangle, then a direction or point in it; both faces emit (the AreaLight rule,
  *                SCENE_FORMAT.md conventions). A mesh of at most CLRT_MESHLIGHT_PICK_MAX triangles picks
  *                triangle k by its weight seen from the shading point p (MeshLight_Weight: about half its
- *                solid angle, 0 where p lies in its plane), so that the triangles that fill p's view of the
- *                light get the samples: pdf over the area (w_k / Σw) / A_k. A larger mesh picks by area
- *                (binary search of the CDF): pdf 1/A. In solid angle: pdf_area·d²/|cosθ_L|. A BSDF ray
- *                that hits the mesh gets the same density (MeshLight_InvAreaPdf, from its origin:
- *                path.cl Path_ObjectLightPdf).
+ *                solid angle Ω_k, 0 where p lies in its plane), so that the triangles that fill p's view of
+ *                the light get the samples, then a direction uniform in Ω_k (MeshLight_SphericalDirection):
+ *                pdf (w_k / Σw) / Ω_k; where Ω_k is too small or too large for that in float, a uniform
+ *                point on the triangle: pdf over the area (w_k / Σw) / A_k. A larger mesh picks by area
+ *                (binary search of the CDF), then a uniform point: pdf 1/A. In solid angle: pdf_area·d²/|cosθ_L|.
+ *                A BSDF ray that hits the mesh gets the same density (MeshLight_InvAreaPdf, from its
+ *                origin: path.cl Path_ObjectLightPdf).
  *   LightSphere: under a similarity, a direction uniform in the cone the sphere subtends: pdf
  *                1/(2π(1 − cosθmax)) (from inside: all directions, 1/4π; the inside emits nothing); under
  *                any other transform (an ellipsoid) the same in object space, from the object-space
@@ -42,23 +44,78 @@ inline int MeshLight_PickTriangle(const __global float4* tri, int n, float u, fl
 }
 
 /* A LightMesh of at most this many triangles picks them by MeshLight_Weight from the shading point (their
- * weights are computed for every light sample: the cost grows with the count); larger ones by area. */
+ * weights are computed for every light sample: the cost grows with the count); larger ones by area. With
+ * CLRT_MESHLIGHT_BY_AREA (clrt render --mesh-light-sampling area: the course renderer's noise) every mesh
+ * picks by area. */
+#ifdef CLRT_MESHLIGHT_BY_AREA
+#define CLRT_MESHLIGHT_PICK_MAX 0
+#else
 #define CLRT_MESHLIGHT_PICK_MAX 16
+#endif
 /* MeshLight_Weight's largest value: tan(Ω/2) at Ω ≈ 0.92π (p close to a large triangle). */
 #define CLRT_MESHLIGHT_WEIGHT_CAP 8.0f
 
-/* The weight of light triangle (a, b, c) seen from p: tan(Ω/2) of its solid angle Ω (Van Oosterom and
- * Strackee's formula), at most CLRT_MESHLIGHT_WEIGHT_CAP; 0 where p lies in the triangle's plane, which
- * then shows p nothing (cosθ_L = 0 everywhere on it). For small Ω about Ω/2: a triangle gets samples in
- * proportion to how much of p's view it fills. Any positive weight keeps the estimate unbiased; the host
- * reference is tests/test_object_lights.cpp hostWeight. */
-inline float MeshLight_Weight(float3 a, float3 b, float3 c, float3 p) {
+/* tan(Ω/2) = *num / *den of the solid angle Ω that light triangle (a, b, c) subtends at p (Van Oosterom and
+ * Strackee's formula; *den < 0 where Ω > π). */
+inline void MeshLight_Subtended(float3 a, float3 b, float3 c, float3 p, float* num, float* den) {
     const float3 ra = a - p, rb = b - p, rc = c - p;
     const float la = sqrt(dot(ra, ra)), lb = sqrt(dot(rb, rb)), lc = sqrt(dot(rc, rc)); /* as the lanes' */
-    const float num = fabs(dot(ra, cross(rb, rc)));
-    const float den = la * lb * lc + dot(ra, rb) * lc + dot(ra, rc) * lb + dot(rb, rc) * la;
+    *num = fabs(dot(ra, cross(rb, rc)));
+    *den = la * lb * lc + dot(ra, rb) * lc + dot(ra, rc) * lb + dot(rb, rc) * la;
+}
+
+/* The weight of light triangle (a, b, c) seen from p: tan(Ω/2) of its solid angle Ω (MeshLight_Subtended),
+ * at most CLRT_MESHLIGHT_WEIGHT_CAP; 0 where p lies in the triangle's plane, which then shows p nothing
+ * (cosθ_L = 0 everywhere on it). For small Ω about Ω/2: a triangle gets samples in proportion to how much
+ * of p's view it fills. Any positive weight keeps the estimate unbiased; the host reference is
+ * tests/test_object_lights.cpp hostWeight. */
+inline float MeshLight_Weight(float3 a, float3 b, float3 c, float3 p) {
+    float num, den;
+    MeshLight_Subtended(a, b, c, p, &num, &den);
     if (!(num > 0.0f)) return 0.0f;
     return den * CLRT_MESHLIGHT_WEIGHT_CAP > num ? num / den : CLRT_MESHLIGHT_WEIGHT_CAP;
+}
+
+/* A picked triangle whose solid angle Ω lies in this range is sampled uniformly in Ω (a spherical
+ * triangle: MeshLight_SphericalDirection), any other uniformly by area. Below the minimum the triangle is
+ * far or seen edge-on: its area density is then nearly uniform in Ω, and float loses the spherical
+ * triangle's angles; above the maximum (p almost on the triangle) its sides are nearly great circles. */
+#define CLRT_MESHLIGHT_SPHERICAL_MIN 3e-4f
+#define CLRT_MESHLIGHT_SPHERICAL_MAX 6.2f
+
+/* Ω of a triangle from MeshLight_Subtended's num and den, and whether it is sampled in Ω. */
+inline float MeshLight_SolidAngle(float num, float den) { return 2.0f * atan2(num, den); }
+inline int MeshLight_BySolidAngle(float omega) {
+    return omega > CLRT_MESHLIGHT_SPHERICAL_MIN && omega < CLRT_MESHLIGHT_SPHERICAL_MAX;
+}
+
+/* A direction drawn uniformly in the spherical triangle of unit vectors a, b, c (halfOmega: half its area,
+ * atan2 of MeshLight_Subtended's num and den): u1 picks the sub-triangle a, b, ĉ of area u1·Ω, whose vertex
+ * ĉ = cosθ·a + sinθ·c⊥ lies on the arc from a to c, then u2 a point on the arc from b to ĉ, uniform in the
+ * sub-triangle's area as in Arvo's method (1995: "Stratified sampling of spherical triangles"). θ comes
+ * from Van Oosterom and Strackee's tan(Ω'/2) of the sub-triangle, which is linear in tan(θ/2) = n/d:
+ * tan(Ω'/2)·(g + m·tan(θ/2)) = k·tan(θ/2) with g = 1 + a·b, m = b·c⊥, k = |a·(b×c⊥)|. Arvo's own formula
+ * for cosθ cancels digits: in float it strayed up to 0.2 rad from the double result on small triangles
+ * (this form: 2e-5 rad at most, 2e-6 for 99.9%). The host reference is tests/test_object_lights.cpp
+ * hostSphericalDirection (Arvo's formula, in double). */
+inline float3 MeshLight_SphericalDirection(float3 a, float3 b, float3 c, float halfOmega, float u1, float u2) {
+    /* v·rsqrt(v·v) rather than normalize(): the operations of Lanes_SphericalDirection, which must draw
+     * the same directions up to rounding; differences of the unit vectors first, which are accurate */
+    const float3 ca = c - a, ba = b - a;
+    const float3 cpRaw = ca - a * dot(ca, a);
+    const float3 cPerp = cpRaw * rsqrt(dot(cpRaw, cpRaw));
+    const float g = 1.0f + dot(a, b), m = dot(ba, cPerp), k = fabs(dot(ba, cross(cPerp, a)));
+    const float2 cs = Math_SinCos2Pi(u1 * halfOmega * (0.5f * CLRT_INV_PI)); /* of half the sub-area */
+    const float n = cs.y * g, d = fmax(k * cs.x - cs.y * m, 0.0f), r = n * n + d * d;
+    if (!(r > 0.0f)) return a;
+    const float3 cHat = a * ((d * d - n * n) / r) + cPerp * (2.0f * n * d / r);
+    const float3 bc = cHat - b;
+    const float oneMinusZ = u2 * 0.5f * dot(bc, bc); /* 1 − cos of the arc from b to the direction */
+    const float sinZ = sqrt(fmax(0.0f, oneMinusZ * (2.0f - oneMinusZ)));
+    const float3 bpRaw = bc - b * dot(bc, b);
+    const float lbp = dot(bpRaw, bpRaw);
+    const float3 w = b * (1.0f - oneMinusZ) + (lbp > 0.0f ? bpRaw * (sinZ * rsqrt(lbp)) : (float3)(0.0f));
+    return w * rsqrt(dot(w, w));
 }
 
 /* The area of light triangle (a, b, c). */
@@ -68,16 +125,16 @@ inline float MeshLight_TriangleArea(float3 a, float3 b, float3 c) {
 }
 
 /* The triangle of a LightMesh of n <= CLRT_MESHLIGHT_PICK_MAX triangles picked by u with probability
- * w_k / Σw (MeshLight_Weight from p), *uRest: u rescaled to [0, 1) inside its share; *invAreaPdf: the
- * reciprocal of the pick's density over the area, A_k·Σw / w_k (0: nothing to pick, p sees no triangle). */
-inline int MeshLight_PickByWeight(const __global float4* tri, int n, float3 p, float u, float* uRest, float* invAreaPdf) {
-    float w[CLRT_MESHLIGHT_PICK_MAX];
+ * w_k / Σw (MeshLight_Weight from p), *uRest: u rescaled to [0, 1) inside its share; *invPick: the
+ * reciprocal of that probability, Σw / w_k (0: nothing to pick, p sees no triangle). */
+inline int MeshLight_PickByWeight(const __global float4* tri, int n, float3 p, float u, float* uRest, float* invPick) {
+    float w[CLRT_MESHLIGHT_PICK_MAX > 0 ? CLRT_MESHLIGHT_PICK_MAX : 1]; /* 0 under CLRT_MESHLIGHT_BY_AREA */
     float total = 0.0f;
     for (int i = 0; i < n; ++i) {
         w[i] = MeshLight_Weight(tri[3 * i].xyz, tri[3 * i + 1].xyz, tri[3 * i + 2].xyz, p);
         total += w[i];
     }
-    *invAreaPdf = 0.0f;
+    *invPick = 0.0f;
     *uRest = 0.5f;
     if (!(total > 0.0f) || !isfinite(total)) return 0;
     const float x = u * total;
@@ -86,21 +143,26 @@ inline int MeshLight_PickByWeight(const __global float4* tri, int n, float3 p, f
     while (k < n - 1 && !(x < below + w[k])) below += w[k++];
     if (!(w[k] > 0.0f)) return k; /* x at the very end, on a triangle of weight 0: no sample */
     *uRest = clamp((x - below) / w[k], 0.0f, 0.99999994f);
-    *invAreaPdf = MeshLight_TriangleArea(tri[3 * k].xyz, tri[3 * k + 1].xyz, tri[3 * k + 2].xyz) * total / w[k];
+    *invPick = total / w[k];
     return k;
 }
 
-/* 1 / (the density over the area) with which MeshLight_Sample, from shading point p, draws the points of the
- * light's triangle (v0, v1, v2): A·Σw / w of MeshLight_PickByWeight, or the mesh's area where it picks by
- * area. The density a BSDF ray that hits the light there needs for MIS (with p its origin). */
+/* 1 / (the density over the area) with which MeshLight_Sample, from shading point p, draws point q of the
+ * light's triangle (v0, v1, v2), dist away from p and seen there at cosLight: picked by weight (Σw / w_k),
+ * then uniform in the triangle's solid angle Ω (Ω·dist²/cosLight) or its area A; where the mesh picks by
+ * area, the mesh's area. The density a BSDF ray that hits the light there needs for MIS (with p its origin). */
 inline float MeshLight_InvAreaPdf(const __global Light* light, const __global float4* data, float3 v0, float3 v1, float3 v2,
-                                  float3 p) {
+                                  float3 p, float dist, float cosLight) {
     if (light->objCount > CLRT_MESHLIGHT_PICK_MAX) return light->area;
     const __global float4* tri = data + light->objFirst;
     float total = 0.0f;
     for (int i = 0; i < light->objCount; ++i) total += MeshLight_Weight(tri[3 * i].xyz, tri[3 * i + 1].xyz, tri[3 * i + 2].xyz, p);
-    const float w = MeshLight_Weight(v0, v1, v2, p);
+    float num, den;
+    MeshLight_Subtended(v0, v1, v2, p, &num, &den);
+    const float w = num > 0.0f ? (den * CLRT_MESHLIGHT_WEIGHT_CAP > num ? num / den : CLRT_MESHLIGHT_WEIGHT_CAP) : 0.0f;
     if (!(w > 0.0f) || !isfinite(total)) return 0.0f;
+    const float omega = MeshLight_SolidAngle(num, den);
+    if (MeshLight_BySolidAngle(omega)) return cosLight > 0.0f ? omega * total / w * (dist * dist / cosLight) : 0.0f;
     return MeshLight_TriangleArea(v0, v1, v2) * total / w;
 }
 
@@ -117,19 +179,37 @@ inline float MeshLight_ShadowLength(float d, float3 q, float cosLight) {
     return fmax(d - offset / cosLight, 0.5f * d);
 }
 
+/* A point of LightMesh `light` seen from p (object_lights.cl's header): *wi, *dist (MeshLight_ShadowLength's),
+ * L / pdf(wi). */
 inline float3 MeshLight_Sample(const __global Light* light, const __global float4* data, float3 p, float2 u,
                                float3* wi, float* dist) {
     if (light->objCount <= 0 || !(light->area > 0.0f)) return (float3)(0.0f);
     const __global float4* tris = data + light->objFirst;
-    float ux, invAreaPdf = light->area;
+    float ux, invPick = 0.0f;
     int k;
-    if (light->objCount <= CLRT_MESHLIGHT_PICK_MAX) {
-        k = MeshLight_PickByWeight(tris, light->objCount, p, u.x, &ux, &invAreaPdf);
-        if (!(invAreaPdf > 0.0f)) return (float3)(0.0f);
+    const int byWeight = light->objCount <= CLRT_MESHLIGHT_PICK_MAX;
+    if (byWeight) {
+        k = MeshLight_PickByWeight(tris, light->objCount, p, u.x, &ux, &invPick);
+        if (!(invPick > 0.0f)) return (float3)(0.0f);
     } else {
         k = MeshLight_PickTriangle(tris, light->objCount, u.x, &ux);
     }
     float3 v0 = tris[3 * k].xyz, v1 = tris[3 * k + 1].xyz, v2 = tris[3 * k + 2].xyz;
+    const float3 nL = normalize(cross(v1 - v0, v2 - v0));
+    if (byWeight) {
+        float num, den;
+        MeshLight_Subtended(v0, v1, v2, p, &num, &den);
+        const float omega = MeshLight_SolidAngle(num, den);
+        if (MeshLight_BySolidAngle(omega)) { /* uniform in the triangle's solid angle: L·Ω·Σw/w_k */
+            const float3 ra = v0 - p, rb = v1 - p, rc = v2 - p;
+            *wi = MeshLight_SphericalDirection(ra * rsqrt(dot(ra, ra)), rb * rsqrt(dot(rb, rb)), rc * rsqrt(dot(rc, rc)),
+                                               0.5f * omega, ux, u.y);
+            const float cosLight = fabs(dot(nL, *wi)), t = fabs(dot(nL, ra)) / cosLight; /* to the plane */
+            if (!(cosLight > 0.0f) || !(t > 0.0f) || !isfinite(t)) return (float3)(0.0f);
+            *dist = MeshLight_ShadowLength(t, p + t * *wi, cosLight);
+            return light->radiance.xyz * (omega * invPick);
+        }
+    }
     float su = sqrt(ux); /* uniform on the triangle: b0 = 1 − √u1, b1 = u2·√u1 */
     float b0 = 1.0f - su, b1 = u.y * su;
     float3 q = b0 * v0 + b1 * v1 + (1.0f - b0 - b1) * v2;
@@ -138,10 +218,10 @@ inline float3 MeshLight_Sample(const __global Light* light, const __global float
     if (!(d2 > 0.0f)) return (float3)(0.0f);
     *dist = sqrt(d2);
     *wi = d / *dist;
-    float3 nL = normalize(cross(v1 - v0, v2 - v0));
     float cosLight = fabs(dot(nL, *wi)); /* both faces emit, as an AreaLight's */
     if (!(cosLight > 0.0f)) return (float3)(0.0f);
     *dist = MeshLight_ShadowLength(*dist, q, cosLight);
+    const float invAreaPdf = byWeight ? MeshLight_TriangleArea(v0, v1, v2) * invPick : light->area;
     return light->radiance.xyz * (invAreaPdf * cosLight / d2);
 }
 

@@ -102,7 +102,7 @@ inline float Path_ObjectLightPdf(const __global Light* light, const __global flo
     float3 origin = pHit - t * dirWorld;
     if (light->kind == LIGHT_MESH) {
         const float cosL = fabs(dot(ngWorld, dirWorld));
-        const float invAreaPdf = MeshLight_InvAreaPdf(light, lightData, tri->v0.xyz, tri->v1.xyz, tri->v2.xyz, origin);
+        const float invAreaPdf = MeshLight_InvAreaPdf(light, lightData, tri->v0.xyz, tri->v1.xyz, tri->v2.xyz, origin, t, cosL);
         return cosL > 0.0f && invAreaPdf > 0.0f ? t * t / (invAreaPdf * cosL) : 0.0f;
     }
     float3 axis = light->position.xyz - origin;

@@ -3,7 +3,7 @@
 # half_a.npy, half_b.npy), for kernel variants side by side, and a bias check. The same relMSE as
 # bench/bench.py (mean of (x - ref)^2 / (ref^2 + 0.01)). Usage (the bench venv):
 #   build/bench-venv/bin/python experiments/relmse_vs_ref.py SCENE REFDIR --spp 16 --seeds 3 [--kernels A,B]
-#       renders seeds 1..N with build/clrt (the fused pipeline); --kernels: CLRT_KERNEL_DIR values
+#       renders seeds 1..N with build/clrt (--pipeline, default fused); --kernels: CLRT_KERNEL_DIR values
 #       (directories holding cl_kernels/ and src/shared/ copies), one column each.
 #   ... --bias --spp 512: two renders (seeds 101, 102) averaged; prints relMSE against the reference and the
 #       sum of both noise floors it should match if the expectations agree, and the per-channel mean ratio.
@@ -13,6 +13,7 @@ ap = argparse.ArgumentParser()
 ap.add_argument("scene"); ap.add_argument("refdir")
 ap.add_argument("--spp", type=int, default=16); ap.add_argument("--seeds", type=int, default=3)
 ap.add_argument("--kernels", default=""); ap.add_argument("--bias", action="store_true")
+ap.add_argument("--pipeline", default="fused")
 ap.add_argument("--clrt", default=os.path.join(os.path.dirname(__file__), "..", "build", "clrt"))
 a = ap.parse_args()
 
@@ -26,7 +27,7 @@ def render(seed, kdir=""):
     if kdir: env.update(CLRT_KERNEL_DIR=os.path.join(kdir, "cl_kernels"), CLRT_CACHE_DIR=os.path.join(kdir, "cache"))
     with tempfile.TemporaryDirectory() as out:
         p = subprocess.run([a.clrt, "render", a.scene, "--spp", str(a.spp), "--seed", str(seed), "-o", out, "-v",
-                            "--pipeline", "fused"], env=env, capture_output=True, text=True, check=True)
+                            "--pipeline", a.pipeline], env=env, capture_output=True, text=True, check=True)
         m = re.search(r"render ([0-9.]+)s", p.stderr + p.stdout)
         return read(os.path.join(out, "img.exr")), float(m.group(1)) if m else float("nan")
 

@@ -144,10 +144,11 @@ inline std::string samplerRefusal(const Scene& scene, PixelSampler sampler) {
 
 // Renders `cam` of the flattened scene `ds` at `spp` samples through `pipeline` (fused or wavefront) on
 // the test device: for tests that check both pipelines.
-inline ImageRGB renderPipeline(const DeviceScene& ds, const Camera& cam, Pipeline pipeline, int spp = 1) {
+inline ImageRGB renderPipeline(const DeviceScene& ds, const Camera& cam, Pipeline pipeline, int spp = 1, uint32_t seed = 0) {
     Renderer r(testContext(), ds);
     RenderSettings rs;
     rs.spp = spp;
+    rs.seed = seed;
     rs.pipeline = pipeline;
     RenderCounters c;
     return r.render(cam, rs, c);

@@ -44,6 +44,11 @@ const char* const kRenderHelp =
     "                        their own BVH, where their placements hold >= 2^20 triangles), flatten\n"
     "                        (every triangle in world space), two-level (every mesh that is no light\n"
     "                        once; the same image within float rounding)\n"
+    "  --mesh-light-sampling M  how LightMesh lights are sampled: solid-angle (default: a mesh of at most\n"
+    "                        16 triangles picks one by how much of the shading point's view it fills, then\n"
+    "                        a direction uniform in its solid angle) or area (a triangle by area, then a\n"
+    "                        uniform point on it, as the course's renderer: noisier, the same expectation;\n"
+    "                        for comparing noise with the course's references)\n"
     "  --rr-rule R           Russian roulette of RussianRoulette cameras: unbiased (default), or course:\n"
     "                        the course's hw6 references' biased rule (a hit's own light is counted\n"
     "                        undivided when the path dies there; see docs/scene-format.md); ignored\n"
@@ -134,6 +139,9 @@ RenderArgs parseRenderArgs(int argc, char** argv, int start) {
              else if (v == "two-level") a.instancing = Instancing::TwoLevel;
              else throwExpected(f, "auto, flatten or two-level", v);
          }},
+        {{"--mesh-light-sampling"}, true, [&](Str f, Str v) {
+             a.meshLightsByArea = parseChoiceArg(f, v, {"solid-angle", "area"}) == 1;
+         }},
         {{"--rr-rule"}, true, [&](Str f, Str v) {
              if (!parseRouletteRule(v, a.rouletteRule)) throwExpected(f, "unbiased or course", v);
          }},
@@ -187,6 +195,7 @@ std::string pixelOptions(const RenderArgs& a) {
     return "env=" + a.envStrategy + ";all-features=" + std::to_string(a.allFeatures) +
            ";sampler=" + pixelSamplerName(a.pixelSampler) +
            (a.rouletteRule == RouletteRule::Course ? ";rr-rule=course" : "") +
+           (a.meshLightsByArea ? ";mesh-light-sampling=area" : "") +
            (a.backfaceCulling >= 0 ? ";backface-culling=" + std::to_string(a.backfaceCulling) : "") +
            (a.vertexNormals >= 0 ? ";vertex-normals=" + std::to_string(a.vertexNormals) : "") +
            (a.rayOrigin >= 0 ? ";ray-origin=" + std::to_string(a.rayOrigin) : "") +

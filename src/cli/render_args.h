@@ -23,6 +23,7 @@ struct RenderArgs {
     uint64_t maxMemory = 0;  // --max-memory: cap on the estimated host peak and device memory (0: none)
     PixelSampler pixelSampler = PixelSampler::Stratified;  // --sampler
     RouletteRule rouletteRule = RouletteRule::Unbiased;    // --rr-rule
+    bool meshLightsByArea = false;  // --mesh-light-sampling area
     Instancing instancing = Instancing::Auto;              // --instancing
     int backfaceCulling = -1;  // --backface-culling: -1 auto (the scene's form decides), 0 off, 1 on
     int vertexNormals = -1;    // --vertex-normals: -1 auto (Scene::vertexNormals' default, area), 0 area, 1 unweighted

@@ -296,9 +296,11 @@ int renderScene(RenderArgs a) {
     auto programFeatures = [&a](FeatureSet f) {
         f.zsobol = a.pixelSampler == PixelSampler::ZSobol;  // the sampler's code only where it runs
         f.correlatedSampler = a.pixelSampler == PixelSampler::Correlated;
+        f.meshLightsByArea = a.meshLightsByArea;
         if (!a.allFeatures) return f;
         FeatureSet all = FeatureSet::all();
         all.bvhStack = f.bvhStack;  // not a feature: the tree's own need
+        all.meshLightsByArea = f.meshLightsByArea;  // a sampling mode, not code to include
         return all;
     };
     ProgramBuilds builds;

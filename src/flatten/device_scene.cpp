@@ -33,6 +33,7 @@ std::vector<std::string> FeatureSet::defines() const {
     add(pathTracing, "CLRT_HAS_PATH_TRACING");
     add(zsobol, "CLRT_HAS_ZSOBOL");
     add(correlatedSampler, "CLRT_HAS_CORRELATED_SAMPLER");
+    add(meshLightsByArea, "CLRT_MESHLIGHT_BY_AREA");
     add(envRotation, "CLRT_HAS_ENV_ROTATION");
     add(backfaceCulling, "CLRT_HAS_BACKFACE_CULLING");
     add(lanes, "CLRT_HAS_LANES");

@@ -31,6 +31,7 @@ struct FeatureSet {
     bool instances = false;         // a two-level BVH (dev::Instance; flatten_instances.cpp)
     bool zsobol = false;            // not the scene's: clrt render --sampler zsobol (ZSobol_2D, common.cl)
     bool correlatedSampler = false; // not the scene's: clrt render --sampler correlated (Sampler_Light2D, common.cl)
+    bool meshLightsByArea = false;  // not the scene's: clrt render --mesh-light-sampling area (object_lights.cl)
     bool envRotation = false;       // an environment light's map is turned by its <Transformations> (lights.cl)
     bool backfaceCulling = false;   // classic rays skip back faces (Scene::backfaceCulling; intersect.cl Ray_Closest)
     bool lanes = false;             // the scene is of render_lanes' family (lanesFamily below; cl_kernels/lanes.cl)
