@@ -160,8 +160,36 @@ inline LaneI Lanes_PickByWeight(const __global float4* tri, int n, LaneV3 p, Lan
     return k;
 }
 
+/* MeshLight_Sample's uniform point on the lanes' triangles (a, b, c; unit normal nL) seen from p: *wi, *dist
+ * (MeshLight_ShadowLength's), and the value's scale invAreaPdf·cosθ_L/d² (0 where the sample fails). */
+inline LaneF Lanes_MeshLightPoint(LaneV3 a, LaneV3 b, LaneV3 c, LaneV3 nL, LaneV3 p, LaneF ux, LaneF u2, LaneF invAreaPdf,
+                                  LaneV3* wi, LaneF* dist) {
+    const LaneF su = sqrt(ux);
+    const LaneF b0 = 1.0f - su, b1 = u2 * su;
+    const LaneV3 q = LaneV3_Add(LaneV3_Add(LaneV3_Scale(a, b0), LaneV3_Scale(b, b1)), LaneV3_Scale(c, 1.0f - b0 - b1));
+    const LaneV3 d = LaneV3_Sub(q, p);
+    const LaneF d2 = LaneV3_Dot(d, d);
+    const LaneF len = sqrt(d2);
+    *wi = LaneV3_Scale(d, 1.0f / len);
+    const LaneF cosLight = fabs(LaneV3_Dot(nL, *wi));
+    *dist = fmax(len - Lanes_OffsetDistance(q) / cosLight, 0.5f * len);
+    return select((LaneF)(0.0f), invAreaPdf * cosLight / d2, (d2 > 0.0f) & (cosLight > 0.0f) & (invAreaPdf > 0.0f));
+}
+
+/* MeshLight_Sample's direction uniform in the solid angle (2·halfOmega) of the lanes' triangles from p: *wi,
+ * *dist to the triangle's plane (MeshLight_ShadowLength's); returns whether the sample holds. */
+inline LaneI Lanes_MeshLightDirection(LaneV3 a, LaneV3 b, LaneV3 c, LaneV3 nL, LaneV3 p, LaneF halfOmega, LaneF ux, LaneF u2,
+                                      LaneV3* wi, LaneF* dist) {
+    const LaneV3 ra = LaneV3_Sub(a, p);
+    *wi = Lanes_SphericalDirection(LaneV3_Normalize(ra), LaneV3_Normalize(LaneV3_Sub(b, p)), LaneV3_Normalize(LaneV3_Sub(c, p)),
+                                   halfOmega, ux, u2);
+    const LaneF cosLight = fabs(LaneV3_Dot(nL, *wi)), t = fabs(LaneV3_Dot(nL, ra)) / cosLight; /* to the plane */
+    *dist = fmax(t - Lanes_OffsetDistance(LaneV3_Add(p, LaneV3_Scale(*wi, t))) / cosLight, 0.5f * t);
+    return (cosLight > 0.0f) & (t > 0.0f) & isfinite(t);
+}
+
 /* MeshLight_Sample for the lanes at p: *wi, *dist (MeshLight_ShadowLength's), the radiance estimate *e
- * (0 where the sample fails), and the light's point's offset distance; u: the lanes' 2D sample. */
+ * (0 where the sample fails); u: the lanes' 2D sample. Each part only where some lane takes it. */
 inline void Lanes_MeshLightSample(const __global Light* light, const __global float4* lightData, LaneV3 p, LaneF u1,
                                   LaneF u2, LaneV3* wi, LaneF* dist, LaneV3* e) {
     const __global float4* tri = lightData + light->objFirst;
@@ -177,40 +205,30 @@ inline void Lanes_MeshLightSample(const __global Light* light, const __global fl
         v0[k] = tri[3 * t].xyz; v1[k] = tri[3 * t + 1].xyz; v2[k] = tri[3 * t + 2].xyz;
     }
     const LaneV3 a = LaneV3_Load(v0), b = LaneV3_Load(v1), c = LaneV3_Load(v2);
-    const LaneV3 nL = LaneV3_Normalize(LaneV3_Cross(LaneV3_Sub(b, a), LaneV3_Sub(c, a)));
-    /* uniform by area (MeshLight_Sample's last part): L·(1/pdf over the area)·cosθ_L/d² */
-    const LaneF su = sqrt(ux);
-    const LaneF b0 = 1.0f - su, b1 = u2 * su;
-    const LaneV3 q = LaneV3_Add(LaneV3_Add(LaneV3_Scale(a, b0), LaneV3_Scale(b, b1)), LaneV3_Scale(c, 1.0f - b0 - b1));
-    const LaneV3 d = LaneV3_Sub(q, p);
-    const LaneF d2 = LaneV3_Dot(d, d);
-    const LaneF len = sqrt(d2);
-    *wi = LaneV3_Scale(d, 1.0f / len);
-    const LaneF cosLight = fabs(LaneV3_Dot(nL, *wi));
-    *dist = fmax(len - Lanes_OffsetDistance(q) / cosLight, 0.5f * len); /* MeshLight_ShadowLength */
-    LaneF invAreaPdf = (LaneF)(light->area), invPick = (LaneF)(0.0f);
-    if (byWeight) { /* MeshLight_TriangleArea · Σw / w */
-        const LaneV3 n = LaneV3_Cross(LaneV3_Sub(b, a), LaneV3_Sub(c, a));
-        invPick = select((LaneF)(0.0f), total / wPick, wPick > 0.0f);
-        invAreaPdf = 0.5f * sqrt(LaneV3_Dot(n, n)) * invPick;
-    }
-    LaneF value = select((LaneF)(0.0f), invAreaPdf * cosLight / d2, (d2 > 0.0f) & (cosLight > 0.0f) & (invAreaPdf > 0.0f));
-    if (byWeight) { /* the lanes whose triangle's Ω is sampled uniformly: L·Ω·Σw/w */
+    const LaneV3 n = LaneV3_Cross(LaneV3_Sub(b, a), LaneV3_Sub(c, a));
+    const LaneV3 nL = LaneV3_Normalize(n);
+    const LaneF invPick = select((LaneF)(0.0f), total / wPick, wPick > 0.0f); /* Σw / w */
+    LaneF omega = (LaneF)(0.0f);
+    LaneI sph = (LaneI)(0);
+    if (byWeight) { /* the lanes whose triangle's Ω is sampled uniformly (MeshLight_SolidAngle, _BySolidAngle) */
         LaneF num, den;
         Lanes_Subtended(a, b, c, p, &num, &den);
-        const LaneF omega = 2.0f * atan2(num, den); /* MeshLight_SolidAngle */
-        const LaneI sph = (omega > CLRT_MESHLIGHT_SPHERICAL_MIN) & (omega < CLRT_MESHLIGHT_SPHERICAL_MAX);
-        if (any(sph)) {
-            const LaneV3 ra = LaneV3_Sub(a, p);
-            const LaneV3 ws = Lanes_SphericalDirection(LaneV3_Normalize(ra), LaneV3_Normalize(LaneV3_Sub(b, p)),
-                                                       LaneV3_Normalize(LaneV3_Sub(c, p)), 0.5f * omega, ux, u2);
-            const LaneF cosS = fabs(LaneV3_Dot(nL, ws)), tS = fabs(LaneV3_Dot(nL, ra)) / cosS; /* to the plane */
-            const LaneF distS = fmax(tS - Lanes_OffsetDistance(LaneV3_Add(p, LaneV3_Scale(ws, tS))) / cosS, 0.5f * tS);
-            const LaneI okS = (cosS > 0.0f) & (tS > 0.0f) & isfinite(tS);
-            *wi = LaneV3_Select(*wi, ws, sph);
-            *dist = select(*dist, distS, sph);
-            value = select(value, select((LaneF)(0.0f), omega * invPick, okS), sph);
-        }
+        omega = 2.0f * atan2(num, den);
+        sph = (omega > CLRT_MESHLIGHT_SPHERICAL_MIN) & (omega < CLRT_MESHLIGHT_SPHERICAL_MAX);
+    }
+    LaneF value = (LaneF)(0.0f);
+    *wi = LaneV3_Splat((float3)(0.0f));
+    *dist = (LaneF)(0.0f);
+    if (!all(sph)) /* by area: MeshLight_TriangleArea · Σw / w, or the mesh's area */
+        value = Lanes_MeshLightPoint(a, b, c, nL, p, ux, u2, byWeight ? 0.5f * sqrt(LaneV3_Dot(n, n)) * invPick : (LaneF)(light->area),
+                                     wi, dist);
+    if (any(sph)) { /* L·Ω·Σw/w */
+        LaneV3 ws;
+        LaneF ds;
+        const LaneI ok = Lanes_MeshLightDirection(a, b, c, nL, p, 0.5f * omega, ux, u2, &ws, &ds);
+        *wi = LaneV3_Select(*wi, ws, sph);
+        *dist = select(*dist, ds, sph);
+        value = select(value, select((LaneF)(0.0f), omega * invPick, ok), sph);
     }
     *e = LaneV3_Scale(LaneV3_Splat(light->radiance.xyz), value);
 }
