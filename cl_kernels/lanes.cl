@@ -199,30 +199,29 @@ inline void Lanes_MeshLightSample(const __global Light* light, const __global fl
                                 : Lanes_PickTriangle(tri, light->objCount, u1, &ux);
     int at[CLRT_LANES];
     float3 v0[CLRT_LANES], v1[CLRT_LANES], v2[CLRT_LANES];
+    float areaK[CLRT_LANES];
     vstore4(pick, 0, at);
     for (int k = 0; k < CLRT_LANES; ++k) {
         const int t = at[k];
         v0[k] = tri[3 * t].xyz; v1[k] = tri[3 * t + 1].xyz; v2[k] = tri[3 * t + 2].xyz;
+        areaK[k] = tri[3 * t + 1].w;
     }
     const LaneV3 a = LaneV3_Load(v0), b = LaneV3_Load(v1), c = LaneV3_Load(v2);
     const LaneV3 n = LaneV3_Cross(LaneV3_Sub(b, a), LaneV3_Sub(c, a));
     const LaneV3 nL = LaneV3_Normalize(n);
-    const LaneF invPick = select((LaneF)(0.0f), total / wPick, wPick > 0.0f); /* Σw / w */
-    LaneF omega = (LaneF)(0.0f);
-    LaneI sph = (LaneI)(0);
-    if (byWeight) { /* the lanes whose triangle's Ω is sampled uniformly (MeshLight_SolidAngle, _BySolidAngle) */
-        LaneF num, den;
-        Lanes_Subtended(a, b, c, p, &num, &den);
-        omega = 2.0f * atan2(num, den);
-        sph = (omega > CLRT_MESHLIGHT_SPHERICAL_MIN) & (omega < CLRT_MESHLIGHT_SPHERICAL_MAX);
-    }
+    /* 1 / P(pick): Σw / w by weight, A / A_k by area */
+    const LaneF invPick = byWeight ? select((LaneF)(0.0f), total / wPick, wPick > 0.0f) : light->area / vload4(0, areaK);
+    LaneF num, den; /* the lanes whose triangle's Ω is sampled uniformly (MeshLight_SolidAngle, _BySolidAngle) */
+    Lanes_Subtended(a, b, c, p, &num, &den);
+    const LaneF omega = 2.0f * atan2(num, den);
+    const LaneI sph = (omega > CLRT_MESHLIGHT_SPHERICAL_MIN) & (omega < CLRT_MESHLIGHT_SPHERICAL_MAX);
     LaneF value = (LaneF)(0.0f);
     *wi = LaneV3_Splat((float3)(0.0f));
     *dist = (LaneF)(0.0f);
     if (!all(sph)) /* by area: MeshLight_TriangleArea · Σw / w, or the mesh's area */
         value = Lanes_MeshLightPoint(a, b, c, nL, p, ux, u2, byWeight ? 0.5f * sqrt(LaneV3_Dot(n, n)) * invPick : (LaneF)(light->area),
                                      wi, dist);
-    if (any(sph)) { /* L·Ω·Σw/w */
+    if (any(sph)) { /* L·Ω / P(pick) */
         LaneV3 ws;
         LaneF ds;
         const LaneI ok = Lanes_MeshLightDirection(a, b, c, nL, p, 0.5f * omega, ux, u2, &ws, &ds);

@@ -155,9 +155,9 @@ inline float3 Lanes_MaterialF(const __global Material* materials, int material) 
 }
 
 #ifdef CLRT_HAS_LIGHT_MESH
-/* For the lanes whose ray, after a non-specular bounce (bsdfPdf > 0), hit a plain triangle of a LightMesh that
- * picks by weight: area[k] becomes MeshLight_InvAreaPdf from the ray's origin p − t·dir (Path_ObjectLightPdf's;
- * cosLight: the hit's |cosθ_L|), for the hit's MIS density (no other lane's emission weight reads it: Lanes_EmissionWeight). */
+/* For the lanes whose ray, after a non-specular bounce (bsdfPdf > 0), hit a plain triangle of a LightMesh: area[k]
+ * becomes MeshLight_InvAreaPdf from the ray's origin p − t·dir (Path_ObjectLightPdf's; cosLight: the hit's
+ * |cosθ_L|), for the hit's MIS density (no other lane's emission weight reads it: Lanes_EmissionWeight). */
 inline void Lanes_MeshLightInvAreaPdf(const __global Light* lights, const __global float4* lightData, const LanesGather* g,
                                       LaneV3 pHit, const float3* dirs, LaneF cosLight, const float* bsdfPdf, float* area) {
     float3 p[CLRT_LANES];
@@ -167,8 +167,7 @@ inline void Lanes_MeshLightInvAreaPdf(const __global Light* lights, const __glob
     for (int k = 0; k < CLRT_LANES; ++k) {
         if (!((g->triBits >> k) & 1) || g->light[k] == CLRT_INVALID || !(bsdfPdf[k] > 0.0f)) continue;
         const __global Light* light = &lights[g->light[k]];
-        if (light->objCount <= CLRT_MESHLIGHT_PICK_MAX)
-            area[k] = MeshLight_InvAreaPdf(light, lightData, g->v0[k], g->v1[k], g->v2[k], p[k] - g->t[k] * dirs[k], g->t[k], cosL[k]);
+        area[k] = MeshLight_InvAreaPdf(light, lightData, g->v0[k], g->v1[k], g->v2[k], p[k] - g->t[k] * dirs[k], g->t[k], cosL[k]);
     }
 }
 #endif

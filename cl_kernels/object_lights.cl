@@ -3,16 +3,17 @@
  * area CDF; a sphere's object-space centre, radius and worldToObject rows) is in the lightData buffer,
  * laid out as device_types.h describes next to struct Light (written by src/flatten/flatten_lights.cpp).
  * Both return, like every Light_Sample case, L(wi) / pdf(wi) for the sampled direction wi (solid angle).
- *   LightMesh:   a triangle, then a direction or point in it; both faces emit (the AreaLight rule,
- *                SCENE_FORMAT.md conventions). A mesh of at most CLRT_MESHLIGHT_PICK_MAX triangles picks
- *                triangle k by its weight seen from the shading point p (MeshLight_Weight: about half its
- *                solid angle Ω_k, 0 where p lies in its plane), so that the triangles that fill p's view of
- *                the light get the samples, then a direction uniform in Ω_k (MeshLight_SphericalDirection):
- *                pdf (w_k / Σw) / Ω_k; where Ω_k is too small or too large for that in float, a uniform
- *                point on the triangle: pdf over the area (w_k / Σw) / A_k. A larger mesh picks by area
- *                (binary search of the CDF), then a uniform point: pdf 1/A. In solid angle: pdf_area·d²/|cosθ_L|.
- *                A BSDF ray that hits the mesh gets the same density (MeshLight_InvAreaPdf, from its
- *                origin: path.cl Path_ObjectLightPdf).
+ *   LightMesh:   a triangle, then a direction in it; both faces emit (the AreaLight rule, SCENE_FORMAT.md
+ *                conventions). A mesh of at most CLRT_MESHLIGHT_PICK_MAX triangles picks triangle k by its
+ *                weight seen from the shading point p (MeshLight_Weight: about half its solid angle Ω_k, 0
+ *                where p lies in its plane), so that the triangles that fill p's view of the light get the
+ *                samples: P(k) = w_k / Σw; a larger mesh picks by area (binary search of the CDF): P(k) =
+ *                A_k / A. Then a direction uniform in Ω_k (MeshLight_SphericalDirection): pdf P(k) / Ω_k;
+ *                where Ω_k is too small or too large for that in float, a uniform point on the triangle:
+ *                pdf over the area P(k) / A_k, in solid angle that times d²/|cosθ_L|. A BSDF ray that hits
+ *                the mesh gets the same density (MeshLight_InvAreaPdf, from its origin: path.cl
+ *                Path_ObjectLightPdf). clrt render --mesh-light-sampling area (CLRT_MESHLIGHT_BY_AREA):
+ *                every mesh by area, a uniform point, as the course's renderer.
  *   LightSphere: under a similarity, a direction uniform in the cone the sphere subtends: pdf
  *                1/(2π(1 − cosθmax)) (from inside: all directions, 1/4π; the inside emits nothing); under
  *                any other transform (an ellipsoid) the same in object space, from the object-space
@@ -81,7 +82,11 @@ inline float MeshLight_Weight(float3 a, float3 b, float3 c, float3 p) {
  * far or seen edge-on: its area density is then nearly uniform in Ω, and float loses the spherical
  * triangle's angles; above the maximum (p almost on the triangle) its sides are nearly great circles. */
 #define CLRT_MESHLIGHT_SPHERICAL_MIN 3e-4f
+#ifdef CLRT_MESHLIGHT_BY_AREA
+#define CLRT_MESHLIGHT_SPHERICAL_MAX 0.0f /* never: a uniform point, as the course's renderer */
+#else
 #define CLRT_MESHLIGHT_SPHERICAL_MAX 6.2f
+#endif
 
 /* Ω of a triangle from MeshLight_Subtended's num and den, and whether it is sampled in Ω. */
 inline float MeshLight_SolidAngle(float num, float den) { return 2.0f * atan2(num, den); }
@@ -148,22 +153,29 @@ inline int MeshLight_PickByWeight(const __global float4* tri, int n, float3 p, f
 }
 
 /* 1 / (the density over the area) with which MeshLight_Sample, from shading point p, draws point q of the
- * light's triangle (v0, v1, v2), dist away from p and seen there at cosLight: picked by weight (Σw / w_k),
- * then uniform in the triangle's solid angle Ω (Ω·dist²/cosLight) or its area A; where the mesh picks by
- * area, the mesh's area. The density a BSDF ray that hits the light there needs for MIS (with p its origin). */
+ * light's triangle (v0, v1, v2), dist away from p and seen there at cosLight: 1/P(pick) (by weight Σw / w_k,
+ * by area A / A_k), then uniform in the triangle's solid angle Ω (Ω·dist²/cosLight) or its area A_k. The
+ * density a BSDF ray that hits the light there needs for MIS (with p its origin). */
 inline float MeshLight_InvAreaPdf(const __global Light* light, const __global float4* data, float3 v0, float3 v1, float3 v2,
                                   float3 p, float dist, float cosLight) {
-    if (light->objCount > CLRT_MESHLIGHT_PICK_MAX) return light->area;
-    const __global float4* tri = data + light->objFirst;
-    float total = 0.0f;
-    for (int i = 0; i < light->objCount; ++i) total += MeshLight_Weight(tri[3 * i].xyz, tri[3 * i + 1].xyz, tri[3 * i + 2].xyz, p);
     float num, den;
     MeshLight_Subtended(v0, v1, v2, p, &num, &den);
-    const float w = num > 0.0f ? (den * CLRT_MESHLIGHT_WEIGHT_CAP > num ? num / den : CLRT_MESHLIGHT_WEIGHT_CAP) : 0.0f;
-    if (!(w > 0.0f) || !isfinite(total)) return 0.0f;
     const float omega = MeshLight_SolidAngle(num, den);
-    if (MeshLight_BySolidAngle(omega)) return cosLight > 0.0f ? omega * total / w * (dist * dist / cosLight) : 0.0f;
-    return MeshLight_TriangleArea(v0, v1, v2) * total / w;
+    const int bySolidAngle = MeshLight_BySolidAngle(omega);
+    float invPick;
+    if (light->objCount > CLRT_MESHLIGHT_PICK_MAX) { /* by area */
+        if (!bySolidAngle) return light->area;
+        invPick = light->area / MeshLight_TriangleArea(v0, v1, v2);
+    } else {
+        const __global float4* tri = data + light->objFirst;
+        float total = 0.0f;
+        for (int i = 0; i < light->objCount; ++i) total += MeshLight_Weight(tri[3 * i].xyz, tri[3 * i + 1].xyz, tri[3 * i + 2].xyz, p);
+        const float w = num > 0.0f ? (den * CLRT_MESHLIGHT_WEIGHT_CAP > num ? num / den : CLRT_MESHLIGHT_WEIGHT_CAP) : 0.0f;
+        if (!(w > 0.0f) || !isfinite(total)) return 0.0f;
+        invPick = total / w;
+    }
+    if (bySolidAngle) return cosLight > 0.0f ? omega * invPick * (dist * dist / cosLight) : 0.0f;
+    return MeshLight_TriangleArea(v0, v1, v2) * invPick;
 }
 
 /* How far the shadow ray towards q (on a light triangle, reached at cosθ_L over distance d) may go:
@@ -193,22 +205,21 @@ inline float3 MeshLight_Sample(const __global Light* light, const __global float
         if (!(invPick > 0.0f)) return (float3)(0.0f);
     } else {
         k = MeshLight_PickTriangle(tris, light->objCount, u.x, &ux);
+        invPick = light->area / tris[3 * k + 1].w; /* A / A_k */
     }
     float3 v0 = tris[3 * k].xyz, v1 = tris[3 * k + 1].xyz, v2 = tris[3 * k + 2].xyz;
     const float3 nL = normalize(cross(v1 - v0, v2 - v0));
-    if (byWeight) {
-        float num, den;
-        MeshLight_Subtended(v0, v1, v2, p, &num, &den);
-        const float omega = MeshLight_SolidAngle(num, den);
-        if (MeshLight_BySolidAngle(omega)) { /* uniform in the triangle's solid angle: L·Ω·Σw/w_k */
-            const float3 ra = v0 - p, rb = v1 - p, rc = v2 - p;
-            *wi = MeshLight_SphericalDirection(ra * rsqrt(dot(ra, ra)), rb * rsqrt(dot(rb, rb)), rc * rsqrt(dot(rc, rc)),
-                                               0.5f * omega, ux, u.y);
-            const float cosLight = fabs(dot(nL, *wi)), t = fabs(dot(nL, ra)) / cosLight; /* to the plane */
-            if (!(cosLight > 0.0f) || !(t > 0.0f) || !isfinite(t)) return (float3)(0.0f);
-            *dist = MeshLight_ShadowLength(t, p + t * *wi, cosLight);
-            return light->radiance.xyz * (omega * invPick);
-        }
+    float num, den;
+    MeshLight_Subtended(v0, v1, v2, p, &num, &den);
+    const float omega = MeshLight_SolidAngle(num, den);
+    if (MeshLight_BySolidAngle(omega)) { /* uniform in the triangle's solid angle: L·Ω / P(k) */
+        const float3 ra = v0 - p, rb = v1 - p, rc = v2 - p;
+        *wi = MeshLight_SphericalDirection(ra * rsqrt(dot(ra, ra)), rb * rsqrt(dot(rb, rb)), rc * rsqrt(dot(rc, rc)),
+                                           0.5f * omega, ux, u.y);
+        const float cosLight = fabs(dot(nL, *wi)), t = fabs(dot(nL, ra)) / cosLight; /* to the plane */
+        if (!(cosLight > 0.0f) || !(t > 0.0f) || !isfinite(t)) return (float3)(0.0f);
+        *dist = MeshLight_ShadowLength(t, p + t * *wi, cosLight);
+        return light->radiance.xyz * (omega * invPick);
     }
     float su = sqrt(ux); /* uniform on the triangle: b0 = 1 − √u1, b1 = u2·√u1 */
     float b0 = 1.0f - su, b1 = u.y * su;

@@ -204,23 +204,27 @@ D3 hostSphericalDirection(D3 a, D3 b, D3 c, double omega, double u1, double u2) 
 }
 
 // 1 / the density over the area with which mesh light h, sampled from p, draws point q of its triangle k:
-// Σw / w_k (by weight), then Ω_k·d²/cosθ_L (uniform in the triangle's solid angle) or A_k; by area (larger
-// meshes): the mesh's area.
+// 1/P(k) (by weight Σw / w_k; by area, larger meshes, A / A_k), then Ω_k·d²/cosθ_L (uniform in the triangle's
+// solid angle) or A_k.
 double hostInvAreaPdf(const HostLight& h, D3 p, size_t k, D3 q) {
     const size_t n = h.v.size() / 3;
-    if (n > kPickMax) return h.area;
-    double total = 0;
-    for (size_t i = 0; i < n; ++i) total += hostWeight(h.v[3 * i], h.v[3 * i + 1], h.v[3 * i + 2], p);
     const D3* v = &h.v[3 * k];
-    double w = hostWeight(v[0], v[1], v[2], p);
-    if (!(w > 0)) return 0.0;
+    const double areaK = 0.5 * len(cross(v[1] - v[0], v[2] - v[0]));
+    double invPick = h.area / areaK;
+    if (n <= kPickMax) {
+        double total = 0;
+        for (size_t i = 0; i < n; ++i) total += hostWeight(h.v[3 * i], h.v[3 * i + 1], h.v[3 * i + 2], p);
+        double w = hostWeight(v[0], v[1], v[2], p);
+        if (!(w > 0)) return 0.0;
+        invPick = total / w;
+    }
     double omega = hostSolidAngle(v[0], v[1], v[2], p);
     if (hostBySolidAngle(omega)) {
         D3 d = q - p;
         double cosL = std::fabs(dot(unit(cross(v[1] - v[0], v[2] - v[0])), unit(d)));
-        return cosL > 0 ? omega * total / w * dot(d, d) / cosL : 0.0;
+        return cosL > 0 ? omega * invPick * dot(d, d) / cosL : 0.0;
     }
-    return 0.5 * len(cross(v[1] - v[0], v[2] - v[0])) * total / w;
+    return areaK * invPick;
 }
 
 // The sampler, in double: what Light_Sample should return for point p and uniforms (u1, u2).
@@ -247,7 +251,7 @@ Sample hostSample(const HostLight& h, D3 p, double u1, double u2) {
         const D3* v = &h.v[3 * k];
         D3 q;
         double omega = hostSolidAngle(v[0], v[1], v[2], p);
-        if (n <= kPickMax && hostBySolidAngle(omega)) {  // the direction, then its point on the triangle's plane
+        if (hostBySolidAngle(omega)) {  // the direction, then its point on the triangle's plane
             D3 w = hostSphericalDirection(unit(v[0] - p), unit(v[1] - p), unit(v[2] - p), omega, ux, u2);
             D3 nL = unit(cross(v[1] - v[0], v[2] - v[0]));
             q = p + (dot(nL, v[0] - p) / dot(nL, w)) * w;
@@ -1021,6 +1025,18 @@ std::string lightMeshBoxScene(const std::string& params) {
                         "9 10 11  9 11 12  9 13 14  9 14 10  10 14 15  10 15 11  11 15 16  11 16 12  12 16 13  12 13 9"
                         "</Faces></LightMesh>");
 }
+
+// The same light box with each face cut into four triangles around its centre: 20 triangles, more than
+// CLRT_MESHLIGHT_PICK_MAX, so picked by area (then a direction in the triangle's solid angle).
+std::string lightMeshBox20Scene(const std::string& params) {
+    return darkBoxScene(params, "0.6", "",
+                        "-0.8 1.2 -0.8  0.8 1.2 -0.8  0.8 1.2 0.8  -0.8 1.2 0.8  -0.8 2 -0.8  0.8 2 -0.8  0.8 2 0.8  -0.8 2 0.8"
+                        "  0 1.2 0  0 1.6 -0.8  0.8 1.6 0  0 1.6 0.8  -0.8 1.6 0",
+                        "<LightMesh id=\"1\"><Material>1</Material><Radiance>10 10 10</Radiance><Faces>"
+                        "9 10 17  10 11 17  11 12 17  12 9 17  9 13 18  13 14 18  14 10 18  10 9 18  "
+                        "10 14 19  14 15 19  15 11 19  11 10 19  11 15 20  15 16 20  16 12 20  12 11 20  "
+                        "12 16 21  16 13 21  13 9 21  9 12 21</Faces></LightMesh>");
+}
 }  // namespace
 
 TEST_CASE("an ellipsoidal LightSphere gives the same light by NEE, by MIS and by BSDF rays alone", "[objlight][path][render]") {
@@ -1050,6 +1066,14 @@ TEST_CASE("a LightMesh box gives the same light by NEE, by MIS and by BSDF rays 
     // MIS through each pipeline: the lanes (Lanes_MeshLightInvAreaPdf), render_fused and the wavefront
     // (Path_ObjectLightPdf) compute the hit's density each.
     checkSameLight(lightMeshBoxScene, 1024, {Pipeline::Lanes, Pipeline::Fused, Pipeline::Wavefront}, 0.01);
+}
+
+TEST_CASE("a LightMesh box of 20 triangles (picked by area) gives the same light by NEE, by MIS and by BSDF rays alone",
+          "[objlight][path][render]") {
+    // As the test before, with the box's faces cut into four triangles each: picked by area, then a direction
+    // uniform in the triangle's solid angle; a BSDF ray that hits it gets that density for MIS
+    // (MeshLight_InvAreaPdf's by-area branch).
+    checkSameLight(lightMeshBox20Scene, 1024, {Pipeline::Lanes, Pipeline::Fused, Pipeline::Wavefront}, 0.01);
 }
 
 TEST_CASE("--mesh-light-sampling area: the LightMesh box's light is the same, with more noise", "[objlight][path][render]") {
