@@ -100,18 +100,19 @@ inline LaneI Lanes_PickTriangle(const __global float4* tri, int n, LaneF u, Lane
     return pos;
 }
 
-/* MeshLight_Subtended of the lanes' triangles (a, b, c) at their points p, the same operations in lanes. */
-inline void Lanes_Subtended(LaneV3 a, LaneV3 b, LaneV3 c, LaneV3 p, LaneF* num, LaneF* den) {
+/* MeshLight_Subtended of the lanes' triangles (a, b, c; n = (b − a)×(c − a)) at their points p, the same
+ * operations in lanes. */
+inline void Lanes_Subtended(LaneV3 a, LaneV3 b, LaneV3 c, LaneV3 n, LaneV3 p, LaneF* num, LaneF* den) {
     const LaneV3 ra = LaneV3_Sub(a, p), rb = LaneV3_Sub(b, p), rc = LaneV3_Sub(c, p);
     const LaneF la = sqrt(LaneV3_Dot(ra, ra)), lb = sqrt(LaneV3_Dot(rb, rb)), lc = sqrt(LaneV3_Dot(rc, rc));
-    *num = fabs(LaneV3_Dot(ra, LaneV3_Cross(rb, rc)));
+    *num = fabs(LaneV3_Dot(ra, n));
     *den = la * lb * lc + LaneV3_Dot(ra, rb) * lc + LaneV3_Dot(ra, rc) * lb + LaneV3_Dot(rb, rc) * la;
 }
 
 /* MeshLight_Weight at the lanes' points p, the same operations in lanes. */
 inline LaneF Lanes_MeshLightWeight(float3 a, float3 b, float3 c, LaneV3 p) {
     LaneF num, den;
-    Lanes_Subtended(LaneV3_Splat(a), LaneV3_Splat(b), LaneV3_Splat(c), p, &num, &den);
+    Lanes_Subtended(LaneV3_Splat(a), LaneV3_Splat(b), LaneV3_Splat(c), LaneV3_Splat(cross(b - a, c - a)), p, &num, &den);
     const LaneF w = select((LaneF)(CLRT_MESHLIGHT_WEIGHT_CAP), num / den, den * CLRT_MESHLIGHT_WEIGHT_CAP > num);
     return select((LaneF)(0.0f), w, num > 0.0f);
 }
@@ -212,7 +213,7 @@ inline void Lanes_MeshLightSample(const __global Light* light, const __global fl
     /* 1 / P(pick): Σw / w by weight, A / A_k by area */
     const LaneF invPick = byWeight ? select((LaneF)(0.0f), total / wPick, wPick > 0.0f) : light->area / vload4(0, areaK);
     LaneF num, den; /* the lanes whose triangle's Ω is sampled uniformly (MeshLight_SolidAngle, _BySolidAngle) */
-    Lanes_Subtended(a, b, c, p, &num, &den);
+    Lanes_Subtended(a, b, c, n, p, &num, &den);
     const LaneF omega = 2.0f * atan2(num, den);
     const LaneI sph = (omega > CLRT_MESHLIGHT_SPHERICAL_MIN) & (omega < CLRT_MESHLIGHT_SPHERICAL_MAX);
     LaneF value = (LaneF)(0.0f);

@@ -57,11 +57,13 @@ inline int MeshLight_PickTriangle(const __global float4* tri, int n, float u, fl
 #define CLRT_MESHLIGHT_WEIGHT_CAP 8.0f
 
 /* tan(Ω/2) = *num / *den of the solid angle Ω that light triangle (a, b, c) subtends at p (Van Oosterom and
- * Strackee's formula; *den < 0 where Ω > π). */
+ * Strackee's formula; *den < 0 where Ω > π). The triple product ra·(rb×rc) as ra·((b − a)×(c − a)) (equal):
+ * the cross product of the short edges keeps its digits where p is far or near the triangle's plane (the
+ * long vectors' lost up to all of them: Ω then the sampler's pdf). */
 inline void MeshLight_Subtended(float3 a, float3 b, float3 c, float3 p, float* num, float* den) {
     const float3 ra = a - p, rb = b - p, rc = c - p;
     const float la = sqrt(dot(ra, ra)), lb = sqrt(dot(rb, rb)), lc = sqrt(dot(rc, rc)); /* as the lanes' */
-    *num = fabs(dot(ra, cross(rb, rc)));
+    *num = fabs(dot(ra, cross(b - a, c - a)));
     *den = la * lb * lc + dot(ra, rb) * lc + dot(ra, rc) * lb + dot(rb, rc) * la;
 }
 
@@ -191,49 +193,63 @@ inline float MeshLight_ShadowLength(float d, float3 q, float cosLight) {
     return fmax(d - offset / cosLight, 0.5f * d);
 }
 
-/* A point of LightMesh `light` seen from p (object_lights.cl's header): *wi, *dist (MeshLight_ShadowLength's),
+/* MeshLight_Sample's direction uniform in the solid angle omega of triangle (v0, v1, v2; unit normal nL) seen
+ * from p: *wi, *dist to the triangle's plane (MeshLight_ShadowLength's); 0 where the sample fails, else 1. */
+inline int MeshLight_SampleDirection(float3 v0, float3 v1, float3 v2, float3 nL, float3 p, float omega, float2 u,
+                                     float3* wi, float* dist) {
+    const float3 ra = v0 - p, rb = v1 - p, rc = v2 - p;
+    *wi = MeshLight_SphericalDirection(ra * rsqrt(dot(ra, ra)), rb * rsqrt(dot(rb, rb)), rc * rsqrt(dot(rc, rc)),
+                                       0.5f * omega, u.x, u.y);
+    const float cosLight = fabs(dot(nL, *wi)), t = fabs(dot(nL, ra)) / cosLight; /* to the plane */
+    if (!(cosLight > 0.0f) || !(t > 0.0f) || !isfinite(t)) return 0;
+    *dist = MeshLight_ShadowLength(t, p + t * *wi, cosLight);
+    return 1;
+}
+
+/* MeshLight_Sample's uniform point on triangle (v0, v1, v2; unit normal nL) seen from p: *wi, *dist
+ * (MeshLight_ShadowLength's); returns invAreaPdf·cosθ_L/d² (0 where the sample fails). */
+inline float MeshLight_SamplePoint(float3 v0, float3 v1, float3 v2, float3 nL, float3 p, float2 u, float invAreaPdf,
+                                   float3* wi, float* dist) {
+    float su = sqrt(u.x); /* uniform on the triangle: b0 = 1 − √u1, b1 = u2·√u1 */
+    float b0 = 1.0f - su, b1 = u.y * su;
+    float3 q = b0 * v0 + b1 * v1 + (1.0f - b0 - b1) * v2;
+    float3 d = q - p;
+    float d2 = dot(d, d);
+    if (!(d2 > 0.0f)) return 0.0f;
+    *dist = sqrt(d2);
+    *wi = d / *dist;
+    float cosLight = fabs(dot(nL, *wi)); /* both faces emit, as an AreaLight's */
+    if (!(cosLight > 0.0f)) return 0.0f;
+    *dist = MeshLight_ShadowLength(*dist, q, cosLight);
+    return invAreaPdf * cosLight / d2;
+}
+
+/* A direction towards LightMesh `light` from p (object_lights.cl's header): *wi, *dist (MeshLight_ShadowLength's),
  * L / pdf(wi). */
 inline float3 MeshLight_Sample(const __global Light* light, const __global float4* data, float3 p, float2 u,
                                float3* wi, float* dist) {
     if (light->objCount <= 0 || !(light->area > 0.0f)) return (float3)(0.0f);
     const __global float4* tris = data + light->objFirst;
-    float ux, invPick = 0.0f;
+    float ux, invPick = 0.0f, invArea;
     int k;
-    const int byWeight = light->objCount <= CLRT_MESHLIGHT_PICK_MAX;
-    if (byWeight) {
+    if (light->objCount <= CLRT_MESHLIGHT_PICK_MAX) {
         k = MeshLight_PickByWeight(tris, light->objCount, p, u.x, &ux, &invPick);
         if (!(invPick > 0.0f)) return (float3)(0.0f);
+        invArea = MeshLight_TriangleArea(tris[3 * k].xyz, tris[3 * k + 1].xyz, tris[3 * k + 2].xyz) * invPick;
     } else {
         k = MeshLight_PickTriangle(tris, light->objCount, u.x, &ux);
         invPick = light->area / tris[3 * k + 1].w; /* A / A_k */
+        invArea = light->area;
     }
-    float3 v0 = tris[3 * k].xyz, v1 = tris[3 * k + 1].xyz, v2 = tris[3 * k + 2].xyz;
+    const float3 v0 = tris[3 * k].xyz, v1 = tris[3 * k + 1].xyz, v2 = tris[3 * k + 2].xyz;
     const float3 nL = normalize(cross(v1 - v0, v2 - v0));
     float num, den;
     MeshLight_Subtended(v0, v1, v2, p, &num, &den);
     const float omega = MeshLight_SolidAngle(num, den);
-    if (MeshLight_BySolidAngle(omega)) { /* uniform in the triangle's solid angle: L·Ω / P(k) */
-        const float3 ra = v0 - p, rb = v1 - p, rc = v2 - p;
-        *wi = MeshLight_SphericalDirection(ra * rsqrt(dot(ra, ra)), rb * rsqrt(dot(rb, rb)), rc * rsqrt(dot(rc, rc)),
-                                           0.5f * omega, ux, u.y);
-        const float cosLight = fabs(dot(nL, *wi)), t = fabs(dot(nL, ra)) / cosLight; /* to the plane */
-        if (!(cosLight > 0.0f) || !(t > 0.0f) || !isfinite(t)) return (float3)(0.0f);
-        *dist = MeshLight_ShadowLength(t, p + t * *wi, cosLight);
-        return light->radiance.xyz * (omega * invPick);
-    }
-    float su = sqrt(ux); /* uniform on the triangle: b0 = 1 − √u1, b1 = u2·√u1 */
-    float b0 = 1.0f - su, b1 = u.y * su;
-    float3 q = b0 * v0 + b1 * v1 + (1.0f - b0 - b1) * v2;
-    float3 d = q - p;
-    float d2 = dot(d, d);
-    if (!(d2 > 0.0f)) return (float3)(0.0f);
-    *dist = sqrt(d2);
-    *wi = d / *dist;
-    float cosLight = fabs(dot(nL, *wi)); /* both faces emit, as an AreaLight's */
-    if (!(cosLight > 0.0f)) return (float3)(0.0f);
-    *dist = MeshLight_ShadowLength(*dist, q, cosLight);
-    const float invAreaPdf = byWeight ? MeshLight_TriangleArea(v0, v1, v2) * invPick : light->area;
-    return light->radiance.xyz * (invAreaPdf * cosLight / d2);
+    if (MeshLight_BySolidAngle(omega)) /* L·Ω / P(k) */
+        return MeshLight_SampleDirection(v0, v1, v2, nL, p, omega, (float2)(ux, u.y), wi, dist) ? light->radiance.xyz * (omega * invPick)
+                                                                                                : (float3)(0.0f);
+    return light->radiance.xyz * MeshLight_SamplePoint(v0, v1, v2, nL, p, (float2)(ux, u.y), invArea, wi, dist);
 }
 
 /* Distance along unit wi from p to the front (outside) surface of the light sphere, or −1 when the

@@ -34,6 +34,28 @@ double relMse(const ImageRGB& a, const ImageRGB& b) {
     return s / double(a.pixels.size());
 }
 
+// relMse over the pixels (all three channels) where a and b differ by at most 1e-3 relative, and how many do
+// not (*branched): pixels whose paths took another branch somewhere (a roulette decision or a shadow ray's
+// hit flipped by another rounding: Intel's runtime contracts the two kernels' arithmetic differently, and a
+// roulette path without a depth cap meets ~10 such decisions).
+double relMseUnbranched(const ImageRGB& a, const ImageRGB& b, int* branched) {
+    double s = 0;
+    size_t n = 0;
+    *branched = 0;
+    for (size_t i = 0; i + 2 < a.pixels.size(); i += 3) {
+        bool far = false;
+        for (size_t c = i; c < i + 3; ++c)
+            far = far || std::fabs(double(a.pixels[c]) - double(b.pixels[c])) > 1e-3 * (std::fabs(double(b.pixels[c])) + 0.1);
+        if (far) { ++*branched; continue; }
+        for (size_t c = i; c < i + 3; ++c) {
+            const double d = double(a.pixels[c]) - double(b.pixels[c]);
+            s += d * d / (double(b.pixels[c]) * double(b.pixels[c]) + 0.01);
+        }
+        n += 3;
+    }
+    return n ? s / double(n) : 0.0;
+}
+
 const char* kPathBox = "hw6/cornellbox_jaroslav_path_diffuse.xml";
 
 // The scene's first sphere made a mirror of reflectance r that keeps its material's diffuse part (a new
@@ -52,17 +74,21 @@ void mirrorFirstSphere(Scene& scene, float r) {
 
 // Renders cam (size × size, 8 spp) with the lanes and with render_fused at seed 3, and render_fused at
 // seed 4 for the noise between seeds; checks that the lanes computed render_fused's image up to rounding
-// (relMSE under 1e-5 of that noise, which must exceed minNoise, and under maxDiff) with the same rays.
+// (relMSE under 1e-5 of that noise, which must exceed minNoise, and under maxDiff) with the same rays. Where
+// a path took another branch (relMseUnbranched: at most 1 pixel in 2000, or 2; PoCL 1 of 1600 on the glossy
+// area-sphere box) the rest holds the rounding bound.
 void checkLanesAsFused(Renderer& r, const Camera& cam, int size, double minNoise, double maxDiff = 1e30) {
     Rendered l = renderWith(r, cam, size, size, 8, 3, Pipeline::Lanes);
     Rendered f = renderWith(r, cam, size, size, 8, 3, Pipeline::Fused);
     Rendered f2 = renderWith(r, cam, size, size, 8, 4, Pipeline::Fused);
     CHECK(l.counters.lanes);
     CHECK_FALSE(f.counters.lanes);
-    const double noise = relMse(f2.image, f.image), diff = relMse(l.image, f.image);
-    INFO("relMSE lanes/fused " << diff << ", between seeds " << noise);
+    int branched = 0;
+    const double noise = relMse(f2.image, f.image), diff = relMseUnbranched(l.image, f.image, &branched);
+    INFO("relMSE lanes/fused " << diff << " (" << branched << " pixels branched), between seeds " << noise);
     CHECK(noise > minNoise);
     CHECK(diff < 1e-5 * noise);  // PoCL ~1e-13 of it, Intel ~1e-7 (other contractions)
+    CHECK(branched <= std::max(2, int(l.image.pixels.size() / 3 / 2000)));
     CHECK(diff < maxDiff);
     CHECK(l.counters.cameraRays == f.counters.cameraRays);
     CHECK(l.counters.secondaryRays == f.counters.secondaryRays);

@@ -174,7 +174,7 @@ constexpr size_t kPickMax = 16;
 double hostWeight(D3 a, D3 b, D3 c, D3 p) {
     D3 ra = a - p, rb = b - p, rc = c - p;
     double la = len(ra), lb = len(rb), lc = len(rc);
-    double num = std::fabs(dot(ra, cross(rb, rc)));
+    double num = std::fabs(dot(ra, cross(b - a, c - a)));  // = ra·(rb×rc), as MeshLight_Subtended
     double den = la * lb * lc + dot(ra, rb) * lc + dot(ra, rc) * lb + dot(rb, rc) * la;
     if (!(num > 0)) return 0;
     return den * 8 > num ? num / den : 8.0;
@@ -184,7 +184,7 @@ double hostWeight(D3 a, D3 b, D3 c, D3 p) {
 double hostSolidAngle(D3 a, D3 b, D3 c, D3 p) {
     D3 ra = a - p, rb = b - p, rc = c - p;
     double la = len(ra), lb = len(rb), lc = len(rc);
-    double num = std::fabs(dot(ra, cross(rb, rc)));
+    double num = std::fabs(dot(ra, cross(b - a, c - a)));  // = ra·(rb×rc), as MeshLight_Subtended
     double den = la * lb * lc + dot(ra, rb) * lc + dot(ra, rc) * lb + dot(rb, rc) * la;
     return 2 * std::atan2(num, den);
 }
