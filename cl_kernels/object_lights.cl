@@ -71,12 +71,15 @@ inline void MeshLight_Subtended(float3 a, float3 b, float3 c, float3 p, float* n
  * at most CLRT_MESHLIGHT_WEIGHT_CAP; 0 where p lies in the triangle's plane, which then shows p nothing
  * (cosθ_L = 0 everywhere on it). For small Ω about Ω/2: a triangle gets samples in proportion to how much
  * of p's view it fills. Any positive weight keeps the estimate unbiased; the host reference is
- * tests/test_object_lights.cpp hostWeight. */
+ * tests/test_object_lights.cpp hostWeight. MeshLight_WeightOf: the same from MeshLight_Subtended's num, den. */
+inline float MeshLight_WeightOf(float num, float den) {
+    if (!(num > 0.0f)) return 0.0f;
+    return den * CLRT_MESHLIGHT_WEIGHT_CAP > num ? num / den : CLRT_MESHLIGHT_WEIGHT_CAP;
+}
 inline float MeshLight_Weight(float3 a, float3 b, float3 c, float3 p) {
     float num, den;
     MeshLight_Subtended(a, b, c, p, &num, &den);
-    if (!(num > 0.0f)) return 0.0f;
-    return den * CLRT_MESHLIGHT_WEIGHT_CAP > num ? num / den : CLRT_MESHLIGHT_WEIGHT_CAP;
+    return MeshLight_WeightOf(num, den);
 }
 
 /* A picked triangle whose solid angle Ω lies in this range is sampled uniformly in Ω (a spherical
@@ -172,7 +175,7 @@ inline float MeshLight_InvAreaPdf(const __global Light* light, const __global fl
         const __global float4* tri = data + light->objFirst;
         float total = 0.0f;
         for (int i = 0; i < light->objCount; ++i) total += MeshLight_Weight(tri[3 * i].xyz, tri[3 * i + 1].xyz, tri[3 * i + 2].xyz, p);
-        const float w = num > 0.0f ? (den * CLRT_MESHLIGHT_WEIGHT_CAP > num ? num / den : CLRT_MESHLIGHT_WEIGHT_CAP) : 0.0f;
+        const float w = MeshLight_WeightOf(num, den);
         if (!(w > 0.0f) || !isfinite(total)) return 0.0f;
         invPick = total / w;
     }
