@@ -1076,6 +1076,30 @@ TEST_CASE("a LightMesh box of 20 triangles (picked by area) gives the same light
     checkSameLight(lightMeshBox20Scene, 1024, {Pipeline::Lanes, Pipeline::Fused, Pipeline::Wavefront}, 0.01);
 }
 
+TEST_CASE("clrt render --mesh-light-sampling: solid-angle by default, area on request, anything else a usage error",
+          "[objlight][cli]") {
+    TempDir d;
+    std::string xml = lightMeshBoxScene("NextEventEstimation ImportanceSampling");
+    xml = std::regex_replace(xml, std::regex("<ImageResolution>32 32</ImageResolution>"), "<ImageResolution>8 8</ImageResolution>");
+    writeText(d, "box.xml", xml);
+    const std::string base = "render " + d.file("box.xml") + " -o " + d.path.string() + " --spp 4 --seed 2" + deviceArg();
+    auto render = [&](const std::string& extra) {
+        const int rc = runClrt(base + extra, d.file("log"));
+        INFO(readFileBytes(d.file("log")));
+        REQUIRE(rc == 0);
+        return readImage(d.file("e.exr")).pixels;
+    };
+    const std::vector<float> def = render(""), solid = render(" --mesh-light-sampling solid-angle"),
+                             area = render(" --mesh-light-sampling area");
+    CHECK(def == solid);
+    CHECK(def != area);
+    const int rc = runClrt(base + " --mesh-light-sampling cosine", d.file("log"));
+    const CliResult r = cliResult(rc, readFileBytes(d.file("log")));
+    CHECK(r.rc == 1);
+    CHECK(r.errorLines == 1);
+    CHECK(readFileBytes(d.file("log")).find("--mesh-light-sampling") != std::string::npos);
+}
+
 TEST_CASE("--mesh-light-sampling area: the LightMesh box's light is the same, with more noise", "[objlight][path][render]") {
     // NEE at depth 1 (the floor's direct light) with directions uniform in the picked triangle's solid angle
     // (the default) and by area (FeatureSet::meshLightsByArea, CLRT_MESHLIGHT_BY_AREA: the course's renderer),
