@@ -117,6 +117,16 @@ inline LaneF Lanes_MeshLightWeight(float3 a, float3 b, float3 c, LaneV3 p) {
     return select((LaneF)(0.0f), w, num > 0.0f);
 }
 
+/* MeshLight_Facing of triangle (a, b, c) for the lanes' points p: the lanes that see its inner side, and those
+ * outside the enclosed light's volume by it added to *outside. */
+inline LaneI Lanes_MeshLightInner(float3 a, float3 b, float3 c, LaneV3 p, float3 inside, LaneI* outside) {
+    const float3 n = cross(b - a, c - a);
+    const LaneV3 ra = LaneV3_Sub(LaneV3_Splat(a), p);
+    const LaneF dn = LaneV3_Dot(ra, LaneV3_Splat(n)), s = dot(a - inside, n) > 0.0f ? dn : -dn;
+    *outside |= (s < 0.0f) & (s * s > 1e-10f * LaneV3_Dot(ra, ra) * dot(n, n));
+    return s > 0.0f;
+}
+
 /* MeshLight_SphericalDirection in lanes (each lane its own spherical triangle a, b, c of half-area halfOmega). */
 inline LaneV3 Lanes_SphericalDirection(LaneV3 a, LaneV3 b, LaneV3 c, LaneF halfOmega, LaneF u1, LaneF u2) {
     const LaneV3 ca = LaneV3_Sub(c, a), ba = LaneV3_Sub(b, a);
@@ -137,12 +147,19 @@ inline LaneV3 Lanes_SphericalDirection(LaneV3 a, LaneV3 b, LaneV3 c, LaneF halfO
 
 /* MeshLight_PickByWeight for the lanes (n <= CLRT_MESHLIGHT_PICK_MAX): the picked triangles, *uRest, and
  * *total (Σw) and *wPick (the pick's w) from which the caller makes A·Σw / w; *wPick 0 where nothing is picked. */
-inline LaneI Lanes_PickByWeight(const __global float4* tri, int n, LaneV3 p, LaneF u, LaneF* uRest, LaneF* total,
-                                LaneF* wPick) {
+inline LaneI Lanes_PickByWeight(const __global Light* light, const __global float4* tri, int n, LaneV3 p, LaneF u,
+                                LaneF* uRest, LaneF* total, LaneF* wPick) {
     LaneF w[CLRT_MESHLIGHT_PICK_MAX > 0 ? CLRT_MESHLIGHT_PICK_MAX : 1];
+    LaneI inner[CLRT_MESHLIGHT_PICK_MAX > 0 ? CLRT_MESHLIGHT_PICK_MAX : 1], outside = (LaneI)(0);
+    const int enclosed = light->position.w > 0.0f; /* MeshLight_Weights: hidden triangles weigh 0 */
+    for (int i = 0; i < n; ++i) {
+        const float3 a = tri[3 * i].xyz, b = tri[3 * i + 1].xyz, c = tri[3 * i + 2].xyz;
+        w[i] = Lanes_MeshLightWeight(a, b, c, p);
+        if (enclosed) inner[i] = Lanes_MeshLightInner(a, b, c, p, light->position.xyz, &outside);
+    }
     LaneF sum = (LaneF)(0.0f);
     for (int i = 0; i < n; ++i) {
-        w[i] = Lanes_MeshLightWeight(tri[3 * i].xyz, tri[3 * i + 1].xyz, tri[3 * i + 2].xyz, p);
+        if (enclosed) w[i] = select(w[i], (LaneF)(0.0f), inner[i] & outside);
         sum += w[i];
     }
     const LaneF x = u * sum;
@@ -196,7 +213,7 @@ inline void Lanes_MeshLightSample(const __global Light* light, const __global fl
     const __global float4* tri = lightData + light->objFirst;
     LaneF ux, total = (LaneF)(0.0f), wPick = (LaneF)(0.0f);
     const int byWeight = light->objCount <= CLRT_MESHLIGHT_PICK_MAX;
-    const LaneI pick = byWeight ? Lanes_PickByWeight(tri, light->objCount, p, u1, &ux, &total, &wPick)
+    const LaneI pick = byWeight ? Lanes_PickByWeight(light, tri, light->objCount, p, u1, &ux, &total, &wPick)
                                 : Lanes_PickTriangle(tri, light->objCount, u1, &ux);
     int at[CLRT_LANES];
     float3 v0[CLRT_LANES], v1[CLRT_LANES], v2[CLRT_LANES];

@@ -82,6 +82,43 @@ inline float MeshLight_Weight(float3 a, float3 b, float3 c, float3 p) {
     return MeshLight_WeightOf(num, den);
 }
 
+/* An enclosed LightMesh (Light.position.w > 0) bounds a closed convex volume around the point
+ * Light.position.xyz (src/flatten/light_enclosure.h: its openings, if any, under opaque scene geometry). A
+ * point p outside it sees only the triangles' outer sides: a triangle that shows p its inner side (p on the
+ * same side of its plane as the inside point) lies behind the others, no shadow ray reaches it, and it gets
+ * weight 0 (MeshLight_Weights). From inside, every triangle keeps its weight. MeshLight_Facing of triangle
+ * (a, b, c): 1 where p sees its inner side, -1 where p lies on its outer side by more than rounding (so p is
+ * outside the volume), else 0. The host reference is tests/test_object_lights.cpp hostFacing. */
+inline int MeshLight_Facing(float3 a, float3 b, float3 c, float3 p, float3 inside) {
+    const float3 n = cross(b - a, c - a), ra = a - p;
+    const float s = dot(a - inside, n) > 0.0f ? dot(ra, n) : -dot(ra, n);
+    return s > 0.0f ? 1 : (s < 0.0f && s * s > 1e-10f * dot(ra, ra) * dot(n, n) ? -1 : 0);
+}
+
+/* The weights w[i] (MeshLight_Weight from p) of the light's n <= CLRT_MESHLIGHT_PICK_MAX triangles tri, an
+ * enclosed light's hidden ones 0 (MeshLight_Facing); returns their sum, *outside whether p lies outside an
+ * enclosed light. */
+inline float MeshLight_Weights(const __global Light* light, const __global float4* tri, int n, float3 p, float* w,
+                               int* outside) {
+    const int enclosed = light->position.w > 0.0f;
+    int inner = 0;
+    *outside = 0;
+    for (int i = 0; i < n; ++i) {
+        const float3 a = tri[3 * i].xyz, b = tri[3 * i + 1].xyz, c = tri[3 * i + 2].xyz;
+        w[i] = MeshLight_Weight(a, b, c, p);
+        if (!enclosed) continue;
+        const int f = MeshLight_Facing(a, b, c, p, light->position.xyz);
+        inner |= (f > 0) << i;
+        *outside |= f < 0;
+    }
+    float total = 0.0f;
+    for (int i = 0; i < n; ++i) {
+        if (*outside && ((inner >> i) & 1)) w[i] = 0.0f;
+        total += w[i];
+    }
+    return total;
+}
+
 /* A picked triangle whose solid angle Ω lies in this range is sampled uniformly in Ω (a spherical
  * triangle: MeshLight_SphericalDirection), any other uniformly by area. Below the minimum the triangle is
  * far or seen edge-on: its area density is then nearly uniform in Ω, and float loses the spherical
@@ -137,13 +174,11 @@ inline float MeshLight_TriangleArea(float3 a, float3 b, float3 c) {
 /* The triangle of a LightMesh of n <= CLRT_MESHLIGHT_PICK_MAX triangles picked by u with probability
  * w_k / Σw (MeshLight_Weight from p), *uRest: u rescaled to [0, 1) inside its share; *invPick: the
  * reciprocal of that probability, Σw / w_k (0: nothing to pick, p sees no triangle). */
-inline int MeshLight_PickByWeight(const __global float4* tri, int n, float3 p, float u, float* uRest, float* invPick) {
+inline int MeshLight_PickByWeight(const __global Light* light, const __global float4* tri, int n, float3 p, float u,
+                                  float* uRest, float* invPick) {
     float w[CLRT_MESHLIGHT_PICK_MAX > 0 ? CLRT_MESHLIGHT_PICK_MAX : 1]; /* 0 under CLRT_MESHLIGHT_BY_AREA */
-    float total = 0.0f;
-    for (int i = 0; i < n; ++i) {
-        w[i] = MeshLight_Weight(tri[3 * i].xyz, tri[3 * i + 1].xyz, tri[3 * i + 2].xyz, p);
-        total += w[i];
-    }
+    int outside;
+    const float total = MeshLight_Weights(light, tri, n, p, w, &outside);
     *invPick = 0.0f;
     *uRest = 0.5f;
     if (!(total > 0.0f) || !isfinite(total)) return 0;
@@ -172,11 +207,12 @@ inline float MeshLight_InvAreaPdf(const __global Light* light, const __global fl
         if (!bySolidAngle) return light->area;
         invPick = light->area / MeshLight_TriangleArea(v0, v1, v2);
     } else {
-        const __global float4* tri = data + light->objFirst;
-        float total = 0.0f;
-        for (int i = 0; i < light->objCount; ++i) total += MeshLight_Weight(tri[3 * i].xyz, tri[3 * i + 1].xyz, tri[3 * i + 2].xyz, p);
+        float weights[CLRT_MESHLIGHT_PICK_MAX > 0 ? CLRT_MESHLIGHT_PICK_MAX : 1];
+        int outside;
+        const float total = MeshLight_Weights(light, data + light->objFirst, light->objCount, p, weights, &outside);
         const float w = MeshLight_WeightOf(num, den);
         if (!(w > 0.0f) || !isfinite(total)) return 0.0f;
+        if (outside && MeshLight_Facing(v0, v1, v2, p, light->position.xyz) > 0) return 0.0f; /* hidden: never sampled */
         invPick = total / w;
     }
     if (bySolidAngle) return cosLight > 0.0f ? omega * invPick * (dist * dist / cosLight) : 0.0f;
@@ -236,7 +272,7 @@ inline float3 MeshLight_Sample(const __global Light* light, const __global float
     float ux, invPick = 0.0f, invArea;
     int k;
     if (light->objCount <= CLRT_MESHLIGHT_PICK_MAX) {
-        k = MeshLight_PickByWeight(tris, light->objCount, p, u.x, &ux, &invPick);
+        k = MeshLight_PickByWeight(light, tris, light->objCount, p, u.x, &ux, &invPick);
         if (!(invPick > 0.0f)) return (float3)(0.0f);
         invArea = MeshLight_TriangleArea(tris[3 * k].xyz, tris[3 * k + 1].xyz, tris[3 * k + 2].xyz) * invPick;
     } else {

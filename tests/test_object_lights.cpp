@@ -57,7 +57,9 @@ void basis(D3 n, D3& t, D3& b) {
 // Test scene: light 0 = a square LightMesh (side 2, at y = 3, facing down), light 1 = a LightMesh of
 // three coplanar triangles of areas 0.5, 0.15 and 1.425 (facing −y before a rotation of 30°), light 2 = a LightSphere of radius 0.5 scaled by 2 (radius 1) at
 // (0.5, 3, -0.2), light 3 = a LightSphere scaled (1, 3, 1) (an ellipsoid) at (-3, 1, 0), light 4 = a LightMesh of
-// 20 triangles (a fan: a regular 20-gon of radius 1 at y = 4, more than CLRT_MESHLIGHT_PICK_MAX: picked by area).
+// 20 triangles (a fan: a regular 20-gon of radius 1 at y = 4, more than CLRT_MESHLIGHT_PICK_MAX: picked by area),
+// light 5 = a closed cube of 12 LightMesh triangles ([-1.5, -0.5] × [-0.5, 0.5] × [0.5, 1.5], mixed winding): enclosed
+// (src/flatten/light_enclosure.h), so that from outside only its outer sides get samples.
 const char* kLightsXml = R"(<Scene>
 <Cameras><Camera id="1" type="lookAt"><Position>0 0 5</Position><GazePoint>0 0 0</GazePoint><Up>0 1 0</Up>
 <FovY>60</FovY><NearDistance>1</NearDistance><ImageResolution>4 4</ImageResolution><ImageName>o.exr</ImageName></Camera></Cameras>
@@ -67,7 +69,8 @@ const char* kLightsXml = R"(<Scene>
 <Rotation id="1">30 1 1 0</Rotation><Translation id="4">1.5 4 0.5</Translation></Transformations>
 <VertexData>-1 0 -1  1 0 -1  1 0 1  -1 0 1  0 0 0
   0 1 0  1 1 0  1 1 1  0.3 1 1  0 1 1  -2 1 -1  -0.1 1 -1  -0.1 1 0.5
-  0 0 0  1.000000 0 0.000000 0.951057 0 0.309017 0.809017 0 0.587785 0.587785 0 0.809017 0.309017 0 0.951057 0.000000 0 1.000000 -0.309017 0 0.951057 -0.587785 0 0.809017 -0.809017 0 0.587785 -0.951057 0 0.309017 -1.000000 0 0.000000 -0.951057 0 -0.309017 -0.809017 0 -0.587785 -0.587785 0 -0.809017 -0.309017 0 -0.951057 -0.000000 0 -1.000000 0.309017 0 -0.951057 0.587785 0 -0.809017 0.809017 0 -0.587785 0.951057 0 -0.309017</VertexData>
+  0 0 0  1.000000 0 0.000000 0.951057 0 0.309017 0.809017 0 0.587785 0.587785 0 0.809017 0.309017 0 0.951057 0.000000 0 1.000000 -0.309017 0 0.951057 -0.587785 0 0.809017 -0.809017 0 0.587785 -0.951057 0 0.309017 -1.000000 0 0.000000 -0.951057 0 -0.309017 -0.809017 0 -0.587785 -0.587785 0 -0.809017 -0.309017 0 -0.951057 -0.000000 0 -1.000000 0.309017 0 -0.951057 0.587785 0 -0.809017 0.809017 0 -0.587785 0.951057 0 -0.309017
+  -1.5 -0.5 0.5  -0.5 -0.5 0.5  -0.5 0.5 0.5  -1.5 0.5 0.5  -1.5 -0.5 1.5  -0.5 -0.5 1.5  -0.5 0.5 1.5  -1.5 0.5 1.5</VertexData>
 <Objects>
 <LightMesh id="1"><Material>1</Material><Radiance>1 2 3</Radiance><Transformations>t1</Transformations>
   <Faces>1 2 3  1 3 4</Faces></LightMesh>
@@ -79,6 +82,8 @@ const char* kLightsXml = R"(<Scene>
   <Transformations>s2 t3</Transformations></LightSphere>
 <LightMesh id="3"><Material>1</Material><Radiance>3 2 1</Radiance><Transformations>t4</Transformations>
   <Faces vertexOffset="13">1 2 3 1 3 4 1 4 5 1 5 6 1 6 7 1 7 8 1 8 9 1 9 10 1 10 11 1 11 12 1 12 13 1 13 14 1 14 15 1 15 16 1 16 17 1 17 18 1 18 19 1 19 20 1 20 21 1 21 2</Faces></LightMesh>
+<LightMesh id="4"><Material>1</Material><Radiance>2 1 3</Radiance>
+  <Faces vertexOffset="34">1 2 3  1 3 4  5 7 6  5 8 7  1 2 6  1 6 5  4 7 3  4 8 7  1 4 8  1 8 5  2 3 7  2 7 6</Faces></LightMesh>
 </Objects></Scene>)";
 
 std::string writeText(const TempDir& dir, const std::string& name, const std::string& text) {
@@ -94,6 +99,8 @@ struct HostLight {
     std::vector<D3> v;          // mesh: 3 per triangle, world space
     std::vector<double> cdf;    // mesh: running area / total
     double area = 0;
+    bool enclosed = false;      // mesh: bounds a closed convex volume (the flattened Light.position.w; enclosedHost)
+    D3 inside;                  // mesh, enclosed: a point inside that volume (Light.position.xyz)
     D3 center;                  // sphere: world centre
     double boundR = 0;          // sphere: bounding radius (given by the test, from the transform)
     Mat4 toObject;              // sphere: world -> object
@@ -180,6 +187,33 @@ double hostWeight(D3 a, D3 b, D3 c, D3 p) {
     return den * 8 > num ? num / den : 8.0;
 }
 
+// MeshLight_Facing: 1 where p sees the inner side of triangle (a, b, c) of the volume around `inside`, -1 where
+// p lies on its outer side by more than 1e-5 (relative), else 0.
+int hostFacing(D3 a, D3 b, D3 c, D3 p, D3 inside) {
+    D3 n = cross(b - a, c - a), ra = a - p;
+    double s = dot(a - inside, n) > 0 ? dot(ra, n) : -dot(ra, n);
+    return s > 0 ? 1 : (s < 0 && s * s > 1e-10 * dot(ra, ra) * dot(n, n) ? -1 : 0);
+}
+
+// The weights (hostWeight) of mesh light h's triangles from p (at most 16); where h is enclosed and p outside
+// it, 0 for the triangles that show p their inner side (MeshLight_Weights).
+std::vector<double> hostWeights(const HostLight& h, D3 p) {
+    const size_t n = h.v.size() / 3;
+    std::vector<double> w(n);
+    std::vector<bool> inner(n, false);
+    bool outside = false;
+    for (size_t i = 0; i < n; ++i) {
+        w[i] = hostWeight(h.v[3 * i], h.v[3 * i + 1], h.v[3 * i + 2], p);
+        if (!h.enclosed) continue;
+        int f = hostFacing(h.v[3 * i], h.v[3 * i + 1], h.v[3 * i + 2], p, h.inside);
+        inner[i] = f > 0;
+        outside = outside || f < 0;
+    }
+    for (size_t i = 0; i < n; ++i)
+        if (outside && inner[i]) w[i] = 0;
+    return w;
+}
+
 // tan(Ω/2) = num / den of the solid angle triangle (a, b, c) subtends at p (MeshLight_Subtended), and Ω.
 double hostSolidAngle(D3 a, D3 b, D3 c, D3 p) {
     D3 ra = a - p, rb = b - p, rc = c - p;
@@ -212,9 +246,10 @@ double hostInvAreaPdf(const HostLight& h, D3 p, size_t k, D3 q) {
     const double areaK = 0.5 * len(cross(v[1] - v[0], v[2] - v[0]));
     double invPick = h.area / areaK;
     if (n <= kPickMax) {
+        const std::vector<double> weights = hostWeights(h, p);
         double total = 0;
-        for (size_t i = 0; i < n; ++i) total += hostWeight(h.v[3 * i], h.v[3 * i + 1], h.v[3 * i + 2], p);
-        double w = hostWeight(v[0], v[1], v[2], p);
+        for (double x : weights) total += x;
+        double w = weights[k];  // 0 where hidden: never sampled
         if (!(w > 0)) return 0.0;
         invPick = total / w;
     }
@@ -235,9 +270,9 @@ Sample hostSample(const HostLight& h, D3 p, double u1, double u2) {
         double ux = 0;
         const size_t n = h.v.size() / 3;
         if (n <= kPickMax) {  // by weight: the first k whose share holds u1·Σw
-            std::vector<double> w(n);
+            const std::vector<double> w = hostWeights(h, p);
             double total = 0, below = 0;
-            for (size_t i = 0; i < n; ++i) total += (w[i] = hostWeight(h.v[3 * i], h.v[3 * i + 1], h.v[3 * i + 2], p));
+            for (double x : w) total += x;
             if (!(total > 0)) return s;
             double x = u1 * total;
             while (k + 1 < n && !(x < below + w[k])) below += w[k++];
@@ -429,14 +464,23 @@ struct LightsFixture {
     }
 };
 
+// hostLight of light li with its enclosure as flattened (Light.position: the kernels' input).
+HostLight enclosedHost(const LightsFixture& f, int li) {
+    HostLight h = hostLight(f.scene, li);
+    const dev::float4& p = f.ds.lights.at(size_t(li)).position;
+    h.enclosed = p.w > 0;
+    h.inside = {p.x, p.y, p.z};
+    return h;
+}
+
 }  // namespace
 
 TEST_CASE("object lights: LightMesh and LightSphere parse into a shape and a light each", "[objlight][scene]") {
     LightsFixture f;
     const Scene& s = f.scene;
-    REQUIRE(s.lights.size() == 5);
-    REQUIRE(s.shapes.size() == 5);
-    for (int i = 0; i < 5; ++i) {
+    REQUIRE(s.lights.size() == 6);
+    REQUIRE(s.shapes.size() == 6);
+    for (int i = 0; i < 6; ++i) {
         CHECK(s.lights[size_t(i)].shapeIndex == i);
         CHECK(s.shapes[size_t(i)].lightIndex == i);
     }
@@ -459,6 +503,12 @@ TEST_CASE("object lights: LightMesh and LightSphere parse into a shape and a lig
     CHECK(ds.lights[0].area == Approx(4.0f));
     CHECK(ds.lights[2].objRadius == Approx(1.0f).epsilon(1e-5));
     CHECK(ds.lights[3].objRadius == Approx(1.5f).epsilon(1e-5));
+    // Only the cube is enclosed, around the mean of its vertices (flat meshes: position.w 0).
+    for (int l : {0, 1, 4}) CHECK(ds.lights[size_t(l)].position.w == 0.0f);
+    CHECK(ds.lights[5].objCount == 12);
+    CHECK(ds.lights[5].position.w == 1.0f);
+    CHECK(ds.lights[5].position.x == Approx(-1.0f));
+    CHECK(ds.lights[5].position.z == Approx(1.0f));
     // A mirrored LightMesh (Scaling -1 1 1) keeps emitting downwards: its sampling triangles take the
     // winding flattenGeometry gives its geometry (reversed under a mirror).
     {
@@ -532,7 +582,8 @@ TEST_CASE("object lights: parse errors name the element and its line", "[objligh
 TEST_CASE("object lights: the device samplers equal the host references", "[objlight][lights][cl]") {
     LightsFixture f;
     std::vector<HostLight> hosts = {hostLight(f.scene, 0), hostLight(f.scene, 1), hostLight(f.scene, 2, 1.0),
-                                    hostLight(f.scene, 3, 1.5), hostLight(f.scene, 4)};
+                                    hostLight(f.scene, 3, 1.5), hostLight(f.scene, 4), enclosedHost(f, 5)};
+    REQUIRE(hosts[5].enclosed);
     const int n = 4096;
     std::mt19937 rng(5);
     std::uniform_real_distribution<float> px(-3.5f, 2.5f), py(-2.0f, 2.0f), pz(-2.0f, 2.0f), uni(0.0f, 0.99999994f);
@@ -542,10 +593,12 @@ TEST_CASE("object lights: the device samplers equal the host references", "[objl
         pts[size_t(i)] = {px(rng), py(rng), pz(rng), 0};
         u[size_t(i)] = {uni(rng), uni(rng)};
     }
-    for (int l = 0; l < 5; ++l) {
+    for (int l = 0; l < 6; ++l) {
         INFO("light " << l);
         std::vector<dev::float4> out = deviceSamples(f.ds, l, pts, u);
         int bad = 0, lit = 0, unlit = 0, inside = 0;
+        if (l == 5)  // points inside the cube: every side gets samples
+            for (const dev::float4& q : pts) inside += q.x > -1.5f && q.x < -0.5f && std::fabs(q.y) < 0.5f && q.z > 0.5f && q.z < 1.5f;
         for (int i = 0; i < n; ++i) {
             D3 p = d3(pts[size_t(i)]);
             Sample h = hostSample(hosts[size_t(l)], p, u[size_t(i)].x, u[size_t(i)].y);
@@ -563,7 +616,7 @@ TEST_CASE("object lights: the device samplers equal the host references", "[objl
         INFO("lit " << lit << ", unlit " << unlit << ", inside bounding sphere " << inside);
         CHECK(lit > n / 10);
         CHECK(bad <= n / 2000);  // CDF and cone-edge round-off only
-        if (l == 3) CHECK(inside > 5);
+        if (l == 3 || l == 5) CHECK(inside > 5);
         if (l == 3) CHECK(unlit > 20);  // points inside the ellipsoid (its object-space cone never misses)
     }
 }
@@ -626,7 +679,8 @@ TEST_CASE("object lights: samples follow the pdf (chi-square), pdf integrates to
                                {"three-triangle LightMesh", 1, hostLight(f.scene, 1), {}},
                                {"LightSphere", 2, hostLight(f.scene, 2, 1.0), {0.1, 0.4, 0.3}},
                                {"ellipsoidal LightSphere", 3, hostLight(f.scene, 3, 1.5), {-1.2, 1.9, 0.4}},
-                               {"20-triangle LightMesh (by area)", 4, hostLight(f.scene, 4), {1.2, 2.2, 0.9}}};
+                               {"20-triangle LightMesh (by area)", 4, hostLight(f.scene, 4), {1.2, 2.2, 0.9}},
+                               {"enclosed cube LightMesh (three faces seen)", 5, enclosedHost(f, 5), {0.4, 1.3, 2.6}}};
     REQUIRE(cases[3].h.ellipsoid);
     REQUIRE_FALSE(cases[2].h.ellipsoid);
     {  // the three triangles seen from their front: 2 units from their centroid along their normal

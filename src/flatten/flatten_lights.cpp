@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "flatten/flatten.h"
+#include "flatten/light_enclosure.h"
 #include "scene/transforms.h"
 #include "util/error.h"
 
@@ -14,10 +15,13 @@ namespace {
 
 // LightMesh: its triangles in world space (as flattenGeometry places them, mirrored meshes with their
 // winding reversed; degenerate and non-finite ones left out) with the area CDF in v0.w and the area in v1.w; total area in d.area.
-void flattenMeshLight(const Scene& scene, const Shape& s, dev::Light& d, DeviceScene& ds) {
+// d.position: a point inside the closed convex volume the triangles bound, w = 1, where they do (light_enclosure.h).
+void flattenMeshLight(const Scene& scene, int shapeIndex, dev::Light& d, DeviceScene& ds) {
+    const Shape& s = scene.shapes.at(size_t(shapeIndex));
     const MeshData& mesh = scene.meshes.at(size_t(s.meshIndex));
     d.objFirst = int(ds.lightData.size());
     std::vector<double> areas;
+    std::vector<Vec3> kept;  // the triangles written, for findMeshLightEnclosure
     const bool mirrored = mirrorsOrientation(s.transform);  // winding as flattenGeometry's (both faces emit)
     for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
         Vec3 p[3];
@@ -28,8 +32,11 @@ void flattenMeshLight(const Scene& scene, const Shape& s, dev::Light& d, DeviceS
         double area = 0.5 * std::sqrt(double(c.x) * c.x + double(c.y) * c.y + double(c.z) * c.z);
         if (!(area > 0) || !std::isfinite(area) || p[0] == p[1] || p[1] == p[2] || p[0] == p[2]) continue;
         for (int k = 0; k < 3; ++k) ds.lightData.push_back(toFloat4(p[k]));
+        kept.insert(kept.end(), p, p + 3);
         areas.push_back(area);
     }
+    const MeshLightEnclosure enclosure = findMeshLightEnclosure(scene, shapeIndex, kept);
+    d.position = enclosure.enclosed ? toFloat4(enclosure.inside, 1.0f) : dev::float4{0, 0, 0, 0};
     double total = 0;
     for (double a : areas) total += a;
     double run = 0;
@@ -117,7 +124,7 @@ void flattenLights(const Scene& scene, DeviceScene& ds, ImageAtlas& atlas) {
         case dev::LIGHT_ENVIRONMENT:
             flattenEnvironmentLight(scene, l, int(ds.lights.size()), d, ds, atlas);
             break;
-        case dev::LIGHT_MESH: flattenMeshLight(scene, scene.shapes.at(size_t(l.shapeIndex)), d, ds); break;
+        case dev::LIGHT_MESH: flattenMeshLight(scene, l.shapeIndex, d, ds); break;
         case dev::LIGHT_SPHERE: flattenSphereLight(scene.shapes.at(size_t(l.shapeIndex)), d, ds); break;
         }
         ds.lights.push_back(d);

@@ -295,6 +295,8 @@ typedef struct Light {
 /* lightData (float4s) of the object lights, written by src/flatten/flatten_lights.cpp:
  *   LightMesh:   per triangle k, 3 float4s: world-space v0, v1, v2; v0.w = the area CDF up to and
  *                including triangle k (the last is 1), v1.w = the triangle's area. Light.area = total area.
+ *                Light.position: w = 1 where the triangles bound a closed convex volume (src/flatten/
+ *                light_enclosure.h), xyz a point inside it; else 0.
  *   LightSphere: 7 float4s: the object-space centre and radius (w), 3 rows of worldToObject, 3 rows of
  *                objectToWorld (as dev::Sphere). Light.position = world-space centre, Light.objRadius =
  *                bounding radius, Light.edgeU.x = |det M|, Light.objCount = 1 when M is no similarity
