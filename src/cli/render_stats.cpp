@@ -24,6 +24,15 @@ void printSetup(const DeviceScene& ds, const std::vector<std::unique_ptr<Rendere
          std::to_string(ds.envDistSeconds) + " s");
     info("primitives: " + std::to_string(ds.params.numTriangles) + " triangles, " + std::to_string(ds.params.numSpheres) +
          " spheres; BVH SAH cost " + std::to_string(ds.bvh.sahCost) + ", depth " + std::to_string(ds.bvh.depth));
+    int meshLights = 0, enclosed = 0;
+    for (int i = 0; i < ds.params.numLights; ++i)
+        if (ds.lights[size_t(i)].kind == dev::LIGHT_MESH) {
+            ++meshLights;
+            enclosed += ds.lights[size_t(i)].position.w > 0;
+        }
+    if (meshLights > 0)
+        info("LightMesh: " + std::to_string(enclosed) + " of " + std::to_string(meshLights) +
+             " enclosed (a closed convex volume: their inner sides get no light samples; flatten/light_enclosure.h)");
 }
 
 void sumDeviceCounters(const std::vector<DeviceWork>& work, RenderCounters& counters) {
