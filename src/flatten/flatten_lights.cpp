@@ -16,7 +16,7 @@ namespace {
 // LightMesh: its triangles in world space (as flattenGeometry places them, mirrored meshes with their
 // winding reversed; degenerate and non-finite ones left out) with the area CDF in v0.w and the area in v1.w; total area in d.area.
 // d.position: a point inside the closed convex volume the triangles bound, w = 1, where they do (light_enclosure.h).
-void flattenMeshLight(const Scene& scene, int shapeIndex, dev::Light& d, DeviceScene& ds) {
+void flattenMeshLight(const Scene& scene, int shapeIndex, dev::Light& d, DeviceScene& ds, MeshLightEnclosures& enclosures) {
     const Shape& s = scene.shapes.at(size_t(shapeIndex));
     const MeshData& mesh = scene.meshes.at(size_t(s.meshIndex));
     d.objFirst = int(ds.lightData.size());
@@ -35,7 +35,7 @@ void flattenMeshLight(const Scene& scene, int shapeIndex, dev::Light& d, DeviceS
         kept.insert(kept.end(), p, p + 3);
         areas.push_back(area);
     }
-    const MeshLightEnclosure enclosure = findMeshLightEnclosure(scene, shapeIndex, kept);
+    const MeshLightEnclosure enclosure = enclosures.find(shapeIndex, kept);
     d.position = enclosure.enclosed ? toFloat4(enclosure.inside, 1.0f) : dev::float4{0, 0, 0, 0};
     double total = 0;
     for (double a : areas) total += a;
@@ -92,6 +92,7 @@ void flattenSphereLight(const Shape& s, dev::Light& d, DeviceScene& ds) {
 
 void flattenLights(const Scene& scene, DeviceScene& ds, ImageAtlas& atlas) {
     ds.params.envLight = CLRT_INVALID;
+    MeshLightEnclosures enclosures(scene);
     for (const Light& l : scene.lights) {
         dev::Light d{};
         d.envCosine = CLRT_INVALID;
@@ -124,7 +125,7 @@ void flattenLights(const Scene& scene, DeviceScene& ds, ImageAtlas& atlas) {
         case dev::LIGHT_ENVIRONMENT:
             flattenEnvironmentLight(scene, l, int(ds.lights.size()), d, ds, atlas);
             break;
-        case dev::LIGHT_MESH: flattenMeshLight(scene, l.shapeIndex, d, ds); break;
+        case dev::LIGHT_MESH: flattenMeshLight(scene, l.shapeIndex, d, ds, enclosures); break;
         case dev::LIGHT_SPHERE: flattenSphereLight(scene.shapes.at(size_t(l.shapeIndex)), d, ds); break;
         }
         ds.lights.push_back(d);

@@ -64,7 +64,8 @@ struct Plane3 {
 
 // Whether scene geometry other than shape `skip` covers convex polygon `loop` (in plane `pl`) with opaque,
 // unmoving surfaces lying in that plane (within tol).
-bool coveredByScene(const Scene& scene, int skip, const std::vector<D3>& loop, const Plane3& pl, double tol) {
+bool coveredByScene(const Scene& scene, const std::vector<MeshLightEnclosures::Box>& boxes, int skip,
+                    const std::vector<D3>& loop, const Plane3& pl, double tol) {
     const D3 e1 = (1.0 / norm(loop[1] - loop[0])) * (loop[1] - loop[0]), e2 = cross(pl.n, e1);
     auto to2 = [&](D3 x) { return P2{dot(x - loop[0], e1), dot(x - loop[0], e2)}; };
     Polygon opening;
@@ -80,6 +81,10 @@ bool coveredByScene(const Scene& scene, int skip, const std::vector<D3>& loop, c
     for (size_t si = 0; si < scene.shapes.size() && !left.empty(); ++si) {
         const Shape& s = scene.shapes[si];
         if (int(si) == skip || s.type == ShapeType::Sphere) continue;
+        const MeshLightEnclosures::Box& b = boxes[si];
+        if (b.lo[0] > hi.x + tol || b.hi[0] < lo.x - tol || b.lo[1] > hi.y + tol || b.hi[1] < lo.y - tol ||
+            b.lo[2] > hi.z + tol || b.hi[2] < lo.z - tol)
+            continue;
         if (s.materialIndex < 0 || size_t(s.materialIndex) >= scene.materials.size() ||
             scene.materials[size_t(s.materialIndex)].type == dev::MATERIAL_DIELECTRIC || !(s.motion == Vec3(0.0f)))
             continue;
@@ -162,6 +167,46 @@ bool opaqueAndStill(const Scene& scene, const Shape& s) {
 }  // namespace
 
 MeshLightEnclosure findMeshLightEnclosure(const Scene& scene, int lightShape, const std::vector<Vec3>& triangles) {
+    return MeshLightEnclosures(scene).find(lightShape, triangles);
+}
+
+const std::vector<MeshLightEnclosures::Box>& MeshLightEnclosures::shapeBoxes() {
+    if (!shapeBoxes_.empty() || scene_.shapes.empty()) return shapeBoxes_;
+    std::map<int, Box> meshBox;  // object space, per MeshData
+    for (const Shape& s : scene_.shapes) {
+        Box w{{-INFINITY, -INFINITY, -INFINITY}, {INFINITY, INFINITY, INFINITY}};  // planes (and spheres: unread)
+        if (s.type == ShapeType::Mesh && (s.meshIndex < 0 || size_t(s.meshIndex) >= scene_.meshes.size())) {
+            w = {{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};  // no triangles: covers nothing
+        } else if (s.type == ShapeType::Mesh) {
+            auto it = meshBox.find(s.meshIndex);
+            if (it == meshBox.end()) {
+                Box o{{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
+                for (const Vec3& v : scene_.meshes.at(size_t(s.meshIndex)).positions) {
+                    const double c[3] = {v.x, v.y, v.z};
+                    for (int a = 0; a < 3; ++a) o.lo[a] = std::min(o.lo[a], c[a]), o.hi[a] = std::max(o.hi[a], c[a]);
+                }
+                it = meshBox.emplace(s.meshIndex, o).first;
+            }
+            const Box& o = it->second;
+            w = {{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
+            for (int corner = 0; corner < 8 && o.lo[0] <= o.hi[0]; ++corner) {
+                const Vec3 q = s.transform.transformPoint(Vec3(float(corner & 1 ? o.hi[0] : o.lo[0]), float(corner & 2 ? o.hi[1] : o.lo[1]),
+                                                               float(corner & 4 ? o.hi[2] : o.lo[2])));
+                const double c[3] = {q.x, q.y, q.z};
+                for (int a = 0; a < 3; ++a) w.lo[a] = std::min(w.lo[a], c[a]), w.hi[a] = std::max(w.hi[a], c[a]);
+            }
+            for (int a = 0; a < 3; ++a) {  // the transform's float rounding
+                const double pad = 1e-6 * std::max(std::fabs(w.lo[a]), std::fabs(w.hi[a]));
+                w.lo[a] -= pad, w.hi[a] += pad;
+            }
+        }
+        shapeBoxes_.push_back(w);
+    }
+    return shapeBoxes_;
+}
+
+MeshLightEnclosure MeshLightEnclosures::find(int lightShape, const std::vector<Vec3>& triangles) {
+    const Scene& scene = scene_;
     MeshLightEnclosure out;
     const size_t n = triangles.size() / 3;
     if (n < 2 || n > kEnclosureMaxTriangles || !opaqueAndStill(scene, scene.shapes.at(size_t(lightShape)))) return out;
@@ -220,7 +265,7 @@ MeshLightEnclosure findMeshLightEnclosure(const Scene& scene, int lightShape, co
         if (!supports(normal, pts[0], &pl)) return out;
         for (const D3& p : pts)
             if (std::fabs(pl.dist(p)) > tol) return out;
-        if (!coveredByScene(scene, lightShape, pts, pl, tol)) return out;
+        if (!coveredByScene(scene, shapeBoxes(), lightShape, pts, pl, tol)) return out;
     }
     out.enclosed = true;
     out.inside = Vec3(float(inside.x), float(inside.y), float(inside.z));

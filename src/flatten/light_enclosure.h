@@ -33,4 +33,22 @@ constexpr size_t kEnclosureMaxTriangles = 64;
 // lightShape: the light's index into scene.shapes (left out of the covering geometry).
 MeshLightEnclosure findMeshLightEnclosure(const Scene& scene, int lightShape, const std::vector<Vec3>& triangles);
 
+// The same for each light of a scene in turn: the scene's shapes' world boxes are made once, on the first
+// opening to cover, and each opening reads only the triangles of shapes whose box reaches it (a scene of many
+// instances or many light boxes is not read once per light).
+class MeshLightEnclosures {
+public:
+    explicit MeshLightEnclosures(const Scene& scene) : scene_(scene) {}
+    MeshLightEnclosure find(int lightShape, const std::vector<Vec3>& triangles);
+
+    struct Box {
+        double lo[3], hi[3];
+    };
+
+private:
+    const Scene& scene_;
+    std::vector<Box> shapeBoxes_;  // world boxes of scene_.shapes (planes: everything), once made
+    const std::vector<Box>& shapeBoxes();
+};
+
 }  // namespace clrt
