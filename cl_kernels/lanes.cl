@@ -150,16 +150,18 @@ inline LaneV3 Lanes_SphericalDirection(LaneV3 a, LaneV3 b, LaneV3 c, LaneF halfO
 inline LaneI Lanes_PickByWeight(const __global Light* light, const __global float4* tri, int n, LaneV3 p, LaneF u,
                                 LaneF* uRest, LaneF* total, LaneF* wPick) {
     LaneF w[CLRT_MESHLIGHT_PICK_MAX > 0 ? CLRT_MESHLIGHT_PICK_MAX : 1];
-    LaneI inner[CLRT_MESHLIGHT_PICK_MAX > 0 ? CLRT_MESHLIGHT_PICK_MAX : 1], outside = (LaneI)(0);
+    LaneI hidden[CLRT_MESHLIGHT_PICK_MAX > 0 ? CLRT_MESHLIGHT_PICK_MAX : 1], outside = (LaneI)(0);
     const int enclosed = light->position.w > 0.0f; /* MeshLight_Weights: hidden triangles weigh 0 */
-    for (int i = 0; i < n; ++i) {
-        const float3 a = tri[3 * i].xyz, b = tri[3 * i + 1].xyz, c = tri[3 * i + 2].xyz;
-        w[i] = Lanes_MeshLightWeight(a, b, c, p);
-        if (enclosed) inner[i] = Lanes_MeshLightInner(a, b, c, p, light->position.xyz, &outside);
-    }
+    for (int i = 0; i < n; ++i)
+        hidden[i] = enclosed ? Lanes_MeshLightInner(tri[3 * i].xyz, tri[3 * i + 1].xyz, tri[3 * i + 2].xyz, p,
+                                                    light->position.xyz, &outside)
+                             : (LaneI)(0);
     LaneF sum = (LaneF)(0.0f);
-    for (int i = 0; i < n; ++i) {
-        if (enclosed) w[i] = select(w[i], (LaneF)(0.0f), inner[i] & outside);
+    for (int i = 0; i < n; ++i) { /* a triangle no lane sees is not weighed */
+        hidden[i] &= outside;
+        w[i] = all(hidden[i]) ? (LaneF)(0.0f)
+                              : select(Lanes_MeshLightWeight(tri[3 * i].xyz, tri[3 * i + 1].xyz, tri[3 * i + 2].xyz, p),
+                                       (LaneF)(0.0f), hidden[i]);
         sum += w[i];
     }
     const LaneF x = u * sum;

@@ -100,20 +100,16 @@ inline int MeshLight_Facing(float3 a, float3 b, float3 c, float3 p, float3 insid
  * enclosed light. */
 inline float MeshLight_Weights(const __global Light* light, const __global float4* tri, int n, float3 p, float* w,
                                int* outside) {
-    const int enclosed = light->position.w > 0.0f;
     int inner = 0;
     *outside = 0;
-    for (int i = 0; i < n; ++i) {
-        const float3 a = tri[3 * i].xyz, b = tri[3 * i + 1].xyz, c = tri[3 * i + 2].xyz;
-        w[i] = MeshLight_Weight(a, b, c, p);
-        if (!enclosed) continue;
-        const int f = MeshLight_Facing(a, b, c, p, light->position.xyz);
+    for (int i = 0; i < n && light->position.w > 0.0f; ++i) { /* enclosed: which sides p sees */
+        const int f = MeshLight_Facing(tri[3 * i].xyz, tri[3 * i + 1].xyz, tri[3 * i + 2].xyz, p, light->position.xyz);
         inner |= (f > 0) << i;
         *outside |= f < 0;
     }
     float total = 0.0f;
     for (int i = 0; i < n; ++i) {
-        if (*outside && ((inner >> i) & 1)) w[i] = 0.0f;
+        w[i] = *outside && ((inner >> i) & 1) ? 0.0f : MeshLight_Weight(tri[3 * i].xyz, tri[3 * i + 1].xyz, tri[3 * i + 2].xyz, p);
         total += w[i];
     }
     return total;
