@@ -67,6 +67,18 @@ TEST_CASE("light enclosure: a closed convex LightMesh, or one whose opening opaq
         CHECK(lightPosition(sceneXml(std::string(kBox) + "0 0 1.28", "<Plane id=\"1\"><Material>1</Material><Point>9</Point>"
                                                                      "<Normal>0 0 -1</Normal></Plane>")).w == 1.0f);
     }
+    SECTION("under a MeshInstance of a mesh elsewhere, moved up to the ceiling") {
+        auto instanceAt = [](const char* z) {  // the base mesh lies at z = 0: only its instance can cover
+            std::string xml = sceneXml(std::string(kBox) + "-2 -2 0  2 -2 0  2 2 0  -2 2 0",
+                                       ceiling() + "<MeshInstance id=\"2\" baseMeshId=\"1\"><Material>1</Material>"
+                                                   "<Transformations>t1</Transformations></MeshInstance>");
+            xml.insert(xml.find("<VertexData>"), std::string("<Transformations><Translation id=\"1\">0 0 ") + z +
+                                                     "</Translation></Transformations>");
+            return lightPosition(xml).w;
+        };
+        CHECK(instanceAt("1.28") == 1.0f);
+        CHECK(instanceAt("1.3") == 0.0f);
+    }
     SECTION("under a ceiling of four triangles that meet inside the opening") {
         CHECK(lightPosition(sceneXml(std::string(kBox) + kCeiling + "  0.1 -0.05 1.28",
                                      ceiling("1", "9 10 13  10 11 13  11 12 13  12 9 13"))).w == 1.0f);
