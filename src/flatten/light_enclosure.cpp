@@ -110,7 +110,9 @@ bool coveredByScene(const Scene& scene, const std::vector<MeshLightEnclosures::B
                            std::min({axes[a][0], axes[a][1], axes[a][2]}) <= his[a] + tol;
             if (!overlaps) continue;
             P2 q[3] = {to2(v[0]), to2(v[1]), to2(v[2])};
-            if ((q[1].x - q[0].x) * (q[2].y - q[0].y) - (q[1].y - q[0].y) * (q[2].x - q[0].x) < 0) std::swap(q[1], q[2]);
+            const double twice = (q[1].x - q[0].x) * (q[2].y - q[0].y) - (q[1].y - q[0].y) * (q[2].x - q[0].x);
+            if (!(std::fabs(twice) > 1e-12 * whole)) continue;  // degenerate (or not finite): covers nothing
+            if (twice < 0) std::swap(q[1], q[2]);
             std::vector<Polygon> next;
             for (const Polygon& piece : left) {  // piece less the triangle: the parts right of each of its edges
                 Polygon rest = piece;
