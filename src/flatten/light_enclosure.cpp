@@ -65,7 +65,7 @@ struct Plane3 {
 // Whether scene geometry other than shape `skip` covers convex polygon `loop` (in plane `pl`) with opaque,
 // unmoving surfaces lying in that plane (within tol).
 bool coveredByScene(const Scene& scene, const std::vector<MeshLightEnclosures::Box>& boxes, int skip,
-                    const std::vector<D3>& loop, const Plane3& pl, double tol) {
+                    const std::vector<D3>& loop, const Plane3& pl, double tol, size_t& budget) {
     const D3 e1 = (1.0 / norm(loop[1] - loop[0])) * (loop[1] - loop[0]), e2 = cross(pl.n, e1);
     auto to2 = [&](D3 x) { return P2{dot(x - loop[0], e1), dot(x - loop[0], e2)}; };
     Polygon opening;
@@ -95,6 +95,8 @@ bool coveredByScene(const Scene& scene, const std::vector<MeshLightEnclosures::B
             continue;
         }
         const MeshData& m = scene.meshes.at(size_t(s.meshIndex));
+        if (m.indices.size() / 3 > budget) return false;  // the scene's reading budget spent: not enclosed
+        budget -= m.indices.size() / 3;
         for (size_t t = 0; t + 2 < m.indices.size() && !left.empty(); t += 3) {
             D3 v[3];
             bool near = true, overlaps = true;
@@ -267,7 +269,7 @@ MeshLightEnclosure MeshLightEnclosures::find(int lightShape, const std::vector<V
         if (!supports(normal, pts[0], &pl)) return out;
         for (const D3& p : pts)
             if (std::fabs(pl.dist(p)) > tol) return out;
-        if (!coveredByScene(scene, shapeBoxes(), lightShape, pts, pl, tol)) return out;
+        if (!coveredByScene(scene, shapeBoxes(), lightShape, pts, pl, tol, budget_)) return out;
     }
     out.enclosed = true;
     out.inside = Vec3(float(inside.x), float(inside.y), float(inside.z));

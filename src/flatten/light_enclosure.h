@@ -34,8 +34,8 @@ constexpr size_t kEnclosureMaxTriangles = 64;
 MeshLightEnclosure findMeshLightEnclosure(const Scene& scene, int lightShape, const std::vector<Vec3>& triangles);
 
 // The same for each light of a scene in turn: the scene's shapes' world boxes are made once, on the first
-// opening to cover, and each opening reads only the triangles of shapes whose box reaches it (a scene of many
-// instances or many light boxes is not read once per light).
+// opening to cover, and each opening reads only the triangles of shapes whose box reaches it, 2^24 of them at
+// most for the scene (so many light boxes under one huge mesh do not read it once each).
 class MeshLightEnclosures {
 public:
     explicit MeshLightEnclosures(const Scene& scene) : scene_(scene) {}
@@ -48,6 +48,9 @@ public:
 private:
     const Scene& scene_;
     std::vector<Box> shapeBoxes_;  // world boxes of scene_.shapes (planes: everything), once made
+    // Covering triangles left to read for the whole scene (a fixed count, not a time: the same lights are
+    // enclosed on every machine); an opening whose candidates exceed it is taken as open.
+    size_t budget_ = size_t(1) << 24;
     const std::vector<Box>& shapeBoxes();
 };
 
