@@ -1,6 +1,8 @@
 // Shared helpers for tests: the OpenCL device to test on ($CLRT_TEST_DEVICE, default "cpu" = PoCL),
 // temporary directories, image metrics, and running the clrt binary.
 #pragma once
+#include <catch.hpp>
+
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -222,6 +224,15 @@ inline int runClrt(const std::string& args, const std::string& logFile) {
     std::string cmd = std::string(CLRT_BINARY) + " " + args + " >" + logFile + " 2>&1";
     int rc = std::system(cmd.c_str());
     return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+// Runs `clrt ARGS` (runClrt, output to logFile), requires exit 0 (the log as the failure's message), and
+// returns the pixels of the EXR it wrote at exrPath (pixels only: the EXR header holds the render time).
+inline std::vector<float> renderedPixels(const std::string& args, const std::string& logFile, const std::string& exrPath) {
+    const int rc = runClrt(args, logFile);
+    INFO(readFileBytes(logFile));
+    REQUIRE(rc == 0);
+    return readImage(exrPath).pixels;
 }
 
 }  // namespace clrt::test

@@ -1137,12 +1137,7 @@ TEST_CASE("clrt render --mesh-light-sampling: solid-angle by default, area on re
     xml = std::regex_replace(xml, std::regex("<ImageResolution>32 32</ImageResolution>"), "<ImageResolution>8 8</ImageResolution>");
     writeText(d, "box.xml", xml);
     const std::string base = "render " + d.file("box.xml") + " -o " + d.path.string() + " --spp 4 --seed 2" + deviceArg();
-    auto render = [&](const std::string& extra) {
-        const int rc = runClrt(base + extra, d.file("log"));
-        INFO(readFileBytes(d.file("log")));
-        REQUIRE(rc == 0);
-        return readImage(d.file("e.exr")).pixels;
-    };
+    auto render = [&](const std::string& extra) { return renderedPixels(base + extra, d.file("log"), d.file("e.exr")); };
     const std::vector<float> def = render(""), solid = render(" --mesh-light-sampling solid-angle"),
                              area = render(" --mesh-light-sampling area");
     CHECK(def == solid);

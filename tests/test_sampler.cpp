@@ -232,12 +232,7 @@ TEST_CASE("clrt render --sampler: stratified by default, independent or zsobol o
     writeExr(d.file("sky.exr"), sky);
     std::ofstream(d.file("s.xml")) << skyScene(d.file("sky.exr"), 8);
     const std::string base = "render " + d.file("s.xml") + " -o " + d.path.string() + " --spp 4 --seed 2" + deviceArg();
-    auto render = [&](const std::string& extra) {
-        const int rc = runClrt(base + extra, d.file("log"));
-        INFO(readFileBytes(d.file("log")));
-        REQUIRE(rc == 0);
-        return readImage(d.file("out.exr")).pixels;
-    };
+    auto render = [&](const std::string& extra) { return renderedPixels(base + extra, d.file("log"), d.file("out.exr")); };
     const std::vector<float> def = render(""), strat = render(" --sampler stratified"), indep = render(" --sampler independent");
     CHECK(def == strat);
     CHECK(def != indep);
