@@ -254,25 +254,51 @@ inline int EnvCos_Bucket(const __global float* tab, float3 n) {
 inline int EnvCos_CellStart(int c, int texels, int cells) { return (int)(((long)c * texels) / cells); }
 inline int EnvCos_CellOf(int t, int texels, int cells) { return (int)(((long)(t + 1) * cells - 1) / texels); }
 
-/* Sample of bucket b: a cell by the bucket's CDFs, a texel of it by its share, then within the texel as the
- * map's distribution `own` does (EnvDist_CellSample); returns 0 where none. */
+/* A sample of bucket b in three steps, each a few dependent loads (the lanes run each step for four
+ * shading points in turn, so that their loads overlap: lights.cl EnvMis_*, lanes.cl): the cell's row J by
+ * the bucket's marginal CDF (EnvCos_PickRow), its column I by the row's CDF (EnvCos_PickColumn), then a
+ * texel of the cell by its share and the point within the texel as the map's distribution `own` places it
+ * (EnvCos_SampleCell). du, dv: the uniforms' remainders within the cell; p: the cell's probability. */
+typedef struct {
+    int I, J;
+    float du, dv, p;
+} EnvCosCell;
+
+inline void EnvCos_PickRow(const __global float* tab, int b, float u2, EnvCosCell* c) {
+    const int Hc = (int)tab[2];
+    const __global float* marg = tab + 8 + b * (int)tab[3];
+    c->J = EnvDist_FindInterval(marg, Hc, u2);
+    c->dv = fmin((u2 - marg[c->J]) / (marg[c->J + 1] - marg[c->J]), CLRT_ONE_MINUS_EPS);
+    c->p = marg[c->J + 1] - marg[c->J];
+}
+
+inline void EnvCos_PickColumn(const __global float* tab, int b, float u1, EnvCosCell* c) {
+    const int Wc = (int)tab[1], Hc = (int)tab[2];
+    const __global float* cond = tab + 8 + b * (int)tab[3] + Hc + 1 + c->J * (Wc + 1);
+    c->I = EnvDist_FindInterval(cond, Wc, u1);
+    c->du = fmin((u1 - cond[c->I]) / (cond[c->I + 1] - cond[c->I]), CLRT_ONE_MINUS_EPS);
+    c->p *= cond[c->I + 1] - cond[c->I];
+}
+
+inline int EnvCos_SampleCell(const __global float* own, const __global float* tab, EnvCosCell c, float u1, float u2,
+                             float3* dir, float* pdf, float2* uvOut) {
+    const int W = (int)own[0], H = (int)own[1], Wc = (int)tab[1], Hc = (int)tab[2];
+    const int x0 = EnvCos_CellStart(c.I, W, Wc), y0 = EnvCos_CellStart(c.J, H, Hc), y1 = EnvCos_CellStart(c.J + 1, H, Hc);
+    const int w = EnvCos_CellStart(c.I + 1, W, Wc) - x0, n = w * (y1 - y0);
+    const __global float* fine = tab + (int)tab[4] + y0 * W + x0 * (y1 - y0);
+    const int k = EnvDist_FindInterval(fine, n, c.du);
+    const float share = (k + 1 < n ? fine[k + 1] : 1.0f) - fine[k];
+    const float dt = fmin((c.du - fine[k]) / share, CLRT_ONE_MINUS_EPS);
+    return EnvDist_CellSample(own, x0 + k % w, y0 + k / w, dt, c.dv, c.p * share, u1, u2, dir, pdf, uvOut);
+}
+
+/* Sample of bucket b (the three steps above); returns 0 where none. */
 inline int EnvCos_SampleUv(const __global float* own, const __global float* tab, int b, float u1, float u2, float3* dir,
                            float* pdf, float2* uvOut) {
-    const int W = (int)own[0], H = (int)own[1], Wc = (int)tab[1], Hc = (int)tab[2];
-    const __global float* marg = tab + 8 + b * (int)tab[3];
-    const int J = EnvDist_FindInterval(marg, Hc, u2);
-    const float dv = fmin((u2 - marg[J]) / (marg[J + 1] - marg[J]), CLRT_ONE_MINUS_EPS);
-    const __global float* cond = marg + Hc + 1 + J * (Wc + 1);
-    const int I = EnvDist_FindInterval(cond, Wc, u1);
-    const float du = fmin((u1 - cond[I]) / (cond[I + 1] - cond[I]), CLRT_ONE_MINUS_EPS);
-    const float pCell = (marg[J + 1] - marg[J]) * (cond[I + 1] - cond[I]);
-    const int x0 = EnvCos_CellStart(I, W, Wc), y0 = EnvCos_CellStart(J, H, Hc), y1 = EnvCos_CellStart(J + 1, H, Hc);
-    const int w = EnvCos_CellStart(I + 1, W, Wc) - x0, n = w * (y1 - y0);
-    const __global float* fine = tab + (int)tab[4] + y0 * W + x0 * (y1 - y0);
-    const int k = EnvDist_FindInterval(fine, n, du);
-    const float share = (k + 1 < n ? fine[k + 1] : 1.0f) - fine[k];
-    const float dt = fmin((du - fine[k]) / share, CLRT_ONE_MINUS_EPS);
-    return EnvDist_CellSample(own, x0 + k % w, y0 + k / w, dt, dv, pCell * share, u1, u2, dir, pdf, uvOut);
+    EnvCosCell c;
+    EnvCos_PickRow(tab, b, u2, &c);
+    EnvCos_PickColumn(tab, b, u1, &c);
+    return EnvCos_SampleCell(own, tab, c, u1, u2, dir, pdf, uvOut);
 }
 
 /* pdf over solid angle of bucket b at map coordinates uv. */

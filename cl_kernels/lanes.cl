@@ -50,6 +50,8 @@ inline void Lanes_Sample2D(SceneParams scene, uint strat, LaneU sample, const Pa
     *u2 = vload4(0, b);
 }
 
+#ifdef CLRT_HAS_PATH_TRACING /* ---- path-traced cameras ---- */
+
 /* Which of the lanes in okBits see the shadow ray from org along unit dir unblocked up to tMax
  * (Shadow_Occluded, per lane). */
 inline int Lanes_Unoccluded(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int okBits, LaneV3 org, LaneV3 dir, LaneF tMax) {
@@ -532,6 +534,117 @@ inline uint Lanes_Paths(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int lightSlot
     return secondary;
 }
 
+#endif /* CLRT_HAS_PATH_TRACING */
+
+/* ---- classic (direct-lighting) cameras ----------------------------------------------------------- */
+
+/* The lanes' 2D sample of light dimension dim at their depth-0 shading points, as Sampler_Light2D draws it:
+ * under the correlated sampler a classic camera's light samples take its camera sample (per lane), else
+ * Lanes_Sample2D. */
+inline void Lanes_Light2D(SceneParams scene, uint strat, LaneU sample, const PathState* path, int pixel, uint dim,
+                          LaneF* u1, LaneF* u2) {
+    if (CLRT_SAMPLER_IS_CORRELATED(scene) && scene.pathMode == 0) {
+        float a[CLRT_LANES], b[CLRT_LANES];
+        for (int k = 0; k < CLRT_LANES; ++k) {
+            const float2 u = Sampler_Light2D(scene, path[k], Rng_Key(scene.seed, pixel, path[k].sample, path[k].pathId), dim);
+            a[k] = u.x;
+            b[k] = u.y;
+        }
+        *u1 = vload4(0, a);
+        *u2 = vload4(0, b);
+        return;
+    }
+    Lanes_Sample2D(scene, strat, sample, path, pixel, dim, u1, u2);
+}
+
+#ifdef CLRT_HAS_ENV_LIGHT
+/* Light l's multi-sample MIS (an environment light; Light_ShadowRays' first branch) at the shading points sp of
+ * the lanes in `bits`: their two shadow rays each, sr and sr2, as Light_ShadowRays makes them, with EnvLight_SampleMis's
+ * steps (lights.cl, EnvMis_*) run for every lane before the next step, so that the lanes' chains of dependent
+ * loads (the bucket's row, column and texel CDFs, the map's texels) are in flight together. */
+inline void Lanes_EnvMisShadows(SceneParams scene, const __global Material* materials, const __global Light* lights,
+                                const __global ImageInfo* images, const __global float4* texels,
+                                const __global float* envDist, int l, int bits, const PathState* path,
+                                const ShadingPoint* sp, int pixel, uint strat, LaneU sample, ShadowRay* sr, ShadowRay* sr2) {
+    const __global Light* light = &lights[l];
+    const uint dim = 4u + 32u * (uint)path[0].depth + 8u + 2u * (uint)l; /* Light_ShadowRays' */
+    LaneF a1, a2, b1, b2;
+    Lanes_Light2D(scene, strat, sample, path, pixel, dim, &a1, &a2);
+    Lanes_Sample2D(scene, strat, sample, path, pixel, dim + 0x8000u, &b1, &b2); /* the cosine sample's */
+    float ua[CLRT_LANES], va[CLRT_LANES], ub[CLRT_LANES], vb[CLRT_LANES];
+    vstore4(a1, 0, ua); vstore4(a2, 0, va); vstore4(b1, 0, ub); vstore4(b2, 0, vb);
+    EnvMis s[CLRT_LANES];
+    for (int k = 0; k < CLRT_LANES; ++k)
+        if ((bits >> k) & 1) {
+            const RngKey key = Rng_Key(scene.seed, pixel, path[k].sample, path[k].pathId);
+            EnvMis_Begin(light, envDist, sp[k].normal.xyz, (float2)(ua[k], va[k]), (float2)(ub[k], vb[k]),
+                         EnvLight_MisWithCosine(path[k], key, l), &s[k]);
+        }
+    for (int k = 0; k < CLRT_LANES; ++k) if ((bits >> k) & 1) EnvMis_Row(&s[k]);
+    for (int k = 0; k < CLRT_LANES; ++k) if ((bits >> k) & 1) EnvMis_Column(&s[k]);
+    for (int k = 0; k < CLRT_LANES; ++k) if ((bits >> k) & 1) EnvMis_Texel(&s[k]);
+    for (int k = 0; k < CLRT_LANES; ++k) if ((bits >> k) & 1) EnvMis_Reads(light, images, texels, &s[k]);
+    for (int k = 0; k < CLRT_LANES; ++k) {
+        if (!((bits >> k) & 1)) continue;
+        float3 wiL, eL, wiB, eB;
+        EnvMis_Values(light, CLRT_ENV_MIS_COSINE_SHARE, &s[k], &wiL, &eL, &wiB, &eB);
+        sr[k] = Shadow_Make(sp[k], materials, path[k].throughput.xyz, wiL, INFINITY, eL, scene.shadowEpsilon);
+        sr2[k] = Shadow_Make(sp[k], materials, path[k].throughput.xyz, wiB, INFINITY, eB, scene.shadowEpsilon);
+    }
+}
+#endif
+
+/* Samples s0 .. s0 + n - 1 (n <= 4) of pixel `pixel` under a classic (direct-lighting) camera, in a scene whose
+ * materials make no children (lanesUnsupported): per lane render_fused's Fused_Path (the closest hit, Shade_Hit,
+ * each light's shadow rays, Fused_Shadow), except an environment light's multi-sample MIS, made in steps across
+ * the lanes (Lanes_EnvMisShadows); their radiance added to levelSum[0] in sample order. */
+inline void Lanes_Direct(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int lightSlots, int pixel, int px, int py, int s0,
+                         int n, float3* levelSum) {
+    PathState path[CLRT_LANES];
+    ShadingPoint sp[CLRT_LANES];
+    float4 sum[CLRT_LANES];
+    int sampleIdx[CLRT_LANES];
+    int shaded = 0;
+    for (int k = 0; k < CLRT_LANES; ++k) {
+        sampleIdx[k] = s0 + min(k, n - 1);
+        Ray ray;
+        Camera_GenerateAt(cam, scene, pixel, px, py, sampleIdx[k], &path[k], &ray);
+        sum[k] = (float4)(0.0f);
+        if (k >= n) continue;
+        int instance;
+        const Hit h = Ray_Closest(ray, scene, nodes, leaves, tris, spheres, planes, instances, &instance);
+        ShadeResult res;
+        Shade_Hit(scene, cam, path[k], ray, h, instance, tris, triShading, triAttributes, spheres, planes, instances,
+                  materials, textureSets, textures, images, texels, lights, envDist, lightData, &res);
+        sum[k] = res.radiance;
+        sp[k] = res.sp;
+        if (sp[k].position.w > 0.0f) shaded |= 1 << k;
+        else if (scene.numLights > 0) sum[k] += (float4)(0.0f); /* as Fused_Path */
+    }
+    const LaneU sample = as_uint4(vload4(0, sampleIdx));
+    const uint strat = Rng_Key(scene.seed, pixel, 0, path[0].pathId).strat; /* the lanes' shared path id */
+    for (int l = 0; l < scene.numLights && shaded; ++l) {
+        ShadowRay sr[CLRT_LANES], sr2[CLRT_LANES];
+        for (int k = 0; k < CLRT_LANES; ++k) /* a slot a light does not use: zero contribution, not traced */
+            sr[k] = sr2[k] = Shadow_Make(sp[0], materials, (float3)(0.0f), (float3)(0.0f, 0.0f, 1.0f), 0.0f, (float3)(0.0f), 0.0f);
+#ifdef CLRT_HAS_ENV_LIGHT
+        if (lightSlots == 2 && EnvLight_UsesMis(&lights[l]))
+            Lanes_EnvMisShadows(scene, materials, lights, images, texels, envDist, l, shaded, path, sp, pixel, strat, sample, sr, sr2);
+        else
+#endif
+            for (int k = 0; k < CLRT_LANES; ++k)
+                if ((shaded >> k) & 1)
+                    Light_ShadowRays(scene, path[k], sp[k], l, lightSlots, Rng_Key(scene.seed, pixel, path[k].sample, path[k].pathId),
+                                     materials, lights, images, texels, envDist, lightData, &sr[k], &sr2[k]);
+        for (int k = 0; k < CLRT_LANES; ++k) {
+            if (!((shaded >> k) & 1)) continue;
+            sum[k] += Fused_Shadow(sr[k], scene, nodes, leaves, tris, spheres, planes, instances);
+            if (lightSlots == 2) sum[k] += Fused_Shadow(sr2[k], scene, nodes, leaves, tris, spheres, planes, instances);
+        }
+    }
+    for (int k = 0; k < n; ++k) levelSum[0] += finiteOrZero(sum[k].xyz);
+}
+
 /* Parameters: src/shared/kernel_params.h (CLRT_KERNEL_render_lanes: render_fused's). A work-item: its
  * pixel's passes × samples samples of the launch, four at a time (the host gives a launch at least four
  * where the render has them), summed per depth in sample order, then added to the image. */
@@ -547,8 +660,14 @@ __kernel CLRT_KERNEL_VEC_HINT void render_lanes(CLRT_KERNEL_PARAMS(render_lanes)
     const int px = pixel % cam.width, py = pixel / cam.width;
     const int total = passes * samples;
     for (int s = 0; s < total; s += CLRT_LANES)
-        secondary += Lanes_Paths(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) lightSlots, pixel, px, py, firstSample + s,
-                                 min(CLRT_LANES, total - s), levels, levelSum);
+#ifdef CLRT_HAS_PATH_TRACING
+        if (scene.pathMode != 0)
+            secondary += Lanes_Paths(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) lightSlots, pixel, px, py, firstSample + s,
+                                     min(CLRT_LANES, total - s), levels, levelSum);
+        else
+#endif
+            Lanes_Direct(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) lightSlots, pixel, px, py, firstSample + s,
+                         min(CLRT_LANES, total - s), levelSum);
     for (int d = 0; d < levels; ++d) acc.xyz += levelSum[d];
     image[pixel] = acc;
     if (secondary > 0) atomic_add(&rayCounts[0], secondary);

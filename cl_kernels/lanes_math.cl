@@ -102,6 +102,7 @@ inline void Lanes_Basis(LaneV3 n, LaneV3* t, LaneV3* b) { /* makeBasis */
     *t = LaneV3_Make(1.0f + sign * n.x * n.x * a, sign * c, -sign * n.x);
     *b = LaneV3_Make(c, sign + n.y * n.y * a, -n.y);
 }
+#ifdef CLRT_HAS_PATH_TRACING
 /* Path_MisWeight for lanes. */
 inline LaneF Lanes_MisWeight(int mode, LaneF pa, LaneF pb) {
     if (mode & CLRT_PATH_MIS_MAXIMUM)
@@ -119,6 +120,7 @@ inline LaneF Lanes_EmissionWeight(int mode, LaneF bsdfPdf, LaneF lightPdf) {
                                            : (LaneF)(0.0f);
     return select(w, (LaneF)(1.0f), !(bsdfPdf > 0.0f));
 }
+#endif /* CLRT_HAS_PATH_TRACING */
 
 #endif /* CLRT_HAS_LANES */
 #endif /* CLRT_LANES_MATH_CL */

@@ -2,14 +2,15 @@
  * (Lanes_Closest), a plain world-space triangle's surface in lanes and any other hit's per lane as
  * Shade_Hit makes it (Lanes_ScalarSurface: instances, textures, bump and normal maps, spheres, planes), the
  * facing, the emission a ray sees and the material's f (Lanes_Surfaces), up to Path_ShadeHit's decisions.
- * Reads the scene's geometry, materials, textures and lights. Compiled under CLRT_HAS_LANES only. */
+ * Reads the scene's geometry, materials, textures and lights. Compiled under CLRT_HAS_LANES and
+ * CLRT_HAS_PATH_TRACING only (a classic camera's lanes use Shade_Hit: lanes.cl, Lanes_Direct). */
 #ifndef CLRT_LANES_SURFACE_CL
 #define CLRT_LANES_SURFACE_CL
 
 #include "fused.cl"
 #include "lanes_math.cl"
 
-#ifdef CLRT_HAS_LANES
+#if defined(CLRT_HAS_LANES) && defined(CLRT_HAS_PATH_TRACING) /* path-traced cameras' */
 
 /* The lanes' closest hits as Lanes_Closest gathers them: a plain world-space triangle's corners, corner
  * normals (smooth triangles) and barycentrics (triBits: the lane code makes its surface); any other hit's
@@ -257,5 +258,5 @@ inline void Lanes_Surfaces(SceneParams scene, const __global Material* materials
     if (points) Lanes_ShadingPoints(materials, points, g, lh, dirs);
 }
 
-#endif /* CLRT_HAS_LANES */
+#endif /* CLRT_HAS_LANES && CLRT_HAS_PATH_TRACING */
 #endif /* CLRT_LANES_SURFACE_CL */

@@ -209,38 +209,84 @@ inline float3 EnvLight_MisValue(float3 l, float nP, float p, float nQ, float q) 
  * *wiB, *eB) where withCosine is set, which the caller sets at a fraction cosShare of the shading points
  * (1: all; ½: every other sample of a pixel), expected counts 1 and cosShare. Then eL + eB (each times its
  * sample's Blinn-Phong term) is an unbiased estimate of what Light_Sample's E estimates. Shadow rays go
- * to infinity; a direction not drawn is n, with value 0. Both directions are found first, then the map
- * is read for both (the two bilinear lookups and the cosine direction's pdf): the reads miss the cache
- * (an 8 MB map, random directions), and issued together their misses overlap (README "Where the time
- * goes"). */
+ * to infinity; a direction not drawn is n, with value 0.
+ * In steps, each a few dependent loads or a short chain of arithmetic, over an EnvMis state: both
+ * directions first (EnvMis_Begin: the cosine direction and its map coordinates; EnvMis_Row, EnvMis_Column,
+ * EnvMis_Texel: the importance sample), then the reads of the map for both (EnvMis_Reads: the two bilinear
+ * lookups and the cosine direction's pdf), which miss the cache (an 8 MB map, random directions) and,
+ * issued together, overlap; then the values (EnvMis_Values). EnvLight_SampleMis runs the steps in turn;
+ * the lanes (lanes.cl, Lanes_EnvMisShadows) run each step for four shading points before the next, so that
+ * four points' chains of loads overlap. */
+typedef struct {
+    EnvLightDist d;
+    EnvCosCell cell;
+    float3 n, wL, wB, lL, lB; /* map space */
+    float2 uLight, uvL, uvB;
+    float pL, pB;
+    int okL, withCosine;
+} EnvMis;
+
+inline void EnvMis_Begin(const __global Light* light, const __global float* envDist, float3 nWorld, float2 uLight,
+                         float2 uBsdf, int withCosine, EnvMis* s) {
+    s->n = EnvLight_ToMap(light, nWorld); /* everything below in map space */
+    s->d = EnvLight_Distribution(light, envDist, s->n);
+    s->uLight = uLight;
+    s->withCosine = withCosine;
+    s->wL = s->wB = s->n;
+    s->lL = s->lB = (float3)(0.0f);
+    s->uvL = s->uvB = (float2)(0.0f);
+    s->pL = s->pB = 0.0f; /* pB: the map's pdf of the cosine direction */
+    s->okL = 0;
+    if (withCosine) {
+        s->wB = EnvSample_Cosine(s->n, (float2)(fmin(uBsdf.x, CLRT_ONE_MINUS_EPS), uBsdf.y));
+        s->uvB = EnvMap_DirToUv(light->mapping, s->wB);
+    }
+}
+
+inline void EnvMis_Row(EnvMis* s) {
+    if (s->d.bucket >= 0) EnvCos_PickRow(s->d.tab, s->d.bucket, s->uLight.y, &s->cell);
+}
+
+inline void EnvMis_Column(EnvMis* s) {
+    if (s->d.bucket >= 0) EnvCos_PickColumn(s->d.tab, s->d.bucket, s->uLight.x, &s->cell);
+}
+
+inline void EnvMis_Texel(EnvMis* s) {
+    const float u1 = s->uLight.x, u2 = s->uLight.y;
+    s->okL = s->d.bucket < 0 ? EnvDist_SampleUv(s->d.own, u1, u2, &s->wL, &s->pL, &s->uvL)
+                             : EnvCos_SampleCell(s->d.own, s->d.tab, s->cell, u1, u2, &s->wL, &s->pL, &s->uvL);
+}
+
+inline void EnvMis_Reads(const __global Light* light, const __global ImageInfo* images, const __global float4* texels,
+                         EnvMis* s) {
+    const ImageInfo img = images[light->image];
+    if (s->okL) s->lL = EnvMap_Lookup(texels, img, light->mapping, s->uvL.x, s->uvL.y) * light->radiance.xyz;
+    else s->wL = s->n;
+    if (s->withCosine) {
+        s->lB = EnvMap_Lookup(texels, img, light->mapping, s->uvB.x, s->uvB.y) * light->radiance.xyz;
+        s->pB = EnvLightDist_PdfUv(s->d, s->uvB);
+    }
+}
+
+inline void EnvMis_Values(const __global Light* light, float cosShare, const EnvMis* s, float3* wiL, float3* eL,
+                          float3* wiB, float3* eB) {
+    *wiL = EnvLight_ToWorld(light, s->wL);
+    *wiB = EnvLight_ToWorld(light, s->wB);
+    *eL = s->okL ? EnvLight_MisValue(s->lL, 1.0f, s->pL, cosShare, fmax(dot(s->wL, s->n), 0.0f) * CLRT_INV_PI) : (float3)(0.0f);
+    *eB = s->withCosine ? EnvLight_MisValue(s->lB, cosShare, fmax(dot(s->wB, s->n), 0.0f) * CLRT_INV_PI, 1.0f, s->pB)
+                        : (float3)(0.0f);
+}
+
 inline void EnvLight_SampleMis(const __global Light* light, float3 nWorld, float2 uLight, float2 uBsdf, float cosShare,
                                int withCosine, const __global ImageInfo* images, const __global float4* texels,
                                const __global float* envDist, float3* wiL, float3* eL, float3* wiB, float3* eB) {
-    const float3 n = EnvLight_ToMap(light, nWorld); /* everything below in map space */
-    const EnvLightDist d = EnvLight_Distribution(light, envDist, n);
-    const ImageInfo img = images[light->image];
-    const int mapping = light->mapping;
-    float3 wL = n, wB = n, lL = (float3)(0.0f), lB = (float3)(0.0f);
-    float pB = 0.0f; /* the map's pdf of the cosine direction */
-    /* Both directions first, then the three table reads that miss the cache (two texel footprints, the
-     * cosine direction's pdf) side by side, so that the core waits for them together, not in turn. */
-    float2 uvL = (float2)(0.0f), uvB = (float2)(0.0f);
-    float pL = 0.0f;
-    const int okL = EnvLightDist_SampleUv(d, uLight.x, uLight.y, &wL, &pL, &uvL);
-    if (withCosine) {
-        wB = EnvSample_Cosine(n, (float2)(fmin(uBsdf.x, CLRT_ONE_MINUS_EPS), uBsdf.y));
-        uvB = EnvMap_DirToUv(mapping, wB);
-    }
-    if (okL) lL = EnvMap_Lookup(texels, img, mapping, uvL.x, uvL.y) * light->radiance.xyz;
-    else wL = n;
-    if (withCosine) {
-        lB = EnvMap_Lookup(texels, img, mapping, uvB.x, uvB.y) * light->radiance.xyz;
-        pB = EnvLightDist_PdfUv(d, uvB);
-    }
-    *wiL = EnvLight_ToWorld(light, wL);
-    *wiB = EnvLight_ToWorld(light, wB);
-    *eL = okL ? EnvLight_MisValue(lL, 1.0f, pL, cosShare, fmax(dot(wL, n), 0.0f) * CLRT_INV_PI) : (float3)(0.0f);
-    *eB = withCosine ? EnvLight_MisValue(lB, cosShare, fmax(dot(wB, n), 0.0f) * CLRT_INV_PI, 1.0f, pB) : (float3)(0.0f);
+    EnvMis s;
+    EnvMis_Begin(light, envDist, nWorld, uLight, uBsdf, withCosine, &s);
+    EnvMis_Row(&s);
+    EnvMis_Column(&s);
+    EnvMis_Texel(&s);
+    EnvMis_Reads(light, images, texels, &s);
+    EnvMis_Values(light, cosShare, &s, wiL, eL, wiB, eB);
 }
 
 /* The dispatcher. p: the shading point, n: its shading normal (env strategies), u: two uniform

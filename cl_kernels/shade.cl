@@ -615,6 +615,12 @@ inline ShadowRay Shadow_Make(ShadingPoint sp, const __global Material* materials
 #define CLRT_ENV_MIS_COSINE_SHARE 1.0f
 #endif
 
+/* Whether light l's multi-sample MIS takes its cosine sample at path's shading point: with a share of ½, at
+ * every other sample of a pixel (parity offset per pixel and light), stratified; with 1 (the default): always. */
+inline int EnvLight_MisWithCosine(PathState path, RngKey key, int l) {
+    return CLRT_ENV_MIS_COSINE_SHARE >= 1.0f || ((path.sample + (int)(Rng_Uniform(key, 0x7ff0u + (uint)l) < 0.5f)) & 1) == 0;
+}
+
 /* The shadow rays of light l for a path at shading point sp (sp.position.w > 0): *sr, and under
  * multi-sample MIS of an environment light (lightSlots 2) the cosine sample's *sr2; a slot a light
  * does not use keeps `none` (zero contribution: not traced). */
@@ -631,13 +637,9 @@ inline void Light_ShadowRays(SceneParams scene, PathState path, ShadingPoint sp,
     if (lightSlots == 2 && EnvLight_UsesMis(&lights[l])) {
         /* the cosine sample's uniforms: the same dimensions, offset by 2^15 */
         float2 u2 = Sampler_2D(scene, path, key, dim + 0x8000u);
-        /* With a share of ½: the cosine sample at every other sample of a pixel (parity offset per
-         * pixel and light), stratified; with 1 (the default): always. */
-        int withCos = CLRT_ENV_MIS_COSINE_SHARE >= 1.0f ||
-                      ((path.sample + (int)(Rng_Uniform(key, 0x7ff0u + (uint)l) < 0.5f)) & 1) == 0;
         float3 wiB, eL, eB;
-        EnvLight_SampleMis(&lights[l], sp.normal.xyz, u, u2, CLRT_ENV_MIS_COSINE_SHARE, withCos, images, texels,
-                           envDist, &wi, &eL, &wiB, &eB);
+        EnvLight_SampleMis(&lights[l], sp.normal.xyz, u, u2, CLRT_ENV_MIS_COSINE_SHARE, EnvLight_MisWithCosine(path, key, l),
+                           images, texels, envDist, &wi, &eL, &wiB, &eB);
         *sr = Shadow_Make(sp, materials, path.throughput.xyz, wi, INFINITY, eL, scene.shadowEpsilon);
         *sr2 = Shadow_Make(sp, materials, path.throughput.xyz, wiB, INFINITY, eB, scene.shadowEpsilon);
     } else

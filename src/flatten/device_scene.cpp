@@ -44,7 +44,10 @@ std::vector<std::string> FeatureSet::defines() const {
 
 std::string lanesFamily(const DeviceScene& ds) {
     const FeatureSet& f = ds.features;
-    if (!f.pathTracing) return "no path-traced camera";
+    // A classic camera gains from the lanes only through an environment light's multi-sample MIS in steps
+    // (Lanes_EnvMisShadows), and they take it only where no material makes children (Lanes_Direct).
+    if (!f.pathTracing && !f.has(dev::LIGHT_ENVIRONMENT)) return "no path-traced camera, no environment light";
+    if (!f.pathTracing && f.bounces()) return "no path-traced camera; classic cameras with reflections or refractions";
     if (f.mipMaps) return "mip-mapped textures";
     if (f.motionBlur) return "motion blur";
     return "";
@@ -66,7 +69,8 @@ static bool someSurface(const DeviceScene& ds, Pred pred) {
     return false;
 }
 
-std::string lanesNoGain(const DeviceScene& ds) {
+std::string lanesNoGain(const DeviceScene& ds, bool classic, bool envMis) {
+    if (classic) return envMis ? "" : "classic camera without an environment light sampled by MIS (the rest is per lane: no faster than render_fused)";
     // A surface the lanes shade in lanes: untextured, a diffuse part (kd > 0) whose f is direction-free
     // (CLRT_BRDF_LAMBERTIAN). A light's black surface has nothing to shade.
     auto inLanes = [&](int material, int textureSet) {

@@ -109,15 +109,17 @@ std::vector<dev::float4> imageTexels(const DeviceScene& ds, int image);
 
 // Camera frame and image plane for the kernels, and numSamples.
 // Whether a flattened scene is of the lanes kernel's family (cl_kernels/lanes.cl, render_lanes): a
-// path-traced camera; no motion blur or mip-maps (every light, material, BRDF, texture and instance is
-// in). "" when it is, else the first reason it is not.
+// path-traced camera, or classic cameras with an environment light and no material that makes children
+// (mirror, conductor, dielectric); no motion blur or mip-maps (every light, material, BRDF, texture and
+// instance is in). "" when it is, else the first reason it is not.
 std::string lanesFamily(const DeviceScene& ds);
 
-// Why `--pipeline auto` leaves a scene of the lanes' family to render_fused ("" when it takes the lanes): no
-// surface is shaded in lanes (no untextured Lambertian one with kd > 0; glossy and textured ones are shaded
-// per lane, where the lanes took 1.02-1.04x render_fused's time on the course's glossy boxes;
-// docs/architecture.md "Paths in lanes").
-std::string lanesNoGain(const DeviceScene& ds);
+// Why `--pipeline auto` leaves a camera of the lanes' family to render_fused ("" when it takes the lanes): a
+// path-traced one when no surface is shaded in lanes (no untextured Lambertian one with kd > 0; glossy and
+// textured ones are shaded per lane, where the lanes took 1.02-1.04x render_fused's time on the course's
+// glossy boxes; docs/architecture.md "Paths in lanes"); a classic one (classic) when no environment light
+// is sampled by multi-sample MIS (envMis: the render's two shadow-ray slots), the one step it takes in lanes.
+std::string lanesNoGain(const DeviceScene& ds, bool classic = false, bool envMis = false);
 // What a path's throughput gains, in expectation, at a bounce off material m, from its untextured diffuse
 // part and its specular child: π·kd for classic materials and the BRDFs that take kd without 1/π (the
 // course's un-normalized models), kd for the normalized ones and TorranceSparrow; plus the mirror

@@ -544,7 +544,8 @@ void Renderer::renderTiles(const Camera& cam, const RenderSettings& settings, Re
     if (pipeline == Pipeline::Lanes || (pipeline == Pipeline::Fused && settings.pipeline == Pipeline::Auto)) {
         notLanes = lanesUnsupported(sp, fusedPlan, m.fused.lanesKernel() ? "" : lanesFamilyOrBuild(m.ds),
                                     (m.dc.info().type & CL_DEVICE_TYPE_CPU) != 0);
-        if (notLanes.empty() && settings.pipeline == Pipeline::Auto) notLanes = lanesNoGain(m.ds);
+        if (notLanes.empty() && settings.pipeline == Pipeline::Auto)
+            notLanes = lanesNoGain(m.ds, sp.pathMode == 0, plan.lightSlots == 2);
         pipeline = notLanes.empty() ? Pipeline::Lanes : Pipeline::Fused;
     }
     const std::string notFused = pipeline == Pipeline::Fused ? fusedUnsupported(sp, fusedPlan) : "";
