@@ -67,12 +67,18 @@ inline float3 Env_HalfRgb(uint2 bits) {
 }
 
 /* Bilinear, texel centres at ((i+0.5)/W, (j+0.5)/H); lat-long wraps in u, rows and probe columns clamp.
- * Texels float4 or half4 (img.format): a half converts to its float exactly, so the result is the same. */
-inline float3 EnvMap_Lookup(const __global float4* texels, ImageInfo img, int mapping, float u, float v) {
+ * In two halves: the four texels' indices and the weights (EnvMap_Footprint: arithmetic only), then their
+ * loads and the blend (EnvMap_Blend), so that callers with several lookups to make (the lanes) can find
+ * every footprint before the first load. */
+typedef struct {
+    int i00, i10, i01, i11; /* texel indices in the image: (x0, y0), (x1, y0), (x0, y1), (x1, y1) */
+    float dx, dy;
+} EnvTexels;
+
+inline EnvTexels EnvMap_Footprint(ImageInfo img, int mapping, float u, float v) {
     int w = img.width, h = img.height;
     float px = u * (float)w - 0.5f, py = v * (float)h - 0.5f;
     float fx = floor(px), fy = floor(py);
-    float dx = px - fx, dy = py - fy;
     int x0 = (int)fx, y0 = (int)fy, x1 = x0 + 1, y1 = y0 + 1;
     if (mapping == ENV_LATLONG) {
         if (x0 >= -1 && x0 < w) { /* u in [0, 1]: one wrap step; the integer division (%) was a long stall on the address */
@@ -86,23 +92,37 @@ inline float3 EnvMap_Lookup(const __global float4* texels, ImageInfo img, int ma
         x0 = clamp(x0, 0, w - 1); x1 = clamp(x1, 0, w - 1);
     }
     y0 = clamp(y0, 0, h - 1); y1 = clamp(y1, 0, h - 1);
+    EnvTexels f;
+    f.i00 = y0 * w + x0; f.i10 = y0 * w + x1; f.i01 = y1 * w + x0; f.i11 = y1 * w + x1;
+    f.dx = px - fx;
+    f.dy = py - fy;
+    return f;
+}
+
+/* Texels float4 or half4 (img.format): a half converts to its float exactly, so the result is the same. */
+inline float3 EnvMap_Blend(const __global float4* texels, ImageInfo img, EnvTexels f) {
     const __global float4* t = texels + img.offset;
     float3 c00, c10, c01, c11;
     if (img.format == TEXELS_HALF4) { /* the same values in half the bytes: fewer cache misses */
 #ifdef __NVPTX__
         const __global uint2* th = (const __global uint2*)t;
-        c00 = Env_HalfRgb(th[y0 * w + x0]); c10 = Env_HalfRgb(th[y0 * w + x1]);
-        c01 = Env_HalfRgb(th[y1 * w + x0]); c11 = Env_HalfRgb(th[y1 * w + x1]);
+        c00 = Env_HalfRgb(th[f.i00]); c10 = Env_HalfRgb(th[f.i10]);
+        c01 = Env_HalfRgb(th[f.i01]); c11 = Env_HalfRgb(th[f.i11]);
 #else
         const __global half* th = (const __global half*)t;
-        c00 = vload_half4(y0 * w + x0, th).xyz; c10 = vload_half4(y0 * w + x1, th).xyz;
-        c01 = vload_half4(y1 * w + x0, th).xyz; c11 = vload_half4(y1 * w + x1, th).xyz;
+        c00 = vload_half4(f.i00, th).xyz; c10 = vload_half4(f.i10, th).xyz;
+        c01 = vload_half4(f.i01, th).xyz; c11 = vload_half4(f.i11, th).xyz;
 #endif
     } else {
-        c00 = t[y0 * w + x0].xyz; c10 = t[y0 * w + x1].xyz;
-        c01 = t[y1 * w + x0].xyz; c11 = t[y1 * w + x1].xyz;
+        c00 = t[f.i00].xyz; c10 = t[f.i10].xyz;
+        c01 = t[f.i01].xyz; c11 = t[f.i11].xyz;
     }
+    const float dx = f.dx, dy = f.dy;
     return c00 * ((1.0f - dx) * (1.0f - dy)) + c10 * (dx * (1.0f - dy)) + c01 * ((1.0f - dx) * dy) + c11 * (dx * dy);
+}
+
+inline float3 EnvMap_Lookup(const __global float4* texels, ImageInfo img, int mapping, float u, float v) {
+    return EnvMap_Blend(texels, img, EnvMap_Footprint(img, mapping, u, v));
 }
 
 /* Radiance of the map in direction d (unit), times `scale`. */

@@ -583,6 +583,7 @@ inline void Lanes_EnvMisShadows(SceneParams scene, const __global Material* mate
     for (int k = 0; k < CLRT_LANES; ++k) if ((bits >> k) & 1) EnvMis_Row(&s[k]);
     for (int k = 0; k < CLRT_LANES; ++k) if ((bits >> k) & 1) EnvMis_Column(&s[k]);
     for (int k = 0; k < CLRT_LANES; ++k) if ((bits >> k) & 1) EnvMis_Texel(&s[k]);
+    for (int k = 0; k < CLRT_LANES; ++k) if ((bits >> k) & 1) EnvMis_Footprints(light, images, &s[k]);
     for (int k = 0; k < CLRT_LANES; ++k) if ((bits >> k) & 1) EnvMis_Reads(light, images, texels, &s[k]);
     for (int k = 0; k < CLRT_LANES; ++k) {
         if (!((bits >> k) & 1)) continue;

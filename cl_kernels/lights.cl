@@ -212,14 +212,15 @@ inline float3 EnvLight_MisValue(float3 l, float nP, float p, float nQ, float q) 
  * to infinity; a direction not drawn is n, with value 0.
  * In steps, each a few dependent loads or a short chain of arithmetic, over an EnvMis state: both
  * directions first (EnvMis_Begin: the cosine direction and its map coordinates; EnvMis_Row, EnvMis_Column,
- * EnvMis_Texel: the importance sample), then the reads of the map for both (EnvMis_Reads: the two bilinear
- * lookups and the cosine direction's pdf), which miss the cache (an 8 MB map, random directions) and,
+ * EnvMis_Texel: the importance sample), then the reads of the map for both (EnvMis_Footprints: the two bilinear
+ * lookups' texels; EnvMis_Reads: their loads and the cosine direction's pdf), which miss the cache (an 8 MB map, random directions) and,
  * issued together, overlap; then the values (EnvMis_Values). EnvLight_SampleMis runs the steps in turn;
  * the lanes (lanes.cl, Lanes_EnvMisShadows) run each step for four shading points before the next, so that
  * four points' chains of loads overlap. */
 typedef struct {
     EnvLightDist d;
     EnvCosCell cell;
+    EnvTexels fL, fB; /* the two lookups' texels */
     float3 n, wL, wB, lL, lB; /* map space */
     float2 uLight, uvL, uvB;
     float pL, pB;
@@ -237,6 +238,9 @@ inline void EnvMis_Begin(const __global Light* light, const __global float* envD
     s->uvL = s->uvB = (float2)(0.0f);
     s->pL = s->pB = 0.0f; /* pB: the map's pdf of the cosine direction */
     s->okL = 0;
+    s->fL.i00 = s->fL.i10 = s->fL.i01 = s->fL.i11 = 0;
+    s->fL.dx = s->fL.dy = 0.0f;
+    s->fB = s->fL;
     if (withCosine) {
         s->wB = EnvSample_Cosine(s->n, (float2)(fmin(uBsdf.x, CLRT_ONE_MINUS_EPS), uBsdf.y));
         s->uvB = EnvMap_DirToUv(light->mapping, s->wB);
@@ -257,13 +261,19 @@ inline void EnvMis_Texel(EnvMis* s) {
                              : EnvCos_SampleCell(s->d.own, s->d.tab, s->cell, u1, u2, &s->wL, &s->pL, &s->uvL);
 }
 
+inline void EnvMis_Footprints(const __global Light* light, const __global ImageInfo* images, EnvMis* s) {
+    const ImageInfo img = images[light->image];
+    if (s->okL) s->fL = EnvMap_Footprint(img, light->mapping, s->uvL.x, s->uvL.y);
+    if (s->withCosine) s->fB = EnvMap_Footprint(img, light->mapping, s->uvB.x, s->uvB.y);
+}
+
 inline void EnvMis_Reads(const __global Light* light, const __global ImageInfo* images, const __global float4* texels,
                          EnvMis* s) {
     const ImageInfo img = images[light->image];
-    if (s->okL) s->lL = EnvMap_Lookup(texels, img, light->mapping, s->uvL.x, s->uvL.y) * light->radiance.xyz;
+    if (s->okL) s->lL = EnvMap_Blend(texels, img, s->fL) * light->radiance.xyz;
     else s->wL = s->n;
     if (s->withCosine) {
-        s->lB = EnvMap_Lookup(texels, img, light->mapping, s->uvB.x, s->uvB.y) * light->radiance.xyz;
+        s->lB = EnvMap_Blend(texels, img, s->fB) * light->radiance.xyz;
         s->pB = EnvLightDist_PdfUv(s->d, s->uvB);
     }
 }
@@ -285,6 +295,7 @@ inline void EnvLight_SampleMis(const __global Light* light, float3 nWorld, float
     EnvMis_Row(&s);
     EnvMis_Column(&s);
     EnvMis_Texel(&s);
+    EnvMis_Footprints(light, images, &s);
     EnvMis_Reads(light, images, texels, &s);
     EnvMis_Values(light, cosShare, &s, wiL, eL, wiB, eB);
 }
