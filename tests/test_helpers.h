@@ -165,13 +165,14 @@ struct Rendered {
 // Renders `cam` at w x h, `spp` samples, `seed`, through pipeline `p` with the Renderer r
 // (maxBatchPixels > 0: RenderSettings::maxBatchPixels, small batches).
 inline Rendered renderWith(Renderer& r, Camera cam, int w, int h, int spp, uint32_t seed, Pipeline p,
-                           size_t maxBatchPixels = 0) {
+                           size_t maxBatchPixels = 0, PixelSampler sampler = PixelSampler::Stratified) {
     cam.width = w;
     cam.height = h;
     RenderSettings rs;
     rs.spp = spp;
     rs.seed = seed;
     rs.pipeline = p;
+    rs.pixelSampler = sampler;
     if (maxBatchPixels > 0) rs.maxBatchPixels = maxBatchPixels;
     Rendered out;
     out.image = r.render(cam, rs, out.counters);

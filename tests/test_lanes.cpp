@@ -4,7 +4,7 @@
 // point light), each also under MIS with the power and the balance heuristic, against render_fused's
 // image: the difference under 1e-5 of the noise between two seeds (PoCL: ~1e-13 of it), the same ray
 // counts; specular children (a mirror beside a diffuse part, glass; the classic Cornell box with a point
-// light only). Also: which scenes and cameras it takes (lanesFamily, lanesUnsupported, auto), determinism,
+// light only); classic cameras with an environment light (its MIS in steps across the lanes). Also: which scenes and cameras it takes (lanesFamily, lanesUnsupported, auto), determinism,
 // sample counts that are no multiple of four, launches of several passes, the fallback to render_fused.
 #include <catch.hpp>
 
@@ -72,15 +72,16 @@ void mirrorFirstSphere(Scene& scene, float r) {
     }
 }
 
-// Renders cam (size × size, 8 spp) with the lanes and with render_fused at seed 3, and render_fused at
+// Renders cam (size × size, 8 spp, the sampler given) with the lanes and with render_fused at seed 3, and render_fused at
 // seed 4 for the noise between seeds; checks that the lanes computed render_fused's image up to rounding
 // (relMSE under 1e-5 of that noise, which must exceed minNoise, and under maxDiff) with the same rays. Where
 // a path took another branch (relMseUnbranched: at most 1 pixel in 2000, or 2; PoCL 1 of 1600 on the glossy
 // area-sphere box) the rest holds the rounding bound.
-void checkLanesAsFused(Renderer& r, const Camera& cam, int size, double minNoise, double maxDiff = 1e30) {
-    Rendered l = renderWith(r, cam, size, size, 8, 3, Pipeline::Lanes);
-    Rendered f = renderWith(r, cam, size, size, 8, 3, Pipeline::Fused);
-    Rendered f2 = renderWith(r, cam, size, size, 8, 4, Pipeline::Fused);
+void checkLanesAsFused(Renderer& r, const Camera& cam, int size, double minNoise, double maxDiff = 1e30,
+                       PixelSampler sampler = PixelSampler::Stratified) {
+    Rendered l = renderWith(r, cam, size, size, 8, 3, Pipeline::Lanes, 0, sampler);
+    Rendered f = renderWith(r, cam, size, size, 8, 3, Pipeline::Fused, 0, sampler);
+    Rendered f2 = renderWith(r, cam, size, size, 8, 4, Pipeline::Fused, 0, sampler);
     CHECK(l.counters.lanes);
     CHECK_FALSE(f.counters.lanes);
     int branched = 0;
@@ -279,6 +280,36 @@ TEST_CASE("lanes: lights without a lane form (sphere, area, directional, environ
     CHECK(compared == 10);
 }
 
+TEST_CASE("lanes: classic cameras with an environment light as render_fused (its MIS in steps across the lanes)", "[lanes][shared]") {
+    if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
+    // Shade_Hit, the shadow rays and every other light per lane; an environment light's multi-sample MIS
+    // (two slots) in steps across the lanes (Lanes_EnvMisShadows), with one slot (importance) per lane.
+    // A sphere under a lat-long map and a smooth-shaded mesh under a light probe; every sampler (the
+    // correlated one draws a classic camera's light samples from its camera sample: Lanes_Light2D).
+    int compared = 0;
+    for (const char* f : {"hw5/sphere_env_light_courtyard.xml", "hw5/head_env_light_courtyard_probe.xml"}) {
+        for (dev::EnvStrategy strategy : {dev::ENV_STRATEGY_MIS, dev::ENV_STRATEGY_IMPORTANCE}) {
+            Scene scene = loadScene(sharedDir() + "/scenes/" + f);
+            for (Light& l : scene.lights) l.envStrategy = strategy;
+            for (PixelSampler sampler : {PixelSampler::Stratified, PixelSampler::ZSobol, PixelSampler::Independent,
+                                         PixelSampler::Correlated}) {
+                if (sampler != PixelSampler::Stratified && strategy != dev::ENV_STRATEGY_MIS) continue;
+                DeviceScene ds = flattenScene(scene);
+                ds.features.zsobol = sampler == PixelSampler::ZSobol;  // as clrt render --sampler builds it
+                ds.features.correlatedSampler = sampler == PixelSampler::Correlated;
+                INFO(f << ", strategy " << strategy << ", sampler " << int(sampler) << ": " << lanesFamily(ds));
+                REQUIRE(lanesFamily(ds).empty());
+                Renderer r(testContext(), ds);
+                Camera cam = scene.cameras.at(0);
+                REQUIRE(cam.pathMode == 0);
+                checkLanesAsFused(r, cam, 40, 1e-5, 1e-6, sampler);
+                ++compared;
+            }
+        }
+    }
+    CHECK(compared == 10);
+}
+
 TEST_CASE("lanes: textures, bump and normal maps, device instances per lane as render_fused", "[lanes][shared]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
     // A textured, bump-mapped, normal-mapped or instanced hit gets Shade_Hit's surface per lane
@@ -403,16 +434,31 @@ TEST_CASE("lanes: deterministic, several launches and sample counts that are no 
 
 TEST_CASE("lanes: which scenes and cameras it takes; auto takes it on CPU devices", "[lanes][shared]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
-    // Out of its family: motion blur, no path tracing.
-    for (const char* f : {kPathBox, "hw5/cube_point.xml"}) {
+    // Out of its family: motion blur; classic cameras alone without an environment light, or with one in a
+    // scene whose materials make children (a mirror).
+    for (const char* f : {kPathBox, "hw5/cube_point.xml", "hw5/sphere_env_light_courtyard.xml"}) {
         INFO(f);
         Scene scene = loadScene(sharedDir() + "/scenes/" + f);
-        for (Camera& c : scene.cameras) c.pathMode = CLRT_PATH_ON | CLRT_PATH_MIS;
-        if (std::string(f) == "hw5/cube_point.xml") scene.cameras.at(0).pathMode = 0;
-        else scene.shapes.at(0).motion = {0.1f, 0.0f, 0.0f};
+        if (std::string(f) == kPathBox) scene.shapes.at(0).motion = {0.1f, 0.0f, 0.0f};
+        else for (Camera& c : scene.cameras) c.pathMode = 0;
+        if (std::string(f) == "hw5/sphere_env_light_courtyard.xml") mirrorFirstSphere(scene, 0.6f);
         DeviceScene ds = flattenScene(scene);
+        INFO(lanesFamily(ds));
         CHECK_FALSE(lanesFamily(ds).empty());
         CHECK_FALSE(ds.features.lanes);
+    }
+    // A classic camera with an environment light: auto takes the lanes under its MIS (two slots), not under
+    // importance sampling (one slot: nothing in lanes).
+    for (dev::EnvStrategy strategy : {dev::ENV_STRATEGY_MIS, dev::ENV_STRATEGY_IMPORTANCE}) {
+        Scene env = loadScene(sharedDir() + "/scenes/hw5/sphere_env_light_courtyard.xml");
+        for (Light& l : env.lights) l.envStrategy = strategy;
+        DeviceScene ds = flattenScene(env);
+        REQUIRE(lanesFamily(ds).empty());
+        CHECK(lanesNoGain(ds, true, true).empty());
+        CHECK_FALSE(lanesNoGain(ds, true, false).empty());
+        Renderer r(testContext(), ds);
+        Rendered a = renderWith(r, env.cameras.at(0), 40, 40, 4, 1, Pipeline::Auto);
+        CHECK(a.counters.lanes == (strategy == dev::ENV_STRATEGY_MIS && (testDevice().type & CL_DEVICE_TYPE_CPU) != 0));
     }
     Scene scene = loadScene(sharedDir() + "/scenes/" + kPathBox);
     DeviceScene ds = flattenScene(scene);
@@ -436,9 +482,13 @@ TEST_CASE("lanes: which scenes and cameras it takes; auto takes it on CPU device
     dev::SceneParams indep = sp;  // test "lanes: the zsobol, independent and correlated samplers"
     indep.pixelSampler = CLRT_PIXEL_SAMPLER_INDEPENDENT;
     CHECK(lanesUnsupported(indep, plan, "", true).empty());
-    dev::SceneParams classic = sp;
+    dev::SceneParams classic = sp;  // a classic camera: only where no material makes children
     classic.pathMode = 0;
-    CHECK_FALSE(lanesUnsupported(classic, plan, "", true).empty());
+    CHECK(lanesUnsupported(classic, plan, "", true).empty());
+    FusedPlan bounces = plan;
+    bounces.bounces = true;
+    CHECK_FALSE(lanesUnsupported(classic, bounces, "", true).empty());
+    CHECK(lanesUnsupported(sp, bounces, "", true).empty());
     FusedPlan tree = plan;
     tree.tree = true;
     CHECK_FALSE(lanesUnsupported(sp, tree, "", true).empty());
