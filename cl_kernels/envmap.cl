@@ -277,8 +277,8 @@ inline int EnvCos_CellOf(int t, int texels, int cells) { return (int)(((long)(t 
 /* A sample of bucket b in three steps, each a few dependent loads (the lanes run each step for four
  * shading points in turn, so that their loads overlap: lights.cl EnvMis_*, lanes.cl): the cell's row J by
  * the bucket's marginal CDF (EnvCos_PickRow), its column I by the row's CDF (EnvCos_PickColumn), then a
- * texel of the cell by its share and the point within the texel as the map's distribution `own` places it
- * (EnvCos_SampleCell). du, dv: the uniforms' remainders within the cell; p: the cell's probability. */
+ * texel of the cell by its share (EnvCos_PickTexel); the point within the texel is placed as the map's
+ * distribution `own` places it (EnvDist_CellSample). du, dv: the uniforms' remainders within the cell; p: the cell's probability. */
 typedef struct {
     int I, J;
     float du, dv, p;
@@ -300,25 +300,31 @@ inline void EnvCos_PickColumn(const __global float* tab, int b, float u1, EnvCos
     c->p *= cond[c->I + 1] - cond[c->I];
 }
 
-inline int EnvCos_SampleCell(const __global float* own, const __global float* tab, EnvCosCell c, float u1, float u2,
-                             float3* dir, float* pdf, float2* uvOut) {
+/* The texel of cell c (the map's own cell (I, J) = the texel, du its column remainder, p its probability). */
+inline EnvCosCell EnvCos_PickTexel(const __global float* own, const __global float* tab, EnvCosCell c) {
     const int W = (int)own[0], H = (int)own[1], Wc = (int)tab[1], Hc = (int)tab[2];
     const int x0 = EnvCos_CellStart(c.I, W, Wc), y0 = EnvCos_CellStart(c.J, H, Hc), y1 = EnvCos_CellStart(c.J + 1, H, Hc);
     const int w = EnvCos_CellStart(c.I + 1, W, Wc) - x0, n = w * (y1 - y0);
     const __global float* fine = tab + (int)tab[4] + y0 * W + x0 * (y1 - y0);
     const int k = EnvDist_FindInterval(fine, n, c.du);
     const float share = (k + 1 < n ? fine[k + 1] : 1.0f) - fine[k];
-    const float dt = fmin((c.du - fine[k]) / share, CLRT_ONE_MINUS_EPS);
-    return EnvDist_CellSample(own, x0 + k % w, y0 + k / w, dt, c.dv, c.p * share, u1, u2, dir, pdf, uvOut);
+    EnvCosCell t;
+    t.I = x0 + k % w;
+    t.J = y0 + k / w;
+    t.du = fmin((c.du - fine[k]) / share, CLRT_ONE_MINUS_EPS);
+    t.dv = c.dv;
+    t.p = c.p * share;
+    return t;
 }
 
-/* Sample of bucket b (the three steps above); returns 0 where none. */
+/* Sample of bucket b (the three steps above, then EnvDist_CellSample in the texel); returns 0 where none. */
 inline int EnvCos_SampleUv(const __global float* own, const __global float* tab, int b, float u1, float u2, float3* dir,
                            float* pdf, float2* uvOut) {
     EnvCosCell c;
     EnvCos_PickRow(tab, b, u2, &c);
     EnvCos_PickColumn(tab, b, u1, &c);
-    return EnvCos_SampleCell(own, tab, c, u1, u2, dir, pdf, uvOut);
+    const EnvCosCell t = EnvCos_PickTexel(own, tab, c);
+    return EnvDist_CellSample(own, t.I, t.J, t.du, t.dv, t.p, u1, u2, dir, pdf, uvOut);
 }
 
 /* pdf over solid angle of bucket b at map coordinates uv. */

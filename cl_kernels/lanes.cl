@@ -558,6 +558,46 @@ inline void Lanes_Light2D(SceneParams scene, uint strat, LaneU sample, const Pat
 }
 
 #ifdef CLRT_HAS_ENV_LIGHT
+/* EnvMis_Point of the lanes in `bits` under a lat-long map, in lanes: for those whose bucket drew a texel, the
+ * point within it (EnvDist_CellSample's lat-long branch: u uniform, cos θ uniform between the row's bounds). */
+inline void Lanes_EnvLatLongPoints(EnvMis* s, int bits) {
+    float zTop[CLRT_LANES], zBottom[CLRT_LANES], x[CLRT_LANES], dv[CLRT_LANES], p[CLRT_LANES];
+    int cells = 0, W = 1;
+    for (int k = 0; k < CLRT_LANES; ++k) {
+        zTop[k] = 1.0f; zBottom[k] = x[k] = dv[k] = p[k] = 0.0f;
+        if (!((bits >> k) & 1) || s[k].d.bucket < 0) continue;
+        const __global float* own = s[k].d.own;
+        W = (int)own[0];
+        const int H = (int)own[1];
+        const __global float* zr = own + 4 + H + 1 + H * (W + 1) + W * H;
+        zTop[k] = zr[s[k].cell.J];
+        zBottom[k] = zr[s[k].cell.J + 1];
+        x[k] = (float)s[k].cell.I + s[k].cell.du;
+        dv[k] = s[k].cell.dv;
+        p[k] = s[k].cell.p;
+        cells |= 1 << k;
+    }
+    if (!cells) return;
+    const LaneF z0 = vload4(0, zTop), z1 = vload4(0, zBottom), u = vload4(0, x) / (float)W;
+    const LaneF z = z0 - vload4(0, dv) * (z0 - z1), st = sqrt(fmax(0.0f, 1.0f - z * z));
+    LaneF c, sn;
+    Lanes_SinCos2Pi(u, &c, &sn); /* φ = 2πu − π, as in EnvMap_UvToDir */
+    const LaneF v = Lanes_Atan2(st, z) * CLRT_INV_PI; /* acos(z) */
+    const LaneF omega = 2.0f * CLRT_PI / (float)W * (z0 - z1);
+    const LaneF pdf = select((LaneF)(0.0f), vload4(0, p) / omega, omega > 0.0f);
+    float3 dir[CLRT_LANES];
+    float uo[CLRT_LANES], vo[CLRT_LANES], po[CLRT_LANES];
+    LaneV3_Store(LaneV3_Make(-st * sn, z, st * c), dir);
+    vstore4(u, 0, uo); vstore4(v, 0, vo); vstore4(pdf, 0, po);
+    for (int k = 0; k < CLRT_LANES; ++k) {
+        if (!((cells >> k) & 1)) continue;
+        s[k].wL = dir[k];
+        s[k].uvL = (float2)(uo[k], vo[k]);
+        s[k].pL = po[k];
+        s[k].okL = po[k] > 0.0f && isfinite(po[k]);
+    }
+}
+
 /* Light l's multi-sample MIS (an environment light; Light_ShadowRays' first branch) at the shading points sp of
  * the lanes in `bits`: their two shadow rays each, sr and sr2, as Light_ShadowRays makes them, with EnvLight_SampleMis's
  * steps (lights.cl, EnvMis_*) run for every lane before the next step, so that the lanes' chains of dependent
@@ -573,16 +613,37 @@ inline void Lanes_EnvMisShadows(SceneParams scene, const __global Material* mate
     Lanes_Sample2D(scene, strat, sample, path, pixel, dim + 0x8000u, &b1, &b2); /* the cosine sample's */
     float ua[CLRT_LANES], va[CLRT_LANES], ub[CLRT_LANES], vb[CLRT_LANES];
     vstore4(a1, 0, ua); vstore4(a2, 0, va); vstore4(b1, 0, ub); vstore4(b2, 0, vb);
+    /* EnvMis_Begin's cosine directions (EnvSample_Cosine) and their lat-long coordinates (EnvMap_DirToUv) in
+     * lanes, the rest of it per lane */
+    float3 nMap[CLRT_LANES], wCos[CLRT_LANES];
+    for (int k = 0; k < CLRT_LANES; ++k) nMap[k] = EnvLight_ToMap(light, sp[(bits >> k) & 1 ? k : 0].normal.xyz);
+    const LaneV3 n = LaneV3_Load(nMap);
+    LaneV3 t, bt;
+    Lanes_Basis(n, &t, &bt);
+    const LaneF u1 = fmin(b1, CLRT_ONE_MINUS_EPS), r = sqrt(u1), z = sqrt(fmax(0.0f, 1.0f - u1));
+    LaneF c, sn;
+    Lanes_SinCos2Pi(b2, &c, &sn);
+    LaneV3 w = LaneV3_Add(LaneV3_Add(LaneV3_Scale(t, r * c), LaneV3_Scale(bt, r * sn)), LaneV3_Scale(n, z));
+    w = LaneV3_Scale(w, 1.0f / sqrt(LaneV3_Dot(w, w)));
+    LaneV3_Store(w, wCos);
+    float uCos[CLRT_LANES], vCos[CLRT_LANES];
+    vstore4(0.5f * (1.0f + Lanes_Atan2(w.x, -w.z) / CLRT_PI), 0, uCos);
+    vstore4(Lanes_Atan2(sqrt(w.x * w.x + w.z * w.z), w.y) / CLRT_PI, 0, vCos);
     EnvMis s[CLRT_LANES];
-    for (int k = 0; k < CLRT_LANES; ++k)
-        if ((bits >> k) & 1) {
-            const RngKey key = Rng_Key(scene.seed, pixel, path[k].sample, path[k].pathId);
-            EnvMis_Begin(light, envDist, sp[k].normal.xyz, (float2)(ua[k], va[k]), (float2)(ub[k], vb[k]),
-                         EnvLight_MisWithCosine(path[k], key, l), &s[k]);
-        }
+    for (int k = 0; k < CLRT_LANES; ++k) {
+        if (!((bits >> k) & 1)) continue;
+        const RngKey key = Rng_Key(scene.seed, pixel, path[k].sample, path[k].pathId);
+        EnvMis_Begin(light, envDist, sp[k].normal.xyz, (float2)(ua[k], va[k]), (float2)(ub[k], vb[k]), 0, &s[k]);
+        s[k].withCosine = EnvLight_MisWithCosine(path[k], key, l);
+        if (!s[k].withCosine) continue;
+        s[k].wB = wCos[k];
+        s[k].uvB = light->mapping == ENV_LATLONG ? (float2)(uCos[k], vCos[k]) : EnvMap_DirToUv(light->mapping, wCos[k]);
+    }
     for (int k = 0; k < CLRT_LANES; ++k) if ((bits >> k) & 1) EnvMis_Row(&s[k]);
     for (int k = 0; k < CLRT_LANES; ++k) if ((bits >> k) & 1) EnvMis_Column(&s[k]);
     for (int k = 0; k < CLRT_LANES; ++k) if ((bits >> k) & 1) EnvMis_Texel(&s[k]);
+    if (light->mapping == ENV_LATLONG) Lanes_EnvLatLongPoints(s, bits);
+    else for (int k = 0; k < CLRT_LANES; ++k) if ((bits >> k) & 1) EnvMis_Point(&s[k]);
     for (int k = 0; k < CLRT_LANES; ++k) if ((bits >> k) & 1) EnvMis_Footprints(light, images, &s[k]);
     for (int k = 0; k < CLRT_LANES; ++k) if ((bits >> k) & 1) EnvMis_Reads(light, images, texels, &s[k]);
     for (int k = 0; k < CLRT_LANES; ++k) {

@@ -212,7 +212,7 @@ inline float3 EnvLight_MisValue(float3 l, float nP, float p, float nQ, float q) 
  * to infinity; a direction not drawn is n, with value 0.
  * In steps, each a few dependent loads or a short chain of arithmetic, over an EnvMis state: both
  * directions first (EnvMis_Begin: the cosine direction and its map coordinates; EnvMis_Row, EnvMis_Column,
- * EnvMis_Texel: the importance sample), then the reads of the map for both (EnvMis_Footprints: the two bilinear
+ * EnvMis_Texel, EnvMis_Point: the importance sample), then the reads of the map for both (EnvMis_Footprints: the two bilinear
  * lookups' texels; EnvMis_Reads: their loads and the cosine direction's pdf), which miss the cache (an 8 MB map, random directions) and,
  * issued together, overlap; then the values (EnvMis_Values). EnvLight_SampleMis runs the steps in turn;
  * the lanes (lanes.cl, Lanes_EnvMisShadows) run each step for four shading points before the next, so that
@@ -256,9 +256,15 @@ inline void EnvMis_Column(EnvMis* s) {
 }
 
 inline void EnvMis_Texel(EnvMis* s) {
-    const float u1 = s->uLight.x, u2 = s->uLight.y;
-    s->okL = s->d.bucket < 0 ? EnvDist_SampleUv(s->d.own, u1, u2, &s->wL, &s->pL, &s->uvL)
-                             : EnvCos_SampleCell(s->d.own, s->d.tab, s->cell, u1, u2, &s->wL, &s->pL, &s->uvL);
+    if (s->d.bucket < 0) s->okL = EnvDist_SampleUv(s->d.own, s->uLight.x, s->uLight.y, &s->wL, &s->pL, &s->uvL);
+    else s->cell = EnvCos_PickTexel(s->d.own, s->d.tab, s->cell);
+}
+
+/* The point within the texel (a bucket's sample; the map's own distribution sampled it whole in EnvMis_Texel). */
+inline void EnvMis_Point(EnvMis* s) {
+    if (s->d.bucket < 0) return;
+    const EnvCosCell t = s->cell;
+    s->okL = EnvDist_CellSample(s->d.own, t.I, t.J, t.du, t.dv, t.p, s->uLight.x, s->uLight.y, &s->wL, &s->pL, &s->uvL);
 }
 
 inline void EnvMis_Footprints(const __global Light* light, const __global ImageInfo* images, EnvMis* s) {
@@ -295,6 +301,7 @@ inline void EnvLight_SampleMis(const __global Light* light, float3 nWorld, float
     EnvMis_Row(&s);
     EnvMis_Column(&s);
     EnvMis_Texel(&s);
+    EnvMis_Point(&s);
     EnvMis_Footprints(light, images, &s);
     EnvMis_Reads(light, images, texels, &s);
     EnvMis_Values(light, cosShare, &s, wiL, eL, wiB, eB);
