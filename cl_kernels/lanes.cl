@@ -17,7 +17,9 @@
  * Lanes_ScalarSurface, textures and instances included), every material (a direction-free f,
  * CLRT_BRDF_LAMBERTIAN, in lanes; a glossy or textured one per lane: Lanes_GlossyLightTerms,
  * Lanes_GlossyBounces) and every light (LightMesh and point lights in lanes, the others per lane:
- * Lanes_ScalarLightSample). Why lanes: a path's
+ * Lanes_ScalarLightSample). Classic (direct-lighting) cameras of a scene under an environment light whose
+ * materials make no children (Lanes_Direct): per lane render_fused's Fused_Path, but the environment light's
+ * multi-sample MIS in steps across the lanes (Lanes_EnvMisShadows). Why lanes: a path's
  * shading is a chain of dependent sqrt, division, sin/cos and loads; four paths go through it as one
  * chain of vector instructions (docs/studies/2026-12-05-simd-lanes-prototype.md).
  * Reads: the scene's geometry, materials and lights; writes: image, and rayCounts[0] += the bounce rays. */
@@ -29,7 +31,7 @@
 
 #ifdef CLRT_HAS_LANES
 
-/* ---- one depth of the lanes' paths: lights, bounces, children ----------------------------------- */
+/* ---- the lanes' samples ---------------------------------------------------------------------------- */
 
 /* The lanes' 2D sample of dimension dim, as Sampler_2D draws it for each lane's path: Lanes_Stratified2D
  * under the stratified sampler (and the correlated one, whose path dimensions are the stratified ones),
@@ -50,7 +52,129 @@ inline void Lanes_Sample2D(SceneParams scene, uint strat, LaneU sample, const Pa
     *u2 = vload4(0, b);
 }
 
-#ifdef CLRT_HAS_PATH_TRACING /* ---- path-traced cameras ---- */
+/* ---- an environment light's multi-sample MIS in steps across the lanes (both kinds of camera) ------ */
+
+/* The lanes' 2D sample of light dimension dim at their depth-0 shading points, as Sampler_Light2D draws it:
+ * under the correlated sampler a classic camera's light samples take its camera sample (per lane), else
+ * Lanes_Sample2D. */
+inline void Lanes_Light2D(SceneParams scene, uint strat, LaneU sample, const PathState* path, int pixel, uint dim,
+                          LaneF* u1, LaneF* u2) {
+    if (CLRT_SAMPLER_IS_CORRELATED(scene) && scene.pathMode == 0) {
+        float a[CLRT_LANES], b[CLRT_LANES];
+        for (int k = 0; k < CLRT_LANES; ++k) {
+            const float2 u = Sampler_Light2D(scene, path[k], Rng_Key(scene.seed, pixel, path[k].sample, path[k].pathId), dim);
+            a[k] = u.x;
+            b[k] = u.y;
+        }
+        *u1 = vload4(0, a);
+        *u2 = vload4(0, b);
+        return;
+    }
+    Lanes_Sample2D(scene, strat, sample, path, pixel, dim, u1, u2);
+}
+
+#ifdef CLRT_HAS_ENV_LIGHT
+/* EnvMis_Point of the lanes in `bits` under a lat-long map, in lanes: for those whose bucket drew a texel, the
+ * point within it (EnvDist_CellSample's lat-long branch: u uniform, cos θ uniform between the row's bounds). */
+inline void Lanes_EnvLatLongPoints(EnvMis* s, int bits) {
+    float zTop[CLRT_LANES], zBottom[CLRT_LANES], x[CLRT_LANES], dv[CLRT_LANES], p[CLRT_LANES];
+    int cells = 0, W = 1;
+    for (int k = 0; k < CLRT_LANES; ++k) {
+        zTop[k] = 1.0f; zBottom[k] = x[k] = dv[k] = p[k] = 0.0f;
+        if (!((bits >> k) & 1) || s[k].d.bucket < 0) continue;
+        const __global float* own = s[k].d.own;
+        W = (int)own[0];
+        const int H = (int)own[1];
+        const __global float* zr = own + 4 + H + 1 + H * (W + 1) + W * H;
+        zTop[k] = zr[s[k].cell.J];
+        zBottom[k] = zr[s[k].cell.J + 1];
+        x[k] = (float)s[k].cell.I + s[k].cell.du;
+        dv[k] = s[k].cell.dv;
+        p[k] = s[k].cell.p;
+        cells |= 1 << k;
+    }
+    if (!cells) return;
+    const LaneF z0 = vload4(0, zTop), z1 = vload4(0, zBottom), u = vload4(0, x) / (float)W;
+    const LaneF z = z0 - vload4(0, dv) * (z0 - z1), st = sqrt(fmax(0.0f, 1.0f - z * z));
+    LaneF c, sn;
+    Lanes_SinCos2Pi(u, &c, &sn); /* φ = 2πu − π, as in EnvMap_UvToDir */
+    const LaneF v = Lanes_Atan2(st, z) * CLRT_INV_PI; /* acos(z) */
+    const LaneF omega = 2.0f * CLRT_PI / (float)W * (z0 - z1);
+    const LaneF pdf = select((LaneF)(0.0f), vload4(0, p) / omega, omega > 0.0f);
+    float3 dir[CLRT_LANES];
+    float uo[CLRT_LANES], vo[CLRT_LANES], po[CLRT_LANES];
+    LaneV3_Store(LaneV3_Make(-st * sn, z, st * c), dir);
+    vstore4(u, 0, uo); vstore4(v, 0, vo); vstore4(pdf, 0, po);
+    for (int k = 0; k < CLRT_LANES; ++k) {
+        if (!((cells >> k) & 1)) continue;
+        s[k].wL = dir[k];
+        s[k].uvL = (float2)(uo[k], vo[k]);
+        s[k].pL = po[k];
+        s[k].okL = po[k] > 0.0f && isfinite(po[k]);
+    }
+}
+
+/* Light l's multi-sample MIS (an environment light; Light_ShadowRays' first branch, dim its dimension there) at
+ * the shading points sp of the lanes in `bits` (classic cameras, and the path tracer's nee lanes): their two shadow rays each, sr and sr2, as Light_ShadowRays makes them, with EnvLight_SampleMis's
+ * steps (lights.cl, EnvMis_*) run for every lane before the next step, so that the lanes' chains of dependent
+ * loads (the bucket's row, column and texel CDFs, the map's texels) are in flight together. */
+inline void Lanes_EnvMisShadows(SceneParams scene, const __global Material* materials, const __global Light* lights,
+                                const __global ImageInfo* images, const __global float4* texels,
+                                const __global float* envDist, int l, int bits, const PathState* path,
+                                const ShadingPoint* sp, int pixel, uint strat, LaneU sample, uint dim, ShadowRay* sr,
+                                ShadowRay* sr2) {
+    const __global Light* light = &lights[l];
+    int first = 0; /* a lane in bits (not empty), whose normal the others borrow */
+    while (!((bits >> first) & 1)) ++first;
+    LaneF a1, a2, b1, b2;
+    Lanes_Light2D(scene, strat, sample, path, pixel, dim, &a1, &a2);
+    Lanes_Sample2D(scene, strat, sample, path, pixel, dim + 0x8000u, &b1, &b2); /* the cosine sample's */
+    float ua[CLRT_LANES], va[CLRT_LANES], ub[CLRT_LANES], vb[CLRT_LANES];
+    vstore4(a1, 0, ua); vstore4(a2, 0, va); vstore4(b1, 0, ub); vstore4(b2, 0, vb);
+    /* EnvMis_Begin's cosine directions (EnvSample_Cosine) and their lat-long coordinates (EnvMap_DirToUv) in
+     * lanes, the rest of it per lane */
+    float3 nMap[CLRT_LANES], wCos[CLRT_LANES];
+    for (int k = 0; k < CLRT_LANES; ++k) nMap[k] = EnvLight_ToMap(light, sp[(bits >> k) & 1 ? k : first].normal.xyz);
+    const LaneV3 n = LaneV3_Load(nMap);
+    LaneV3 t, bt;
+    Lanes_Basis(n, &t, &bt);
+    const LaneF u1 = fmin(b1, CLRT_ONE_MINUS_EPS), r = sqrt(u1), z = sqrt(fmax(0.0f, 1.0f - u1));
+    LaneF c, sn;
+    Lanes_SinCos2Pi(b2, &c, &sn);
+    LaneV3 w = LaneV3_Add(LaneV3_Add(LaneV3_Scale(t, r * c), LaneV3_Scale(bt, r * sn)), LaneV3_Scale(n, z));
+    w = LaneV3_Scale(w, 1.0f / sqrt(LaneV3_Dot(w, w)));
+    LaneV3_Store(w, wCos);
+    float uCos[CLRT_LANES], vCos[CLRT_LANES];
+    vstore4(0.5f * (1.0f + Lanes_Atan2(w.x, -w.z) / CLRT_PI), 0, uCos);
+    vstore4(Lanes_Atan2(sqrt(w.x * w.x + w.z * w.z), w.y) / CLRT_PI, 0, vCos);
+    EnvMis s[CLRT_LANES];
+    for (int k = 0; k < CLRT_LANES; ++k) {
+        if (!((bits >> k) & 1)) continue;
+        const RngKey key = Rng_Key(scene.seed, pixel, path[k].sample, path[k].pathId);
+        EnvMis_Begin(light, envDist, sp[k].normal.xyz, (float2)(ua[k], va[k]), (float2)(ub[k], vb[k]), 0, &s[k]);
+        s[k].withCosine = EnvLight_MisWithCosine(path[k], key, l);
+        if (!s[k].withCosine) continue;
+        s[k].wB = wCos[k];
+        s[k].uvB = light->mapping == ENV_LATLONG ? (float2)(uCos[k], vCos[k]) : EnvMap_DirToUv(light->mapping, wCos[k]);
+    }
+    for (int k = 0; k < CLRT_LANES; ++k) if ((bits >> k) & 1) EnvMis_Row(&s[k]);
+    for (int k = 0; k < CLRT_LANES; ++k) if ((bits >> k) & 1) EnvMis_Column(&s[k]);
+    for (int k = 0; k < CLRT_LANES; ++k) if ((bits >> k) & 1) EnvMis_Texel(&s[k]);
+    if (light->mapping == ENV_LATLONG) Lanes_EnvLatLongPoints(s, bits);
+    else for (int k = 0; k < CLRT_LANES; ++k) if ((bits >> k) & 1) EnvMis_Point(&s[k]);
+    for (int k = 0; k < CLRT_LANES; ++k) if ((bits >> k) & 1) EnvMis_Footprints(light, images, &s[k]);
+    for (int k = 0; k < CLRT_LANES; ++k) if ((bits >> k) & 1) EnvMis_Reads(light, images, texels, &s[k]);
+    for (int k = 0; k < CLRT_LANES; ++k) {
+        if (!((bits >> k) & 1)) continue;
+        float3 wiL, eL, wiB, eB;
+        EnvMis_Values(light, CLRT_ENV_MIS_COSINE_SHARE, &s[k], &wiL, &eL, &wiB, &eB);
+        sr[k] = Shadow_Make(sp[k], materials, path[k].throughput.xyz, wiL, INFINITY, eL, scene.shadowEpsilon);
+        sr2[k] = Shadow_Make(sp[k], materials, path[k].throughput.xyz, wiB, INFINITY, eB, scene.shadowEpsilon);
+    }
+}
+#endif
+
+#ifdef CLRT_HAS_PATH_TRACING /* ---- path-traced cameras: one depth of the lanes' paths (lights, bounces, children) ---- */
 
 /* Which of the lanes in okBits see the shadow ray from org along unit dir unblocked up to tMax
  * (Shadow_Occluded, per lane). */
@@ -332,21 +456,30 @@ inline int Lanes_HasLaneForm(const __global Light* light) { return light->kind =
 
 /* Light l's samples at the lanes in hit->nee through clrt's scalar Light_ShadowRays and Fused_Shadow, per lane
  * (the light kinds without a lane form: area, sphere, spot and directional lights, environment maps, with
- * lightSlots shadow rays each: 2 for an environment light's MIS pair), added to the lanes' sum in
- * render_fused's order: each lane's path, ShadingPoint and random stream as there. */
+ * lightSlots shadow rays each: 2 for an environment light's MIS pair, made in steps across the lanes by
+ * Lanes_EnvMisShadows), added to the lanes' sum in render_fused's order: each lane's path, ShadingPoint and
+ * random stream as there. dim: the light's dimension (Light_ShadowRays'). */
 inline LaneV3 Lanes_ScalarLightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int l, int lightSlots, const LanesHit* hit,
-                                      const PathState* path, int pixel, LaneV3 sum) {
+                                      const PathState* path, int pixel, uint strat, LaneU sample, uint dim, LaneV3 sum) {
     float3 out[CLRT_LANES];
     LaneV3_Store(sum, out);
+    ShadowRay sr[CLRT_LANES], sr2[CLRT_LANES];
+    int envMis = 0;
+#ifdef CLRT_HAS_ENV_LIGHT
+    envMis = lightSlots == 2 && EnvLight_UsesMis(&lights[l]);
+    if (envMis)
+        Lanes_EnvMisShadows(scene, materials, lights, images, texels, envDist, l, hit->nee, path, hit->sp, pixel, strat,
+                            sample, dim, sr, sr2);
+#endif
     for (int k = 0; k < CLRT_LANES; ++k) {
         if (!((hit->nee >> k) & 1)) continue;
-        const RngKey key = Rng_Key(scene.seed, pixel, path[k].sample, path[k].pathId);
-        ShadowRay sr, sr2;
-        sr2.origin = sr2.direction = sr2.contribution = (float4)(0.0f); /* a light with one sample leaves it untraced */
-        Light_ShadowRays(scene, path[k], hit->sp[k], l, lightSlots, key, materials, lights, images, texels, envDist,
-                         lightData, &sr, &sr2);
-        out[k] += Fused_Shadow(sr, scene, nodes, leaves, tris, spheres, planes, instances).xyz;
-        if (lightSlots == 2) out[k] += Fused_Shadow(sr2, scene, nodes, leaves, tris, spheres, planes, instances).xyz;
+        if (!envMis) {
+            sr2[k].origin = sr2[k].direction = sr2[k].contribution = (float4)(0.0f); /* a light with one sample leaves it untraced */
+            Light_ShadowRays(scene, path[k], hit->sp[k], l, lightSlots, Rng_Key(scene.seed, pixel, path[k].sample, path[k].pathId),
+                             materials, lights, images, texels, envDist, lightData, &sr[k], &sr2[k]);
+        }
+        out[k] += Fused_Shadow(sr[k], scene, nodes, leaves, tris, spheres, planes, instances).xyz;
+        if (lightSlots == 2) out[k] += Fused_Shadow(sr2[k], scene, nodes, leaves, tris, spheres, planes, instances).xyz;
     }
     return LaneV3_Load(out);
 }
@@ -503,7 +636,8 @@ inline uint Lanes_Paths(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int lightSlot
             sum = Lanes_HasLaneForm(&lights[l])
                       ? LaneV3_Add(sum, Lanes_LightSample(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) & lights[l], &hit, path,
                                                           pixel, throughput, strat, sample, dim + 8u + 2u * (uint)l))
-                      : Lanes_ScalarLightSample(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) l, lightSlots, &hit, path, pixel, sum);
+                      : Lanes_ScalarLightSample(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) l, lightSlots, &hit, path, pixel, strat,
+                                                sample, dim + 8u + 2u * (uint)l, sum);
         float3 out[CLRT_LANES];
         LaneV3_Store(sum, out);
         for (int k = 0; k < CLRT_LANES; ++k) /* as render_fused: per depth, in sample order */
@@ -537,124 +671,6 @@ inline uint Lanes_Paths(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int lightSlot
 #endif /* CLRT_HAS_PATH_TRACING */
 
 /* ---- classic (direct-lighting) cameras ----------------------------------------------------------- */
-
-/* The lanes' 2D sample of light dimension dim at their depth-0 shading points, as Sampler_Light2D draws it:
- * under the correlated sampler a classic camera's light samples take its camera sample (per lane), else
- * Lanes_Sample2D. */
-inline void Lanes_Light2D(SceneParams scene, uint strat, LaneU sample, const PathState* path, int pixel, uint dim,
-                          LaneF* u1, LaneF* u2) {
-    if (CLRT_SAMPLER_IS_CORRELATED(scene) && scene.pathMode == 0) {
-        float a[CLRT_LANES], b[CLRT_LANES];
-        for (int k = 0; k < CLRT_LANES; ++k) {
-            const float2 u = Sampler_Light2D(scene, path[k], Rng_Key(scene.seed, pixel, path[k].sample, path[k].pathId), dim);
-            a[k] = u.x;
-            b[k] = u.y;
-        }
-        *u1 = vload4(0, a);
-        *u2 = vload4(0, b);
-        return;
-    }
-    Lanes_Sample2D(scene, strat, sample, path, pixel, dim, u1, u2);
-}
-
-#ifdef CLRT_HAS_ENV_LIGHT
-/* EnvMis_Point of the lanes in `bits` under a lat-long map, in lanes: for those whose bucket drew a texel, the
- * point within it (EnvDist_CellSample's lat-long branch: u uniform, cos θ uniform between the row's bounds). */
-inline void Lanes_EnvLatLongPoints(EnvMis* s, int bits) {
-    float zTop[CLRT_LANES], zBottom[CLRT_LANES], x[CLRT_LANES], dv[CLRT_LANES], p[CLRT_LANES];
-    int cells = 0, W = 1;
-    for (int k = 0; k < CLRT_LANES; ++k) {
-        zTop[k] = 1.0f; zBottom[k] = x[k] = dv[k] = p[k] = 0.0f;
-        if (!((bits >> k) & 1) || s[k].d.bucket < 0) continue;
-        const __global float* own = s[k].d.own;
-        W = (int)own[0];
-        const int H = (int)own[1];
-        const __global float* zr = own + 4 + H + 1 + H * (W + 1) + W * H;
-        zTop[k] = zr[s[k].cell.J];
-        zBottom[k] = zr[s[k].cell.J + 1];
-        x[k] = (float)s[k].cell.I + s[k].cell.du;
-        dv[k] = s[k].cell.dv;
-        p[k] = s[k].cell.p;
-        cells |= 1 << k;
-    }
-    if (!cells) return;
-    const LaneF z0 = vload4(0, zTop), z1 = vload4(0, zBottom), u = vload4(0, x) / (float)W;
-    const LaneF z = z0 - vload4(0, dv) * (z0 - z1), st = sqrt(fmax(0.0f, 1.0f - z * z));
-    LaneF c, sn;
-    Lanes_SinCos2Pi(u, &c, &sn); /* φ = 2πu − π, as in EnvMap_UvToDir */
-    const LaneF v = Lanes_Atan2(st, z) * CLRT_INV_PI; /* acos(z) */
-    const LaneF omega = 2.0f * CLRT_PI / (float)W * (z0 - z1);
-    const LaneF pdf = select((LaneF)(0.0f), vload4(0, p) / omega, omega > 0.0f);
-    float3 dir[CLRT_LANES];
-    float uo[CLRT_LANES], vo[CLRT_LANES], po[CLRT_LANES];
-    LaneV3_Store(LaneV3_Make(-st * sn, z, st * c), dir);
-    vstore4(u, 0, uo); vstore4(v, 0, vo); vstore4(pdf, 0, po);
-    for (int k = 0; k < CLRT_LANES; ++k) {
-        if (!((cells >> k) & 1)) continue;
-        s[k].wL = dir[k];
-        s[k].uvL = (float2)(uo[k], vo[k]);
-        s[k].pL = po[k];
-        s[k].okL = po[k] > 0.0f && isfinite(po[k]);
-    }
-}
-
-/* Light l's multi-sample MIS (an environment light; Light_ShadowRays' first branch) at the shading points sp of
- * the lanes in `bits`: their two shadow rays each, sr and sr2, as Light_ShadowRays makes them, with EnvLight_SampleMis's
- * steps (lights.cl, EnvMis_*) run for every lane before the next step, so that the lanes' chains of dependent
- * loads (the bucket's row, column and texel CDFs, the map's texels) are in flight together. */
-inline void Lanes_EnvMisShadows(SceneParams scene, const __global Material* materials, const __global Light* lights,
-                                const __global ImageInfo* images, const __global float4* texels,
-                                const __global float* envDist, int l, int bits, const PathState* path,
-                                const ShadingPoint* sp, int pixel, uint strat, LaneU sample, ShadowRay* sr, ShadowRay* sr2) {
-    const __global Light* light = &lights[l];
-    const uint dim = 4u + 32u * (uint)path[0].depth + 8u + 2u * (uint)l; /* Light_ShadowRays' */
-    LaneF a1, a2, b1, b2;
-    Lanes_Light2D(scene, strat, sample, path, pixel, dim, &a1, &a2);
-    Lanes_Sample2D(scene, strat, sample, path, pixel, dim + 0x8000u, &b1, &b2); /* the cosine sample's */
-    float ua[CLRT_LANES], va[CLRT_LANES], ub[CLRT_LANES], vb[CLRT_LANES];
-    vstore4(a1, 0, ua); vstore4(a2, 0, va); vstore4(b1, 0, ub); vstore4(b2, 0, vb);
-    /* EnvMis_Begin's cosine directions (EnvSample_Cosine) and their lat-long coordinates (EnvMap_DirToUv) in
-     * lanes, the rest of it per lane */
-    float3 nMap[CLRT_LANES], wCos[CLRT_LANES];
-    for (int k = 0; k < CLRT_LANES; ++k) nMap[k] = EnvLight_ToMap(light, sp[(bits >> k) & 1 ? k : 0].normal.xyz);
-    const LaneV3 n = LaneV3_Load(nMap);
-    LaneV3 t, bt;
-    Lanes_Basis(n, &t, &bt);
-    const LaneF u1 = fmin(b1, CLRT_ONE_MINUS_EPS), r = sqrt(u1), z = sqrt(fmax(0.0f, 1.0f - u1));
-    LaneF c, sn;
-    Lanes_SinCos2Pi(b2, &c, &sn);
-    LaneV3 w = LaneV3_Add(LaneV3_Add(LaneV3_Scale(t, r * c), LaneV3_Scale(bt, r * sn)), LaneV3_Scale(n, z));
-    w = LaneV3_Scale(w, 1.0f / sqrt(LaneV3_Dot(w, w)));
-    LaneV3_Store(w, wCos);
-    float uCos[CLRT_LANES], vCos[CLRT_LANES];
-    vstore4(0.5f * (1.0f + Lanes_Atan2(w.x, -w.z) / CLRT_PI), 0, uCos);
-    vstore4(Lanes_Atan2(sqrt(w.x * w.x + w.z * w.z), w.y) / CLRT_PI, 0, vCos);
-    EnvMis s[CLRT_LANES];
-    for (int k = 0; k < CLRT_LANES; ++k) {
-        if (!((bits >> k) & 1)) continue;
-        const RngKey key = Rng_Key(scene.seed, pixel, path[k].sample, path[k].pathId);
-        EnvMis_Begin(light, envDist, sp[k].normal.xyz, (float2)(ua[k], va[k]), (float2)(ub[k], vb[k]), 0, &s[k]);
-        s[k].withCosine = EnvLight_MisWithCosine(path[k], key, l);
-        if (!s[k].withCosine) continue;
-        s[k].wB = wCos[k];
-        s[k].uvB = light->mapping == ENV_LATLONG ? (float2)(uCos[k], vCos[k]) : EnvMap_DirToUv(light->mapping, wCos[k]);
-    }
-    for (int k = 0; k < CLRT_LANES; ++k) if ((bits >> k) & 1) EnvMis_Row(&s[k]);
-    for (int k = 0; k < CLRT_LANES; ++k) if ((bits >> k) & 1) EnvMis_Column(&s[k]);
-    for (int k = 0; k < CLRT_LANES; ++k) if ((bits >> k) & 1) EnvMis_Texel(&s[k]);
-    if (light->mapping == ENV_LATLONG) Lanes_EnvLatLongPoints(s, bits);
-    else for (int k = 0; k < CLRT_LANES; ++k) if ((bits >> k) & 1) EnvMis_Point(&s[k]);
-    for (int k = 0; k < CLRT_LANES; ++k) if ((bits >> k) & 1) EnvMis_Footprints(light, images, &s[k]);
-    for (int k = 0; k < CLRT_LANES; ++k) if ((bits >> k) & 1) EnvMis_Reads(light, images, texels, &s[k]);
-    for (int k = 0; k < CLRT_LANES; ++k) {
-        if (!((bits >> k) & 1)) continue;
-        float3 wiL, eL, wiB, eB;
-        EnvMis_Values(light, CLRT_ENV_MIS_COSINE_SHARE, &s[k], &wiL, &eL, &wiB, &eB);
-        sr[k] = Shadow_Make(sp[k], materials, path[k].throughput.xyz, wiL, INFINITY, eL, scene.shadowEpsilon);
-        sr2[k] = Shadow_Make(sp[k], materials, path[k].throughput.xyz, wiB, INFINITY, eB, scene.shadowEpsilon);
-    }
-}
-#endif
 
 /* Samples s0 .. s0 + n - 1 (n <= 4) of pixel `pixel` under a classic (direct-lighting) camera, in a scene whose
  * materials make no children (lanesUnsupported): per lane render_fused's Fused_Path (the closest hit, Shade_Hit,
@@ -691,7 +707,8 @@ inline void Lanes_Direct(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int lightSlo
             sr[k] = sr2[k] = Shadow_Make(sp[0], materials, (float3)(0.0f), (float3)(0.0f, 0.0f, 1.0f), 0.0f, (float3)(0.0f), 0.0f);
 #ifdef CLRT_HAS_ENV_LIGHT
         if (lightSlots == 2 && EnvLight_UsesMis(&lights[l]))
-            Lanes_EnvMisShadows(scene, materials, lights, images, texels, envDist, l, shaded, path, sp, pixel, strat, sample, sr, sr2);
+            Lanes_EnvMisShadows(scene, materials, lights, images, texels, envDist, l, shaded, path, sp, pixel, strat, sample,
+                                4u + 8u + 2u * (uint)l, sr, sr2); /* Light_ShadowRays' dimension at depth 0 */
         else
 #endif
             for (int k = 0; k < CLRT_LANES; ++k)

@@ -71,6 +71,7 @@ static bool someSurface(const DeviceScene& ds, Pred pred) {
 
 std::string lanesNoGain(const DeviceScene& ds, bool classic, bool envMis) {
     if (classic) return envMis ? "" : "classic camera without an environment light sampled by MIS (the rest is per lane: no faster than render_fused)";
+    if (envMis) return "";  // its MIS pair in steps across the lanes (Lanes_EnvMisShadows)
     // A surface the lanes shade in lanes: untextured, a diffuse part (kd > 0) whose f is direction-free
     // (CLRT_BRDF_LAMBERTIAN). A light's black surface has nothing to shade.
     auto inLanes = [&](int material, int textureSet) {
