@@ -286,12 +286,17 @@ TEST_CASE("lanes: classic cameras with an environment light as render_fused (its
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
     // Shade_Hit, the shadow rays and every other light per lane; an environment light's multi-sample MIS
     // (two slots) in steps across the lanes (Lanes_EnvMisShadows), with one slot (importance) per lane.
-    // A sphere under a lat-long map and a smooth-shaded mesh under a light probe; every sampler (the
-    // correlated one draws a classic camera's light samples from its camera sample: Lanes_Light2D).
+    // A sphere under a lat-long map, a smooth-shaded mesh under a light probe, and scenes/env_turned.xml (a
+    // map turned by its light's <Transformations>; its mirror made plain: a classic camera's lanes take no
+    // children); every sampler (the correlated one draws a classic camera's light samples from its camera
+    // sample: Lanes_Light2D).
     int compared = 0;
-    for (const char* f : {"hw5/sphere_env_light_courtyard.xml", "hw5/head_env_light_courtyard_probe.xml"}) {
+    for (const std::string& f : {sharedDir() + "/scenes/hw5/sphere_env_light_courtyard.xml",
+                                sharedDir() + "/scenes/hw5/head_env_light_courtyard_probe.xml",
+                                std::string(CLRT_SOURCE_DIR) + "/scenes/env_turned.xml"}) {
         for (dev::EnvStrategy strategy : {dev::ENV_STRATEGY_MIS, dev::ENV_STRATEGY_IMPORTANCE}) {
-            Scene scene = loadScene(sharedDir() + "/scenes/" + f);
+            Scene scene = loadScene(f);
+            for (Material& m : scene.materials) m.type = dev::MATERIAL_BLINN_PHONG;
             for (Light& l : scene.lights) l.envStrategy = strategy;
             for (PixelSampler sampler : {PixelSampler::Stratified, PixelSampler::ZSobol, PixelSampler::Independent,
                                          PixelSampler::Correlated}) {
@@ -309,7 +314,7 @@ TEST_CASE("lanes: classic cameras with an environment light as render_fused (its
             }
         }
     }
-    CHECK(compared == 10);
+    CHECK(compared == 15);
 }
 
 TEST_CASE("lanes: textures, bump and normal maps, device instances per lane as render_fused", "[lanes][shared]") {
