@@ -293,6 +293,19 @@ inline float Math_PowNonNegative(float x, float e) {
     return x > 0.0f ? exp2(e * log2(x)) : atZero;
 }
 
+/* p = atan(a)/a for a in [0, 1], s = a²: Math_Atan2's fitted polynomial P(s), as statements on p (float or floatN:
+ * Math_Atan2 and its lane form, lanes_math.cl Lanes_Atan2). */
+#define CLRT_ATAN_POLY(p, s)          \
+    p = 2.932761940e-03f;             \
+    p = p * (s) - 1.641319041e-02f;   \
+    p = p * (s) + 4.327824176e-02f;   \
+    p = p * (s) - 7.556900204e-02f;   \
+    p = p * (s) + 1.066748690e-01f;   \
+    p = p * (s) - 1.421110605e-01f;   \
+    p = p * (s) + 1.999369432e-01f;   \
+    p = p * (s) - 3.333313797e-01f;   \
+    p = p * (s) + 9.999999938e-01f
+
 /* atan2(y, x) for finite arguments, within 3e-7 rad (about an ulp of π) of the exact value (the
  * polynomial's error is 8.7e-8 over [0, 1]; the rest is the rounding of the quadrant fix-ups): atan(a) = a·P(a²) on
  * a = min/max in [0, 1], P fitted by us (least squares on Chebyshev nodes, degree 8 in a²). PoCL's
@@ -304,15 +317,8 @@ inline float Math_Atan2(float y, float x) {
     float mx = fmax(ax, ay), mn = fmin(ax, ay);
     float a = mx > 0.0f ? mn / mx : 0.0f;
     float s = a * a;
-    float p = 2.932761940e-03f;
-    p = p * s - 1.641319041e-02f;
-    p = p * s + 4.327824176e-02f;
-    p = p * s - 7.556900204e-02f;
-    p = p * s + 1.066748690e-01f;
-    p = p * s - 1.421110605e-01f;
-    p = p * s + 1.999369432e-01f;
-    p = p * s - 3.333313797e-01f;
-    p = p * s + 9.999999938e-01f;
+    float p;
+    CLRT_ATAN_POLY(p, s);
     float r = a * p;
     if (ay > ax) r = 0.5f * CLRT_PI - r;
     if (x < 0.0f) r = CLRT_PI - r;

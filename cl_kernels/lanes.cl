@@ -33,6 +33,18 @@
 
 /* ---- the lanes' samples ---------------------------------------------------------------------------- */
 
+/* The camera rays of samples s0 .. s0 + n - 1 (n <= 4) of pixel `pixel` (Camera_GenerateAt), lane k the sample
+ * s0 + k (lanes past n repeat the last: every lane holds a valid path); returns the lanes' sample indices. */
+inline LaneU Lanes_CameraRays(CameraParams cam, SceneParams scene, int pixel, int px, int py, int s0, int n,
+                              PathState* path, Ray* ray) {
+    int sampleIdx[CLRT_LANES];
+    for (int k = 0; k < CLRT_LANES; ++k) {
+        sampleIdx[k] = s0 + min(k, n - 1);
+        Camera_GenerateAt(cam, scene, pixel, px, py, sampleIdx[k], &path[k], &ray[k]);
+    }
+    return as_uint4(vload4(0, sampleIdx));
+}
+
 /* The lanes' 2D sample of dimension dim, as Sampler_2D draws it for each lane's path: Lanes_Stratified2D
  * under the stratified sampler (and the correlated one, whose path dimensions are the stratified ones),
  * else Sampler_2D per lane (zsobol, independent). */
@@ -609,14 +621,8 @@ inline uint Lanes_Paths(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int lightSlot
                         int n, int levels, float3* levelSum) {
     PathState path[CLRT_LANES];
     Ray ray[CLRT_LANES];
-    int sampleIdx[CLRT_LANES];
-    int live = 0;
-    for (int k = 0; k < CLRT_LANES; ++k) {
-        sampleIdx[k] = s0 + min(k, n - 1);
-        Camera_GenerateAt(cam, scene, pixel, px, py, sampleIdx[k], &path[k], &ray[k]);
-        if (k < n) live |= 1 << k;
-    }
-    const LaneU sample = as_uint4(vload4(0, sampleIdx));
+    const LaneU sample = Lanes_CameraRays(cam, scene, pixel, px, py, s0, n, path, ray);
+    int live = (1 << n) - 1;
     const int mode = scene.pathMode;
     int scalarLights = 0;
     for (int l = 0; l < scene.numLights; ++l) scalarLights |= !Lanes_HasLaneForm(&lights[l]);
@@ -679,27 +685,24 @@ inline uint Lanes_Paths(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int lightSlot
 inline void Lanes_Direct(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int lightSlots, int pixel, int px, int py, int s0,
                          int n, float3* levelSum) {
     PathState path[CLRT_LANES];
+    Ray ray[CLRT_LANES];
     ShadingPoint sp[CLRT_LANES];
     float4 sum[CLRT_LANES];
-    int sampleIdx[CLRT_LANES];
+    const LaneU sample = Lanes_CameraRays(cam, scene, pixel, px, py, s0, n, path, ray);
     int shaded = 0;
     for (int k = 0; k < CLRT_LANES; ++k) {
-        sampleIdx[k] = s0 + min(k, n - 1);
-        Ray ray;
-        Camera_GenerateAt(cam, scene, pixel, px, py, sampleIdx[k], &path[k], &ray);
         sum[k] = (float4)(0.0f);
         if (k >= n) continue;
         int instance;
-        const Hit h = Ray_Closest(ray, scene, nodes, leaves, tris, spheres, planes, instances, &instance);
+        const Hit h = Ray_Closest(ray[k], scene, nodes, leaves, tris, spheres, planes, instances, &instance);
         ShadeResult res;
-        Shade_Hit(scene, cam, path[k], ray, h, instance, tris, triShading, triAttributes, spheres, planes, instances,
+        Shade_Hit(scene, cam, path[k], ray[k], h, instance, tris, triShading, triAttributes, spheres, planes, instances,
                   materials, textureSets, textures, images, texels, lights, envDist, lightData, &res);
         sum[k] = res.radiance;
         sp[k] = res.sp;
         if (sp[k].position.w > 0.0f) shaded |= 1 << k;
         else if (scene.numLights > 0) sum[k] += (float4)(0.0f); /* as Fused_Path */
     }
-    const LaneU sample = as_uint4(vload4(0, sampleIdx));
     const uint strat = Rng_Key(scene.seed, pixel, 0, path[0].pathId).strat; /* the lanes' shared path id */
     for (int l = 0; l < scene.numLights && shaded; ++l) {
         ShadowRay sr[CLRT_LANES], sr2[CLRT_LANES];

@@ -98,15 +98,8 @@ inline LaneF Lanes_OffsetDistance(LaneV3 p) { /* Ray_OffsetDistance */
 inline LaneF Lanes_Atan2(LaneF y, LaneF x) { /* Math_Atan2 */
     const LaneF ax = fabs(x), ay = fabs(y), mx = fmax(ax, ay), mn = fmin(ax, ay);
     const LaneF a = select((LaneF)(0.0f), mn / mx, mx > 0.0f), s = a * a;
-    LaneF p = 2.932761940e-03f;
-    p = p * s - 1.641319041e-02f;
-    p = p * s + 4.327824176e-02f;
-    p = p * s - 7.556900204e-02f;
-    p = p * s + 1.066748690e-01f;
-    p = p * s - 1.421110605e-01f;
-    p = p * s + 1.999369432e-01f;
-    p = p * s - 3.333313797e-01f;
-    p = p * s + 9.999999938e-01f;
+    LaneF p;
+    CLRT_ATAN_POLY(p, s);
     LaneF r = a * p;
     r = select(r, 0.5f * CLRT_PI - r, ay > ax);
     r = select(r, CLRT_PI - r, x < 0.0f);
