@@ -127,9 +127,11 @@ inline void Lanes_EnvLatLongPoints(EnvMis* s, int bits) {
 }
 
 /* Light l's multi-sample MIS (an environment light; Light_ShadowRays' first branch, dim its dimension there) at
- * the shading points sp of the lanes in `bits` (classic cameras, and the path tracer's nee lanes): their two shadow rays each, sr and sr2, as Light_ShadowRays makes them, with EnvLight_SampleMis's
- * steps (lights.cl, EnvMis_*) run for every lane before the next step, so that the lanes' chains of dependent
- * loads (the bucket's row, column and texel CDFs, the map's texels) are in flight together. */
+ * the shading points sp of the lanes in `bits` (classic cameras, and the path tracer's nee lanes): their two
+ * shadow rays each, sr and sr2, as Light_ShadowRays makes them, with EnvLight_SampleMis's steps (lights.cl,
+ * EnvMis_*) run for every lane before the next step, so that the lanes' chains of dependent loads (the
+ * bucket's row, column and texel CDFs, the map's texels) are in flight together; the arithmetic between them
+ * (the cosine directions and their lat-long coordinates, the lat-long point in a drawn texel) in lanes. */
 inline void Lanes_EnvMisShadows(SceneParams scene, const __global Material* materials, const __global Light* lights,
                                 const __global ImageInfo* images, const __global float4* texels,
                                 const __global float* envDist, int l, int bits, const PathState* path,
@@ -707,7 +709,8 @@ inline void Lanes_Direct(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int lightSlo
     for (int l = 0; l < scene.numLights && shaded; ++l) {
         ShadowRay sr[CLRT_LANES], sr2[CLRT_LANES];
         for (int k = 0; k < CLRT_LANES; ++k) /* a slot a light does not use: zero contribution, not traced */
-            sr[k] = sr2[k] = Shadow_Make(sp[0], materials, (float3)(0.0f), (float3)(0.0f, 0.0f, 1.0f), 0.0f, (float3)(0.0f), 0.0f);
+            sr[k].origin = sr[k].direction = sr[k].contribution = sr2[k].origin = sr2[k].direction = sr2[k].contribution =
+                (float4)(0.0f);
 #ifdef CLRT_HAS_ENV_LIGHT
         if (lightSlots == 2 && EnvLight_UsesMis(&lights[l]))
             Lanes_EnvMisShadows(scene, materials, lights, images, texels, envDist, l, shaded, path, sp, pixel, strat, sample,

@@ -212,11 +212,12 @@ inline float3 EnvLight_MisValue(float3 l, float nP, float p, float nQ, float q) 
  * to infinity; a direction not drawn is n, with value 0.
  * In steps, each a few dependent loads or a short chain of arithmetic, over an EnvMis state: both
  * directions first (EnvMis_Begin: the cosine direction and its map coordinates; EnvMis_Row, EnvMis_Column,
- * EnvMis_Texel, EnvMis_Point: the importance sample), then the reads of the map for both (EnvMis_Footprints: the two bilinear
- * lookups' texels; EnvMis_Reads: their loads and the cosine direction's pdf), which miss the cache (an 8 MB map, random directions) and,
- * issued together, overlap; then the values (EnvMis_Values). EnvLight_SampleMis runs the steps in turn;
- * the lanes (lanes.cl, Lanes_EnvMisShadows) run each step for four shading points before the next, so that
- * four points' chains of loads overlap. */
+ * EnvMis_Texel, EnvMis_Point: the importance sample), then the reads of the map for both
+ * (EnvMis_Footprints: the two bilinear lookups' texels; EnvMis_Reads: their loads and the cosine
+ * direction's pdf), which miss the cache (an 8 MB map, random directions) and, issued together, overlap;
+ * then the values (EnvMis_Values). EnvLight_SampleMis runs the steps in turn; the lanes (lanes.cl,
+ * Lanes_EnvMisShadows) run each step for four shading points before the next, so that four points' chains
+ * of loads overlap. */
 typedef struct {
     EnvLightDist d;
     EnvCosCell cell;
