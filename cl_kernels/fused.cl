@@ -69,6 +69,32 @@ typedef struct {
     Ray ray;
 } FusedEntry;
 
+#ifdef CLRT_FUSED_BOUNCES
+/* A shaded path's children into the walk of its tree, depth first: the left (reflection) child next, the
+ * right ones onto the stack, so each depth comes in queue order. Returns 1 with *path, *ray the path to
+ * trace next (that child, or the stack's top), 0 when the tree is done; *secondary counts the children. */
+inline int Fused_NextPath(const ShadeResult* res, FusedEntry* stack, int* top, PathState* path, Ray* ray, uint* secondary) {
+    for (int k = 2; k >= 1; --k)
+        if (res->childValid[k] && *top < CLRT_FUSED_STACK_SIZE) {
+            stack[*top].path = res->childPath[k];
+            stack[*top].ray = res->childRay[k];
+            ++*top;
+            ++*secondary;
+        }
+    if (res->childValid[0]) {
+        *path = res->childPath[0];
+        *ray = res->childRay[0];
+        ++*secondary;
+        return 1;
+    }
+    if (*top == 0) return 0;
+    --*top;
+    *path = stack[*top].path;
+    *ray = stack[*top].ray;
+    return 1;
+}
+#endif
+
 /* Parameters: src/shared/kernel_params.h (CLRT_KERNEL_render_fused).
  * CLRT_KERNEL_VEC_HINT (common.cl; quirk INTEL_VEC_HINT, docs/quirks.md): vec_type_hint(float4) on
  * Intel's OpenCL CPU runtime, which keeps it from vectorising this kernel across work-items (a speed
@@ -120,31 +146,7 @@ __kernel CLRT_KERNEL_VEC_HINT void render_fused(CLRT_KERNEL_PARAMS(render_fused)
                 if (direct) acc.xyz += r;
                 else levelSum[min(path.depth, levels - 1)] += r;
 #ifdef CLRT_FUSED_BOUNCES
-                /* left (reflection) child next, the right ones later: each depth in queue order */
-                if (res.childValid[2] && top < CLRT_FUSED_STACK_SIZE) {
-                    stack[top].path = res.childPath[2];
-                    stack[top].ray = res.childRay[2];
-                    ++top;
-                    ++secondary;
-                }
-                if (res.childValid[1] && top < CLRT_FUSED_STACK_SIZE) {
-                    stack[top].path = res.childPath[1];
-                    stack[top].ray = res.childRay[1];
-                    ++top;
-                    ++secondary;
-                }
-                if (res.childValid[0]) {
-                    path = res.childPath[0];
-                    ray = res.childRay[0];
-                    ++secondary;
-                    continue;
-                }
-                if (top > 0) {
-                    --top;
-                    path = stack[top].path;
-                    ray = stack[top].ray;
-                    continue;
-                }
+                if (Fused_NextPath(&res, stack, &top, &path, &ray, &secondary)) continue;
 #endif
                 break;
             }

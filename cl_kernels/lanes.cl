@@ -17,9 +17,10 @@
  * Lanes_ScalarSurface, textures and instances included), every material (a direction-free f,
  * CLRT_BRDF_LAMBERTIAN, in lanes; a glossy or textured one per lane: Lanes_GlossyLightTerms,
  * Lanes_GlossyBounces) and every light (LightMesh and point lights in lanes, the others per lane:
- * Lanes_ScalarLightSample). Classic (direct-lighting) cameras of a scene under an environment light whose
- * materials make no children (Lanes_Direct): per lane render_fused's Fused_Path, but the environment light's
- * multi-sample MIS in steps across the lanes (Lanes_EnvMisShadows). Why lanes: a path's
+ * Lanes_ScalarLightSample). Classic (direct-lighting) cameras of a scene under an environment light
+ * (Lanes_Direct): per lane render_fused's Fused_Path, but the environment light's multi-sample MIS at the camera
+ * rays' hits in steps across the lanes (Lanes_EnvMisShadows); their children per lane as render_fused follows
+ * them (Lanes_DirectChildren). Why lanes: a path's
  * shading is a chain of dependent sqrt, division, sin/cos and loads; four paths go through it as one
  * chain of vector instructions (docs/studies/2026-12-05-simd-lanes-prototype.md).
  * Reads: the scene's geometry, materials and lights; writes: image, and rayCounts[0] += the bounce rays. */
@@ -680,28 +681,51 @@ inline uint Lanes_Paths(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int lightSlot
 
 /* ---- classic (direct-lighting) cameras ----------------------------------------------------------- */
 
-/* Samples s0 .. s0 + n - 1 (n <= 4) of pixel `pixel` under a classic (direct-lighting) camera, in a scene whose
- * materials make no children (lanesUnsupported): per lane render_fused's Fused_Path (the closest hit, Shade_Hit,
- * each light's shadow rays, Fused_Shadow), except an environment light's multi-sample MIS, made in steps across
- * the lanes (Lanes_EnvMisShadows); their radiance added to levelSum[0] in sample order. */
-inline void Lanes_Direct(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int lightSlots, int pixel, int px, int py, int s0,
-                         int n, float3* levelSum) {
+#ifdef CLRT_FUSED_BOUNCES
+/* The children of a classic camera ray's shaded hit (res) and theirs, as render_fused follows them: each path's
+ * radiance (Fused_Path) added to levelSum[min(depth, levels - 1)]; returns how many were traced. */
+inline uint Lanes_DirectChildren(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int lightSlots, const ShadeResult* res, int levels,
+                                 float3* levelSum) {
+    FusedEntry stack[CLRT_FUSED_STACK_SIZE];
+    int top = 0;
+    uint secondary = 0;
+    PathState path;
+    Ray ray;
+    int more = Fused_NextPath(res, stack, &top, &path, &ray, &secondary);
+    while (more) {
+        ShadeResult child;
+        levelSum[min(path.depth, levels - 1)] += Fused_Path(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) lightSlots, path, ray, &child);
+        more = Fused_NextPath(&child, stack, &top, &path, &ray, &secondary);
+    }
+    return secondary;
+}
+#endif
+
+/* Samples s0 .. s0 + n - 1 (n <= 4) of pixel `pixel` under a classic (direct-lighting) camera (no tree of paths:
+ * lanesUnsupported): per lane render_fused's Fused_Path (the closest hit, Shade_Hit, each light's shadow rays,
+ * Fused_Shadow), except an environment light's multi-sample MIS at the camera rays' hits, made in steps across
+ * the lanes (Lanes_EnvMisShadows); then each lane's children (mirror, conductor, dielectric) as render_fused
+ * follows them (Lanes_DirectChildren). Their radiance added to levelSum[min(depth, levels - 1)], the camera
+ * rays' in sample order; returns how many children were traced. */
+inline uint Lanes_Direct(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int lightSlots, int pixel, int px, int py, int s0,
+                         int n, int levels, float3* levelSum) {
     PathState path[CLRT_LANES];
     Ray ray[CLRT_LANES];
+    ShadeResult res[CLRT_LANES];
     ShadingPoint sp[CLRT_LANES];
     float4 sum[CLRT_LANES];
     const LaneU sample = Lanes_CameraRays(cam, scene, pixel, px, py, s0, n, path, ray);
     int shaded = 0;
     for (int k = 0; k < CLRT_LANES; ++k) {
         sum[k] = (float4)(0.0f);
+        for (int c = 0; c < CLRT_SHADE_CHILDREN; ++c) res[k].childValid[c] = 0;
         if (k >= n) continue;
         int instance;
         const Hit h = Ray_Closest(ray[k], scene, nodes, leaves, tris, spheres, planes, instances, &instance);
-        ShadeResult res;
         Shade_Hit(scene, cam, path[k], ray[k], h, instance, tris, triShading, triAttributes, spheres, planes, instances,
-                  materials, textureSets, textures, images, texels, lights, envDist, lightData, &res);
-        sum[k] = res.radiance;
-        sp[k] = res.sp;
+                  materials, textureSets, textures, images, texels, lights, envDist, lightData, &res[k]);
+        sum[k] = res[k].radiance;
+        sp[k] = res[k].sp;
         if (sp[k].position.w > 0.0f) shaded |= 1 << k;
         else if (scene.numLights > 0) sum[k] += (float4)(0.0f); /* as Fused_Path */
     }
@@ -728,6 +752,12 @@ inline void Lanes_Direct(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int lightSlo
         }
     }
     for (int k = 0; k < n; ++k) levelSum[0] += finiteOrZero(sum[k].xyz);
+    uint secondary = 0;
+#ifdef CLRT_FUSED_BOUNCES
+    for (int k = 0; k < n; ++k)
+        secondary += Lanes_DirectChildren(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) lightSlots, &res[k], levels, levelSum);
+#endif
+    return secondary;
 }
 
 /* Parameters: src/shared/kernel_params.h (CLRT_KERNEL_render_lanes: render_fused's). A work-item: its
@@ -751,8 +781,8 @@ __kernel CLRT_KERNEL_VEC_HINT void render_lanes(CLRT_KERNEL_PARAMS(render_lanes)
                                      min(CLRT_LANES, total - s), levels, levelSum);
         else
 #endif
-            Lanes_Direct(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) lightSlots, pixel, px, py, firstSample + s,
-                         min(CLRT_LANES, total - s), levelSum);
+            secondary += Lanes_Direct(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) lightSlots, pixel, px, py, firstSample + s,
+                                      min(CLRT_LANES, total - s), levels, levelSum);
     for (int d = 0; d < levels; ++d) acc.xyz += levelSum[d];
     image[pixel] = acc;
     if (secondary > 0) atomic_add(&rayCounts[0], secondary);

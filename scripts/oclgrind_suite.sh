@@ -115,10 +115,11 @@ done < scripts/kernel_variants.txt
 # The lanes kernel (cl_kernels/lanes.cl, render_lanes), four samples so that every lane works: the hw6 path
 # box (LightMesh and point light, eight cameras: NEE, importance, MIS, roulette), scenes/lanes_mix.xml
 # (the per-lane code: a textured hit, a glossy BRDF, a mirror, sphere and area lights, misses), and a classic
-# camera under an environment map (Lanes_Direct, the MIS pair in steps across the lanes).
+# camera under an environment map with a mirror (Lanes_Direct: the MIS pair in steps across the lanes, then
+# the children: Lanes_DirectChildren).
 for pass in $PASSES; do
   mkdir -p "$OUT/img/lanes-$pass" "$OUT/img/lanes-mix-$pass" "$OUT/img/lanes-env-$pass"
-  spawn lanes-env "$pass" --pipeline-of lanes build/clrt render "$SCENES/hw5/sphere_env_light_courtyard.xml" \
+  spawn lanes-env "$pass" --pipeline-of lanes build/clrt render scenes/env_turned.xml \
     --resolution 8x8 --spp 4 -o "$OUT/img/lanes-env-$pass" -v --pipeline lanes
   spawn lanes "$pass" --pipeline-of lanes build/clrt render "$SCENES/hw6/cornellbox_jaroslav_path_diffuse.xml" \
     --resolution 8x8 --spp 4 -o "$OUT/img/lanes-$pass" -v --pipeline lanes

@@ -4,7 +4,8 @@
 // point light), each also under MIS with the power and the balance heuristic, against render_fused's
 // image: the difference under 1e-5 of the noise between two seeds (PoCL: ~1e-13 of it), the same ray
 // counts; specular children (a mirror beside a diffuse part, glass; the classic Cornell box with a point
-// light only); classic cameras with an environment light (its MIS in steps across the lanes). Also: which scenes and cameras it takes (lanesFamily, lanesUnsupported, auto), determinism,
+// light only); classic cameras with an environment light (its MIS in steps across the lanes), and their children
+// (mirror, glass). Also: which scenes and cameras it takes (lanesFamily, lanesUnsupported, auto), determinism,
 // sample counts that are no multiple of four, launches of several passes, the fallback to render_fused.
 #include <catch.hpp>
 
@@ -318,6 +319,42 @@ TEST_CASE("lanes: classic cameras with an environment light as render_fused (its
     CHECK(compared == 9);
 }
 
+TEST_CASE("lanes: classic cameras' children (mirror, glass) under an environment light as render_fused", "[lanes][shared]") {
+    if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
+    // The camera rays' hits in the lanes (their MIS pair in steps), their children as render_fused follows them
+    // (Lanes_DirectChildren): the sphere under a lat-long map made a mirror with a diffuse part, and the sphere made
+    // glass (8 spp: no split, one child by Fresnel weight); scenes/env_turned.xml as it is (its mirror); the
+    // course's mirror and glass spheres inside a light probe. Every child's depth-1+ sums and ray counts.
+    int compared = 0;
+    for (const std::string& f : {sharedDir() + "/scenes/hw5/sphere_env_light_courtyard.xml",
+                                std::string(CLRT_SOURCE_DIR) + "/scenes/env_turned.xml",
+                                sharedDir() + "/scenes/hw5/mirror_sphere_env_interior_probe.xml",
+                                sharedDir() + "/scenes/hw5/glass_sphere_env_interior.xml"}) {
+        for (int variant = 0; variant < (f.find("sphere_env_light_courtyard") != std::string::npos ? 2 : 1); ++variant) {
+            Scene scene = loadScene(f);
+            if (f.find("sphere_env_light_courtyard") != std::string::npos) {
+                mirrorFirstSphere(scene, 0.6f);
+                if (variant == 1) {
+                    Material& m = scene.materials.back();
+                    m.type = dev::MATERIAL_DIELECTRIC;
+                    m.refractionIndex = 1.5f;
+                    m.absorptionCoefficient = {0.1f, 0.2f, 0.3f};
+                }
+            }
+            DeviceScene ds = flattenScene(scene);
+            INFO(f << " variant " << variant << ": " << lanesFamily(ds));
+            REQUIRE(lanesFamily(ds).empty());
+            REQUIRE(ds.features.bounces());
+            Renderer r(testContext(), ds);
+            Camera cam = scene.cameras.at(0);
+            REQUIRE(cam.pathMode == 0);
+            checkLanesAsFused(r, cam, 40, 1e-5, 1e-6);
+            ++compared;
+        }
+    }
+    CHECK(compared == 5);
+}
+
 TEST_CASE("lanes: textures, bump and normal maps, device instances per lane as render_fused", "[lanes][shared]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
     // A textured, bump-mapped, normal-mapped or instanced hit gets Shade_Hit's surface per lane
@@ -442,14 +479,14 @@ TEST_CASE("lanes: deterministic, several launches and sample counts that are no 
 
 TEST_CASE("lanes: which scenes and cameras it takes; auto takes it on CPU devices", "[lanes][shared]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
-    // Out of its family: motion blur; classic cameras alone without an environment light, or with one in a
-    // scene whose materials make children (a mirror).
-    for (const char* f : {kPathBox, "hw5/cube_point.xml", "hw5/sphere_env_light_courtyard.xml"}) {
+    // Out of its family: motion blur; classic cameras alone without an environment light (with one, a scene
+    // whose materials make children is in: a mirror).
+    for (const char* f : {kPathBox, "hw5/cube_point.xml"}) {
         INFO(f);
         Scene scene = loadScene(sharedDir() + "/scenes/" + f);
         if (std::string(f) == kPathBox) scene.shapes.at(0).motion = {0.1f, 0.0f, 0.0f};
         else for (Camera& c : scene.cameras) c.pathMode = 0;
-        if (std::string(f) == "hw5/sphere_env_light_courtyard.xml") mirrorFirstSphere(scene, 0.6f);
+        mirrorFirstSphere(scene, 0.6f);
         DeviceScene ds = flattenScene(scene);
         INFO(lanesFamily(ds));
         CHECK_FALSE(lanesFamily(ds).empty());
@@ -490,13 +527,16 @@ TEST_CASE("lanes: which scenes and cameras it takes; auto takes it on CPU device
     dev::SceneParams indep = sp;  // test "lanes: the zsobol, independent and correlated samplers"
     indep.pixelSampler = CLRT_PIXEL_SAMPLER_INDEPENDENT;
     CHECK(lanesUnsupported(indep, plan, "", true).empty());
-    dev::SceneParams classic = sp;  // a classic camera: only where no material makes children
+    dev::SceneParams classic = sp;  // a classic camera: its children too, but not a split (tree of paths)
     classic.pathMode = 0;
     CHECK(lanesUnsupported(classic, plan, "", true).empty());
     FusedPlan bounces = plan;
     bounces.bounces = true;
-    CHECK_FALSE(lanesUnsupported(classic, bounces, "", true).empty());
+    CHECK(lanesUnsupported(classic, bounces, "", true).empty());
     CHECK(lanesUnsupported(sp, bounces, "", true).empty());
+    dev::SceneParams split = classic;
+    split.splitDepth = 2;
+    CHECK_FALSE(lanesUnsupported(split, bounces, "", true).empty());
     FusedPlan tree = plan;
     tree.tree = true;
     CHECK_FALSE(lanesUnsupported(sp, tree, "", true).empty());

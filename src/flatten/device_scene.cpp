@@ -45,9 +45,8 @@ std::vector<std::string> FeatureSet::defines() const {
 std::string lanesFamily(const DeviceScene& ds) {
     const FeatureSet& f = ds.features;
     // A classic camera gains from the lanes only through an environment light's multi-sample MIS in steps
-    // (Lanes_EnvMisShadows), and they take it only where no material makes children (Lanes_Direct).
+    // (Lanes_EnvMisShadows, at the camera rays' hits; their children go as in render_fused: Lanes_Direct).
     if (!f.pathTracing && !f.has(dev::LIGHT_ENVIRONMENT)) return "no path-traced camera, no environment light";
-    if (!f.pathTracing && f.bounces()) return "no path-traced camera; classic cameras with reflections or refractions";
     if (f.mipMaps) return "mip-mapped textures";
     if (f.motionBlur) return "motion blur";
     return "";

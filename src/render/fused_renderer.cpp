@@ -52,7 +52,6 @@ Pipeline choosePipeline(Pipeline requested, const DeviceInfo& device, size_t num
 std::string lanesUnsupported(const dev::SceneParams& sp, const FusedPlan& plan, const std::string& notFamily, bool cpuDevice) {
     if (!cpuDevice) return "not a CPU device";
     if (!notFamily.empty()) return "scene: " + notFamily;
-    if (sp.pathMode == 0 && plan.bounces) return "classic camera with reflections or refractions";
     if (sp.pathMode & CLRT_PATH_RR_COURSE) return "--rr-rule course";
     if (plan.tree || sp.splitDepth > 0) return "a tree of paths (splits)";
     return "";

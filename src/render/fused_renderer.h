@@ -38,8 +38,8 @@ Pipeline choosePipeline(Pipeline requested, const DeviceInfo& device, size_t num
                         std::string* why = nullptr);
 
 // Why render_lanes cannot render this camera ("" when it can): the scene is not of its family
-// (notFamily: lanesFamily's reason, src/flatten/device_scene.h), or the camera or settings ask for what it lacks (a
-// classic camera's children, the course's roulette, a split or tree of paths, a device other than a CPU).
+// (notFamily: lanesFamily's reason, src/flatten/device_scene.h), or the camera or settings ask for what it lacks (the
+// course's roulette, a split or tree of paths, a device other than a CPU).
 std::string lanesUnsupported(const dev::SceneParams& sp, const FusedPlan& plan, const std::string& notFamily, bool cpuDevice);
 
 // Why the fused path cannot render this plan ("" when it can): more depths than CLRT_FUSED_MAX_LEVELS
