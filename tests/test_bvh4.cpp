@@ -43,11 +43,12 @@ float lane(const dev::float4& v, int i) { return (&v.x)[i]; }
 int lane(const dev::int4& v, int i) { return (&v.x)[i]; }
 
 // Walks the 4-wide tree from the root: every node reached once, every leaf block owned by one leaf
-// lane, every primitive in exactly one leaf lane's blocks (and lanes past a leaf's end empty), every lane's box inside the box its parent lane gave, empty lanes marked.
+// lane, every primitive in exactly one leaf lane's blocks (and lanes past a leaf's end empty), every lane's box inside the box its parent lane gave, empty lanes marked
+// and last, the other lanes ordered by area, largest first (the order shadow rays visit them in).
 void checkStructure4(const Bvh& bin, const Bvh4& b4, const std::vector<Aabb>& boxes) {
     const int n = int(bin.primRefs.size());
     std::vector<int> covered(size_t(n), 0), reached(b4.nodes.size(), 0), blockUse(b4.leaves.size(), 0);
-    int badBox = 0, badEmpty = 0, badChild = 0, maxLevel = 0;
+    int badBox = 0, badEmpty = 0, badChild = 0, badOrder = 0, maxLevel = 0;
     struct Item { int node, level; Aabb box; };
     Aabb all;
     all.min = Vec3(-INFINITY); all.max = Vec3(INFINITY);
@@ -60,11 +61,22 @@ void checkStructure4(const Bvh& bin, const Bvh4& b4, const std::vector<Aabb>& bo
         reached[size_t(it.node)]++;
         maxLevel = std::max(maxLevel, it.level);
         const dev::Bvh4Node& nd = b4.nodes[size_t(it.node)];
+        double lastArea = INFINITY;
+        bool seenEmpty = false;
         for (int i = 0; i < 4; ++i) {
             const int child = lane(nd.child, i), count = lane(nd.count, i);
             Aabb box;
             box.min = Vec3(lane(nd.minX, i), lane(nd.minY, i), lane(nd.minZ, i));
             box.max = Vec3(lane(nd.maxX, i), lane(nd.maxY, i), lane(nd.maxZ, i));
+            if (child != CLRT_INVALID) {
+                const double dx = double(box.max.x) - box.min.x, dy = double(box.max.y) - box.min.y,
+                             dz = double(box.max.z) - box.min.z;
+                double area = dx >= 0 && dy >= 0 && dz >= 0 ? dx * dy + dy * dz + dz * dx : 0;
+                if (!(area >= 0)) area = 0;
+                badOrder += seenEmpty || area > lastArea;
+                lastArea = area;
+            }
+            seenEmpty = seenEmpty || child == CLRT_INVALID;
             if (child == CLRT_INVALID) {
                 badEmpty += !(count == 0 && box.min.x == INFINITY && box.max.x == -INFINITY &&
                               box.min.z == INFINITY && box.max.z == -INFINITY);
@@ -105,6 +117,7 @@ void checkStructure4(const Bvh& bin, const Bvh4& b4, const std::vector<Aabb>& bo
     CHECK(badBox == 0);
     CHECK(badEmpty == 0);
     CHECK(badChild == 0);
+    CHECK(badOrder == 0);
     CHECK(maxLevel == b4.depth);
     CHECK(b4.depth <= bin.depth);
     CHECK(b4.maxStack <= CLRT_BVH4_STACK_SIZE);

@@ -324,7 +324,8 @@ TEST_CASE("lanes: classic cameras' children (mirror, glass) under an environment
     // The camera rays' hits in the lanes (their MIS pair in steps), their children as render_fused follows them
     // (Lanes_DirectChildren): the sphere under a lat-long map made a mirror with a diffuse part, and the sphere made
     // glass (8 spp: no split, one child by Fresnel weight); scenes/env_turned.xml as it is (its mirror); the
-    // course's mirror and glass spheres inside a light probe. Every child's depth-1+ sums and ray counts.
+    // course's mirror sphere inside a light probe and glass sphere inside a lat-long map. The children's depths'
+    // sums and the ray counts (checkLanesAsFused).
     int compared = 0;
     for (const std::string& f : {sharedDir() + "/scenes/hw5/sphere_env_light_courtyard.xml",
                                 std::string(CLRT_SOURCE_DIR) + "/scenes/env_turned.xml",

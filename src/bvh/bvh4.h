@@ -1,7 +1,8 @@
 // Collapse of the binary SAH tree (bvh.h) into the 4-wide nodes the device traverses
 // (dev::Bvh4Node in shared/device_types.h): each 4-wide node takes a binary node's children and keeps
 // opening its largest-area interior child until it has four (Wald et al. 2008, "Getting rid of
-// packets"; Embree's BVH4 is built the same way). A leaf's primitives (the binary tree's own leaves,
+// packets"; Embree's BVH4 is built the same way), its lanes ordered by area, largest first (the order
+// shadow rays visit them in). A leaf's primitives (the binary tree's own leaves,
 // in primRefs order) are copied into blocks of four (dev::Bvh4Leaf) with their triangles' vertices
 // as struct of arrays, so the device tests a leaf's triangles four at a time.
 #pragma once

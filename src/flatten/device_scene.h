@@ -110,7 +110,8 @@ std::vector<dev::float4> imageTexels(const DeviceScene& ds, int image);
 // Camera frame and image plane for the kernels, and numSamples.
 // Whether a flattened scene is of the lanes kernel's family (cl_kernels/lanes.cl, render_lanes): a
 // path-traced camera, or classic cameras with an environment light (their children, of mirrors, conductors
-// and dielectrics, too); no motion blur or mip-maps (every light, material, BRDF, texture and instance is in). "" when it is, else the first reason it is not.
+// and dielectrics, too); no motion blur or mip-maps (every light, material, BRDF, texture and instance is in).
+// "" when it is, else the first reason it is not.
 std::string lanesFamily(const DeviceScene& ds);
 
 // Why `--pipeline auto` leaves a camera of the lanes' family to render_fused ("" when it takes the lanes): a
