@@ -250,12 +250,11 @@ inline void Lanes_Subtended(LaneV3 a, LaneV3 b, LaneV3 c, LaneV3 n, LaneV3 p, La
     *den = la * lb * lc + LaneV3_Dot(ra, rb) * lc + LaneV3_Dot(ra, rc) * lb + LaneV3_Dot(rb, rc) * la;
 }
 
-/* MeshLight_Weight at the lanes' points p, the same operations in lanes. */
-inline LaneF Lanes_MeshLightWeight(float3 a, float3 b, float3 c, LaneV3 p) {
-    LaneF num, den;
-    Lanes_Subtended(LaneV3_Splat(a), LaneV3_Splat(b), LaneV3_Splat(c), LaneV3_Splat(cross(b - a, c - a)), p, &num, &den);
-    const LaneF w = select((LaneF)(CLRT_MESHLIGHT_WEIGHT_CAP), num / den, den * CLRT_MESHLIGHT_WEIGHT_CAP > num);
-    return select((LaneF)(0.0f), w, num > 0.0f);
+/* MeshLight_Weight at the lanes' points p, the same operations in lanes; *num, *den: its Lanes_Subtended terms. */
+inline LaneF Lanes_MeshLightWeight(float3 a, float3 b, float3 c, LaneV3 p, LaneF* num, LaneF* den) {
+    Lanes_Subtended(LaneV3_Splat(a), LaneV3_Splat(b), LaneV3_Splat(c), LaneV3_Splat(cross(b - a, c - a)), p, num, den);
+    const LaneF w = select((LaneF)(CLRT_MESHLIGHT_WEIGHT_CAP), *num / *den, *den * CLRT_MESHLIGHT_WEIGHT_CAP > *num);
+    return select((LaneF)(0.0f), w, *num > 0.0f);
 }
 
 /* MeshLight_Facing of triangle (a, b, c) for the lanes' points p: the lanes that see its inner side, and those
@@ -287,9 +286,11 @@ inline LaneV3 Lanes_SphericalDirection(LaneV3 a, LaneV3 b, LaneV3 c, LaneF halfO
 }
 
 /* MeshLight_PickByWeight for the lanes (n <= CLRT_MESHLIGHT_PICK_MAX): the picked triangles, *uRest, and
- * *total (Σw) and *wPick (the pick's w) from which the caller makes A·Σw / w; *wPick 0 where nothing is picked. */
+ * *total (Σw) and *wPick (the pick's w) from which the caller makes A·Σw / w; *wPick 0 where nothing is picked.
+ * *num, *den: the picked triangle's Lanes_Subtended terms (its solid angle's; 0 and 1 where its weight was not
+ * computed: no lane sees it, and then it is not picked). */
 inline LaneI Lanes_PickByWeight(const __global Light* light, const __global float4* tri, int n, LaneV3 p, LaneF u,
-                                LaneF* uRest, LaneF* total, LaneF* wPick) {
+                                LaneF* uRest, LaneF* total, LaneF* wPick, LaneF* num, LaneF* den) {
     LaneF w[CLRT_MESHLIGHT_PICK_MAX > 0 ? CLRT_MESHLIGHT_PICK_MAX : 1];
     LaneI hidden[CLRT_MESHLIGHT_PICK_MAX > 0 ? CLRT_MESHLIGHT_PICK_MAX : 1], outside = (LaneI)(0);
     const int enclosed = light->position.w > 0.0f; /* MeshLight_Weights: hidden triangles weigh 0 */
@@ -297,22 +298,30 @@ inline LaneI Lanes_PickByWeight(const __global Light* light, const __global floa
         hidden[i] = enclosed ? Lanes_MeshLightInner(tri[3 * i].xyz, tri[3 * i + 1].xyz, tri[3 * i + 2].xyz, p,
                                                     light->position.xyz, &outside)
                              : (LaneI)(0);
-    LaneF sum = (LaneF)(0.0f);
+    LaneF sum = (LaneF)(0.0f), nums[CLRT_MESHLIGHT_PICK_MAX > 0 ? CLRT_MESHLIGHT_PICK_MAX : 1],
+                              dens[CLRT_MESHLIGHT_PICK_MAX > 0 ? CLRT_MESHLIGHT_PICK_MAX : 1];
     for (int i = 0; i < n; ++i) { /* a triangle no lane sees is not weighed */
         hidden[i] &= outside;
+        nums[i] = (LaneF)(0.0f);
+        dens[i] = (LaneF)(1.0f);
         w[i] = all(hidden[i]) ? (LaneF)(0.0f)
-                              : select(Lanes_MeshLightWeight(tri[3 * i].xyz, tri[3 * i + 1].xyz, tri[3 * i + 2].xyz, p),
+                              : select(Lanes_MeshLightWeight(tri[3 * i].xyz, tri[3 * i + 1].xyz, tri[3 * i + 2].xyz, p,
+                                                             &nums[i], &dens[i]),
                                        (LaneF)(0.0f), hidden[i]);
         sum += w[i];
     }
     const LaneF x = u * sum;
     LaneF below = (LaneF)(0.0f), wk = w[0];
     LaneI k = (LaneI)(0), going = (LaneI)(-1);
+    *num = nums[0];
+    *den = dens[0];
     for (int i = 0; i < n - 1; ++i) { /* as the scalar loop: past triangle i while x is not below its end */
         going &= !(x < below + w[i]);
         below = select(below, below + w[i], going);
         k = select(k, (LaneI)(i + 1), going);
         wk = select(wk, w[i + 1], going);
+        *num = select(*num, nums[i + 1], going);
+        *den = select(*den, dens[i + 1], going);
     }
     const LaneI ok = (sum > 0.0f) & isfinite(sum) & (wk > 0.0f);
     *uRest = select((LaneF)(0.5f), clamp((x - below) / wk, 0.0f, 0.99999994f), ok);
@@ -354,9 +363,9 @@ inline LaneI Lanes_MeshLightDirection(LaneV3 a, LaneV3 b, LaneV3 c, LaneV3 nL, L
 inline void Lanes_MeshLightSample(const __global Light* light, const __global float4* lightData, LaneV3 p, LaneF u1,
                                   LaneF u2, LaneV3* wi, LaneF* dist, LaneV3* e) {
     const __global float4* tri = lightData + light->objFirst;
-    LaneF ux, total = (LaneF)(0.0f), wPick = (LaneF)(0.0f);
+    LaneF ux, total = (LaneF)(0.0f), wPick = (LaneF)(0.0f), num, den;
     const int byWeight = light->objCount <= CLRT_MESHLIGHT_PICK_MAX;
-    const LaneI pick = byWeight ? Lanes_PickByWeight(light, tri, light->objCount, p, u1, &ux, &total, &wPick)
+    const LaneI pick = byWeight ? Lanes_PickByWeight(light, tri, light->objCount, p, u1, &ux, &total, &wPick, &num, &den)
                                 : Lanes_PickTriangle(tri, light->objCount, u1, &ux);
     int at[CLRT_LANES];
     float3 v0[CLRT_LANES], v1[CLRT_LANES], v2[CLRT_LANES];
@@ -372,8 +381,9 @@ inline void Lanes_MeshLightSample(const __global Light* light, const __global fl
     const LaneV3 nL = LaneV3_Normalize(n);
     /* 1 / P(pick): Σw / w by weight, A / A_k by area */
     const LaneF invPick = byWeight ? select((LaneF)(0.0f), total / wPick, wPick > 0.0f) : light->area / vload4(0, areaK);
-    LaneF num, den; /* the lanes whose triangle's Ω is sampled uniformly (MeshLight_SolidAngle, _BySolidAngle) */
-    Lanes_Subtended(a, b, c, n, p, &num, &den);
+    /* the lanes whose triangle's Ω is sampled uniformly (MeshLight_SolidAngle, _BySolidAngle); a pick by weight
+     * has the picked triangle's terms already */
+    if (!byWeight) Lanes_Subtended(a, b, c, n, p, &num, &den);
     const LaneF omega = 2.0f * atan2(num, den);
     const LaneI sph = (omega > CLRT_MESHLIGHT_SPHERICAL_MIN) & (omega < CLRT_MESHLIGHT_SPHERICAL_MAX);
     LaneF value = (LaneF)(0.0f);
