@@ -162,6 +162,12 @@ inline float3 MotionBlur_RestOrigin(float3 org, float time, float3 motion) {
 #endif
 }
 
+/* A box's exit distance, and the ray's tMax when a box is held against it, widened by 1 + 2γ3 (pbrt): a hit the
+ * watertight triangle test accepts exactly on an edge may lie a few ULPs outside the triangle's tight box, and
+ * one it accepts within rounding of tMax (T < tMax·det) may lie in a box whose rounded entry is just past tMax
+ * (a shadow ray ends just short of its light point: its blocker there was missed, session 33). */
+#define CLRT_SLAB_WIDEN 1.0000004f
+
 /* Slab test; returns the entry distance or INFINITY when the box is missed within [0, tMax). */
 inline float Aabb_Intersect(float4 bmin, float4 bmax, float3 org, float3 invDir, float tMax) {
     float3 t0 = (bmin.xyz - org) * invDir;
@@ -174,10 +180,8 @@ inline float Aabb_Intersect(float4 bmin, float4 bmax, float3 org, float3 invDir,
     t1 = select(t1, invDir, isnan(t1));
     float3 tn = fmin(t0, t1), tf = fmax(t0, t1);
     float tEnter = fmax(fmax(tn.x, tn.y), fmax(tn.z, 0.0f));
-    /* Widened by 1 + 2γ3 (pbrt): a hit the watertight triangle test accepts exactly on an edge
-     * may lie a few ULPs outside the triangle's tight box. */
-    float tExit = fmin(fmin(tf.x, tf.y), tf.z) * 1.0000004f;
-    tExit = fmin(tExit, tMax);
+    float tExit = fmin(fmin(tf.x, tf.y), tf.z) * CLRT_SLAB_WIDEN;
+    tExit = fmin(tExit, tMax * CLRT_SLAB_WIDEN);
     return tEnter <= tExit ? tEnter : INFINITY;
 }
 
@@ -345,10 +349,9 @@ __attribute__((always_inline)) inline int Bvh4_SlabTest(const __global Bvh4Node*
     tExit = tFx < tExit ? tFx : tExit;
     tExit = tFy < tExit ? tFy : tExit;
     tExit = tFz < tExit ? tFz : tExit;
-    /* Widened by 1 + 2γ3 (pbrt): a hit the watertight triangle test accepts exactly on an edge may lie
-     * a few ULPs outside the triangle's tight box. */
-    tExit = tExit * 1.0000004f;
-    tExit = tExit < tMax ? tExit : (float4)(tMax);
+    tExit = tExit * CLRT_SLAB_WIDEN; /* both widened: CLRT_SLAB_WIDEN */
+    const float tEnd = tMax * CLRT_SLAB_WIDEN;
+    tExit = tExit < tEnd ? tExit : (float4)(tEnd);
     *isHit = tEnter <= tExit;
     *tEnterOut = tEnter;
     return -((*isHit).s0 + (*isHit).s1 + (*isHit).s2 + (*isHit).s3);
@@ -485,7 +488,7 @@ inline int Bvh_Traverse(const __global Bvh4Node* nodes, const __global Bvh4Leaf*
 #endif
             if (sp == 0) return found;
             --sp;
-            if ((flags & CLRT_RAY_ANY_HIT) || stackT[sp] <= tMax) { entry = stackEntry[sp]; break; }
+            if ((flags & CLRT_RAY_ANY_HIT) || stackT[sp] <= tMax * CLRT_SLAB_WIDEN) { entry = stackEntry[sp]; break; }
         }
     }
 }

@@ -148,7 +148,7 @@ Trace4 traverse4(const Bvh& bin, const Bvh4& b4, const std::vector<Tri>& tris, V
                     tEnter = std::fmax(tEnter, tn);
                     tExit = std::fmin(tExit, tf);
                 }
-                tExit = std::fmin(tExit * 1.0000004f, tMax);
+                tExit = std::fmin(tExit * 1.0000004f, tMax * 1.0000004f);  // CLRT_SLAB_WIDEN, both
                 if (!(tEnter <= tExit)) continue;
                 const int child = lane(nd.child, i), count = lane(nd.count, i);
                 hits.push_back({std::fmin(tEnter, FLT_MAX), count > 0 ? ~((child << 4) | count) : child});
@@ -178,7 +178,7 @@ Trace4 traverse4(const Bvh& bin, const Bvh4& b4, const std::vector<Tri>& tris, V
         while (!stack.empty()) {
             auto e = stack.back();
             stack.pop_back();
-            if (e.first <= tMax) { entry = e.second; next = true; break; }
+            if (e.first <= tMax * 1.0000004f) { entry = e.second; next = true; break; }
         }
         if (!next) return r;
     }
