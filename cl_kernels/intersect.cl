@@ -324,11 +324,11 @@ __attribute__((always_inline)) inline int Leaf_Intersect(const __global Bvh4Leaf
 /* ---- 4-wide nodes ---------------------------------------------------------------------------- */
 
 /* The slab tests of node n's four children: their entry distances (tEnter) and which are hit before
- * tMax (*isHit); returns how many are. The near and far planes of each axis are picked by the per-ray
+ * tEnd, the ray's tMax widened by CLRT_SLAB_WIDEN (*isHit); returns how many are. The near and far planes of each axis are picked by the per-ray
  * index near (minX 0 / maxX 1, minY 2 / maxY 3, minZ 4 / maxZ 5, by the sign of the direction): an
  * empty lane (min +inf, max -inf) is then never hit. */
 __attribute__((always_inline)) inline int Bvh4_SlabTest(const __global Bvh4Node* n, float3 org, float3 invDir, int nearX, int nearY, int nearZ,
-                         float tMax, float4* tEnterOut, int4* isHit) {
+                         float tEnd, float4* tEnterOut, int4* isHit) {
     /* The node's planes as an array (minX, maxX, minY, maxY, minZ, maxZ): one load each. */
     const __global float4* planes4 = &n->minX;
     const float4 tNx = (planes4[nearX] - org.x) * invDir.x;
@@ -349,8 +349,7 @@ __attribute__((always_inline)) inline int Bvh4_SlabTest(const __global Bvh4Node*
     tExit = tFx < tExit ? tFx : tExit;
     tExit = tFy < tExit ? tFy : tExit;
     tExit = tFz < tExit ? tFz : tExit;
-    tExit = tExit * CLRT_SLAB_WIDEN; /* both widened: CLRT_SLAB_WIDEN */
-    const float tEnd = tMax * CLRT_SLAB_WIDEN;
+    tExit = tExit * CLRT_SLAB_WIDEN; /* tEnd: the ray's tMax, widened the same (CLRT_SLAB_WIDEN) */
     tExit = tExit < tEnd ? tExit : (float4)(tEnd);
     *isHit = tEnter <= tExit;
     *tEnterOut = tEnter;
@@ -452,6 +451,7 @@ inline int Bvh_Traverse(const __global Bvh4Node* nodes, const __global Bvh4Leaf*
     int sp = 0;
     int entry = 0;
     int found = 0;
+    float tEnd = tMax * CLRT_SLAB_WIDEN; /* what boxes and popped entries are held against (CLRT_SLAB_WIDEN) */
 #ifdef CLRT_HAS_INSTANCES
     int instance = CLRT_INVALID, instanceSp = 0; /* the instance being traversed, the stack height it began at */
     if (scene.numInstances > 0) { stackEntry[0] = scene.instanceRoot; stackT[0] = 0.0f; sp = 1; }
@@ -461,7 +461,7 @@ inline int Bvh_Traverse(const __global Bvh4Node* nodes, const __global Bvh4Leaf*
             const __global Bvh4Node* n = &nodes[entry];
             float4 tEnter;
             int4 isHit;
-            const int nh = Bvh4_SlabTest(n, r.org, r.invDir, r.nearX, r.nearY, r.nearZ, tMax, &tEnter, &isHit);
+            const int nh = Bvh4_SlabTest(n, r.org, r.invDir, r.nearX, r.nearY, r.nearZ, tEnd, &tEnter, &isHit);
             if (nh > 0) {
                 entry = Bvh4_Children(n, tEnter, isHit, nh, flags, stackEntry, stackT, &sp);
                 continue;
@@ -476,6 +476,7 @@ inline int Bvh_Traverse(const __global Bvh4Node* nodes, const __global Bvh4Leaf*
         } else if (Leaf_Intersect(leaves, ~entry, tris, spheres, numTriangles, r.org, r.dir, r.orgK, r.shear, time,
                                   flags, cullBefore, &tMax, hit)) {
             found = 1;
+            tEnd = tMax * CLRT_SLAB_WIDEN;
 #ifdef CLRT_HAS_INSTANCES
             *hitInstance = instance;
 #endif
@@ -488,7 +489,7 @@ inline int Bvh_Traverse(const __global Bvh4Node* nodes, const __global Bvh4Leaf*
 #endif
             if (sp == 0) return found;
             --sp;
-            if ((flags & CLRT_RAY_ANY_HIT) || stackT[sp] <= tMax * CLRT_SLAB_WIDEN) { entry = stackEntry[sp]; break; }
+            if ((flags & CLRT_RAY_ANY_HIT) || stackT[sp] <= tEnd) { entry = stackEntry[sp]; break; }
         }
     }
 }
