@@ -7,7 +7,7 @@
 // Embree's single-ray API (rtcIntersect1 / rtcOccluded1) on N threads, and prints Mrays/s, the ratio
 // clrt/Embree, and how often the two agree on hit/miss (and on the primitive hit).
 //
-// usage: ray_bench SCENE [--runs 5] [--device SPEC] [--threads 2] [--dump FILE] [--embree-config STR]
+// usage: ray_bench SCENE [--runs 5] [--device SPEC] [--threads 2] [--dump FILE] [--embree-config STR] [--embree-robust]
 //                  [--instancing flatten|two-level|auto]   (clrt's layout; Embree always gets the flattened scene;
 //                  with two-level the "prim" agreement column compares different numberings: read the hit column)
 //   --threads T: Embree's thread count, and the whole process (so the OpenCL runtime's workers too) is
@@ -18,6 +18,9 @@
 //   --embree-config STR: appended to Embree's device configuration, e.g. "verbose=2": Embree then prints
 //   the BVH and intersector it picked (on this machine BVH8<triangle4>, BVH8Triangle4Intersector1Moeller)
 //   and its tree's statistics (nodes, fill, SAH cost).
+//   --embree-robust: Embree's scene with RTC_SCENE_FLAG_ROBUST ("robust traversal, no optimizations that
+//   reduce arithmetic accuracy ... rays shooting through edges of neighboring primitives"): Embree's mode
+//   for what clrt always does (watertight triangles). Its default mode tests triangles by Moeller-Trumbore.
 #include <embree3/rtcore.h>
 #include <sched.h>
 
@@ -87,6 +90,7 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
 
 struct Options {
     std::string scenePath, deviceSpec = "cpu", dumpPath, embreeConfig;
+    bool embreeRobust = false;
     Instancing instancing = Instancing::Flatten;  // --instancing: how clrt stores instanced meshes
     int runs = 5, threads = 2;
     bool threadsGiven = false;
@@ -95,18 +99,20 @@ struct Options {
 Options parseArgs(int argc, char** argv) {
     Options o;
     o.scenePath = argv[1];
-    for (int i = 2; i + 1 < argc; i += 2) {
-        std::string a = argv[i];
-        if (a == "--runs") o.runs = std::max(1, std::atoi(argv[i + 1]));
-        else if (a == "--device") o.deviceSpec = argv[i + 1];
-        else if (a == "--threads") o.threads = std::max(1, std::atoi(argv[i + 1])), o.threadsGiven = true;
-        else if (a == "--dump") o.dumpPath = argv[i + 1];
-        else if (a == "--embree-config") o.embreeConfig = argv[i + 1];
+    for (int i = 2; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a == "--embree-robust") { o.embreeRobust = true; continue; }
+        if (i + 1 >= argc) throw Error(a + ": expects a value (or is not an option)");
+        const std::string v = argv[++i];
+        if (a == "--runs") o.runs = std::max(1, std::atoi(v.c_str()));
+        else if (a == "--device") o.deviceSpec = v;
+        else if (a == "--threads") o.threads = std::max(1, std::atoi(v.c_str())), o.threadsGiven = true;
+        else if (a == "--dump") o.dumpPath = v;
+        else if (a == "--embree-config") o.embreeConfig = v;
         else if (a == "--instancing") {
-            const std::string v = argv[i + 1];
             if (v != "flatten" && v != "two-level" && v != "auto") throw Error("--instancing: flatten, two-level or auto");
             o.instancing = v == "flatten" ? Instancing::Flatten : v == "two-level" ? Instancing::TwoLevel : Instancing::Auto;
-        }
+        } else throw Error(a + ": unknown option");
     }
     return o;
 }
@@ -115,10 +121,11 @@ Options parseArgs(int argc, char** argv) {
 // API on `threads` threads.
 class EmbreeTracer {
 public:
-    EmbreeTracer(const DeviceScene& ds, int threads, const std::string& config) : threads_(threads) {
+    EmbreeTracer(const DeviceScene& ds, int threads, const std::string& config, bool robust) : threads_(threads) {
         const int numTris = ds.params.numTriangles;
         dev_ = rtcNewDevice(("threads=" + std::to_string(threads) + (config.empty() ? "" : "," + config)).c_str());
         scene_ = rtcNewScene(dev_);
+        if (robust) rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
         RTCGeometry geom = rtcNewGeometry(dev_, RTC_GEOMETRY_TYPE_TRIANGLE);
         float* vb = (float*)rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
                                                     size_t(numTris) * 3);
@@ -376,7 +383,7 @@ int main(int argc, char** argv) {
         own.instancing = opt.instancing;
         DeviceScene dsClrt = opt.instancing == Instancing::Flatten ? DeviceScene{} : flattenScene(scene, own);
         if (ds.params.numSpheres > 0) std::fprintf(stderr, "note: spheres are ignored by this benchmark\n");
-        EmbreeTracer embree(ds, opt.threads, opt.embreeConfig);
+        EmbreeTracer embree(ds, opt.threads, opt.embreeConfig, opt.embreeRobust);
         ClrtTracer clrt(opt.instancing == Instancing::Flatten ? ds : dsClrt, opt.deviceSpec, dump);
 
         RaySet camera = cameraRays(scene.cameras.at(0));

@@ -10,10 +10,11 @@
 Prints Markdown on stdout. Builds build/clrt and build/ray_bench first (cmake --build build --target
 ray_bench clrt; needs Debian libembree-dev); reads ../shared/scenes. Uses only the standard library.
 
-usage: scripts/speed_table.py [--runs 5] [--device cpu] [--build build] [--threads 1,2] [--rays-only]
+usage: scripts/speed_table.py [--runs 5] [--device cpu] [--build build] [--threads 1,2] [--rays-only] [--embree-robust]
   --threads: one ray_bench table per thread count, each run with ray_bench --threads T (Embree on T
   threads, the process pinned to T CPUs, PoCL told T workers); default: one table, Embree on 2 threads,
-  nothing pinned. --rays-only: the ray_bench tables only, no renders.
+  nothing pinned. --rays-only: the ray_bench tables only, no renders. --embree-robust: Embree with
+  RTC_SCENE_FLAG_ROBUST (ray_bench --embree-robust), its mode for rays that must not slip between triangles.
 """
 import argparse
 import datetime
@@ -63,8 +64,9 @@ def fmt(m, digits=2):
     return "%.*f [%.*f–%.*f]" % (digits, m[0], digits, m[1], digits, m[2])
 
 
-def ray_bench(exe, scene, runs, device, threads=None):
-    p = sh([exe, scene, "--runs", str(runs), "--device", device] + (["--threads", str(threads)] if threads else []))
+def ray_bench(exe, scene, runs, device, threads=None, robust=False):
+    p = sh([exe, scene, "--runs", str(runs), "--device", device] + (["--threads", str(threads)] if threads else []) +
+           (["--embree-robust"] if robust else []))
     if p.returncode != 0:
         return None, p.stderr.strip().splitlines()[-1:]
     rows = {}
@@ -98,6 +100,7 @@ def main():
     ap.add_argument("--build", default=os.path.join(ROOT, "build"))
     ap.add_argument("--threads", default="", help="comma-separated thread counts for ray_bench, e.g. 1,2")
     ap.add_argument("--rays-only", action="store_true", help="only the ray_bench tables")
+    ap.add_argument("--embree-robust", action="store_true", help="Embree in its robust mode (RTC_SCENE_FLAG_ROBUST)")
     a = ap.parse_args()
     clrt, rb = os.path.join(a.build, "clrt"), os.path.join(a.build, "ray_bench")
     # ray_bench is not in `all` (EXCLUDE_FROM_ALL): built here, it cannot lag behind the kernels it embeds.
@@ -109,15 +112,16 @@ def main():
 
     for threads in [int(t) for t in a.threads.split(",") if t] or [None]:
         if threads:
-            print("ray_bench --threads %d (Embree on %d threads; the process pinned to %d CPUs):\n"
-                  % (threads, threads, threads))
-        print("| scene | triangles | camera clrt / Embree Mrays/s (ratio) | shadow | diffuse | hit agreement |")
+            print("ray_bench --threads %d%s (Embree on %d threads; the process pinned to %d CPUs):\n"
+                  % (threads, " --embree-robust" if a.embree_robust else "", threads, threads))
+        print("| scene | triangles | camera clrt / Embree%s Mrays/s (ratio) | shadow | diffuse | hit agreement |"
+              % (" robust" if a.embree_robust else ""))
         print("|---|---|---|---|---|---|")
         for name, rel in SCENES:
             path = os.path.join(SHARED, rel)
             if not os.path.exists(path) or not os.path.exists(rb):
                 continue
-            res, err = ray_bench(rb, path, a.runs, a.device, threads)
+            res, err = ray_bench(rb, path, a.runs, a.device, threads, a.embree_robust)
             if res is None:
                 print("| %s | ray_bench failed: %s | | | | |" % (name, err))
                 continue

@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <cstring>
 #include <fstream>
-#include <map>
 #include <random>
 
 #include "bvh/bvh.h"
@@ -20,6 +19,7 @@
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
 #include "test_helpers.h"
+#include "watertight_sphere.h"
 
 using namespace clrt;
 using namespace clrt::test;
@@ -140,41 +140,6 @@ std::vector<dev::Hit> deviceClosest(const std::vector<dev::Triangle>& trisIn, co
 
 dev::Ray makeRay(const Vec3& o, const Vec3& d, float tMax = INFINITY) { return {f4(o), f4(d, tMax)}; }
 
-// Icosphere: a subdivided icosahedron projected onto the sphere (centre c, radius r), shared vertices.
-struct Mesh {
-    std::vector<Vec3> v;
-    std::vector<int> idx;
-};
-Mesh icosphere(int levels, const Vec3& c, float r) {
-    const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
-    std::vector<Vec3> dirs = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                              {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-    std::vector<int> f = {0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7, 6,
-                          7, 1, 8, 3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11, 6, 2, 10, 8, 6, 7, 9, 8, 1};
-    for (Vec3& d : dirs) d = normalize(d);
-    for (int l = 0; l < levels; ++l) {
-        std::map<std::pair<int, int>, int> mid;
-        auto midpoint = [&](int a, int b) {
-            auto key = std::minmax(a, b);
-            auto it = mid.find(key);
-            if (it != mid.end()) return it->second;
-            dirs.push_back(normalize(dirs[a] + dirs[b]));
-            return mid[key] = int(dirs.size()) - 1;
-        };
-        std::vector<int> nf;
-        for (size_t i = 0; i < f.size(); i += 3) {
-            int a = f[i], b = f[i + 1], cc = f[i + 2];
-            int ab = midpoint(a, b), bc = midpoint(b, cc), ca = midpoint(cc, a);
-            nf.insert(nf.end(), {a, ab, ca, b, bc, ab, cc, ca, bc, ab, bc, ca});
-        }
-        f.swap(nf);
-    }
-    Mesh m;
-    for (const Vec3& d : dirs) m.v.push_back(c + d * r);
-    m.idx = f;
-    return m;
-}
-
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------------
@@ -184,46 +149,9 @@ TEST_CASE("robust: watertight triangles on the device, rays aimed at vertices an
     for (const Vec3 centre : {Vec3(0, 0, 0), Vec3(0.37f, -0.21f, 0.05f), Vec3(1000.25f, -1000.5f, 1000.125f)}) {
         INFO("sphere centre " << centre.x << " " << centre.y << " " << centre.z);
         const float radius = centre.x > 100 ? 10.0f : 1.0f;
-        Mesh m = icosphere(3, centre, radius);  // 1280 triangles, 642 vertices
-        std::vector<dev::Triangle> tris;
-        for (size_t i = 0; i < m.idx.size(); i += 3)
-            tris.push_back({f4(m.v[m.idx[i]]), f4(m.v[m.idx[i + 1]]), f4(m.v[m.idx[i + 2]])});
-        std::mt19937 rng(7);
-        std::uniform_real_distribution<float> u(-1, 1);
-        auto insidePoint = [&]() {
-            for (;;) {
-                Vec3 p(u(rng), u(rng), u(rng));
-                if (length(p) < 0.85f) return centre + p * radius;
-            }
-        };
-        std::vector<dev::Ray> rays;
-        const size_t total = 100000;
-        // 1. From the exact centre and from random inside points exactly at every vertex.
-        for (const Vec3& v : m.v) {
-            rays.push_back(makeRay(centre, v - centre));
-            Vec3 o = insidePoint();
-            rays.push_back(makeRay(o, v - o));
-        }
-        // 2. At edge points (midpoints and other fractions, rounded to float: on or beside the edge).
-        for (size_t i = 0; i < m.idx.size() && rays.size() < total / 2; i += 3)
-            for (int e = 0; e < 3; ++e) {
-                const Vec3& a = m.v[m.idx[i + e]];
-                const Vec3& b = m.v[m.idx[i + (e + 1) % 3]];
-                for (float s : {0.5f, 0.25f, 1.0f / 3.0f}) {
-                    Vec3 target = a + (b - a) * s;
-                    Vec3 o = (e == 0) ? centre : insidePoint();
-                    rays.push_back(makeRay(o, target - o));
-                }
-            }
-        // 3. Random directions, some axis-aligned (zero direction components).
-        while (rays.size() < total) {
-            Vec3 o = rays.size() % 7 == 0 ? centre : insidePoint();
-            Vec3 d(u(rng), u(rng), u(rng));
-            if (rays.size() % 11 == 0) d = Vec3(0, 0, rays.size() % 2 ? 1.f : -1.f);
-            if (rays.size() % 13 == 0) d = Vec3(1, -1, 0);
-            rays.push_back(makeRay(o, d));
-        }
-        std::vector<dev::Hit> hits = deviceClosest(tris, {}, rays);
+        const WatertightCase wc = watertightSphere(centre, radius);  // 1280 triangles, 100,000 rays
+        const std::vector<dev::Ray>& rays = wc.rays;
+        std::vector<dev::Hit> hits = deviceClosest(wc.tris, {}, rays);
         size_t escaped = 0, badT = 0;
         std::string example;
         for (size_t i = 0; i < rays.size(); ++i) {
