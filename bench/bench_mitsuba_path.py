@@ -23,7 +23,7 @@ efficiency = 1/(relMSE x time); ratio clrt/Mitsuba = time factor x noise factor.
 --depth-check: the box at clrt depths 0 and 1 against Mitsuba max_depth d+1 and d+2 (the mapping's test).
 --scene-file FILE[@CAMERA],...: any course XML scene instead of the three above (user_scene below): one of
 its cameras (the first unless @N, 1-based), its own depth and RendererParams (or --path-params; Russian
-roulette removed, as above), the resolution scaled to --path-res on the long side, references of --path-ref-spp; what the
+roulette removed, as above; a camera that is not path traced is made so, with MultipleImportanceSampling), the resolution scaled to --path-res on the long side, references of --path-ref-spp; what the
 conversion cannot map is listed under the report's table ("Conversion warnings"), and the means must still
 agree within 1% for the efficiency to count.
 Writes mitsuba_path.csv, mitsuba_path_runs.csv, mitsuba_path_<scene>.png, mitsuba_path_report.md."""
@@ -134,8 +134,9 @@ def user_scene(spec, long_side, ref_spp):
 
 def user_scene_copy(sc, tmpdir, depth):
     """The copy of a --scene-file scene both renderers render: only its chosen camera (ImageName img.exr, the
-    reduced resolution, no NumSamples, Russian roulette removed from its RendererParams), file paths (PLY,
-    texture images) made absolute, MaxRecursionDepth set where clrt reads it when depth differs."""
+    reduced resolution, no NumSamples, path traced (a camera that is not gets Renderer PathTracing with
+    --path-params or MultipleImportanceSampling), Russian roulette removed from its RendererParams), file paths
+    (PLY, texture images) made absolute, MaxRecursionDepth set where clrt reads it when depth differs."""
     tree = ET.parse(sc["path"])
     root = tree.getroot()
     base = os.path.dirname(sc["path"])
@@ -168,8 +169,17 @@ def user_scene_copy(sc, tmpdir, depth):
         if text not in notes:
             notes.append(text)
 
-    path_traced = (keep.findtext("Renderer") or "").strip() == "PathTracing"
-    if sc.get("params") and path_traced:
+    if (keep.findtext("Renderer") or "").strip() != "PathTracing":
+        # Mitsuba's side is `path`: a camera the scene renders otherwise (direct lighting, the classic
+        # recursive tracer) is made path traced, with --path-params or else MIS, the strategy `path` uses.
+        set_child(keep, "Renderer", "PathTracing")
+        if rp is None:
+            rp = ET.SubElement(keep, "RendererParams")
+        old = (rp.text or "").strip()
+        rp.text = sc.get("params") or "MultipleImportanceSampling"
+        note("the camera made path traced in clrt (Renderer PathTracing, RendererParams '%s'; it had '%s')"
+             % (rp.text, old))
+    elif sc.get("params"):
         if rp is None:
             rp = ET.SubElement(keep, "RendererParams")
         if (rp.text or "").split() != sc["params"].split():
@@ -401,15 +411,22 @@ def report(B, a, metas, rows, seconds, device_name):
             " ".join("%.4f" % r for r in m["ratio"]), "yes" if m["agree"] else "**no**", m["refs_relmse"]))
     lines += ["", "| scene | spp | Mitsuba sampler | clrt s (CPU) | Mitsuba s (CPU) | clrt relMSE | Mitsuba relMSE | time factor (CPU) | "
               "noise factor | efficiency clrt/Mitsuba [min-max] | by CPU [min-max] |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+    agrees = {m["scene"]: m["agree"] for m in metas}
     for r in rows:
-        lines.append("| %s | %d | %s | %.3g (%.3g) | %.3g (%.3g) | %.3g | %.3g | %.2f (%.2f) | %.2f | **%.2f** [%.2f-%.2f] | "
-                     "**%.2f** [%.2f-%.2f] |" % (
+        # A scene whose references' means disagree renders two different images: its efficiency is shown,
+        # unmarked and flagged, but compares nothing.
+        eff = "**%.2f** [%.2f-%.2f]" if agrees.get(r["scene"], True) else "%.2f [%.2f-%.2f] (means disagree)"
+        lines.append(("| %s | %d | %s | %.3g (%.3g) | %.3g (%.3g) | %.3g | %.3g | %.2f (%.2f) | %.2f | " + eff + " | " + eff + " |") % (
                          r["scene"], r["spp"], r["mitsuba_sampler"], r["clrt_time_s"], r["clrt_cpu_render_s"], r["mitsuba_time_s"],
                          r["mitsuba_cpu_render_s"], r["clrt_relmse_net"], r["mitsuba_relmse_net"], r["time_factor"],
                          r["cpu_factor"], r["noise_factor"], r["eff_ratio"], r["eff_ratio_min"], r["eff_ratio_max"],
                          r["eff_ratio_cpu"], r["eff_ratio_cpu_min"], r["eff_ratio_cpu_max"]))
     lines += ["", "Efficiency ratio = time factor (Mitsuba s / clrt s) x noise factor (Mitsuba relMSE / clrt relMSE); "
               "> 1: clrt better. Spread: over run pairs of equal seed. Plots: mitsuba_path_<scene>.png.", ""]
+    for m in metas:
+        if not m["agree"]:
+            lines.append("**%s: the references' means disagree by more than 1%%: the two renderers do not render the "
+                         "same image (see the conversion warnings), so its efficiencies compare nothing.**" % m["scene"])
     for m in metas:
         lines.append("Conversion warnings, %s: %s" % (m["scene"], "; ".join(m["warnings"]) or "none"))
     return lines + [""]
