@@ -21,7 +21,7 @@ time, process wall and CPU time (getrusage of the child), Mitsuba's mi.render wa
 (time.process_time), both on the same thread count; relMSE of each against its own reference;
 efficiency = 1/(relMSE x time); ratio clrt/Mitsuba = time factor x noise factor.
 --depth-check: the box at clrt depths 0 and 1 against Mitsuba max_depth d+1 and d+2 (the mapping's test).
---scene-file FILE[@CAMERA],...: any course XML scene instead of the three above (user_scene below): one of
+--scene-file FILE[@CAMERA],...: any course scene (XML, or 2025 JSON: json_to_xml) instead of the three above (user_scene below): one of
 its cameras (the first unless @N, 1-based), its own depth and RendererParams (or --path-params; Russian
 roulette removed, as above; a camera that is not path traced is made so, with MultipleImportanceSampling), the resolution scaled to --path-res on the long side, references of --path-ref-spp; what the
 conversion cannot map is listed under the report's table ("Conversion warnings"), and the means must still
@@ -106,15 +106,53 @@ def veach_scene(sc, depth, tmpdir, params, area_light=False):
     return out
 
 
+def json_to_xml(path):
+    """A scene in the 2025 JSON form as the XML tree it transliterates (docs/scene-format.md, "The JSON form",
+    the rule clrt's reader follows: keys starting with '_' are attributes, "_data" an element's text when it
+    has attributes, an array the element repeated, numbers written as they stand)."""
+    import json
+
+    def text(v):
+        return ("true" if v else "false") if isinstance(v, bool) else str(v)
+
+    def fill(el, value):
+        if isinstance(value, dict):
+            for k, v in value.items():
+                if k == "_data":
+                    el.text = text(v)
+                elif k.startswith("_"):
+                    el.set(k[1:], text(v))
+                else:
+                    for item in (v if isinstance(v, list) else [v]):
+                        fill(ET.SubElement(el, k), item)
+        else:
+            el.text = text(value)
+
+    with open(path) as f:
+        doc = json.load(f)
+    if not isinstance(doc, dict) or "Scene" not in doc:
+        raise SystemExit("bench: --scene-file %s: no \"Scene\" at the top of the JSON" % path)
+    root = ET.Element("Scene")
+    fill(root, doc["Scene"])
+    return ET.ElementTree(root)
+
+
+def parse_scene(path):
+    """The scene file as an XML tree: XML as it is, the 2025 JSON form transliterated (json_to_xml)."""
+    with open(path, "rb") as f:
+        head = f.read(64).lstrip(b"\xef\xbb\xbf \t\r\n")
+    return json_to_xml(path) if head.startswith(b"{") else ET.parse(path)
+
+
 def user_scene(spec, long_side, ref_spp):
     """A SCENES entry for --scene-file FILE[@CAMERA]: the camera (1-based, default the first), its resolution
     scaled to long_side on the long side (aspect kept), its depth as clrt reads it (the camera's
     MaxRecursionDepth, else the scene's, else 6)."""
     path, _, cam = spec.partition("@")
     path = os.path.abspath(path)
-    if not path.endswith(".xml"):
-        raise SystemExit("bench: --scene-file %s: an XML course scene is needed (the converter reads XML)" % path)
-    root = ET.parse(path).getroot()
+    if not os.path.isfile(path):
+        raise SystemExit("bench: --scene-file %s: no such file" % path)
+    root = parse_scene(path).getroot()
     cams = list(root.find("Cameras")) if root.find("Cameras") is not None else []
     k = int(cam) if cam else 1
     if not 1 <= k <= len(cams):
@@ -137,7 +175,7 @@ def user_scene_copy(sc, tmpdir, depth):
     reduced resolution, no NumSamples, path traced (a camera that is not gets Renderer PathTracing with
     --path-params or MultipleImportanceSampling), Russian roulette removed from its RendererParams), file paths
     (PLY, texture images) made absolute, MaxRecursionDepth set where clrt reads it when depth differs."""
-    tree = ET.parse(sc["path"])
+    tree = parse_scene(sc["path"])  # a JSON scene is rendered by both from its XML transliteration
     root = tree.getroot()
     base = os.path.dirname(sc["path"])
     for el in root.iter():
