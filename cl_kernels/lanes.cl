@@ -2,21 +2,22 @@
  * compiled under CLRT_HAS_LANES: FeatureSet::lanes). A work-item takes its pixel's samples four at a
  * time (lane k: sample s0 + k) and steps their paths together, one depth per round:
  *   per lane, scalar: the closest hit (Ray_Closest) and the loads of what it hit (Lanes_Closest), the
- *     surface of any hit but a plain triangle (Lanes_ScalarSurface), the material's f, a glossy or textured
- *     material's f, pdf and bounce, the samples of lights without a lane form (Lanes_ScalarLightSample), the
+ *     surface of any hit but a plain triangle (Lanes_ScalarSurface), the material's f, the samples of lights
+ *     without a lane form (Lanes_ScalarLightSample), the
  *     shadow rays' occlusion (Shadow_Occluded), the specular pick and a mirror's, conductor's or
  *     dielectric's child (Path_SpecularBounce), roulette;
  *   in lanes: a plain triangle's surface, the facing and the emission the ray sees (Lanes_Surfaces: the
  *     path branch of Shade_Hit and the start of Path_ShadeHit), the sampler (Lanes_Stratified2D), the
- *     LightMesh and point-light samples (MeshLight_PickTriangle, MeshLight_Sample, Shadow_Make,
- *     Path_LightSampleWeight, ObjectLight_AimShadow) and the bounce (Path_SampleBounce, Path_Child).
+ *     LightMesh, LightSphere and point-light samples (MeshLight_PickTriangle, MeshLight_Sample, SphereLight_Sample, Shadow_Make,
+ *     Path_LightSampleWeight, ObjectLight_AimShadow), a glossy or textured material's f, pdf and bounce
+ *     (lanes_brdf.cl) and the bounce (Path_SampleBounce, Path_Child).
  * It computes what render_fused computes for the same random streams, up to rounding (tests/test_lanes.cpp):
  * one lane is one path of the fused kernel. Scenes of its family only (src/flatten/device_scene.h
  * lanesFamily, src/render/fused_renderer.h lanesUnsupported): every sampler (the lanes' stratified form,
  * or Sampler_2D per lane), no tree of paths, no motion blur or mip-maps; every surface (a plain world-space triangle's in lanes, the others per lane:
  * Lanes_ScalarSurface, textures and instances included), every material (a direction-free f,
- * CLRT_BRDF_LAMBERTIAN, in lanes; a glossy or textured one per lane: Lanes_GlossyLightTerms,
- * Lanes_GlossyBounces) and every light (LightMesh and point lights in lanes, the others per lane:
+ * CLRT_BRDF_LAMBERTIAN, in lanes; a glossy or textured one in lanes too, from its ShadingPoint:
+ * Lanes_GlossyLightTerms, Lanes_GlossyBounces) and every light (LightMesh, LightSphere and point lights in lanes, the others per lane:
  * Lanes_ScalarLightSample). Classic (direct-lighting) cameras of a scene under an environment light
  * (Lanes_Direct): per lane render_fused's Fused_Path, but the environment light's multi-sample MIS at the camera
  * rays' hits in steps across the lanes (Lanes_EnvMisShadows); their children per lane as render_fused follows
@@ -29,6 +30,7 @@
 
 #include "fused.cl"
 #include "lanes_surface.cl"
+#include "lanes_brdf.cl"
 
 #ifdef CLRT_HAS_LANES
 
@@ -404,18 +406,62 @@ inline void Lanes_MeshLightSample(const __global Light* light, const __global fl
 }
 #endif
 
-/* f·cosθ towards wi and Path_BouncePdf's density of wi at the glossy lanes' hits, per lane (Shadow_Make's
- * Material_EvalDirect, Path_LightSampleWeight's pdf); the other lanes keep *fCos and *bouncePdf. */
+#ifdef CLRT_HAS_LIGHT_SPHERE
+/* SphereLight_Sample of a LightSphere under a similarity (objCount 0) at the lanes' points p, the same operations
+ * in lanes: a direction uniform in the cone the sphere subtends (SphereLight_ConeDirection), its distance to the
+ * sphere's outside (SphereLight_Hit), *e = Radiance·Ω; nothing where p is inside the sphere or the direction
+ * misses it. s: the light's lightData (object-space centre and radius, then the worldToObject rows). */
+inline void Lanes_SphereLightSample(const __global Light* light, const __global float4* s, LaneV3 p, LaneF u1, LaneF u2,
+                                    LaneV3* wi, LaneF* dist, LaneV3* e) {
+    const LaneV3 axis = LaneV3_Sub(LaneV3_Splat(light->position.xyz), p);
+    const float R = light->objRadius;
+    const LaneF d2 = LaneV3_Dot(axis, axis);
+    const LaneF sin2Max = R * R / d2, cosMax = sqrt(fmax(0.0f, 1.0f - sin2Max));
+    const LaneF oneMinusCosMax = sin2Max / (1.0f + cosMax); /* 1 − cosθmax without cancellation */
+    const LaneF oneMinusCos = u1 * oneMinusCosMax;
+    const LaneF cosT = 1.0f - oneMinusCos, sinT = sqrt(fmax(0.0f, oneMinusCos * (2.0f - oneMinusCos)));
+    LaneF cs, sn;
+    Lanes_SinCos2Pi(u2, &cs, &sn);
+    const LaneV3 n = LaneV3_Scale(axis, 1.0f / sqrt(d2));
+    LaneV3 t, b;
+    Lanes_Basis(n, &t, &b);
+    const LaneV3 w = LaneV3_Normalize(LaneV3_Add(LaneV3_Add(LaneV3_Scale(t, sinT * cs), LaneV3_Scale(b, sinT * sn)), LaneV3_Scale(n, cosT)));
+    /* SphereLight_Hit: in object space, the near root of the ray from p along w */
+    const LaneV3 o = LaneV3_Make(LaneV3_Dot(LaneV3_Splat(s[1].xyz), p) + s[1].w, LaneV3_Dot(LaneV3_Splat(s[2].xyz), p) + s[2].w,
+                                 LaneV3_Dot(LaneV3_Splat(s[3].xyz), p) + s[3].w);
+    const LaneV3 d = LaneV3_Make(LaneV3_Dot(LaneV3_Splat(s[1].xyz), w), LaneV3_Dot(LaneV3_Splat(s[2].xyz), w),
+                                 LaneV3_Dot(LaneV3_Splat(s[3].xyz), w));
+    const float r = s[0].w;
+    const LaneV3 f = LaneV3_Sub(o, LaneV3_Splat(s[0].xyz));
+    const LaneF cc = LaneV3_Dot(f, f) - r * r, a = LaneV3_Dot(d, d), bf = LaneV3_Dot(f, d);
+    const LaneV3 l = LaneV3_Sub(f, LaneV3_Scale(d, bf / a));
+    const LaneF disc = a * (r * r - LaneV3_Dot(l, l));
+    const LaneF tHit = cc / -(bf - sqrt(disc));
+    const LaneI ok = (d2 > R * R) & (cc > 0.0f) & (bf < 0.0f) & (a > 0.0f) & (disc >= 0.0f) & (tHit > 0.0f);
+    *wi = w;
+    *dist = tHit;
+    *e = LaneV3_Select(LaneV3_Splat((float3)(0.0f)), LaneV3_Scale(LaneV3_Splat(light->radiance.xyz), 2.0f * CLRT_PI * oneMinusCosMax), ok);
+}
+#endif
+
+/* f·cosθ towards wi and Path_BouncePdf's density of wi at the glossy lanes' hits, in lanes (lanes_brdf.cl:
+ * Shadow_Make's Material_EvalDirect, Path_LightSampleWeight's pdf); the other lanes keep *fCos and *bouncePdf. */
 inline void Lanes_GlossyLightTerms(const __global Material* materials, int mode, int glossy, const ShadingPoint* sp,
                                    LaneV3 wi, LaneF cosTheta, LaneV3* fCos, LaneF* bouncePdf) {
-    float3 w[CLRT_LANES], fc[CLRT_LANES];
+    const LaneBrdf b = LaneBrdf_Load(materials, glossy, sp);
+    const LaneI g = Lane_FromBits(glossy);
+    const LaneV3 f = LaneV3_Select(LaneV3_Splat((float3)(0.0f)), LaneBrdf_EvalDirect(&b, wi, cosTheta), cosTheta > 0.0f);
+    *fCos = LaneV3_Select(*fCos, f, g);
+    *bouncePdf = select(*bouncePdf, LaneBrdf_BouncePdf(&b, mode, wi), g);
+    if (!b.scalar) return;
+    float3 w[CLRT_LANES], fc[CLRT_LANES]; /* a BRDF without a lane form: per lane */
     float c[CLRT_LANES], pdf[CLRT_LANES];
     LaneV3_Store(wi, w);
     LaneV3_Store(*fCos, fc);
     vstore4(cosTheta, 0, c);
     vstore4(*bouncePdf, 0, pdf);
     for (int k = 0; k < CLRT_LANES; ++k) {
-        if (!((glossy >> k) & 1)) continue;
+        if (!((b.scalar >> k) & 1)) continue;
         fc[k] = c[k] > 0.0f ? Material_EvalDirect(sp[k], materials, w[k], c[k]) : (float3)(0.0f);
         pdf[k] = Path_BouncePdf(sp[k], materials, mode, w[k]);
     }
@@ -423,14 +469,14 @@ inline void Lanes_GlossyLightTerms(const __global Material* materials, int mode,
     *bouncePdf = vload4(0, pdf);
 }
 
-/* The lanes' light samples of light `light` (LightMesh or PointLight) at their hits (those in hit->nee):
+/* The lanes' light samples of light `light` (LightMesh, LightSphere under a similarity or PointLight) at their hits (those in hit->nee):
  * as Light_ShadowRays and Fused_Shadow, the unoccluded contributions (MIS-weighted, times the throughput). */
 inline LaneV3 Lanes_LightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) const __global Light* light, const LanesHit* hit,
                                 const PathState* path, int pixel, LaneV3 throughput, uint strat, LaneU sample, uint dim) {
     const LaneV3 zero = LaneV3_Splat((float3)(0.0f)), p = hit->p, ng = hit->ng, ns = hit->ns;
     LaneV3 wi, e;
     LaneF dist;
-    const int mesh = light->kind == LIGHT_MESH;
+    const int mesh = light->kind == LIGHT_MESH, shape = mesh || light->kind == LIGHT_SPHERE; /* an object light */
     if (mesh) {
 #ifdef CLRT_HAS_LIGHT_MESH
         if (light->objCount <= 0 || !(light->area > 0.0f)) return zero;
@@ -440,7 +486,15 @@ inline LaneV3 Lanes_LightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) const
 #else
         return zero;
 #endif
-    } else { /* PointLight_Sample */
+    }
+#ifdef CLRT_HAS_LIGHT_SPHERE
+    else if (light->kind == LIGHT_SPHERE) { /* under a similarity: Lanes_HasLaneForm */
+        LaneF u1, u2;
+        Lanes_Sample2D(scene, strat, sample, path, pixel, dim, &u1, &u2);
+        Lanes_SphereLightSample(light, lightData + light->objFirst, p, u1, u2, &wi, &dist, &e);
+    }
+#endif
+    else { /* PointLight_Sample */
         const LaneV3 d = LaneV3_Sub(LaneV3_Splat(light->position.xyz), p);
         const LaneF d2 = LaneV3_Dot(d, d);
         dist = sqrt(d2);
@@ -456,7 +510,7 @@ inline LaneV3 Lanes_LightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) const
     if (hit->glossy & hit->nee)
         Lanes_GlossyLightTerms(materials, mode, hit->glossy & hit->nee, hit->sp, wi, cosTheta, &fCos, &bouncePdf);
     LaneV3 contrib = LaneV3_FiniteOrZero(LaneV3_Mul(LaneV3_Mul(throughput, fCos), e));
-    if (mesh && (mode & CLRT_PATH_MIS)) { /* Path_LightSampleWeight: a point light's weight is 1 */
+    if (shape && (mode & CLRT_PATH_MIS)) { /* Path_LightSampleWeight: a point light's weight is 1 */
         const LaneF lightPdf = maxComponent(light->radiance.xyz) / LaneV3_Max(e);
         contrib = LaneV3_Scale(contrib, Lanes_MisWeight(mode, lightPdf, select((LaneF)(0.0f), bouncePdf, cosTheta > 0.0f)));
     }
@@ -468,7 +522,7 @@ inline LaneV3 Lanes_LightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) const
     const LaneV3 dir = LaneV3_Scale(toLight, 1.0f / len);
     ok &= LaneV3_Max(contrib) > 0.0f; /* Fused_Shadow traces no ray of zero contribution */
     LaneF tMax = dist;
-    if (mesh) {
+    if (shape) {
         ok &= (len > 0.0f) & isfinite(len);
         tMax = len * (1.0f - 1e-5f);
     }
@@ -476,11 +530,17 @@ inline LaneV3 Lanes_LightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) const
     return LaneV3_Select(zero, contrib, Lane_FromBits(open));
 }
 
-/* Whether light l's samples have a lane form (Lanes_LightSample): LightMesh and point lights. */
-inline int Lanes_HasLaneForm(const __global Light* light) { return light->kind == LIGHT_MESH || light->kind == LIGHT_POINT; }
+/* Whether light l's samples have a lane form (Lanes_LightSample): LightMesh and point lights, and LightSpheres
+ * under a similarity (an ellipsoid's samples are drawn in object space: per lane). */
+inline int Lanes_HasLaneForm(const __global Light* light) {
+#ifdef CLRT_HAS_LIGHT_SPHERE
+    if (light->kind == LIGHT_SPHERE && light->objCount == 0) return 1;
+#endif
+    return light->kind == LIGHT_MESH || light->kind == LIGHT_POINT;
+}
 
 /* Light l's samples at the lanes in hit->nee through clrt's scalar Light_ShadowRays and Fused_Shadow, per lane
- * (the light kinds without a lane form: area, sphere, spot and directional lights, environment maps, with
+ * (the light kinds without a lane form: area, spot and directional lights, ellipsoidal spheres, environment maps, with
  * lightSlots shadow rays each: 2 for an environment light's MIS pair, made in steps across the lanes by
  * Lanes_EnvMisShadows), added to the lanes' sum in render_fused's order: each lane's path, ShadingPoint and
  * random stream as there. dim: the light's dimension (Light_ShadowRays'). */
@@ -509,25 +569,51 @@ inline LaneV3 Lanes_ScalarLightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE)
     return LaneV3_Load(out);
 }
 
-/* Path_SampleBounce at the glossy lanes' hits, per lane, with the lanes' sample u: their *dir, *pdf and
- * *fCos (0 where the sample carries nothing); the other lanes keep theirs. */
+/* Path_SampleBounce at the glossy lanes' hits, in lanes (lanes_brdf.cl), with the lanes' sample u and, in *dir
+ * and *pdf, the hemisphere warp Lanes_Bounce drew from it (what a material without a BRDF, or every material
+ * without importance sampling, takes): their *dir, *pdf and *fCos (0 where the sample carries nothing); the
+ * other lanes keep theirs. */
 inline void Lanes_GlossyBounces(const __global Material* materials, int mode, int glossy, const ShadingPoint* sp, LaneF u1,
                                 LaneF u2, LaneV3* dir, LaneF* pdf, LaneV3* fCos) {
-    float3 d[CLRT_LANES], fc[CLRT_LANES];
-    float a[CLRT_LANES], b[CLRT_LANES], pd[CLRT_LANES];
-    LaneV3_Store(*dir, d);
-    LaneV3_Store(*fCos, fc);
-    vstore4(u1, 0, a);
-    vstore4(u2, 0, b);
-    vstore4(*pdf, 0, pd);
+    const LaneBrdf b = LaneBrdf_Load(materials, glossy, sp);
+    const LaneI g = Lane_FromBits(glossy);
+    LaneV3 wi = *dir;
+    LaneF pd = *pdf;
+    LaneI ok = (LaneI)(-1);
+    if (Path_UsesImportance(mode)) { /* Brdf_Sample where there is a BRDF */
+        LaneV3 wB;
+        LaneF pB;
+        const LaneI okB = LaneBrdf_Sample(&b, u1, u2, &wB, &pB);
+        const LaneI brdf = b.kind != CLRT_INVALID;
+        wi = LaneV3_Select(wi, wB, brdf);
+        pd = select(pd, pB, brdf);
+        ok = select(ok, okB, brdf);
+    }
+    const LaneF c = LaneV3_Dot(b.n, wi);
+    ok &= (c > 0.0f) & (LaneV3_Dot(b.ng, wi) > 0.0f) & (pd > 0.0f);
+    const LaneV3 f = LaneV3_Select(LaneV3_Splat((float3)(0.0f)), LaneBrdf_EvalDirect(&b, wi, c), ok);
+    float3 d[CLRT_LANES], fc[CLRT_LANES]; /* a BRDF without a lane form: per lane, from the lanes' warp */
+    float a[CLRT_LANES], bb[CLRT_LANES], pdfs[CLRT_LANES];
+    if (b.scalar) {
+        LaneV3_Store(*dir, d);
+        LaneV3_Store(*fCos, fc);
+        vstore4(u1, 0, a);
+        vstore4(u2, 0, bb);
+        vstore4(*pdf, 0, pdfs);
+    }
+    *dir = LaneV3_Select(*dir, wi, g);
+    *pdf = select(*pdf, pd, g);
+    *fCos = LaneV3_Select(*fCos, f, g);
+    if (!b.scalar) return;
     for (int k = 0; k < CLRT_LANES; ++k)
-        if ((glossy >> k) & 1) fc[k] = Path_SampleBounce(sp[k], materials, mode, (float2)(a[k], b[k]), &d[k], &pd[k]);
-    *dir = LaneV3_Load(d);
-    *fCos = LaneV3_Load(fc);
-    *pdf = vload4(0, pd);
+        if ((b.scalar >> k) & 1) fc[k] = Path_SampleBounce(sp[k], materials, mode, (float2)(a[k], bb[k]), &d[k], &pdfs[k]);
+    const LaneI sc = Lane_FromBits(b.scalar);
+    *dir = LaneV3_Select(*dir, LaneV3_Load(d), sc);
+    *fCos = LaneV3_Select(*fCos, LaneV3_Load(fc), sc);
+    *pdf = select(*pdf, vload4(0, pdfs), sc);
 }
 
-/* The lanes' non-specular bounces (Path_SampleBounce; the glossy lanes' per lane) for the lanes in
+/* The lanes' non-specular bounces (Path_SampleBounce; the glossy lanes' by Lanes_GlossyBounces) for the lanes in
  * bounceBits, picked with probability 1 − pSpecular: *dir, *pdf and the new throughput; the lanes in the
  * returned bits carry a child. */
 inline int Lanes_Bounce(const __global Material* materials, int mode, int bounceBits, const LanesHit* hit, LaneF pSpecular,

@@ -194,13 +194,15 @@ TEST_CASE("lanes: a LightMesh of more than 16 triangles (picked by area) as rend
 TEST_CASE("lanes: glossy lobes (classic Phong and every BRDF kind) as render_fused evaluates and samples them", "[lanes][shared]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
     // The hw6 path box with every material given a specular lobe: classic Blinn-Phong (no BRDF), then
-    // each BRDF kind (Torrance-Sparrow with kd·(1 − F)), so that f depends on wo and wi: the glossy lanes
-    // evaluate Material_EvalDirect, Path_BouncePdf and Path_SampleBounce per lane. A mirror sphere keeps
-    // its diffuse part beside the lobe.
+    // each BRDF kind (the modified ones normalized and not, Torrance-Sparrow with kd·(1 − F) and without),
+    // so that f depends on wo and wi: the glossy lanes evaluate Material_EvalDirect, Path_BouncePdf and
+    // Path_SampleBounce in lanes (lanes_brdf.cl). A mirror sphere keeps its diffuse part beside the lobe.
     struct Kind { int brdf; bool normalized, kdFresnel; };
     const Kind kinds[] = {{-1, false, false}, {dev::BRDF_ORIGINAL_PHONG, false, false},
                           {dev::BRDF_ORIGINAL_BLINN_PHONG, false, false}, {dev::BRDF_MODIFIED_PHONG, true, false},
-                          {dev::BRDF_MODIFIED_BLINN_PHONG, true, false}, {dev::BRDF_TORRANCE_SPARROW, false, true}};
+                          {dev::BRDF_MODIFIED_PHONG, false, false}, {dev::BRDF_MODIFIED_BLINN_PHONG, true, false},
+                          {dev::BRDF_MODIFIED_BLINN_PHONG, false, false}, {dev::BRDF_TORRANCE_SPARROW, false, true},
+                          {dev::BRDF_TORRANCE_SPARROW, false, false}};
     int compared = 0;
     for (const Kind& k : kinds) {
         Scene scene = loadScene(sharedDir() + "/scenes/" + kPathBox);
@@ -224,13 +226,11 @@ TEST_CASE("lanes: glossy lobes (classic Phong and every BRDF kind) as render_fus
         REQUIRE(lanesFamily(ds).empty());
         for (const dev::Material& m : ds.materials) CHECK_FALSE(m.brdfFlags & CLRT_BRDF_LAMBERTIAN);
         Renderer r(testContext(), ds);
-        // Every surface glossy: auto leaves it to render_fused (per lane, the lanes are no faster), unless an
-        // environment light's MIS pair (two slots) would be made in steps across the lanes.
-        CHECK_FALSE(lanesNoGain(ds).empty());
-        CHECK(lanesNoGain(ds, false, true).empty());
+        // Every surface glossy and shaded in lanes: auto takes the lanes.
+        CHECK(lanesNoGain(ds).empty());
         Camera autoCam = scene.cameras.at(0);
         autoCam.pathMode = CLRT_PATH_ON | CLRT_PATH_MIS;
-        CHECK_FALSE(renderWith(r, autoCam, 40, 40, 4, 1, Pipeline::Auto).counters.lanes);
+        CHECK(renderWith(r, autoCam, 40, 40, 4, 1, Pipeline::Auto).counters.lanes);
         for (int mode : {CLRT_PATH_ON | CLRT_PATH_MIS, CLRT_PATH_ON | CLRT_PATH_NEE | CLRT_PATH_IMPORTANCE,
                          CLRT_PATH_ON | CLRT_PATH_NEE}) {
             Camera cam = scene.cameras.at(0);
@@ -240,7 +240,7 @@ TEST_CASE("lanes: glossy lobes (classic Phong and every BRDF kind) as render_fus
             ++compared;
         }
     }
-    CHECK(compared == 18);
+    CHECK(compared == 27);
     // The flag itself: set where f is direction-free (here: ks = 0, no BRDF or a listed one), not elsewhere.
     Scene plain = loadScene(sharedDir() + "/scenes/" + kPathBox);
     const DeviceScene dp = flattenScene(plain);
@@ -253,21 +253,30 @@ TEST_CASE("lanes: glossy lobes (classic Phong and every BRDF kind) as render_fus
     CHECK(lambertian >= 3);
 }
 
-TEST_CASE("lanes: lights without a lane form (sphere, area, directional, environment) per lane as render_fused", "[lanes][shared]") {
+TEST_CASE("lanes: a LightSphere in lanes, and lights without a lane form (an ellipsoid, area, directional, environment) per lane as render_fused", "[lanes][shared]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
-    // Their samples go through the scalar Light_ShadowRays per lane; a LightSphere's emission where a ray
-    // hits it through Path_HitEmission per lane; an environment map's through Shade_Miss. The environment
-    // light with one light slot (importance sampling) and with two (its default MIS between the light's
-    // and the cosine's samples).
+    // A LightSphere's samples in lanes (Lanes_SphereLightSample); an ellipsoidal one's (the hw6 sphere box's
+    // light scaled by 1.4 in y about its centre), and the other lights', through the scalar Light_ShadowRays
+    // per lane; a LightSphere's emission where a ray hits it through Path_HitEmission per lane; an
+    // environment map's through Shade_Miss. The environment light with one light slot (importance
+    // sampling) and with two (its default MIS between the light's and the cosine's samples).
     int compared = 0;
-    for (const char* f : {"hw6/cornellbox_jaroslav_glossy_area_sphere.xml", "hw3/cornellbox_area.xml",
+    for (const char* f : {"hw6/cornellbox_jaroslav_glossy_area_sphere.xml", "ellipsoid", "hw3/cornellbox_area.xml",
                           "hw5/cube_directional.xml", "hw5/sphere_env_light_courtyard.xml", "env-mis"}) {
-        const bool envMis = std::string(f) == "env-mis";
+        const bool envMis = std::string(f) == "env-mis", ellipsoid = std::string(f) == "ellipsoid";
         if (envMis) f = "hw5/sphere_env_light_courtyard.xml";
+        if (ellipsoid) f = "hw6/cornellbox_jaroslav_glossy_area_sphere.xml";
         Scene scene = loadScene(sharedDir() + "/scenes/" + f);
+        if (ellipsoid)
+            for (Shape& sh : scene.shapes)
+                if (sh.type == ShapeType::Sphere && sh.lightIndex >= 0)
+                    sh.transform = sh.transform * Mat4::translation(sh.center) * Mat4::scaling(Vec3(1, 1.4f, 1)) *
+                                   Mat4::translation(sh.center * -1.0f);
         for (Light& l : scene.lights) l.envStrategy = envMis ? dev::ENV_STRATEGY_MIS : dev::ENV_STRATEGY_IMPORTANCE;
         for (Camera& c : scene.cameras) c.pathMode = CLRT_PATH_ON | CLRT_PATH_MIS;
         DeviceScene ds = flattenScene(scene);
+        for (const dev::Light& l : ds.lights)  // a similarity: in lanes; an ellipsoid: per lane (Lanes_HasLaneForm)
+            if (l.kind == dev::LIGHT_SPHERE) CHECK((l.objCount != 0) == ellipsoid);
         INFO(f << ": " << lanesFamily(ds));
         REQUIRE(lanesFamily(ds).empty());
         Renderer r(testContext(), ds);
@@ -280,7 +289,7 @@ TEST_CASE("lanes: lights without a lane form (sphere, area, directional, environ
             ++compared;
         }
     }
-    CHECK(compared == 10);
+    CHECK(compared == 12);
 }
 
 TEST_CASE("lanes: classic cameras with an environment light as render_fused (its MIS in steps across the lanes)", "[lanes][shared]") {

@@ -71,15 +71,17 @@ static bool someSurface(const DeviceScene& ds, Pred pred) {
 std::string lanesNoGain(const DeviceScene& ds, bool classic, bool envMis) {
     if (classic) return envMis ? "" : "classic camera without an environment light sampled by MIS (the rest is per lane: no faster than render_fused)";
     if (envMis) return "";  // its MIS pair in steps across the lanes (Lanes_EnvMisShadows)
-    // A surface the lanes shade in lanes: untextured, a diffuse part (kd > 0) whose f is direction-free
-    // (CLRT_BRDF_LAMBERTIAN). A light's black surface has nothing to shade.
+    // A surface the lanes shade in lanes: untextured, with a diffuse or glossy part (kd or ks > 0; its f
+    // direction-free, CLRT_BRDF_LAMBERTIAN, or any BRDF and the classic lobe: cl_kernels/lanes_brdf.cl). A
+    // light's black surface and a purely specular one have nothing to shade there.
     auto inLanes = [&](int material, int textureSet) {
         if (textureSet != CLRT_INVALID || material < 0 || size_t(material) >= ds.materials.size()) return false;
         const dev::Material& m = ds.materials[size_t(material)];
-        return (m.brdfFlags & CLRT_BRDF_LAMBERTIAN) != 0 && (m.diffuse.x > 0.0f || m.diffuse.y > 0.0f || m.diffuse.z > 0.0f);
+        return m.diffuse.x > 0.0f || m.diffuse.y > 0.0f || m.diffuse.z > 0.0f || m.specular.x > 0.0f ||
+               m.specular.y > 0.0f || m.specular.z > 0.0f;
     };
     if (someSurface(ds, inLanes)) return "";
-    return "no untextured Lambertian surface (the rest is shaded per lane: no faster than render_fused)";
+    return "no untextured surface with a diffuse or glossy part (the rest is shaded per lane: no faster than render_fused)";
 }
 
 float pathAlbedoBound(const dev::Material& m) {

@@ -117,8 +117,8 @@ std::string lanesFamily(const DeviceScene& ds);
 // Why `--pipeline auto` leaves a camera of the lanes' family to render_fused ("" when it takes the lanes): a
 // path-traced one when no environment light is sampled by multi-sample MIS (envMis: the render's two
 // shadow-ray slots; its pair is made in steps across the lanes) and no surface is shaded in lanes (no
-// untextured Lambertian one with kd > 0; glossy and textured ones are shaded per lane, where the lanes took
-// 1.02-1.04x render_fused's time on the course's glossy boxes; docs/architecture.md "Paths in lanes"); a
+// untextured one with kd or ks > 0: its BRDF in lanes, cl_kernels/lanes_brdf.cl; textured surfaces are made
+// per lane; docs/architecture.md "Paths in lanes"); a
 // classic one (classic) when no environment light is sampled by multi-sample MIS, the one step it takes in lanes.
 std::string lanesNoGain(const DeviceScene& ds, bool classic = false, bool envMis = false);
 // What a path's throughput gains, in expectation, at a bounce off material m, from its untextured diffuse
