@@ -30,6 +30,7 @@ Writes mitsuba_path.csv, mitsuba_path_runs.csv, mitsuba_path_<scene>.png, mitsub
 import os
 import re
 import resource
+import sys
 import time
 import xml.etree.ElementTree as ET
 
@@ -107,34 +108,17 @@ def veach_scene(sc, depth, tmpdir, params, area_light=False):
 
 
 def json_to_xml(path):
-    """A scene in the 2025 JSON form as the XML tree it transliterates (docs/scene-format.md, "The JSON form",
-    the rule clrt's reader follows: keys starting with '_' are attributes, "_data" an element's text when it
-    has attributes, an array the element repeated, numbers written as they stand)."""
+    """A scene in the 2025 JSON form as the XML tree it transliterates (scripts/scene_json.py: the rule clrt's
+    reader follows)."""
     import json
-
-    def text(v):
-        return ("true" if v else "false") if isinstance(v, bool) else str(v)
-
-    def fill(el, value):
-        if isinstance(value, dict):
-            for k, v in value.items():
-                if k == "_data":
-                    el.text = text(v)
-                elif k.startswith("_"):
-                    el.set(k[1:], text(v))
-                else:
-                    for item in (v if isinstance(v, list) else [v]):
-                        fill(ET.SubElement(el, k), item)
-        else:
-            el.text = text(value)
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scripts"))
+    from scene_json import json_to_element
 
     with open(path) as f:
         doc = json.load(f)
     if not isinstance(doc, dict) or "Scene" not in doc:
         raise SystemExit("bench: --scene-file %s: no \"Scene\" at the top of the JSON" % path)
-    root = ET.Element("Scene")
-    fill(root, doc["Scene"])
-    return ET.ElementTree(root)
+    return ET.ElementTree(json_to_element("Scene", doc["Scene"]))
 
 
 def parse_scene(path):

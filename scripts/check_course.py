@@ -86,6 +86,8 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
+from scene_json import json_to_element  # scripts/scene_json.py
+
 try:
     import OpenEXR  # noqa: F401  (PyPI 'openexr'; scripts/check_course puts it in build/check-venv)
     HAVE_OPENEXR = True
@@ -156,24 +158,6 @@ def luminance_stats(img):
 
 
 # ---------------------------------------------------------------- scenes
-
-def json_to_element(tag, value):
-    """The 2025 JSON form as the XML tree it stands for: a key is an element, "_data" its text, any other
-    "_name" an attribute, a list repeated elements of one tag (SCENE_FORMAT.md's JSON form)."""
-    e = ET.Element(tag)
-    if isinstance(value, dict):
-        for k, v in value.items():
-            if k == "_data":
-                e.text = str(v)
-            elif k.startswith("_"):
-                e.set(k[1:], str(v))
-            else:
-                for item in (v if isinstance(v, list) else [v]):
-                    e.append(json_to_element(k, item))
-    else:
-        e.text = str(value)
-    return e
-
 
 def reference_candidates(scene_path, image):
     """The reference images a camera of scene_path may have: [its folder's _reference_outputs/IMAGE], or with
