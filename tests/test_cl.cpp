@@ -272,7 +272,7 @@ TEST_CASE("kernel sources: each file brings in what it #includes, once, before i
                                                           "intersect.cl", "camera.cl", "textures.cl", "shading_frame.cl",
                                                           "envmap.cl", "object_lights.cl", "lights.cl", "brdf.cl", "material.cl", "path.cl", "shade.cl",
                                                           "compact.cl", "fused.cl", "lanes_math.cl", "lanes_surface.cl",
-                                                          "lanes.cl"});
+                                                          "lanes_brdf.cl", "lanes.cl"});
     CHECK(sourceNames(loadKernelSources(KernelProgram::Tonemap)) ==
           std::vector<std::string>{"device_types.h", "kernel_params.h", "tonemap.cl"});
     CHECK(sourceNames(loadKernelSources(KernelProgram::Intersect)) ==
