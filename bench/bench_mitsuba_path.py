@@ -27,6 +27,7 @@ roulette removed, as above; a camera that is not path traced is made so, with Mu
 conversion cannot map is listed under the report's table ("Conversion warnings"), and the means must still
 agree within 1% for the efficiency to count.
 Writes mitsuba_path.csv, mitsuba_path_runs.csv, mitsuba_path_<scene>.png, mitsuba_path_report.md."""
+import json
 import os
 import re
 import resource
@@ -37,6 +38,8 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 import bench_path
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scripts"))
+from scene_json import json_to_element  # noqa: E402  (scripts/scene_json.py, shared with check_course.py)
 
 ROOT = bench_path.ROOT
 SHARED = os.environ.get("CLRT_SHARED_SCENES", bench_path.SHARED)  # ../shared/scenes beside the checkout
@@ -110,10 +113,6 @@ def veach_scene(sc, depth, tmpdir, params, area_light=False):
 def json_to_xml(path):
     """A scene in the 2025 JSON form as the XML tree it transliterates (scripts/scene_json.py: the rule clrt's
     reader follows)."""
-    import json
-    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scripts"))
-    from scene_json import json_to_element
-
     with open(path) as f:
         doc = json.load(f)
     if not isinstance(doc, dict) or "Scene" not in doc:

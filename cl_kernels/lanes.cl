@@ -569,12 +569,13 @@ inline LaneV3 Lanes_ScalarLightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE)
     return LaneV3_Load(out);
 }
 
-/* Path_SampleBounce at the glossy lanes' hits, in lanes (lanes_brdf.cl), with the lanes' sample u and, in *dir
+/* Path_SampleBounce at the glossy lanes' hits, in lanes (lanes_brdf.cl), with the lanes' sample u (c2, s2: the
+ * cosine and sine of 2π·u2) and, in *dir
  * and *pdf, the hemisphere warp Lanes_Bounce drew from it (what a material without a BRDF, or every material
  * without importance sampling, takes): their *dir, *pdf and *fCos (0 where the sample carries nothing); the
  * other lanes keep theirs. */
 inline void Lanes_GlossyBounces(const __global Material* materials, int mode, int glossy, const ShadingPoint* sp, LaneF u1,
-                                LaneF u2, LaneV3* dir, LaneF* pdf, LaneV3* fCos) {
+                                LaneF u2, LaneF c2, LaneF s2, LaneV3* dir, LaneF* pdf, LaneV3* fCos) {
     const LaneBrdf b = LaneBrdf_Load(materials, glossy, sp);
     const LaneI g = Lane_FromBits(glossy);
     LaneV3 wi = *dir;
@@ -583,7 +584,7 @@ inline void Lanes_GlossyBounces(const __global Material* materials, int mode, in
     if (Path_UsesImportance(mode)) { /* Brdf_Sample where there is a BRDF */
         LaneV3 wB;
         LaneF pB;
-        const LaneI okB = LaneBrdf_Sample(&b, u1, u2, &wB, &pB);
+        const LaneI okB = LaneBrdf_Sample(&b, u1, c2, s2, &wB, &pB);
         const LaneI brdf = b.kind != CLRT_INVALID;
         wi = LaneV3_Select(wi, wB, brdf);
         pd = select(pd, pB, brdf);
@@ -636,7 +637,7 @@ inline int Lanes_Bounce(const __global Material* materials, int mode, int bounce
     *pdf = cosine ? lz * CLRT_INV_PI : (LaneF)(0.5f * CLRT_INV_PI);
     LaneV3 fCos = LaneV3_Scale(hit->f, LaneV3_Dot(ns, *dir));
     if (hit->glossy & bounceBits)
-        Lanes_GlossyBounces(materials, mode, hit->glossy & bounceBits, hit->sp, u1, u2, dir, pdf, &fCos);
+        Lanes_GlossyBounces(materials, mode, hit->glossy & bounceBits, hit->sp, u1, u2, c2, s2, dir, pdf, &fCos);
     const LaneI ok = Lane_FromBits(bounceBits) & (LaneV3_Dot(ns, *dir) > 0.0f) & (LaneV3_Dot(ng, *dir) > 0.0f) &
                      (*pdf > 0.0f) & LaneV3_Finite(*dir);
     const LaneF q = *pdf * (1.0f - pSpecular);

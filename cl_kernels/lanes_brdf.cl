@@ -148,21 +148,20 @@ inline LaneF LaneBrdf_BouncePdf(const LaneBrdf* b, int mode, LaneV3 wi) {
     return select((LaneF)(0.0f), select(brdfPdf, c * CLRT_INV_PI, b->kind == CLRT_INVALID), c > 0.0f);
 }
 
-/* Brdf_Sample for the lanes with a BRDF, in importance sampling modes: *wi and *pdf; returns the lanes whose
+/* Brdf_Sample for the lanes with a BRDF, in importance sampling modes, from u1 and the cosine and sine of 2π·u2
+ * (Lanes_SinCos2Pi, which Lanes_Bounce has made): *wi and *pdf; returns the lanes whose
  * sample carries something (above the surface, pdf > 0, wi finite). Each lane draws from the lobe its u1
  * picks, in one warp: the glossy lobe's power cosine (Brdf_WarpPowerCosine) about wo mirrored in n, or about n
  * for a half vector that wo is then reflected about, or the cosine lobe about n (Warp_CosineHemisphere). The
  * density is the mixture's at wi, (1 − s) cosθ/π + s·Brdf_GlossyPdf, for either lobe: the scalar code takes
  * the glossy lobe's term from the warp's cosine instead, the same value up to rounding. */
-inline LaneI LaneBrdf_Sample(const LaneBrdf* b, LaneF u1, LaneF u2, LaneV3* wi, LaneF* pdf) {
+inline LaneI LaneBrdf_Sample(const LaneBrdf* b, LaneF u1, LaneF cs, LaneF sn, LaneV3* wi, LaneF* pdf) {
     const LaneF s = LaneBrdf_GlossyWeight(b), q = LaneBrdf_LobeExponent(b);
     const LaneI glossyLobe = u1 < s, mirror = LaneBrdf_MirrorLobe(b);
     const LaneF v1 = fmin((u1 - s) / (1.0f - s), 1.0f);                                 /* the cosine lobe's u1 */
     const LaneF cG = Lanes_PowNonNegative(fmin(u1 / s, 1.0f), 1.0f / (q + 1.0f));       /* the glossy lobe's cosine */
     const LaneF c = select(sqrt(fmax(0.0f, 1.0f - v1)), cG, glossyLobe);
     const LaneF sinT = select(sqrt(v1), sqrt(fmax(0.0f, 1.0f - cG * cG)), glossyLobe);
-    LaneF cs, sn;
-    Lanes_SinCos2Pi(u2, &cs, &sn);
     const LaneV3 axis = LaneV3_Select(b->n, LaneV3_Reflect(b->wo, b->n), glossyLobe & mirror);
     LaneV3 t, bt;
     Lanes_Basis(axis, &t, &bt);
