@@ -515,6 +515,23 @@ TEST_CASE("lanes: which scenes and cameras it takes; auto takes it on CPU device
         Rendered a = renderWith(r, env.cameras.at(0), 40, 40, 4, 1, Pipeline::Auto);
         CHECK(a.counters.lanes == (strategy == dev::ENV_STRATEGY_MIS && (testDevice().type & CL_DEVICE_TYPE_CPU) != 0));
     }
+    // A path-traced scene with nothing shaded in lanes (every surface a pure mirror, kd = ks = 0): auto
+    // leaves it to render_fused.
+    {
+        Scene mirrors = loadScene(sharedDir() + "/scenes/" + kPathBox);
+        for (Material& m : mirrors.materials) {
+            m.type = dev::MATERIAL_MIRROR;
+            m.mirror = {0.8f, 0.8f, 0.8f};
+            m.diffuse = m.specular = {0.0f, 0.0f, 0.0f};
+        }
+        DeviceScene dm = flattenScene(mirrors);
+        REQUIRE(lanesFamily(dm).empty());
+        CHECK_FALSE(lanesNoGain(dm).empty());
+        Renderer rm(testContext(), dm);
+        Camera mc = mirrors.cameras.at(0);
+        mc.pathMode = CLRT_PATH_ON | CLRT_PATH_MIS;
+        CHECK_FALSE(renderWith(rm, mc, 40, 40, 4, 1, Pipeline::Auto).counters.lanes);
+    }
     Scene scene = loadScene(sharedDir() + "/scenes/" + kPathBox);
     DeviceScene ds = flattenScene(scene);
     CHECK(lanesNoGain(ds).empty());
