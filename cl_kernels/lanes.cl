@@ -450,9 +450,10 @@ inline void Lanes_GlossyLightTerms(const __global Material* materials, int mode,
                                    LaneV3 wi, LaneF cosTheta, LaneV3* fCos, LaneF* bouncePdf) {
     const LaneBrdf b = LaneBrdf_Load(materials, glossy, sp);
     const LaneI g = Lane_FromBits(glossy);
-    const LaneV3 f = LaneV3_Select(LaneV3_Splat((float3)(0.0f)), LaneBrdf_EvalDirect(&b, wi, cosTheta), cosTheta > 0.0f);
+    const LaneBrdfAt at = LaneBrdf_At(&b, wi);
+    const LaneV3 f = LaneV3_Select(LaneV3_Splat((float3)(0.0f)), LaneBrdf_EvalDirect(&b, &at, cosTheta), cosTheta > 0.0f);
     *fCos = LaneV3_Select(*fCos, f, g);
-    *bouncePdf = select(*bouncePdf, LaneBrdf_BouncePdf(&b, mode, wi), g);
+    *bouncePdf = select(*bouncePdf, LaneBrdf_BouncePdf(&b, mode, &at), g);
     if (!b.scalar) return;
     float3 w[CLRT_LANES], fc[CLRT_LANES]; /* a BRDF without a lane form: per lane */
     float c[CLRT_LANES], pdf[CLRT_LANES];
@@ -580,19 +581,22 @@ inline void Lanes_GlossyBounces(const __global Material* materials, int mode, in
     const LaneI g = Lane_FromBits(glossy);
     LaneV3 wi = *dir;
     LaneF pd = *pdf;
-    LaneI ok = (LaneI)(-1);
-    if (Path_UsesImportance(mode)) { /* Brdf_Sample where there is a BRDF */
+    LaneI ok = (LaneI)(-1), okB = (LaneI)(-1);
+    const LaneI brdf = Path_UsesImportance(mode) ? b.kind != CLRT_INVALID : (LaneI)(0);
+    if (any(brdf)) { /* Brdf_Sample where there is a BRDF; its density once the lanes' wi are known */
         LaneV3 wB;
-        LaneF pB;
-        const LaneI okB = LaneBrdf_Sample(&b, u1, c2, s2, &wB, &pB);
-        const LaneI brdf = b.kind != CLRT_INVALID;
+        okB = LaneBrdf_Sample(&b, u1, c2, s2, &wB);
         wi = LaneV3_Select(wi, wB, brdf);
-        pd = select(pd, pB, brdf);
-        ok = select(ok, okB, brdf);
     }
-    const LaneF c = LaneV3_Dot(b.n, wi);
+    const LaneBrdfAt at = LaneBrdf_At(&b, wi); /* f and the density share its power */
+    if (any(brdf)) {
+        const LaneF pB = LaneBrdf_MixturePdf(&b, &at);
+        pd = select(pd, pB, brdf);
+        ok = select(ok, okB & (pB > 0.0f), brdf);
+    }
+    const LaneF c = at.cosI;
     ok &= (c > 0.0f) & (LaneV3_Dot(b.ng, wi) > 0.0f) & (pd > 0.0f);
-    const LaneV3 f = LaneV3_Select(LaneV3_Splat((float3)(0.0f)), LaneBrdf_EvalDirect(&b, wi, c), ok);
+    const LaneV3 f = LaneV3_Select(LaneV3_Splat((float3)(0.0f)), LaneBrdf_EvalDirect(&b, &at, c), ok);
     float3 d[CLRT_LANES], fc[CLRT_LANES]; /* a BRDF without a lane form: per lane, from the lanes' warp */
     float a[CLRT_LANES], bb[CLRT_LANES], pdfs[CLRT_LANES];
     if (b.scalar) {

@@ -75,17 +75,44 @@ inline LaneI LaneBrdf_MirrorLobe(const LaneBrdf* b) {
     return (b->kind == BRDF_ORIGINAL_PHONG) | (b->kind == BRDF_MODIFIED_PHONG);
 }
 
-/* Material_EvalDirect: f(wo, wi)·cosθ (cosTheta = n·wi > 0 where it is used). */
-inline LaneV3 LaneBrdf_EvalDirect(const LaneBrdf* b, LaneV3 wi, LaneF cosTheta) {
-    const LaneF cosI = LaneV3_Dot(b->n, wi), cosO = LaneV3_Dot(b->n, b->wo);
+/* What f and the glossy lobe's density share at wi, computed once (LaneBrdf_At): the cosines, the half vector's
+ * terms and the lobe's power. The lobe's cosine `base` is wo·(wi mirrored in n) for the Phong pair (their
+ * Brdf_CosAlphaR before its clamp; Brdf_GlossyPdf's (wo mirrored)·wi, the same up to rounding) and |n·h| for the
+ * half-vector lobes (Brdf_CosAlphaH where n·h > 0, the lobe density's cosine of h turned up); one power per lane
+ * serves both: f's cos^p of the clamped cosine is the power where the cosine is > 0 and the power at 0 elsewhere. */
+typedef struct {
+    LaneF cosI, cosO; /* n·wi, n·wo */
+    LaneF hl;         /* |wi + wo| */
+    LaneF nh, woH;    /* n·h and wo·h, h = (wi + wo)/hl; nh 0 where hl is 0 */
+    LaneF cosLobe;    /* the lobe's signed cosine for f: n·h, or wo·(wi mirrored) (Phong pair) */
+    LaneF base;       /* the lobe's cosine for the power: |n·h|, or cosLobe (Phong pair) */
+    LaneF power;      /* base^exponent (Lanes_PowNonNegative) */
+} LaneBrdfAt;
+
+inline LaneBrdfAt LaneBrdf_At(const LaneBrdf* b, LaneV3 wi) {
+    LaneBrdfAt a;
+    a.cosI = LaneV3_Dot(b->n, wi);
+    a.cosO = LaneV3_Dot(b->n, b->wo);
     const LaneV3 hRaw = LaneV3_Add(wi, b->wo);
-    const LaneF hl = sqrt(LaneV3_Dot(hRaw, hRaw));
-    const LaneF cosH = select((LaneF)(0.0f), fmax(0.0f, LaneV3_Dot(b->n, hRaw) / hl), hl > 0.0f); /* Brdf_CosAlphaH */
-    const LaneF cosR = fmax(0.0f, LaneV3_Dot(LaneV3_Reflect(wi, b->n), b->wo));                    /* Brdf_CosAlphaR */
+    a.hl = sqrt(LaneV3_Dot(hRaw, hRaw));
+    a.nh = select((LaneF)(0.0f), LaneV3_Dot(b->n, hRaw) / a.hl, a.hl > 0.0f);
+    a.woH = LaneV3_Dot(b->wo, hRaw) / a.hl;
+    const LaneI mirror = LaneBrdf_MirrorLobe(b);
+    a.cosLobe = select(a.nh, LaneV3_Dot(LaneV3_Reflect(wi, b->n), b->wo), mirror);
+    a.base = select(fabs(a.nh), a.cosLobe, mirror);
+    a.power = Lanes_PowNonNegative(a.base, b->exponent);
+    return a;
+}
+
+/* Material_EvalDirect: f(wo, wi)·cosθ (cosTheta = n·wi > 0 where it is used), from LaneBrdf_At(b, wi). */
+inline LaneV3 LaneBrdf_EvalDirect(const LaneBrdf* b, const LaneBrdfAt* at, LaneF cosTheta) {
+    const LaneF cosI = at->cosI, cosO = at->cosO;
+    const LaneF cosH = fmax(0.0f, at->nh); /* Brdf_CosAlphaH */
     const LaneI classic = b->kind == CLRT_INVALID, ts = b->kind == BRDF_TORRANCE_SPARROW;
     const LaneI hasSpec = LaneV3_Max(b->ks) > 0.0f;
-    const LaneF spec = select((LaneF)(0.0f), Lanes_PowNonNegative(select(cosH, cosR, LaneBrdf_MirrorLobe(b)), b->exponent),
-                              hasSpec | ts);
+    /* cos^p of the clamped cosine (Lanes_PowNonNegative(fmax(0, cosLobe), p)): the power at 0 where it is <= 0 */
+    const LaneF powAtZero = Lanes_PowNonNegative((LaneF)(0.0f), b->exponent);
+    const LaneF spec = select((LaneF)(0.0f), select(powAtZero, at->power, at->cosLobe > 0.0f), hasSpec | ts);
     /* the specular factor s of f = kd' + ks·s, and kd' = kd·dScale */
     LaneF s = spec, dScale = (LaneF)(1.0f);
     const LaneI original = (b->kind == BRDF_ORIGINAL_PHONG) | (b->kind == BRDF_ORIGINAL_BLINN_PHONG);
@@ -96,7 +123,7 @@ inline LaneV3 LaneBrdf_EvalDirect(const LaneBrdf* b, LaneV3 wi, LaneF cosTheta) 
     s = select(s, spec * (b->exponent + 8.0f) * (0.125f * CLRT_INV_PI), modBlinn);
     dScale = select(dScale, (LaneF)(CLRT_INV_PI), modPhong | modBlinn | ts);
     if (any(ts)) { /* Torrance-Sparrow: D F G / (4 cosθi cosθo), F at θi; (1 − F) kd with kdfresnel */
-        const LaneF woH = LaneV3_Dot(b->wo, hRaw) / hl;
+        const LaneF woH = at->woH;
         const LaneF d = (b->exponent + 2.0f) * (0.5f * CLRT_INV_PI) * spec;
         const LaneF g = fmin(1.0f, fmin(2.0f * cosH * cosO / woH, 2.0f * cosH * cosI / woH));
         const LaneF c2 = cosI * cosI, nk = b->eta * b->eta + b->k * b->k;
@@ -118,44 +145,44 @@ inline LaneV3 LaneBrdf_EvalDirect(const LaneBrdf* b, LaneV3 wi, LaneF cosTheta) 
 inline LaneF LaneBrdf_LobeExponent(const LaneBrdf* b) {
     return select(b->exponent, b->exponent + 1.0f, b->kind == BRDF_TORRANCE_SPARROW);
 }
-inline LaneF Lanes_PowerCosinePdf(LaneF q, LaneF c) { /* Brdf_PowerCosinePdf */
-    return select((LaneF)(0.0f), (q + 1.0f) * (0.5f * CLRT_INV_PI) * Lanes_PowNonNegative(c, q), c > 0.0f);
-}
 inline LaneF LaneBrdf_GlossyWeight(const LaneBrdf* b) { /* Brdf_GlossyWeight */
     const LaneF d = LaneV3_Sum(b->kd), s = LaneV3_Sum(b->ks);
     return select((LaneF)(0.0f), s / (d + s), d + s > 0.0f);
 }
 
-/* Brdf_GlossyPdf: the glossy lobe's density at wi (one power per lane: the lobe's cosine is picked first). */
-inline LaneF LaneBrdf_GlossyPdf(const LaneBrdf* b, LaneV3 wi) {
+/* Brdf_GlossyPdf: the glossy lobe's density at wi, from LaneBrdf_At(b, wi) (its power; Torrance-Sparrow's lobe
+ * D(h) cos αh has one cosine more). */
+inline LaneF LaneBrdf_GlossyPdf(const LaneBrdf* b, const LaneBrdfAt* at) {
     const LaneF q = LaneBrdf_LobeExponent(b);
     const LaneI mirror = LaneBrdf_MirrorLobe(b);
-    const LaneV3 hRaw = LaneV3_Add(wi, b->wo);
-    const LaneF l = sqrt(LaneV3_Dot(hRaw, hRaw));
-    const LaneV3 h = LaneV3_Scale(hRaw, 1.0f / l);
-    const LaneF woH = fabs(LaneV3_Dot(b->wo, h)); /* h turned into the upper hemisphere: the same |wo·h| */
-    const LaneF c = select(fabs(LaneV3_Dot(b->n, h)), LaneV3_Dot(LaneV3_Reflect(b->wo, b->n), wi), mirror);
-    const LaneF lobe = Lanes_PowerCosinePdf(q, c);
-    return select(select((LaneF)(0.0f), lobe / (4.0f * woH), (l > 0.0f) & (woH > 0.0f)), lobe, mirror);
+    const LaneF lobePower = select(at->power, at->power * at->base, b->kind == BRDF_TORRANCE_SPARROW);
+    const LaneF lobe = select((LaneF)(0.0f), (q + 1.0f) * (0.5f * CLRT_INV_PI) * lobePower, at->base > 0.0f); /* Brdf_PowerCosinePdf */
+    const LaneF woH = fabs(at->woH); /* h turned into the upper hemisphere: the same |wo·h| */
+    return select(select((LaneF)(0.0f), lobe / (4.0f * woH), (at->hl > 0.0f) & (woH > 0.0f)), lobe, mirror);
 }
 
-/* Path_BouncePdf: the density Path_SampleBounce draws wi with. */
-inline LaneF LaneBrdf_BouncePdf(const LaneBrdf* b, int mode, LaneV3 wi) {
-    const LaneF c = LaneV3_Dot(b->n, wi);
-    if (!Path_UsesImportance(mode)) return select((LaneF)(0.0f), (LaneF)(0.5f * CLRT_INV_PI), c > 0.0f);
+/* The mixture's density at wi: (1 − s) cosθ/π + s·Brdf_GlossyPdf (Brdf_Pdf, cosθ clamped at 0). */
+inline LaneF LaneBrdf_MixturePdf(const LaneBrdf* b, const LaneBrdfAt* at) {
     const LaneF s = LaneBrdf_GlossyWeight(b);
-    const LaneF brdfPdf = (1.0f - s) * (c * CLRT_INV_PI) + select((LaneF)(0.0f), s * LaneBrdf_GlossyPdf(b, wi), s > 0.0f);
+    return (1.0f - s) * fmax(0.0f, at->cosI) * CLRT_INV_PI + select((LaneF)(0.0f), s * LaneBrdf_GlossyPdf(b, at), s > 0.0f);
+}
+
+/* Path_BouncePdf: the density Path_SampleBounce draws wi with (at: LaneBrdf_At(b, wi)). */
+inline LaneF LaneBrdf_BouncePdf(const LaneBrdf* b, int mode, const LaneBrdfAt* at) {
+    const LaneF c = at->cosI;
+    if (!Path_UsesImportance(mode)) return select((LaneF)(0.0f), (LaneF)(0.5f * CLRT_INV_PI), c > 0.0f);
+    const LaneF brdfPdf = LaneBrdf_MixturePdf(b, at);
     return select((LaneF)(0.0f), select(brdfPdf, c * CLRT_INV_PI, b->kind == CLRT_INVALID), c > 0.0f);
 }
 
 /* Brdf_Sample for the lanes with a BRDF, in importance sampling modes, from u1 and the cosine and sine of 2π·u2
- * (Lanes_SinCos2Pi, which Lanes_Bounce has made): *wi and *pdf; returns the lanes whose
- * sample carries something (above the surface, pdf > 0, wi finite). Each lane draws from the lobe its u1
+ * (Lanes_SinCos2Pi, which Lanes_Bounce has made): *wi; returns the lanes whose sample can carry something (wi
+ * above the surface and finite; the caller asks for its density > 0 too). Each lane draws from the lobe its u1
  * picks, in one warp: the glossy lobe's power cosine (Brdf_WarpPowerCosine) about wo mirrored in n, or about n
- * for a half vector that wo is then reflected about, or the cosine lobe about n (Warp_CosineHemisphere). The
- * density is the mixture's at wi, (1 − s) cosθ/π + s·Brdf_GlossyPdf, for either lobe: the scalar code takes
- * the glossy lobe's term from the warp's cosine instead, the same value up to rounding. */
-inline LaneI LaneBrdf_Sample(const LaneBrdf* b, LaneF u1, LaneF cs, LaneF sn, LaneV3* wi, LaneF* pdf) {
+ * for a half vector that wo is then reflected about, or the cosine lobe about n (Warp_CosineHemisphere). Its
+ * density is the mixture's at wi (LaneBrdf_MixturePdf), for either lobe: the scalar code takes the glossy
+ * lobe's term from the warp's cosine instead, the same value up to rounding. */
+inline LaneI LaneBrdf_Sample(const LaneBrdf* b, LaneF u1, LaneF cs, LaneF sn, LaneV3* wi) {
     const LaneF s = LaneBrdf_GlossyWeight(b), q = LaneBrdf_LobeExponent(b);
     const LaneI glossyLobe = u1 < s, mirror = LaneBrdf_MirrorLobe(b);
     const LaneF v1 = fmin((u1 - s) / (1.0f - s), 1.0f);                                 /* the cosine lobe's u1 */
@@ -169,9 +196,7 @@ inline LaneI LaneBrdf_Sample(const LaneBrdf* b, LaneF u1, LaneF cs, LaneF sn, La
     const LaneI viaHalf = glossyLobe & ~mirror;
     const LaneF woH = LaneV3_Dot(b->wo, w);
     *wi = LaneV3_Select(w, LaneV3_Normalize(LaneV3_Sub(LaneV3_Scale(w, 2.0f * woH), b->wo)), viaHalf);
-    const LaneF cosI = LaneV3_Dot(b->n, *wi);
-    *pdf = (1.0f - s) * fmax(0.0f, cosI) * CLRT_INV_PI + select((LaneF)(0.0f), s * LaneBrdf_GlossyPdf(b, *wi), s > 0.0f);
-    return ~(viaHalf & ~(fabs(woH) > 0.0f)) & (cosI > 0.0f) & (*pdf > 0.0f) & LaneV3_Finite(*wi);
+    return ~(viaHalf & ~(fabs(woH) > 0.0f)) & (LaneV3_Dot(b->n, *wi) > 0.0f) & LaneV3_Finite(*wi);
 }
 
 #endif /* CLRT_HAS_LANES && CLRT_HAS_PATH_TRACING */
