@@ -42,8 +42,16 @@ inline float4 Fused_Shadow(ShadowRay sr, SceneParams scene, const __global Bvh4N
 /* One path: its closest hit, shading (children into *res) and direct light; returns its radiance as
  * accumulate adds it (finite). */
 inline float3 Fused_Path(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int lightSlots, PathState path, Ray ray, ShadeResult* res) {
-    int instance;
-    Hit h = Ray_Closest(ray, scene, nodes, leaves, tris, spheres, planes, instances, &instance);
+    int instance = CLRT_INVALID;
+    Hit h;
+    h.t = -1.0f; h.prim = CLRT_INVALID; h.u = 0.0f; h.v = 0.0f; /* Ray_Closest's miss */
+#ifdef CLRT_HAS_PATH_TRACING
+    Ray bounded = ray; /* an emission-only segment: traced only if it meets an object light, up to it */
+    if (Path_BoundEmissionOnly(scene, path, lights, lightData, &bounded))
+        h = Ray_Closest(bounded, scene, nodes, leaves, tris, spheres, planes, instances, &instance);
+#else
+    h = Ray_Closest(ray, scene, nodes, leaves, tris, spheres, planes, instances, &instance);
+#endif
     Shade_Hit(scene, cam, path, ray, h, instance, tris, triShading, triAttributes, spheres, planes, instances, materials, textureSets, textures, images,
               texels, lights, envDist, lightData, res);
     float4 sum = res->radiance;

@@ -92,8 +92,10 @@ inline void Lanes_Closest(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int live, c
         g->material[k] = 0;
         g->light[k] = CLRT_INVALID;
         if (!(live & (1 << k))) continue;
+        Ray r = ray[k];
+        if (!Path_BoundEmissionOnly(scene, path[k], lights, lightData, &r)) continue; /* it can bring nothing: a miss's 0 */
         int instance;
-        const Hit h = Ray_Closest(ray[k], scene, nodes, leaves, tris, spheres, planes, instances, &instance);
+        const Hit h = Ray_Closest(r, scene, nodes, leaves, tris, spheres, planes, instances, &instance);
         if (h.prim == CLRT_INVALID) {
             ShadeResult res;
             Shade_Miss(scene, cam, path[k], ray[k], textures, images, texels, lights, envDist, &res);

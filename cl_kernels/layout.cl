@@ -54,7 +54,8 @@
         M(SceneParams, pathMode) M(SceneParams, pixelSampler) M(SceneParams, shadowEpsilon)   \
         M(SceneParams, samplerWidth) M(SceneParams, samplerLog2Spp)                               \
         M(SceneParams, numInstances) M(SceneParams, instanceRoot) M(SceneParams, rrMinDepth) M(SceneParams, split)  \
-        M(SceneParams, cullBackFaces) M(SceneParams, scenePad)                                      \
+        M(SceneParams, cullBackFaces) M(SceneParams, emitterTest) M(SceneParams, scenePad)           \
+        M(SceneParams, emitterLo) M(SceneParams, emitterHi)                                         \
     S(Ray) M(Ray, origin) M(Ray, direction)                                                       \
     S(Hit) M(Hit, t) M(Hit, prim) M(Hit, u) M(Hit, v)  \
     S(PathState) M(PathState, throughput) M(PathState, pixel) M(PathState, sample)                \

@@ -16,7 +16,8 @@
  *     At the depth cap it makes none, except under MIS: there the non-specular BSDF sample still goes
  *     out, as an emission-only segment (depth maxDepth + 1: MIS-weighted emission of an object or
  *     environment light, no light samples, no child), so the last vertex's light samples keep their
- *     power-heuristic weight (as Mitsuba's path; docs/studies/2026-12-04-mitsuba-path.md, addendum).
+ *     power-heuristic weight (as Mitsuba's path; docs/studies/2026-12-04-mitsuba-path.md, addendum). The fused
+ *     and lanes kernels test that segment against a few object lights alone first (Path_BoundEmissionOnly).
  * PathState.throughput.w: the solid-angle pdf of the BSDF sample that made the path (0: a camera ray
  * or a specular bounce); under CLRT_PATH_RR_COURSE instead ±sigma (Path_CourseSigma): + after a BSDF
  * bounce, − after a specular one, 0 for a camera ray (sigma 1).
@@ -38,6 +39,7 @@
 #include "brdf.cl"
 #include "material.cl"
 #include "object_lights.cl"
+#include "intersect.cl"
 
 #ifdef CLRT_HAS_PATH_TRACING
 
@@ -88,6 +90,55 @@ inline float Path_MissWeight(SceneParams scene, PathState path, const __global L
     if (!(l > 0.0f)) return 0.0f;
     float lightPdf = (scene.pathMode & CLRT_PATH_MIS) ? Path_EnvLightPdf(envLight, envDist, dirWorld / l) : -1.0f;
     return Path_EmissionWeight(scene.pathMode, path.throughput.w, lightPdf);
+}
+
+/* ---- the emission-only segment against the object lights alone ---------------------------------------
+ * The segment (depth maxDepth + 1, MIS) brings back only the emission of an object light it hits first; a miss
+ * or any other hit brings nothing when the scene has no environment light (Path_MissWeight: the background is
+ * unseen there). Where the lights a ray can hit are a few primitives (SceneParams.emitterTest), the ray is first
+ * tested against them alone: one that meets none is not traced; one that does is traced only up to the nearest
+ * (the closest hit is the same: a box entered beyond it holds nothing closer). */
+#define CLRT_EMITTER_DISTANCE_WIDEN 1.0001f /* the bound over that distance (the BVH's own test rounds as it will) */
+
+/* The distance from org along dir to the nearest object-light primitive (their lightData copies, flatten_lights.cpp:
+ * a LightMesh's world-space triangles, a LightSphere's dev::Sphere rows) before tMax, INFINITY if none. */
+inline float Path_EmitterDistance(SceneParams scene, const __global Light* lights, const __global float4* lightData,
+                                  float3 org, float3 dir, float tMax) {
+    if (!(Aabb_Intersect(scene.emitterLo, scene.emitterHi, org, safeInverse(dir), tMax) < INFINITY)) return INFINITY;
+    const RayShear shear = RayShear_Make(dir);
+    float tNear = tMax;
+    int found = 0;
+    for (int l = 0; l < scene.numLights; ++l) {
+        const __global Light* light = &lights[l];
+        const __global float4* d = lightData + light->objFirst;
+        float t, b1, b2;
+#ifdef CLRT_HAS_LIGHT_MESH
+        if (light->kind == LIGHT_MESH)
+            for (int i = 0; i < light->objCount; ++i)
+                if (Triangle_Intersect(org, shear, d[3 * i].xyz, d[3 * i + 1].xyz, d[3 * i + 2].xyz, tNear, 0, 0.0f, &t, &b1, &b2)) {
+                    tNear = t;
+                    found = 1;
+                }
+#endif
+#ifdef CLRT_HAS_LIGHT_SPHERE
+        if (light->kind == LIGHT_SPHERE && Sphere_Intersect((const __global Sphere*)d, org, dir, tNear, &t)) {
+            tNear = t;
+            found = 1;
+        }
+#endif
+    }
+    return found ? tNear : INFINITY;
+}
+
+/* Whether ray r of path needs tracing: 0 for an emission-only segment that meets no object light (under
+ * SceneParams.emitterTest); one that does has its tMax (r->direction.w) cut to just past the nearest. */
+inline int Path_BoundEmissionOnly(SceneParams scene, PathState path, const __global Light* lights,
+                                  const __global float4* lightData, Ray* r) {
+    if (!scene.emitterTest || path.depth <= scene.maxDepth || !(r->direction.w > 0.0f)) return 1;
+    const float tLight = Path_EmitterDistance(scene, lights, lightData, r->origin.xyz, r->direction.xyz, r->direction.w);
+    if (!(tLight < INFINITY)) return 0;
+    r->direction.w = fmin(r->direction.w, tLight * CLRT_EMITTER_DISTANCE_WIDEN);
+    return 1;
 }
 
 #if defined(CLRT_HAS_LIGHT_MESH) || defined(CLRT_HAS_LIGHT_SPHERE)

@@ -1130,6 +1130,67 @@ TEST_CASE("a LightMesh box of 20 triangles (picked by area) gives the same light
     checkSameLight(lightMeshBox20Scene, 1024, {Pipeline::Lanes, Pipeline::Fused, Pipeline::Wavefront}, 0.01);
 }
 
+TEST_CASE("object lights: emission-only segments are tested against the lights alone first, the image unchanged",
+          "[objlight][path][render]") {
+    // Under MIS the last vertex's BSDF sample goes out as an emission-only segment (path.cl): it brings back only
+    // the emission of an object light it hits first. Where the lights a ray can hit are at most
+    // CLRT_EMITTER_TEST_MAX primitives and no environment light shines (SceneParams.emitterTest, set by
+    // flatten_lights.cpp), such a ray is first tested against those alone (Path_BoundEmissionOnly): not traced
+    // when it meets none, traced up to just past the nearest when it does. The image must be the one of tracing
+    // every such ray (the flag cleared), bit for bit, in the lanes and in render_fused; the segments carry light
+    // in these scenes (depth 0: the floor's MIS-weighted BSDF samples of the light; with the box moved off the lights
+    // the image darkens, 0.9% with the large light box, 0.006% with the small sphere);
+    // the box holds every light's primitives.
+    auto depth0 = [](std::string xml) {
+        const std::string from = "<MaxRecursionDepth>1</MaxRecursionDepth>";
+        REQUIRE(xml.find(from) != std::string::npos);
+        return xml.replace(xml.find(from), from.size(), "<MaxRecursionDepth>0</MaxRecursionDepth>");
+    };
+    const std::string mis = "MultipleImportanceSampling";
+    const std::string sphere = darkBoxScene(
+        mis, "1", "<Transformations><Scaling id=\"1\">4 1 1</Scaling><Translation id=\"1\">0 1.6 0</Translation></Transformations>",
+        "0 0 0", "<LightSphere id=\"1\"><Material>1</Material><Center>9</Center><Radius>0.2</Radius>"
+                 "<Radiance>10 10 10</Radiance><Transformations>s1 t1</Transformations></LightSphere>");
+    struct Case { const char* name; std::string xml; int emitterTest; };
+    const Case cases[] = {{"LightMesh box of 10 triangles", depth0(lightMeshBoxScene(mis)), 1},
+                          {"ellipsoidal LightSphere", depth0(sphere), 1},
+                          {"LightMesh box of 20 triangles", depth0(lightMeshBox20Scene(mis)), 0}};
+    TempDir d;
+    int compared = 0;
+    for (const Case& c : cases) {
+        INFO(c.name);
+        const Scene scene = loadScene(writeText(d, "s.xml", c.xml));
+        const DeviceScene ds = flattenScene(scene);
+        CHECK(ds.params.emitterTest == c.emitterTest);
+        const dev::float4 lo = ds.params.emitterLo, hi = ds.params.emitterHi;
+        auto inBox = [&](float x, float y, float z, float r) {
+            return x - r >= lo.x && y - r >= lo.y && z - r >= lo.z && x + r <= hi.x && y + r <= hi.y && z + r <= hi.z;
+        };
+        for (const dev::Light& l : ds.lights) {
+            if (!ds.params.emitterTest) break;
+            for (int i = 0; l.kind == dev::LIGHT_MESH && i < 3 * l.objCount; ++i) {
+                const dev::float4& v = ds.lightData[size_t(l.objFirst + i)];
+                CHECK(inBox(v.x, v.y, v.z, 0.0f));
+            }
+            if (l.kind == dev::LIGHT_SPHERE) CHECK(inBox(l.position.x, l.position.y, l.position.z, l.objRadius));
+        }
+        if (!c.emitterTest) continue;
+        DeviceScene traced = ds, empty = ds;
+        traced.params.emitterTest = 0;
+        empty.params.emitterLo = empty.params.emitterHi = {1e6f, 1e6f, 1e6f, 0}; /* a box away from the lights */
+        for (Pipeline p : {Pipeline::Lanes, Pipeline::Fused}) {
+            const ImageRGB a = renderPipeline(ds, scene.cameras.at(0), p, 16, 1);
+            CHECK(differingFloats(a, renderPipeline(traced, scene.cameras.at(0), p, 16, 1)) == 0);
+            const ImageRGB e = renderPipeline(empty, scene.cameras.at(0), p, 16, 1);
+            auto sum = [](const ImageRGB& img) { double t = 0; for (float v : img.pixels) t += v; return t; };
+            CHECK(differingFloats(a, e) > 0);
+            CHECK(sum(e) < sum(a));
+            ++compared;
+        }
+    }
+    CHECK(compared == 4);
+}
+
 TEST_CASE("clrt render --mesh-light-sampling: solid-angle by default, area on request, anything else a usage error",
           "[objlight][cli]") {
     TempDir d;

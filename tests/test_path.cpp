@@ -180,6 +180,7 @@ TEST_CASE("Path tracing: white furnace under a constant environment gives a*Le f
     for (const char* sampler : {"uniform", "importance", "cosine"}) {
         for (const char* params : optionSets) {
             Scene scene = loadScene(writeText(tmp.file("furnace.xml"), envFurnace(params, sampler, a)));
+            CHECK(flattenScene(scene).params.emitterTest == 0); /* a miss brings the environment's light */
             ImageRGB img = renderCamera(scene, scene.cameras.at(0), 64, 7);
             for (int c = 0; c < 3; ++c) {
                 INFO("sampler " << sampler << ", RendererParams '" << params << "', channel " << c);

@@ -88,6 +88,37 @@ void flattenSphereLight(const Shape& s, dev::Light& d, DeviceScene& ds) {
     }
 }
 
+// SceneParams.emitterTest and the box around the object lights' primitives (their lightData: a LightMesh's
+// triangles, a LightSphere's world-space bounding sphere), for a path's emission-only segment
+// (cl_kernels/path.cl, Path_BoundEmissionOnly): only without an environment light (a miss would bring its light)
+// and with at most CLRT_EMITTER_TEST_MAX primitives.
+void setEmitterTest(DeviceScene& ds) {
+    int prims = 0;
+    dev::float4 lo{INFINITY, INFINITY, INFINITY, 0}, hi{-INFINITY, -INFINITY, -INFINITY, 0};
+    auto grow = [&](float x, float y, float z, float r) {
+        lo = {std::min(lo.x, x - r), std::min(lo.y, y - r), std::min(lo.z, z - r), 0};
+        hi = {std::max(hi.x, x + r), std::max(hi.y, y + r), std::max(hi.z, z + r), 0};
+    };
+    for (const dev::Light& l : ds.lights) {
+        if (l.kind == dev::LIGHT_ENVIRONMENT) return;
+        if (l.kind == dev::LIGHT_MESH) {
+            prims += l.objCount;
+            for (int i = 0; i < 3 * l.objCount; ++i) {
+                const dev::float4& v = ds.lightData[size_t(l.objFirst + i)];
+                grow(v.x, v.y, v.z, 0.0f);
+            }
+        }
+        if (l.kind == dev::LIGHT_SPHERE) {
+            ++prims;
+            grow(l.position.x, l.position.y, l.position.z, l.objRadius);
+        }
+    }
+    if (prims > CLRT_EMITTER_TEST_MAX) return;
+    ds.params.emitterTest = 1;
+    ds.params.emitterLo = lo;  // inverted (lo > hi) without object lights: the slab test passes, no primitive is hit
+    ds.params.emitterHi = hi;
+}
+
 }  // namespace
 
 void flattenLights(const Scene& scene, DeviceScene& ds, ImageAtlas& atlas) {
@@ -134,6 +165,7 @@ void flattenLights(const Scene& scene, DeviceScene& ds, ImageAtlas& atlas) {
     if (ds.envDistribution.empty()) ds.envDistribution.push_back(0.0f);
     if (ds.lightData.empty()) ds.lightData.push_back(dev::float4{});
     ds.params.numLights = int(scene.lights.size());  // every light is flattened
+    setEmitterTest(ds);
 }
 
 }  // namespace clrt

@@ -352,8 +352,15 @@ typedef struct SceneParams {
                             * takes camera sample s / split (camera.cl) */
     int cullBackFaces;     /* 1: the classic renderer's rays in air skip triangles seen from behind (the course's 2025
                             * renderer; Scene::backfaceCulling; under CLRT_HAS_BACKFACE_CULLING only) */
-    int scenePad[3];       /* to a multiple of 16 bytes */
+    int emitterTest;       /* 1: every light a ray can hit is among a few primitives (at most CLRT_EMITTER_TEST_MAX LightMesh
+                            * triangles and LightSpheres) and there is no environment light: a path's emission-only
+                            * segment is first tested against those alone (cl_kernels/path.cl, Path_BoundEmissionOnly) */
+    int scenePad[2];       /* to a multiple of 16 bytes */
+    float4 emitterLo, emitterHi; /* with emitterTest: the box around those primitives (flatten_lights.cpp) */
 } SceneParams;
+
+/* SceneParams.emitterTest: the most object-light primitives (LightMesh triangles, LightSpheres) tested one by one. */
+#define CLRT_EMITTER_TEST_MAX 16
 
 /* SceneParams.pixelSampler (set per render from RenderSettings::pixelSampler, clrt render --sampler). */
 #define CLRT_PIXEL_SAMPLER_INDEPENDENT 0 /* every number an independent uniform (Rng_Uniform) */
