@@ -63,9 +63,11 @@ inline LaneBrdf LaneBrdf_Load(const __global Material* materials, int lanes, con
     return b;
 }
 
+inline LaneF Lanes_PowAtZero(LaneF e) { /* Math_PowNonNegative's 0^e: 0 for e > 0, 1 for e = 0, inf for e < 0 */
+    return select(select(select(e, (LaneF)(INFINITY), e < 0.0f), (LaneF)(1.0f), e == 0.0f), (LaneF)(0.0f), e > 0.0f);
+}
 inline LaneF Lanes_PowNonNegative(LaneF x, LaneF e) { /* Math_PowNonNegative */
-    const LaneF atZero = select(select(select(e, (LaneF)(INFINITY), e < 0.0f), (LaneF)(1.0f), e == 0.0f), (LaneF)(0.0f), e > 0.0f);
-    return select(atZero, exp2(e * log2(x)), x > 0.0f);
+    return select(Lanes_PowAtZero(e), exp2(e * log2(x)), x > 0.0f);
 }
 inline LaneV3 LaneV3_Reflect(LaneV3 w, LaneV3 n) { return LaneV3_Sub(LaneV3_Scale(n, 2.0f * LaneV3_Dot(w, n)), w); }
 inline LaneF LaneV3_Sum(LaneV3 a) { return a.x + a.y + a.z; }
@@ -111,7 +113,7 @@ inline LaneV3 LaneBrdf_EvalDirect(const LaneBrdf* b, const LaneBrdfAt* at, LaneF
     const LaneI classic = b->kind == CLRT_INVALID, ts = b->kind == BRDF_TORRANCE_SPARROW;
     const LaneI hasSpec = LaneV3_Max(b->ks) > 0.0f;
     /* cos^p of the clamped cosine (Lanes_PowNonNegative(fmax(0, cosLobe), p)): the power at 0 where it is <= 0 */
-    const LaneF powAtZero = Lanes_PowNonNegative((LaneF)(0.0f), b->exponent);
+    const LaneF powAtZero = Lanes_PowAtZero(b->exponent);
     const LaneF spec = select((LaneF)(0.0f), select(powAtZero, at->power, at->cosLobe > 0.0f), hasSpec | ts);
     /* the specular factor s of f = kd' + ks·s, and kd' = kd·dScale */
     LaneF s = spec, dScale = (LaneF)(1.0f);
