@@ -1189,6 +1189,11 @@ TEST_CASE("object lights: emission-only segments are tested against the lights a
         }
     }
     CHECK(compared == 4);
+    if (haveShared()) {  // a point light beside the LightMesh: no ray hits it, the test stays on
+        const DeviceScene box = flattenScene(loadScene(sharedDir() + "/scenes/hw6/cornellbox_jaroslav_path_diffuse.xml"));
+        CHECK(box.params.numLights == 2);
+        CHECK(box.params.emitterTest == 1);
+    }
 }
 
 TEST_CASE("clrt render --mesh-light-sampling: solid-angle by default, area on request, anything else a usage error",

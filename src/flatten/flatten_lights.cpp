@@ -90,8 +90,8 @@ void flattenSphereLight(const Shape& s, dev::Light& d, DeviceScene& ds) {
 
 // SceneParams.emitterTest and the box around the object lights' primitives (their lightData: a LightMesh's
 // triangles, a LightSphere's world-space bounding sphere), for a path's emission-only segment
-// (cl_kernels/path.cl, Path_BoundEmissionOnly): only without an environment light (a miss would bring its light)
-// and with at most CLRT_EMITTER_TEST_MAX primitives.
+// (cl_kernels/path.cl, Path_BoundEmissionOnly): only where every light is a kind listed below (no environment light:
+// a miss would bring its light) and with at most CLRT_EMITTER_TEST_MAX primitives.
 void setEmitterTest(DeviceScene& ds) {
     int prims = 0;
     dev::float4 lo{INFINITY, INFINITY, INFINITY, 0}, hi{-INFINITY, -INFINITY, -INFINITY, 0};
@@ -100,17 +100,23 @@ void setEmitterTest(DeviceScene& ds) {
         hi = {std::max(hi.x, x + r), std::max(hi.y, y + r), std::max(hi.z, z + r), 0};
     };
     for (const dev::Light& l : ds.lights) {
-        if (l.kind == dev::LIGHT_ENVIRONMENT) return;
-        if (l.kind == dev::LIGHT_MESH) {
+        switch (l.kind) {
+        case dev::LIGHT_POINT:
+        case dev::LIGHT_SPOT:
+        case dev::LIGHT_DIRECTIONAL:
+        case dev::LIGHT_AREA: break;  // no ray hits them
+        case dev::LIGHT_MESH:
             prims += l.objCount;
             for (int i = 0; i < 3 * l.objCount; ++i) {
                 const dev::float4& v = ds.lightData[size_t(l.objFirst + i)];
                 grow(v.x, v.y, v.z, 0.0f);
             }
-        }
-        if (l.kind == dev::LIGHT_SPHERE) {
+            break;
+        case dev::LIGHT_SPHERE:
             ++prims;
             grow(l.position.x, l.position.y, l.position.z, l.objRadius);
+            break;
+        default: return;  // an environment light (a miss brings its light), or a kind Path_EmitterDistance does not test
         }
     }
     if (prims > CLRT_EMITTER_TEST_MAX) return;
