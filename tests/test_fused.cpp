@@ -1,5 +1,6 @@
 // The fused CPU path (issue 18, cl_kernels/fused.cl, src/render/fused_renderer.cpp): it renders the
-// wavefront's image bit for bit (same physics functions, same random streams, sums in the same order)
+// wavefront's image bit for bit on PoCL (same physics functions, same random streams, sums in the same order;
+// Intel's runtime contracts the two programs differently: its LightMesh scenes differ by rounding, docs/architecture.md)
 // on shared scenes covering every kind of path tree and light: point, area, spot, environment (multi-
 // sample MIS: two shadow slots), object lights, mirrors, conductors, dielectrics with the split tree
 // (per-depth sums and the explicit stack) and without, several samples per group, textures, bump maps,
