@@ -178,8 +178,8 @@ inline LaneF LaneBrdf_BouncePdf(const LaneBrdf* b, int mode, const LaneBrdfAt* a
 }
 
 /* Brdf_Sample for the lanes with a BRDF, in importance sampling modes, from u1 and the cosine and sine of 2π·u2
- * (Lanes_SinCos2Pi, which Lanes_Bounce has made): *wi; returns the lanes whose sample can carry something (wi
- * above the surface and finite; the caller asks for its density > 0 too). Each lane draws from the lobe its u1
+ * (Lanes_SinCos2Pi, which Lanes_Bounce has made): *wi; returns the lanes whose sample can carry something (a
+ * finite wi, and for a half-vector draw wo·h != 0; the caller asks for n·wi > 0 and a density > 0 too). Each lane draws from the lobe its u1
  * picks, in one warp: the glossy lobe's power cosine (Brdf_WarpPowerCosine) about wo mirrored in n, or about n
  * for a half vector that wo is then reflected about, or the cosine lobe about n (Warp_CosineHemisphere). Its
  * density is the mixture's at wi (LaneBrdf_MixturePdf), for either lobe: the scalar code takes the glossy
@@ -198,7 +198,7 @@ inline LaneI LaneBrdf_Sample(const LaneBrdf* b, LaneF u1, LaneF cs, LaneF sn, La
     const LaneI viaHalf = glossyLobe & ~mirror;
     const LaneF woH = LaneV3_Dot(b->wo, w);
     *wi = LaneV3_Select(w, LaneV3_Normalize(LaneV3_Sub(LaneV3_Scale(w, 2.0f * woH), b->wo)), viaHalf);
-    return ~(viaHalf & ~(fabs(woH) > 0.0f)) & (LaneV3_Dot(b->n, *wi) > 0.0f) & LaneV3_Finite(*wi);
+    return ~(viaHalf & ~(fabs(woH) > 0.0f)) & LaneV3_Finite(*wi);
 }
 
 #endif /* CLRT_HAS_LANES && CLRT_HAS_PATH_TRACING */

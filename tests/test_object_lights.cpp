@@ -1070,6 +1070,16 @@ void checkSameLight(const std::function<std::string(const std::string&)>& scene,
     CHECK(far <= 1);
 }
 
+// A darkBoxScene lit by a LightSphere scaled (4, 1, 1) above the floor (sampled in object space: object_lights.cl).
+std::string ellipsoidLightScene(const std::string& params) {
+    return darkBoxScene(params, "1",
+                        "<Transformations><Scaling id=\"1\">4 1 1</Scaling><Translation id=\"1\">0 1.6 0</Translation>"
+                        "</Transformations>",
+                        "0 0 0",
+                        "<LightSphere id=\"1\"><Material>1</Material><Center>9</Center><Radius>0.2</Radius>"
+                        "<Radiance>10 10 10</Radiance><Transformations>s1 t1</Transformations></LightSphere>");
+}
+
 // A darkBoxScene lit by a box of ten LightMesh triangles, as the hw6 boxes' light (five faces, open at the top,
 // closed off by the ceiling), here large and close to the floor.
 std::string lightMeshBoxScene(const std::string& params) {
@@ -1099,15 +1109,7 @@ TEST_CASE("an ellipsoidal LightSphere gives the same light by NEE, by MIS and by
     // hit it after a diffuse bounce see that too). Path traced to depth 1 three ways: NEE, NEE with MIS,
     // and BSDF sampling alone; with black walls (NEE at the bounce's vertex adds nothing) all three
     // estimate the floor's direct light: 8×8 blocks within 4 sigmas of the BSDF renders' mean.
-    auto scene = [](const std::string& params) {
-        return darkBoxScene(params, "1",
-                            "<Transformations><Scaling id=\"1\">4 1 1</Scaling><Translation id=\"1\">0 1.6 0</Translation>"
-                            "</Transformations>",
-                            "0 0 0",
-                            "<LightSphere id=\"1\"><Material>1</Material><Center>9</Center><Radius>0.2</Radius>"
-                            "<Radiance>10 10 10</Radiance><Transformations>s1 t1</Transformations></LightSphere>");
-    };
-    checkSameLight(scene, 256, {Pipeline::Auto}, 0.03);
+    checkSameLight(ellipsoidLightScene, 256, {Pipeline::Auto}, 0.03);
 }
 
 TEST_CASE("a LightMesh box gives the same light by NEE, by MIS and by BSDF rays alone", "[objlight][path][render]") {
@@ -1147,13 +1149,9 @@ TEST_CASE("object lights: emission-only segments are tested against the lights a
         return xml.replace(xml.find(from), from.size(), "<MaxRecursionDepth>0</MaxRecursionDepth>");
     };
     const std::string mis = "MultipleImportanceSampling";
-    const std::string sphere = darkBoxScene(
-        mis, "1", "<Transformations><Scaling id=\"1\">4 1 1</Scaling><Translation id=\"1\">0 1.6 0</Translation></Transformations>",
-        "0 0 0", "<LightSphere id=\"1\"><Material>1</Material><Center>9</Center><Radius>0.2</Radius>"
-                 "<Radiance>10 10 10</Radiance><Transformations>s1 t1</Transformations></LightSphere>");
     struct Case { const char* name; std::string xml; int emitterTest; };
     const Case cases[] = {{"LightMesh box of 10 triangles", depth0(lightMeshBoxScene(mis)), 1},
-                          {"ellipsoidal LightSphere", depth0(sphere), 1},
+                          {"ellipsoidal LightSphere", depth0(ellipsoidLightScene(mis)), 1},
                           {"LightMesh box of 20 triangles", depth0(lightMeshBox20Scene(mis)), 0}};
     TempDir d;
     int compared = 0;
