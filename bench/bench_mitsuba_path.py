@@ -23,7 +23,8 @@ efficiency = 1/(relMSE x time); ratio clrt/Mitsuba = time factor x noise factor.
 --depth-check: the box at clrt depths 0 and 1 against Mitsuba max_depth d+1 and d+2 (the mapping's test).
 --scene-file FILE[@CAMERA],...: any course scene (XML, or 2025 JSON: json_to_xml) instead of the three above (user_scene below): one of
 its cameras (the first unless @N, 1-based), its own depth and RendererParams (or --path-params; Russian
-roulette removed, as above; a camera that is not path traced is made so, with MultipleImportanceSampling), the resolution scaled to --path-res on the long side, references of --path-ref-spp; what the
+roulette removed, as above; a camera that is not path traced is made so, with MultipleImportanceSampling; one
+whose strategy has no next-event estimation, unlike `path`, is rendered so and noted), the resolution scaled to --path-res on the long side, references of --path-ref-spp; what the
 conversion cannot map is listed under the report's table ("Conversion warnings"), and the means must still
 agree within 1% for the efficiency to count.
 Writes mitsuba_path.csv, mitsuba_path_runs.csv, mitsuba_path_<scene>.png, mitsuba_path_report.md."""
@@ -206,6 +207,13 @@ def user_scene_copy(sc, tmpdir, depth):
         if (rp.text or "").split() != sc["params"].split():
             note("RendererParams '%s' replaced by '%s' (--path-params)" % ((rp.text or "").strip(), sc["params"]))
         rp.text = sc["params"]
+    own = (rp.text or "").split() if rp is not None else []
+    if not sc.get("params") and not ({"MultipleImportanceSampling", "NextEventEstimation", "MIS_POWER", "MIS_BALANCE",
+                                      "MIS_01"} & set(own)):
+        # `path` always samples the lights (next-event estimation with MIS): a camera that does not is a
+        # different estimator, far noisier wherever lights are small, and its efficiencies say so.
+        note("clrt renders the camera's own strategy '%s', without next-event estimation, which Mitsuba's path "
+             "always does: --path-params MultipleImportanceSampling compares the same strategy" % " ".join(own))
     if rp is not None and "RussianRoulette" in (rp.text or "").split():
         rp.text = " ".join(x for x in rp.text.split() if x != "RussianRoulette")
         note("RussianRoulette removed from clrt's RendererParams (it lifts the depth cap; Mitsuba renders at the cap)")
