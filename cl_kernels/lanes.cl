@@ -445,16 +445,17 @@ inline void Lanes_SphereLightSample(const __global Light* light, const __global 
 #endif
 
 /* f·cosθ towards wi and Path_BouncePdf's density of wi at the glossy lanes' hits, in lanes (lanes_brdf.cl:
- * Shadow_Make's Material_EvalDirect, Path_LightSampleWeight's pdf); the other lanes keep *fCos and *bouncePdf. */
-inline void Lanes_GlossyLightTerms(const __global Material* materials, int mode, int glossy, const ShadingPoint* sp,
-                                   LaneV3 wi, LaneF cosTheta, LaneV3* fCos, LaneF* bouncePdf) {
-    const LaneBrdf b = LaneBrdf_Load(materials, glossy, sp);
+ * Shadow_Make's Material_EvalDirect, Path_LightSampleWeight's pdf); the other lanes keep *fCos and *bouncePdf.
+ * b: the BRDFs loaded for the vertex's glossy lanes (a superset of glossy; each lane computes on its own). */
+inline void Lanes_GlossyLightTerms(const __global Material* materials, const LaneBrdf* b, int mode, int glossy,
+                                   const ShadingPoint* sp, LaneV3 wi, LaneF cosTheta, LaneV3* fCos, LaneF* bouncePdf) {
     const LaneI g = Lane_FromBits(glossy);
-    const LaneBrdfAt at = LaneBrdf_At(&b, wi);
-    const LaneV3 f = LaneV3_Select(LaneV3_Splat((float3)(0.0f)), LaneBrdf_EvalDirect(&b, &at, cosTheta), cosTheta > 0.0f);
+    const LaneBrdfAt at = LaneBrdf_At(b, wi);
+    const LaneV3 f = LaneV3_Select(LaneV3_Splat((float3)(0.0f)), LaneBrdf_EvalDirect(b, &at, cosTheta), cosTheta > 0.0f);
     *fCos = LaneV3_Select(*fCos, f, g);
-    *bouncePdf = select(*bouncePdf, LaneBrdf_BouncePdf(&b, mode, &at), g);
-    if (!b.scalar) return;
+    *bouncePdf = select(*bouncePdf, LaneBrdf_BouncePdf(b, mode, &at), g);
+    const int scalar = b->scalar & glossy;
+    if (!scalar) return;
     float3 w[CLRT_LANES], fc[CLRT_LANES]; /* a BRDF without a lane form: per lane */
     float c[CLRT_LANES], pdf[CLRT_LANES];
     LaneV3_Store(wi, w);
@@ -462,7 +463,7 @@ inline void Lanes_GlossyLightTerms(const __global Material* materials, int mode,
     vstore4(cosTheta, 0, c);
     vstore4(*bouncePdf, 0, pdf);
     for (int k = 0; k < CLRT_LANES; ++k) {
-        if (!((b.scalar >> k) & 1)) continue;
+        if (!((scalar >> k) & 1)) continue;
         fc[k] = c[k] > 0.0f ? Material_EvalDirect(sp[k], materials, w[k], c[k]) : (float3)(0.0f);
         pdf[k] = Path_BouncePdf(sp[k], materials, mode, w[k]);
     }
@@ -473,7 +474,7 @@ inline void Lanes_GlossyLightTerms(const __global Material* materials, int mode,
 /* The lanes' light samples of light `light` (LightMesh, LightSphere under a similarity or PointLight) at their hits (those in hit->nee):
  * as Light_ShadowRays and Fused_Shadow, the unoccluded contributions (MIS-weighted, times the throughput). */
 inline LaneV3 Lanes_LightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) const __global Light* light, const LanesHit* hit,
-                                const PathState* path, int pixel, LaneV3 throughput, uint strat, LaneU sample, uint dim) {
+                                const LaneBrdf* brdf, const PathState* path, int pixel, LaneV3 throughput, uint strat, LaneU sample, uint dim) {
     const LaneV3 zero = LaneV3_Splat((float3)(0.0f)), p = hit->p, ng = hit->ng, ns = hit->ns;
     LaneV3 wi, e;
     LaneF dist;
@@ -509,7 +510,7 @@ inline LaneV3 Lanes_LightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) const
     LaneV3 fCos = LaneV3_Scale(hit->f, cosTheta);
     LaneF bouncePdf = Path_UsesImportance(mode) ? cosTheta * CLRT_INV_PI : (LaneF)(0.5f * CLRT_INV_PI);
     if (hit->glossy & hit->nee)
-        Lanes_GlossyLightTerms(materials, mode, hit->glossy & hit->nee, hit->sp, wi, cosTheta, &fCos, &bouncePdf);
+        Lanes_GlossyLightTerms(materials, brdf, mode, hit->glossy & hit->nee, hit->sp, wi, cosTheta, &fCos, &bouncePdf);
     LaneV3 contrib = LaneV3_FiniteOrZero(LaneV3_Mul(LaneV3_Mul(throughput, fCos), e));
     if (shape && (mode & CLRT_PATH_MIS)) { /* Path_LightSampleWeight: a point light's weight is 1 */
         const LaneF lightPdf = maxComponent(light->radiance.xyz) / LaneV3_Max(e);
@@ -575,31 +576,32 @@ inline LaneV3 Lanes_ScalarLightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE)
  * and *pdf, the hemisphere warp Lanes_Bounce drew from it (what a material without a BRDF, or every material
  * without importance sampling, takes): their *dir, *pdf and *fCos (0 where the sample carries nothing); the
  * other lanes keep theirs. */
-inline void Lanes_GlossyBounces(const __global Material* materials, int mode, int glossy, const ShadingPoint* sp, LaneF u1,
-                                LaneF u2, LaneF c2, LaneF s2, LaneV3* dir, LaneF* pdf, LaneV3* fCos) {
-    const LaneBrdf b = LaneBrdf_Load(materials, glossy, sp);
+inline void Lanes_GlossyBounces(const __global Material* materials, const LaneBrdf* b, int mode, int glossy,
+                                const ShadingPoint* sp, LaneF u1, LaneF u2, LaneF c2, LaneF s2, LaneV3* dir, LaneF* pdf,
+                                LaneV3* fCos) {
+    const int scalar = b->scalar & glossy;
     const LaneI g = Lane_FromBits(glossy);
     LaneV3 wi = *dir;
     LaneF pd = *pdf;
     LaneI ok = (LaneI)(-1), okB = (LaneI)(-1);
-    const LaneI brdf = Path_UsesImportance(mode) ? b.kind != CLRT_INVALID : (LaneI)(0);
+    const LaneI brdf = Path_UsesImportance(mode) ? b->kind != CLRT_INVALID : (LaneI)(0);
     if (any(brdf)) { /* Brdf_Sample where there is a BRDF; its density once the lanes' wi are known */
         LaneV3 wB;
-        okB = LaneBrdf_Sample(&b, u1, c2, s2, &wB);
+        okB = LaneBrdf_Sample(b, u1, c2, s2, &wB);
         wi = LaneV3_Select(wi, wB, brdf);
     }
-    const LaneBrdfAt at = LaneBrdf_At(&b, wi); /* f and the density share its power */
+    const LaneBrdfAt at = LaneBrdf_At(b, wi); /* f and the density share its power */
     if (any(brdf)) {
-        const LaneF pB = LaneBrdf_MixturePdf(&b, &at);
+        const LaneF pB = LaneBrdf_MixturePdf(b, &at);
         pd = select(pd, pB, brdf);
         ok = select(ok, okB & (pB > 0.0f), brdf);
     }
     const LaneF c = at.cosI;
-    ok &= (c > 0.0f) & (LaneV3_Dot(b.ng, wi) > 0.0f) & (pd > 0.0f);
-    const LaneV3 f = LaneV3_Select(LaneV3_Splat((float3)(0.0f)), LaneBrdf_EvalDirect(&b, &at, c), ok);
+    ok &= (c > 0.0f) & (LaneV3_Dot(b->ng, wi) > 0.0f) & (pd > 0.0f);
+    const LaneV3 f = LaneV3_Select(LaneV3_Splat((float3)(0.0f)), LaneBrdf_EvalDirect(b, &at, c), ok);
     float3 d[CLRT_LANES], fc[CLRT_LANES]; /* a BRDF without a lane form: per lane, from the lanes' warp */
     float a[CLRT_LANES], bb[CLRT_LANES], pdfs[CLRT_LANES];
-    if (b.scalar) {
+    if (scalar) {
         LaneV3_Store(*dir, d);
         LaneV3_Store(*fCos, fc);
         vstore4(u1, 0, a);
@@ -609,10 +611,10 @@ inline void Lanes_GlossyBounces(const __global Material* materials, int mode, in
     *dir = LaneV3_Select(*dir, wi, g);
     *pdf = select(*pdf, pd, g);
     *fCos = LaneV3_Select(*fCos, f, g);
-    if (!b.scalar) return;
+    if (!scalar) return;
     for (int k = 0; k < CLRT_LANES; ++k)
-        if ((b.scalar >> k) & 1) fc[k] = Path_SampleBounce(sp[k], materials, mode, (float2)(a[k], bb[k]), &d[k], &pdfs[k]);
-    const LaneI sc = Lane_FromBits(b.scalar);
+        if ((scalar >> k) & 1) fc[k] = Path_SampleBounce(sp[k], materials, mode, (float2)(a[k], bb[k]), &d[k], &pdfs[k]);
+    const LaneI sc = Lane_FromBits(scalar);
     *dir = LaneV3_Select(*dir, LaneV3_Load(d), sc);
     *fCos = LaneV3_Select(*fCos, LaneV3_Load(fc), sc);
     *pdf = select(*pdf, vload4(0, pdfs), sc);
@@ -621,8 +623,8 @@ inline void Lanes_GlossyBounces(const __global Material* materials, int mode, in
 /* The lanes' non-specular bounces (Path_SampleBounce; the glossy lanes' by Lanes_GlossyBounces) for the lanes in
  * bounceBits, picked with probability 1 − pSpecular: *dir, *pdf and the new throughput; the lanes in the
  * returned bits carry a child. */
-inline int Lanes_Bounce(const __global Material* materials, int mode, int bounceBits, const LanesHit* hit, LaneF pSpecular,
-                        LaneF u1, LaneF u2, LaneV3* throughput, LaneV3* dir, LaneF* pdf) {
+inline int Lanes_Bounce(const __global Material* materials, const LaneBrdf* brdf, int mode, int bounceBits, const LanesHit* hit,
+                        LaneF pSpecular, LaneF u1, LaneF u2, LaneV3* throughput, LaneV3* dir, LaneF* pdf) {
     const int cosine = Path_UsesImportance(mode);
     const LaneV3 ng = hit->ng, ns = hit->ns;
     LaneF c2, s2;
@@ -641,7 +643,7 @@ inline int Lanes_Bounce(const __global Material* materials, int mode, int bounce
     *pdf = cosine ? lz * CLRT_INV_PI : (LaneF)(0.5f * CLRT_INV_PI);
     LaneV3 fCos = LaneV3_Scale(hit->f, LaneV3_Dot(ns, *dir));
     if (hit->glossy & bounceBits)
-        Lanes_GlossyBounces(materials, mode, hit->glossy & bounceBits, hit->sp, u1, u2, c2, s2, dir, pdf, &fCos);
+        Lanes_GlossyBounces(materials, brdf, mode, hit->glossy & bounceBits, hit->sp, u1, u2, c2, s2, dir, pdf, &fCos);
     const LaneI ok = Lane_FromBits(bounceBits) & (LaneV3_Dot(ns, *dir) > 0.0f) & (LaneV3_Dot(ng, *dir) > 0.0f) &
                      (*pdf > 0.0f) & LaneV3_Finite(*dir);
     const LaneF q = *pdf * (1.0f - pSpecular);
@@ -742,9 +744,11 @@ inline uint Lanes_Paths(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int lightSlot
         const uint strat = Rng_Key(scene.seed, pixel, 0, path[0].pathId).strat; /* the lanes' shared path id */
         const uint dim = 4u + 32u * (uint)depth;
         LaneV3 sum = hit.radiance;
+        LaneBrdf brdf; /* the glossy lanes' BRDFs, for every light's sample and the bounce */
+        if (hit.glossy) brdf = LaneBrdf_Load(materials, hit.glossy, hit.sp);
         for (int l = 0; l < scene.numLights && hit.nee; ++l)
             sum = Lanes_HasLaneForm(&lights[l])
-                      ? LaneV3_Add(sum, Lanes_LightSample(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) & lights[l], &hit, path,
+                      ? LaneV3_Add(sum, Lanes_LightSample(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) & lights[l], &hit, &brdf, path,
                                                           pixel, throughput, strat, sample, dim + 8u + 2u * (uint)l))
                       : Lanes_ScalarLightSample(CLRT_GROUP_ARGS(CLRT_PARAMS_FUSED_SCENE) l, lightSlots, &hit, path, pixel, strat,
                                                 sample, dim + 8u + 2u * (uint)l, sum);
@@ -760,7 +764,7 @@ inline uint Lanes_Paths(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) int lightSlot
         LaneF u1, u2, pdf;
         Lanes_Sample2D(scene, strat, sample, path, pixel, dim + 5u, &u1, &u2);
         LaneV3 dir;
-        const int diffuseBits = Lanes_Bounce(materials, mode, live & ~specBits, &hit, vload4(0, pSpec), u1, u2, &throughput,
+        const int diffuseBits = Lanes_Bounce(materials, &brdf, mode, live & ~specBits, &hit, vload4(0, pSpec), u1, u2, &throughput,
                                              &dir, &pdf);
         float pdfs[CLRT_LANES];
         LaneV3_Store(LaneV3_Add(hit.p, LaneV3_Scale(hit.ng, Lanes_OffsetDistance(hit.p))), org); /* Ray_OffsetOrigin */
