@@ -202,6 +202,36 @@ class Converter:
             f.write(fa.tobytes())
         return path
 
+    def sphere_shape(self, el, name, extra=None):
+        """Sphere or LightSphere el as a Mitsuba shape: a `sphere` under a similarity, else (an ellipsoid, which
+        Mitsuba's sphere cannot be) a UV sphere of 128 x 64 quads with the ellipsoid's own vertex normals, its
+        faces turned outwards (the emitting side of a LightSphere). Its area is within 0.02% of the ellipsoid's."""
+        ci = int(el.find("Center").text) - (0 if self.zero_based else 1)
+        c = np.array(self.vertices[ci], dtype=float)
+        r = float(el.find("Radius").text)
+        m = self.object_matrix(el)
+        d = dict(extra or {}, bsdf=self.bsdf(el.find("Material").text.strip()))
+        sv = np.linalg.svd(m[:3, :3], compute_uv=False)
+        if sv.max() - sv.min() <= 1e-6 * sv.max():
+            world = m @ np.array([[r, 0, 0, c[0]], [0, r, 0, c[1]], [0, 0, r, c[2]], [0, 0, 0, 1.0]])
+            return dict(d, type="sphere", to_world=world.tolist())
+        nu, nv = 128, 64
+        th = np.linspace(0.0, math.pi, nv + 1)[:, None]
+        ph = np.linspace(0.0, 2.0 * math.pi, nu + 1)[None, :]
+        unit = np.stack([np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th) * np.ones_like(ph)], -1).reshape(-1, 3)
+        pos = (c + r * unit) @ m[:3, :3].T + m[:3, 3]
+        nrm = unit @ np.linalg.inv(m[:3, :3])  # normals by the inverse transpose
+        nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
+        i = np.arange(nv)[:, None] * (nu + 1) + np.arange(nu)[None, :]
+        quads = np.stack([i, i + nu + 1, i + nu + 2, i + 1], -1).reshape(-1, 4)
+        faces = np.vstack([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
+        if np.linalg.det(m[:3, :3]) < 0:
+            faces = faces[:, ::-1]
+        a, b, cc = pos[faces[:, 0]], pos[faces[:, 1]], pos[faces[:, 2]]
+        faces = faces[np.linalg.norm(np.cross(b - a, cc - a), axis=1) > 0]  # the poles' empty triangles
+        self.warn("%s %s: an ellipsoid (not a similarity): a mesh of %d triangles in Mitsuba" % (el.tag, el.get("id"), len(faces)))
+        return dict(d, type="ply", filename=self._write_ply(name, pos, faces, nrm))
+
     def _mesh(self, el, shapes, kind):
         mid = el.find("Material").text.strip()
         m = self.object_matrix(el)
@@ -293,14 +323,9 @@ class Converter:
             if el.tag in ("Mesh", "Triangle"):
                 self._mesh(el, out, el.tag)
             elif el.tag == "Sphere":
-                ci = int(el.find("Center").text) - (0 if self.zero_based else 1)
-                c = self.vertices[ci]
-                r = float(el.find("Radius").text)
-                m = self.object_matrix(el)
                 if el.find("Textures") is not None:
                     self.warn("Sphere %s: textures dropped" % el.get("id"))
-                world = m @ np.array([[r, 0, 0, c[0]], [0, r, 0, c[1]], [0, 0, r, c[2]], [0, 0, 0, 1.0]])
-                out["sphere_" + el.get("id")] = {"type": "sphere", "to_world": world.tolist(), "bsdf": self.bsdf(el.find("Material").text.strip())}
+                out["sphere_" + el.get("id")] = self.sphere_shape(el, "Sphere_" + el.get("id"))
             elif self.path_tracing and el.tag in ("LightMesh", "LightSphere", "MeshInstance"):
                 import to_mitsuba_path
                 to_mitsuba_path.shape(self, el, out)
