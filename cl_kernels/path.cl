@@ -16,8 +16,9 @@
  *     At the depth cap it makes none, except under MIS: there the non-specular BSDF sample still goes
  *     out, as an emission-only segment (depth maxDepth + 1: MIS-weighted emission of an object or
  *     environment light, no light samples, no child), so the last vertex's light samples keep their
- *     power-heuristic weight (as Mitsuba's path; docs/studies/2026-12-04-mitsuba-path.md, addendum). The fused
- *     and lanes kernels test that segment against a few object lights alone first (Path_BoundEmissionOnly).
+ *     power-heuristic weight (as Mitsuba's path; docs/studies/2026-12-04-mitsuba-path.md, addendum). Every
+ *     pipeline tests that segment against a few object lights alone first (Path_BoundEmissionOnly: render_fused,
+ *     the lanes, the wavefront's shade_hits for the child it queues).
  * PathState.throughput.w: the solid-angle pdf of the BSDF sample that made the path (0: a camera ray
  * or a specular bounce); under CLRT_PATH_RR_COURSE instead ±sigma (Path_CourseSigma): + after a BSDF
  * bounce, − after a specular one, 0 for a camera ray (sigma 1).

@@ -568,7 +568,12 @@ __kernel CLRT_KERNEL_VEC_HINT void shade_hits(CLRT_KERNEL_PARAMS(shade_hits)) {
         childValid[slots * i + k] = res.childValid[k];
         if (res.childValid[k]) {  /* compact_paths reads only the valid children */
             const PathState child = res.childPath[k];
-            const Ray childRay = res.childRay[k];
+            Ray childRay = res.childRay[k];
+#ifdef CLRT_HAS_PATH_TRACING
+            /* an emission-only segment that meets no object light: tMax 0, a miss that intersect_closest does not
+             * trace (Ray_Closest); one that does: traced up to it, as render_fused and the lanes trace it */
+            if (!Path_BoundEmissionOnly(scene, child, lights, lightData, &childRay)) childRay.direction.w = 0.0f;
+#endif
             nextPaths[slots * i + k] = child;
             nextRays[slots * i + k] = childRay;
         }

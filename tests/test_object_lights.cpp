@@ -1139,7 +1139,7 @@ TEST_CASE("object lights: emission-only segments are tested against the lights a
     // CLRT_EMITTER_TEST_MAX primitives and no environment light shines (SceneParams.emitterTest, set by
     // flatten_lights.cpp), such a ray is first tested against those alone (Path_BoundEmissionOnly): not traced
     // when it meets none, traced up to just past the nearest when it does. The image must be the one of tracing
-    // every such ray (the flag cleared), bit for bit, in the lanes and in render_fused; the segments carry light
+    // every such ray (the flag cleared), bit for bit, in the lanes, render_fused and the wavefront; the segments carry light
     // in these scenes (depth 0: the floor's MIS-weighted BSDF samples of the light; with the box moved off the lights
     // the image darkens, 0.9% with the large light box, 0.006% with the small sphere);
     // the box holds every light's primitives.
@@ -1176,7 +1176,7 @@ TEST_CASE("object lights: emission-only segments are tested against the lights a
         DeviceScene traced = ds, empty = ds;
         traced.params.emitterTest = 0;
         empty.params.emitterLo = empty.params.emitterHi = {1e6f, 1e6f, 1e6f, 0}; /* a box away from the lights */
-        for (Pipeline p : {Pipeline::Lanes, Pipeline::Fused}) {
+        for (Pipeline p : {Pipeline::Lanes, Pipeline::Fused, Pipeline::Wavefront}) {
             const ImageRGB a = renderPipeline(ds, scene.cameras.at(0), p, 16, 1);
             CHECK(differingFloats(a, renderPipeline(traced, scene.cameras.at(0), p, 16, 1)) == 0);
             const ImageRGB e = renderPipeline(empty, scene.cameras.at(0), p, 16, 1);
@@ -1186,7 +1186,7 @@ TEST_CASE("object lights: emission-only segments are tested against the lights a
             ++compared;
         }
     }
-    CHECK(compared == 4);
+    CHECK(compared == 6);
     if (haveShared()) {  // a point light beside the LightMesh: no ray hits it, the test stays on
         const DeviceScene box = flattenScene(loadScene(sharedDir() + "/scenes/hw6/cornellbox_jaroslav_path_diffuse.xml"));
         CHECK(box.params.numLights == 2);
