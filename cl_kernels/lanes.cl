@@ -472,7 +472,8 @@ inline void Lanes_GlossyLightTerms(const __global Material* materials, const Lan
 }
 
 /* The lanes' light samples of light `light` (LightMesh, LightSphere under a similarity or PointLight) at their hits (those in hit->nee):
- * as Light_ShadowRays and Fused_Shadow, the unoccluded contributions (MIS-weighted, times the throughput). */
+ * as Light_ShadowRays and Fused_Shadow, the unoccluded contributions (MIS-weighted, times the throughput). brdf: the
+ * vertex's LaneBrdf_Load for hit->glossy (read only where that is non-zero). */
 inline LaneV3 Lanes_LightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) const __global Light* light, const LanesHit* hit,
                                 const LaneBrdf* brdf, const PathState* path, int pixel, LaneV3 throughput, uint strat, LaneU sample, uint dim) {
     const LaneV3 zero = LaneV3_Splat((float3)(0.0f)), p = hit->p, ng = hit->ng, ns = hit->ns;
@@ -620,9 +621,9 @@ inline void Lanes_GlossyBounces(const __global Material* materials, const LaneBr
     *pdf = select(*pdf, vload4(0, pdfs), sc);
 }
 
-/* The lanes' non-specular bounces (Path_SampleBounce; the glossy lanes' by Lanes_GlossyBounces) for the lanes in
- * bounceBits, picked with probability 1 − pSpecular: *dir, *pdf and the new throughput; the lanes in the
- * returned bits carry a child. */
+/* The lanes' non-specular bounces (Path_SampleBounce; the glossy lanes' by Lanes_GlossyBounces, from brdf as in
+ * Lanes_LightSample) for the lanes in bounceBits, picked with probability 1 − pSpecular: *dir, *pdf and the new
+ * throughput; the lanes in the returned bits carry a child. */
 inline int Lanes_Bounce(const __global Material* materials, const LaneBrdf* brdf, int mode, int bounceBits, const LanesHit* hit,
                         LaneF pSpecular, LaneF u1, LaneF u2, LaneV3* throughput, LaneV3* dir, LaneF* pdf) {
     const int cosine = Path_UsesImportance(mode);
