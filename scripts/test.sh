@@ -29,9 +29,9 @@ log=build/test-log.txt
 # rule): when that check runs, the suite leaves them out ("~[.]": hidden tests stay hidden).
 args=("$@")
 if [ $# -eq 0 ] && [ -z "${CLRT_NO_COURSE_CHECK:-}" ] && [ -d ../shared/scenes ]; then args=("~[course]~[.]"); fi
-# The suite runs in CLRT_TEST_SHARDS processes at once (default: the cores, at most 4), each given every
-# n-th test case by name: a cold kernel cache makes much of the suite single-threaded compiles, which then
-# overlap. With arguments (a tag, a name) it runs as one process.
+# The suite runs in CLRT_TEST_SHARDS processes at once (default: the cores, at most 4; scripts/run_shards.sh),
+# each given every n-th test case by name: a cold kernel cache makes much of the suite single-threaded compiles,
+# which then overlap. With arguments (a tag, a name) it runs as one process.
 shards=${CLRT_TEST_SHARDS:-$(nproc)}; [ "$shards" -gt 4 ] && shards=4
 [ $# -eq 0 ] || shards=1
 if [ "$shards" -le 1 ]; then
@@ -40,21 +40,10 @@ if [ "$shards" -le 1 ]; then
   rc=${PIPESTATUS[0]}
   set -e
 else
-  # Names escaped as Catch2's test specs need (\ , [ ]); each shard's share in build/test-shard-I.txt.
-  # A name with a double quote cannot be given this way: the count check below then fails the run.
-  # (Catch2 2.x exits with the number of test cases it lists.)
-  { (cd build && ./clrt_tests "${args[@]}" --list-test-names-only) || true; } | sed '/^$/d' |
-    sed 's/\\/\\\\/g; s/,/\\,/g; s/\[/\\[/g; s/\]/\\]/g' > build/test-names.txt
-  pids=()
-  for ((i = 0; i < shards; i++)); do
-    awk -v n="$shards" -v i="$i" '(NR - 1) % n == i' build/test-names.txt > "build/test-shard-$i.txt"
-    (cd build && ./clrt_tests -f "test-shard-$i.txt") > "build/test-log-shard-$i.txt" 2>&1 &
-    pids+=($!)
-  done
-  echo "catch2: $(wc -l < build/test-names.txt) test cases in $shards processes (logs build/test-log-shard-*.txt)"
-  rc=0
-  for ((i = 0; i < shards; i++)); do wait "${pids[$i]}" || rc=1; done
-  cat build/test-log-shard-*.txt | tee "$log"
+  set +e
+  bash scripts/run_shards.sh "$shards" test "${args[@]}" 2>&1 | tee "$log"
+  rc=${PIPESTATUS[0]}
+  set -e
 fi
 # One plain summary line: "tests: N passed, N failed" (test cases, all shards).
 p=0; f=0
@@ -65,9 +54,6 @@ while read -r line; do
                     f=$((f + $(echo "$line" | sed -n 's/.*| *\([0-9]*\) failed.*/\1/p' | grep . || echo 1))) ;;
   esac
 done < <(grep -E "^(All tests passed|test cases:)" "$log")
-if [ "$shards" -gt 1 ] && [ "$rc" -eq 0 ] && [ $((p + f)) -ne "$(wc -l < build/test-names.txt)" ]; then
-  echo "catch2: the shards ran $((p + f)) test cases of $(wc -l < build/test-names.txt) listed"; rc=1; f=$((f + 1))
-fi
 [ "$rc" -eq 0 ] || [ "$f" -gt 0 ] || f=1
 echo "tests: $p passed, $f failed"
 lap catch2

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The OpenCL-implementation part of scripts/test.sh (issue 17), after the main suite has passed on
 # PoCL:
-#   1. the device tests (Catch2 tags [cl] [lights] [tonemap] [render] [lanes]: intersection, light and
+#   1. the device tests (Catch2 tags [cl] [lights] [tonemap] [render] [lanes], in CLRT_TEST_SHARDS processes
+#      as the suite: scripts/run_shards.sh; intersection, light and
 #      environment sampling, tone mapping against the host references, struct layout, determinism,
 #      course references) on every other CPU implementation present: Intel's OpenCL CPU runtime when
 #      scripts/setup_intel_ocl.sh installed it (build/opencl-env.sh); except the cases tagged
@@ -18,6 +19,9 @@ cd "$(dirname "$0")/.."
 [ -f build/opencl-env.sh ] && . build/opencl-env.sh
 export CLRT_CACHE_DIR="${CLRT_CACHE_DIR:-$PWD/build/kernel-cache}"
 DEVICE_TAGS="[cl]~[one-implementation],[lights]~[one-implementation],[tonemap]~[one-implementation],[render]~[one-implementation],[lanes]"
+# In as many processes as the suite (scripts/run_shards.sh): Intel's cold-cache compiles overlap (2 cores: 305 s
+# against 415 s in one process, session 36).
+shards=${CLRT_TEST_SHARDS:-$(nproc)}; [ "$shards" -gt 4 ] && shards=4
 rc=0
 
 # 1. Device tests on each CPU platform other than PoCL.
@@ -29,13 +33,14 @@ platforms=$(build/clrt devices | sed -n 's/^\[[0-9]*\] *CPU .*(platform: \(.*\))
             grep -v "^Portable Computing Language$" || true)
 while read -r plat; do
   [ -n "$plat" ] || continue
-  log=build/test-log-$(echo "$plat" | tr -c 'A-Za-z0-9\n' '_').txt
+  name=test-$(echo "$plat" | tr -c 'A-Za-z0-9\n' '_')
+  log=build/$name.txt
   t0=$SECONDS
-  (cd build && CLRT_TEST_DEVICE="platform:$plat" ./clrt_tests "$DEVICE_TAGS") > "$log" 2>&1
+  CLRT_TEST_DEVICE="platform:$plat" bash scripts/run_shards.sh "$shards" "$name" "$DEVICE_TAGS" > "$log" 2>&1
   r=$?
-  sum=$(grep -E "^(All tests passed|test cases:)" "$log" | tail -1)
-  echo "implementations: device tests $DEVICE_TAGS on \"$plat\": ${sum:-no summary} (log $log, $((SECONDS - t0)) s)"
-  if [ $r -ne 0 ]; then grep -B3 -A12 "FAILED:" "$log" | head -60; rc=1; fi
+  sum=$(grep -E "^(All tests passed|test cases:)" "$log" | tr '\n' ' ')
+  echo "implementations: device tests $DEVICE_TAGS on \"$plat\" in $shards processes: ${sum:-no summary}(log $log, $((SECONDS - t0)) s)"
+  if [ $r -ne 0 ]; then grep -B3 -A12 "FAILED:\|^catch2: the processes" "$log" | head -60; rc=1; fi
 done <<< "$platforms"
 [ -n "$platforms" ] || echo "implementations: no CPU OpenCL implementation besides PoCL (scripts/setup_intel_ocl.sh installs Intel's)"
 
