@@ -27,15 +27,10 @@ done
 echo "catch2: $listed test cases in $n processes (logs build/$prefix-log-*.txt)"
 rc=0
 for ((i = 0; i < n; i++)); do wait "${pids[$i]}" || rc=1; done
-ran=0
-for ((i = 0; i < n; i++)); do
-  cat "build/$prefix-log-$i.txt"
-  line=$(grep -E "^(All tests passed|test cases:)" "build/$prefix-log-$i.txt" | tail -1)
-  case "$line" in
-    "All tests passed"*) ran=$((ran + $(echo "$line" | sed -n 's/.* in \([0-9]*\) test case.*/\1/p'))) ;;
-    "test cases:"*) ran=$((ran + $(echo "$line" | sed -n 's/test cases: *\([0-9]*\) .*/\1/p'))) ;;
-  esac
-done
+logs=()
+for ((i = 0; i < n; i++)); do cat "build/$prefix-log-$i.txt"; logs+=("build/$prefix-log-$i.txt"); done
+read -r passed failed _ < <(bash scripts/catch2_summary.sh "${logs[@]}")
+ran=$((passed + failed))
 if [ "$rc" -eq 0 ] && [ "$ran" -ne "$listed" ]; then
   echo "catch2: the processes ran $ran test cases of $listed listed"; rc=1
 fi

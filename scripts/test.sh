@@ -46,14 +46,7 @@ else
   set -e
 fi
 # One plain summary line: "tests: N passed, N failed" (test cases, all shards).
-p=0; f=0
-while read -r line; do
-  case "$line" in
-    "All tests passed"*) p=$((p + $(echo "$line" | sed -n 's/.* in \([0-9]*\) test case.*/\1/p'))) ;;
-    "test cases:"*) p=$((p + $(echo "$line" | sed -n 's/.*| *\([0-9]*\) passed.*/\1/p' | grep . || echo 0)))
-                    f=$((f + $(echo "$line" | sed -n 's/.*| *\([0-9]*\) failed.*/\1/p' | grep . || echo 1))) ;;
-  esac
-done < <(grep -E "^(All tests passed|test cases:)" "$log")
+read -r p f _ < <(bash scripts/catch2_summary.sh "$log")
 [ "$rc" -eq 0 ] || [ "$f" -gt 0 ] || f=1
 echo "tests: $p passed, $f failed"
 lap catch2

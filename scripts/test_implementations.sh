@@ -38,17 +38,10 @@ while read -r plat; do
   t0=$SECONDS
   CLRT_TEST_DEVICE="platform:$plat" bash scripts/run_shards.sh "$shards" "$name" "$DEVICE_TAGS" > "$log" 2>&1
   r=$?
-  a=0; c=0; other=""  # the processes' summaries as one: "All tests passed (N assertions in N test cases)"
-  while read -r line; do
-    case "$line" in
-      "All tests passed"*) a=$((a + $(echo "$line" | sed -n 's/.*(\([0-9]*\) assertion.*/\1/p')))
-                           c=$((c + $(echo "$line" | sed -n 's/.* in \([0-9]*\) test case.*/\1/p'))) ;;
-      *) other="$other$line; " ;;
-    esac
-  done < <(grep -E "^(All tests passed|test cases:)" "$log")
+  read -r c f a < <(bash scripts/catch2_summary.sh "$log")  # the processes' summaries as one
   sum="All tests passed ($a assertions in $c test cases)"
-  [ -z "$other" ] || sum="$other(passed in full: $c test cases)"
-  [ "$c" -gt 0 ] || [ -n "$other" ] || sum="no summary"
+  [ "$f" -eq 0 ] || sum="$f of $((c + f)) test cases failed ($a assertions)"
+  [ $((c + f)) -gt 0 ] || sum="no summary"
   echo "implementations: device tests $DEVICE_TAGS on \"$plat\" in $shards processes: $sum (log $log, $((SECONDS - t0)) s)"
   if [ $r -ne 0 ]; then grep -B3 -A12 "FAILED:\|^catch2: the processes" "$log" | head -60; rc=1; fi
 done <<< "$platforms"
