@@ -407,6 +407,29 @@ inline void Lanes_MeshLightSample(const __global Light* light, const __global fl
 #endif
 
 #ifdef CLRT_HAS_LIGHT_SPHERE
+/* SphereLight_ConeDirection in lanes: a direction drawn uniformly (u1, u2) in the cone around unit axis n of a sphere
+ * of radius R whose centre is d2 (squared) away; *oneMinusCosMax: 1 − cosθmax (the solid angle over 2π). */
+inline LaneV3 Lanes_ConeDirection(LaneV3 n, float R, LaneF d2, LaneF u1, LaneF u2, LaneF* oneMinusCosMax) {
+    const LaneF sin2Max = R * R / d2, cosMax = sqrt(fmax(0.0f, 1.0f - sin2Max));
+    *oneMinusCosMax = sin2Max / (1.0f + cosMax); /* 1 − cosθmax without cancellation */
+    const LaneF oneMinusCos = u1 * *oneMinusCosMax;
+    const LaneF cosT = 1.0f - oneMinusCos, sinT = sqrt(fmax(0.0f, oneMinusCos * (2.0f - oneMinusCos)));
+    LaneF cs, sn;
+    Lanes_SinCos2Pi(u2, &cs, &sn);
+    LaneV3 t, b;
+    Lanes_Basis(n, &t, &b);
+    return LaneV3_Normalize(LaneV3_Add(LaneV3_Add(LaneV3_Scale(t, sinT * cs), LaneV3_Scale(b, sinT * sn)), LaneV3_Scale(n, cosT)));
+}
+
+/* The affine map of rows m[0..2] (a 3×4 matrix) applied to the lanes' points p, and to their vectors v. */
+inline LaneV3 Lanes_AffinePoint(const __global float4* m, LaneV3 p) {
+    return LaneV3_Make(LaneV3_Dot(LaneV3_Splat(m[0].xyz), p) + m[0].w, LaneV3_Dot(LaneV3_Splat(m[1].xyz), p) + m[1].w,
+                       LaneV3_Dot(LaneV3_Splat(m[2].xyz), p) + m[2].w);
+}
+inline LaneV3 Lanes_AffineVector(const __global float4* m, LaneV3 v) {
+    return LaneV3_Make(LaneV3_Dot(LaneV3_Splat(m[0].xyz), v), LaneV3_Dot(LaneV3_Splat(m[1].xyz), v), LaneV3_Dot(LaneV3_Splat(m[2].xyz), v));
+}
+
 /* SphereLight_Sample of a LightSphere under a similarity (objCount 0) at the lanes' points p, the same operations
  * in lanes: a direction uniform in the cone the sphere subtends (SphereLight_ConeDirection), its distance to the
  * sphere's outside (SphereLight_Hit), *e = Radiance·Ω; nothing where p is inside the sphere or the direction
@@ -416,21 +439,10 @@ inline void Lanes_SphereLightSample(const __global Light* light, const __global 
     const LaneV3 axis = LaneV3_Sub(LaneV3_Splat(light->position.xyz), p);
     const float R = light->objRadius;
     const LaneF d2 = LaneV3_Dot(axis, axis);
-    const LaneF sin2Max = R * R / d2, cosMax = sqrt(fmax(0.0f, 1.0f - sin2Max));
-    const LaneF oneMinusCosMax = sin2Max / (1.0f + cosMax); /* 1 − cosθmax without cancellation */
-    const LaneF oneMinusCos = u1 * oneMinusCosMax;
-    const LaneF cosT = 1.0f - oneMinusCos, sinT = sqrt(fmax(0.0f, oneMinusCos * (2.0f - oneMinusCos)));
-    LaneF cs, sn;
-    Lanes_SinCos2Pi(u2, &cs, &sn);
-    const LaneV3 n = LaneV3_Scale(axis, 1.0f / sqrt(d2));
-    LaneV3 t, b;
-    Lanes_Basis(n, &t, &b);
-    const LaneV3 w = LaneV3_Normalize(LaneV3_Add(LaneV3_Add(LaneV3_Scale(t, sinT * cs), LaneV3_Scale(b, sinT * sn)), LaneV3_Scale(n, cosT)));
+    LaneF oneMinusCosMax;
+    const LaneV3 w = Lanes_ConeDirection(LaneV3_Scale(axis, 1.0f / sqrt(d2)), R, d2, u1, u2, &oneMinusCosMax);
     /* SphereLight_Hit: in object space, the near root of the ray from p along w */
-    const LaneV3 o = LaneV3_Make(LaneV3_Dot(LaneV3_Splat(s[1].xyz), p) + s[1].w, LaneV3_Dot(LaneV3_Splat(s[2].xyz), p) + s[2].w,
-                                 LaneV3_Dot(LaneV3_Splat(s[3].xyz), p) + s[3].w);
-    const LaneV3 d = LaneV3_Make(LaneV3_Dot(LaneV3_Splat(s[1].xyz), w), LaneV3_Dot(LaneV3_Splat(s[2].xyz), w),
-                                 LaneV3_Dot(LaneV3_Splat(s[3].xyz), w));
+    const LaneV3 o = Lanes_AffinePoint(s + 1, p), d = Lanes_AffineVector(s + 1, w);
     const float r = s[0].w;
     const LaneV3 f = LaneV3_Sub(o, LaneV3_Splat(s[0].xyz));
     const LaneF cc = LaneV3_Dot(f, f) - r * r, a = LaneV3_Dot(d, d), bf = LaneV3_Dot(f, d);
@@ -441,6 +453,47 @@ inline void Lanes_SphereLightSample(const __global Light* light, const __global 
     *wi = w;
     *dist = tHit;
     *e = LaneV3_Select(LaneV3_Splat((float3)(0.0f)), LaneV3_Scale(LaneV3_Splat(light->radiance.xyz), 2.0f * CLRT_PI * oneMinusCosMax), ok);
+}
+
+/* SphereLight_SampleObjectCone in lanes (a LightSphere under a transform that is no similarity: an ellipsoid): p
+ * in object space, a direction uniform in the cone the object-space sphere subtends there, its near hit carried
+ * back to world space: *wi, *dist (MeshLight_ShadowLength's), *e = Radiance·Ω_obj; nothing from inside.
+ * s: the light's lightData (centre and radius, worldToObject rows, objectToWorld rows). */
+inline void Lanes_EllipsoidLightSample(const __global Light* light, const __global float4* s, LaneV3 p, LaneF u1, LaneF u2,
+                                       LaneV3* wi, LaneF* dist, LaneV3* e) {
+    const LaneV3 pObj = Lanes_AffinePoint(s + 1, p), c = LaneV3_Splat(s[0].xyz);
+    const LaneV3 f = LaneV3_Sub(pObj, c);
+    const float R = s[0].w;
+    const LaneF d2 = LaneV3_Dot(f, f);
+    LaneF oneMinusCosMax;
+    const LaneF fl = sqrt(d2);
+    const LaneV3 wObj = Lanes_ConeDirection(LaneV3_Make(-f.x / fl, -f.y / fl, -f.z / fl), R, d2, u1, u2, &oneMinusCosMax);
+    const LaneF b = LaneV3_Dot(f, wObj), cc = d2 - R * R;
+    const LaneF root = -b + sqrt(fmax(b * b - cc, 0.0f)); /* ≥ 0 inside the cone but for rounding */
+    const LaneF tObj = select((LaneF)(0.0f), cc / root, root > 0.0f); /* the near root */
+    const LaneV3 qObj = LaneV3_Add(pObj, LaneV3_Scale(wObj, tObj));
+    const LaneV3 q = Lanes_AffinePoint(s + 4, qObj);
+    const LaneV3 d = LaneV3_Sub(q, p);
+    const LaneF dl = sqrt(LaneV3_Dot(d, d));
+    *wi = LaneV3_Make(d.x / dl, d.y / dl, d.z / dl);
+    const LaneV3 nObj = LaneV3_Sub(qObj, c); /* the world normal M⁻ᵀ·n_obj (SphereLight_NormalWorld) */
+    const LaneV3 m = LaneV3_Add(LaneV3_Add(LaneV3_Scale(LaneV3_Splat(s[1].xyz), nObj.x), LaneV3_Scale(LaneV3_Splat(s[2].xyz), nObj.y)),
+                                LaneV3_Scale(LaneV3_Splat(s[3].xyz), nObj.z));
+    const LaneF ml = sqrt(LaneV3_Dot(m, m));
+    const LaneF cosLight = select((LaneF)(1.0f), fmax(-LaneV3_Dot(m, *wi) / ml, 1e-4f), ml > 0.0f);
+    *dist = fmax(dl - Lanes_OffsetDistance(q) / cosLight, 0.5f * dl); /* MeshLight_ShadowLength */
+    const LaneI ok = (d2 > R * R) & (dl > 0.0f) & isfinite(dl);
+    *e = LaneV3_Select(LaneV3_Splat((float3)(0.0f)),
+                       LaneV3_FiniteOrZero(LaneV3_Scale(LaneV3_Splat(light->radiance.xyz), 2.0f * CLRT_PI * oneMinusCosMax)), ok);
+}
+
+/* SphereLight_DirectionScale in lanes: dω_obj/dω_world along the lanes' world directions w (1 under a similarity). */
+inline LaneF Lanes_SphereLightDirectionScale(const __global Light* light, const __global float4* s, LaneV3 w) {
+    if (light->objCount == 0) return (LaneF)(1.0f);
+    const LaneV3 a = Lanes_AffineVector(s + 1, w);
+    const LaneF l = sqrt(LaneV3_Dot(a, a));
+    const LaneF j = 1.0f / (light->edgeU.x * l * l * l);
+    return select((LaneF)(0.0f), j, (l > 0.0f) & isfinite(j));
 }
 #endif
 
@@ -471,7 +524,7 @@ inline void Lanes_GlossyLightTerms(const __global Material* materials, const Lan
     *bouncePdf = vload4(0, pdf);
 }
 
-/* The lanes' light samples of light `light` (LightMesh, LightSphere under a similarity or PointLight) at their hits (those in hit->nee):
+/* The lanes' light samples of light `light` (LightMesh, LightSphere or PointLight) at their hits (those in hit->nee):
  * as Light_ShadowRays and Fused_Shadow, the unoccluded contributions (MIS-weighted, times the throughput). brdf: the
  * vertex's LaneBrdf_Load for hit->glossy (read only where that is non-zero). */
 inline LaneV3 Lanes_LightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) const __global Light* light, const LanesHit* hit,
@@ -491,10 +544,13 @@ inline LaneV3 Lanes_LightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) const
 #endif
     }
 #ifdef CLRT_HAS_LIGHT_SPHERE
-    else if (light->kind == LIGHT_SPHERE) { /* under a similarity: Lanes_HasLaneForm */
+    else if (light->kind == LIGHT_SPHERE) {
         LaneF u1, u2;
         Lanes_Sample2D(scene, strat, sample, path, pixel, dim, &u1, &u2);
-        Lanes_SphereLightSample(light, lightData + light->objFirst, p, u1, u2, &wi, &dist, &e);
+        if (light->objCount == 0)
+            Lanes_SphereLightSample(light, lightData + light->objFirst, p, u1, u2, &wi, &dist, &e);
+        else
+            Lanes_EllipsoidLightSample(light, lightData + light->objFirst, p, u1, u2, &wi, &dist, &e);
     }
 #endif
     else { /* PointLight_Sample */
@@ -514,7 +570,11 @@ inline LaneV3 Lanes_LightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) const
         Lanes_GlossyLightTerms(materials, brdf, mode, hit->glossy & hit->nee, hit->sp, wi, cosTheta, &fCos, &bouncePdf);
     LaneV3 contrib = LaneV3_FiniteOrZero(LaneV3_Mul(LaneV3_Mul(throughput, fCos), e));
     if (shape && (mode & CLRT_PATH_MIS)) { /* Path_LightSampleWeight: a point light's weight is 1 */
-        const LaneF lightPdf = maxComponent(light->radiance.xyz) / LaneV3_Max(e);
+        LaneF scale = 1.0f; /* an ellipsoid's dω_obj/dω_world */
+#ifdef CLRT_HAS_LIGHT_SPHERE
+        if (light->kind == LIGHT_SPHERE) scale = Lanes_SphereLightDirectionScale(light, lightData + light->objFirst, wi);
+#endif
+        const LaneF lightPdf = maxComponent(light->radiance.xyz) * scale / LaneV3_Max(e);
         contrib = LaneV3_Scale(contrib, Lanes_MisWeight(mode, lightPdf, select((LaneF)(0.0f), bouncePdf, cosTheta > 0.0f)));
     }
     /* The ray: from Ray_EpsilonOrigin aimed at the light's point, as long as from p (a mesh light's:
@@ -533,17 +593,17 @@ inline LaneV3 Lanes_LightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) const
     return LaneV3_Select(zero, contrib, Lane_FromBits(open));
 }
 
-/* Whether light l's samples have a lane form (Lanes_LightSample): LightMesh and point lights, and LightSpheres
- * under a similarity (an ellipsoid's samples are drawn in object space: per lane). */
+/* Whether light l's samples have a lane form (Lanes_LightSample): LightMesh, LightSphere (an ellipsoid's too) and
+ * point lights. */
 inline int Lanes_HasLaneForm(const __global Light* light) {
 #ifdef CLRT_HAS_LIGHT_SPHERE
-    if (light->kind == LIGHT_SPHERE && light->objCount == 0) return 1;
+    if (light->kind == LIGHT_SPHERE) return 1;
 #endif
     return light->kind == LIGHT_MESH || light->kind == LIGHT_POINT;
 }
 
 /* Light l's samples at the lanes in hit->nee through clrt's scalar Light_ShadowRays and Fused_Shadow, per lane
- * (the light kinds without a lane form: area, spot and directional lights, ellipsoidal spheres, environment maps, with
+ * (the light kinds without a lane form: area, spot and directional lights, environment maps, with
  * lightSlots shadow rays each: 2 for an environment light's MIS pair, made in steps across the lanes by
  * Lanes_EnvMisShadows), added to the lanes' sum in render_fused's order: each lane's path, ShadingPoint and
  * random stream as there. dim: the light's dimension (Light_ShadowRays'). */

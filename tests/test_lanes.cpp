@@ -253,11 +253,11 @@ TEST_CASE("lanes: glossy lobes (classic Phong and every BRDF kind) as render_fus
     CHECK(lambertian >= 3);
 }
 
-TEST_CASE("lanes: a LightSphere in lanes, and lights without a lane form (an ellipsoid, area, directional, environment) per lane as render_fused", "[lanes][shared]") {
+TEST_CASE("lanes: a LightSphere and an ellipsoidal one in lanes, lights without a lane form (area, directional, environment) per lane as render_fused", "[lanes][shared]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
-    // A LightSphere's samples in lanes (Lanes_SphereLightSample); an ellipsoidal one's (the hw6 sphere box's
-    // light scaled by 1.4 in y about its centre), and the other lights', through the scalar Light_ShadowRays
-    // per lane; a LightSphere's emission where a ray hits it through Path_HitEmission per lane; an
+    // A LightSphere's samples in lanes (Lanes_SphereLightSample), an ellipsoidal one's too (the hw6 sphere
+    // box's light scaled by 1.4 in y about its centre: Lanes_EllipsoidLightSample, its MIS density through
+    // Lanes_SphereLightDirectionScale); the other lights' through the scalar Light_ShadowRays per lane; a LightSphere's emission where a ray hits it through Path_HitEmission per lane; an
     // environment map's through Shade_Miss. The environment light with one light slot (importance
     // sampling) and with two (its default MIS between the light's and the cosine's samples).
     int compared = 0;
@@ -275,7 +275,7 @@ TEST_CASE("lanes: a LightSphere in lanes, and lights without a lane form (an ell
         for (Light& l : scene.lights) l.envStrategy = envMis ? dev::ENV_STRATEGY_MIS : dev::ENV_STRATEGY_IMPORTANCE;
         for (Camera& c : scene.cameras) c.pathMode = CLRT_PATH_ON | CLRT_PATH_MIS;
         DeviceScene ds = flattenScene(scene);
-        for (const dev::Light& l : ds.lights)  // a similarity: in lanes; an ellipsoid: per lane (Lanes_HasLaneForm)
+        for (const dev::Light& l : ds.lights)  // objCount 1: the ellipsoid's object-space sample
             if (l.kind == dev::LIGHT_SPHERE) CHECK((l.objCount != 0) == ellipsoid);
         INFO(f << ": " << lanesFamily(ds));
         REQUIRE(lanesFamily(ds).empty());
