@@ -248,7 +248,7 @@ class Mitsuba:
     def __init__(self, mi, scene_path, spp_list, samplers=("independent",)):
         import to_mitsuba
         self.mi = mi
-        self.convention = to_mitsuba.CONVENTION
+        self.code = to_mitsuba.code_hash()
         scene, self.warnings = to_mitsuba.scene_dict(scene_path, 1, warn=log)
         self.scene = mi.load_dict(to_mitsuba.materialize(scene, mi))  # independent sampler: the references
         self.scenes = {}  # the timed renders, one scene per sampler (the sensor's sampler)
@@ -273,8 +273,9 @@ class Mitsuba:
         return acc / (k + 1)
 
     def reference(self, name, key, ref_spp, cache_dir, refresh):
-        """Two independent halves (like clrt's), cached (the converter's CONVENTION in the name)."""
-        d = os.path.join(cache_dir, "%s-mitsuba%d-%s-%d" % (name, self.convention, key, ref_spp))
+        """Two independent halves (like clrt's), cached (the scene's hash and the converter's, to_mitsuba.code_hash,
+        in the name)."""
+        d = os.path.join(cache_dir, "%s-mitsuba-c%s-%s-%d" % (name, self.code, key, ref_spp))
         files = [os.path.join(d, f) for f in ("half_a.npy", "half_b.npy")]
         if not refresh and all(os.path.exists(f) for f in files):
             a, b = (np.load(f).astype(np.float64) for f in files)

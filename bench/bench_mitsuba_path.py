@@ -39,6 +39,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 import bench_path
+import to_mitsuba
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scripts"))
 from scene_json import json_to_element  # noqa: E402  (scripts/scene_json.py, shared with check_course.py)
 
@@ -256,7 +257,6 @@ class MitsubaPath:
     """A converted path-traced scene; render() times mi.render (wall and process CPU)."""
 
     def __init__(self, B, mi, scene_path, variant, sampler="independent", open_lights="two-sided"):
-        import to_mitsuba
         self.mi = mi
         self.open_lights = open_lights
         d, self.warnings = to_mitsuba.scene_dict(scene_path, 1, warn=B.log, path_tracing=True, open_lights=open_lights)
@@ -279,22 +279,11 @@ class MitsubaPath:
         return sum(self.image(min(spp, MI_PASS), seed0 + 7919 * k) for k in range(n)) / n
 
 
-def converter_hash():
-    """The first 8 hex digits of a sha256 of the conversion's code (to_mitsuba*.py, the course BRDF plugin): a
-    reference converted by older code is not taken from the cache."""
-    import hashlib
-    h = hashlib.sha256()
-    here = os.path.dirname(os.path.abspath(__file__))
-    for f in ("to_mitsuba.py", "to_mitsuba_path.py", "mitsuba_course_brdf.py"):
-        h.update(open(os.path.join(here, f), "rb").read())
-    return h.hexdigest()[:8]
-
-
 def mitsuba_reference(B, ms, sc, scene_path, cache, refresh):
     """Mitsuba's two independent halves, cached like clrt's (the scene's hash, the converter's and the variant in
     the name)."""
     d = os.path.join(cache, "%s-mitsuba-path-%s-%s-c%s-%d%s" % (sc["name"], ms.variant, B.scene_hash(scene_path),
-                                                               converter_hash(), sc["ref_spp"],
+                                                               to_mitsuba.code_hash(), sc["ref_spp"],
                                                                "" if ms.open_lights == "two-sided" else "-" + ms.open_lights))
     files = [os.path.join(d, f) for f in ("half_a.npy", "half_b.npy")]
     if not refresh and all(os.path.exists(f) for f in files):

@@ -20,7 +20,8 @@ Conventions (measured against clrt, see bench/README.md "Against Mitsuba 3"):
   (any kd > 1/π) is a 1×1 raw `bitmap` texture instead (nearest lookup), written beside the PLY files.
   (Until 2026-11-30 the emitters were scaled by π, the camera was blind to them and the camera-visible
   environment was rendered once at high spp and added: that kept the background's work and noise out
-  of Mitsuba's timed render. CONVENTION numbers the versions, for the benchmark's reference cache.)
+  of Mitsuba's timed render. The benchmarks' caches of Mitsuba references are keyed by code_hash(): a
+  reference converted by other code is rendered again.)
 - Direct lighting only (clrt's renderer has no diffuse inter-reflection): path max_depth 2.
 - Environment orientation: clrt's lat-long u = (1 + atan2(dx, −dz)/π)/2 puts −z at u = ½; Mitsuba's
   envmap puts −z at u = 0, so the map is turned 180° about y.
@@ -35,7 +36,19 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
-CONVENTION = 2  # see "Radiance" above; part of the benchmark's cache key for Mitsuba references
+CONVERTER_FILES = ("to_mitsuba.py", "to_mitsuba_path.py", "mitsuba_course_brdf.py")  # what a conversion runs
+
+
+def code_hash():
+    """The first 8 hex digits of a sha256 of the conversion's code (CONVERTER_FILES, beside this file): part of the
+    key of every cached Mitsuba reference (bench.py, bench_mitsuba_path.py), so none converted by older code is used."""
+    import hashlib
+    h = hashlib.sha256()
+    here = os.path.dirname(os.path.abspath(__file__))
+    for f in CONVERTER_FILES:
+        with open(os.path.join(here, f), "rb") as fh:
+            h.update(fh.read())
+    return h.hexdigest()[:8]
 
 
 def _nums(el, default=None):
