@@ -8,7 +8,8 @@
  *     dielectric's child (Path_SpecularBounce), roulette;
  *   in lanes: a plain triangle's surface, the facing and the emission the ray sees (Lanes_Surfaces: the
  *     path branch of Shade_Hit and the start of Path_ShadeHit), the sampler (Lanes_Stratified2D), the
- *     LightMesh, LightSphere and point-light samples (MeshLight_PickTriangle, MeshLight_Sample, SphereLight_Sample, Shadow_Make,
+ *     light samples of every kind but an environment's (Light_Sample: MeshLight_PickTriangle, MeshLight_Sample,
+ *     SphereLight_Sample, AreaLight_Sample, ...; Shadow_Make,
  *     Path_LightSampleWeight, ObjectLight_AimShadow), a glossy or textured material's f, pdf and bounce
  *     (lanes_brdf.cl) and the bounce (Path_SampleBounce, Path_Child).
  * It computes what render_fused computes for the same random streams, up to rounding (tests/test_lanes.cpp):
@@ -17,8 +18,8 @@
  * or Sampler_2D per lane), no tree of paths, no motion blur or mip-maps; every surface (a plain world-space triangle's in lanes, the others per lane:
  * Lanes_ScalarSurface, textures and instances included), every material (a direction-free f,
  * CLRT_BRDF_LAMBERTIAN, in lanes; a glossy or textured one in lanes too, from its ShadingPoint:
- * Lanes_GlossyLightTerms, Lanes_GlossyBounces) and every light (LightMesh, LightSphere and point lights in lanes, the others per lane:
- * Lanes_ScalarLightSample). Classic (direct-lighting) cameras of a scene under an environment light
+ * Lanes_GlossyLightTerms, Lanes_GlossyBounces) and every light (in lanes, Lanes_LightDirection; an environment light per
+ * lane: Lanes_ScalarLightSample). Classic (direct-lighting) cameras of a scene under an environment light
  * (Lanes_Direct): per lane render_fused's Fused_Path, but the environment light's multi-sample MIS at the camera
  * rays' hits in steps across the lanes (Lanes_EnvMisShadows); their children per lane as render_fused follows
  * them (Lanes_DirectChildren). Why lanes: a path's
@@ -524,7 +525,71 @@ inline void Lanes_GlossyLightTerms(const __global Material* materials, const Lan
     *bouncePdf = vload4(0, pdf);
 }
 
-/* The lanes' light samples of light `light` (LightMesh, LightSphere or PointLight) at their hits (those in hit->nee):
+/* SpotLight_Falloff in lanes. */
+inline LaneF Lanes_SpotFalloff(const __global Light* light, LaneF cosAlpha) {
+    const float denom = light->cosFalloffHalf - light->cosCoverageHalf;
+    const LaneF s = denom > 0.0f ? (cosAlpha - light->cosCoverageHalf) / denom : (LaneF)(0.0f);
+    const LaneF inner = select(s * s * s * s, (LaneF)(0.0f), cosAlpha <= light->cosCoverageHalf);
+    return select(inner, (LaneF)(1.0f), cosAlpha >= light->cosFalloffHalf);
+}
+
+/* AreaLight_Sample in lanes: a uniform point of the square (u1, u2), seen from either side. */
+inline void Lanes_AreaLightSample(const __global Light* light, LaneV3 p, LaneF u1, LaneF u2, LaneV3* wi, LaneF* dist, LaneV3* e) {
+    const LaneV3 q = LaneV3_Add(LaneV3_Add(LaneV3_Splat(light->position.xyz), LaneV3_Scale(LaneV3_Splat(light->edgeU.xyz), u1 - 0.5f)),
+                                LaneV3_Scale(LaneV3_Splat(light->edgeV.xyz), u2 - 0.5f));
+    const LaneV3 d = LaneV3_Sub(q, p);
+    const LaneF d2 = LaneV3_Dot(d, d);
+    *dist = sqrt(d2);
+    *wi = LaneV3_Make(d.x / *dist, d.y / *dist, d.z / *dist);
+    const LaneF cosLight = fabs(LaneV3_Dot(LaneV3_Splat(light->direction.xyz), *wi)); /* two-sided */
+    *e = LaneV3_Scale(LaneV3_Splat(light->radiance.xyz),
+                      select((LaneF)(0.0f), light->area * cosLight / d2, (d2 > 0.0f) & (cosLight > 0.0f)));
+}
+
+/* Light_Sample of light `light` (a kind Lanes_HasLaneForm names) at the lanes' points p, in lanes: *wi, *dist
+ * (INFINITY for a directional light) and the estimate *e, 0 where the sample fails. The lanes' 2D sample of
+ * dimension dim (Sampler_Light2D's: path tracing's is Sampler_2D) is drawn for the lights that read one. */
+inline void Lanes_LightDirection(const __global Light* light, const __global float4* lightData, SceneParams scene, uint strat,
+                                 LaneU sample, const PathState* path, int pixel, uint dim, LaneV3 p, LaneV3* wi, LaneF* dist,
+                                 LaneV3* e) {
+    *wi = *e = LaneV3_Splat((float3)(0.0f));
+    *dist = (LaneF)(0.0f);
+    const int kind = light->kind;
+    LaneF u1, u2;
+    if (kind == LIGHT_MESH || kind == LIGHT_SPHERE || kind == LIGHT_AREA) Lanes_Sample2D(scene, strat, sample, path, pixel, dim, &u1, &u2);
+#ifdef CLRT_HAS_LIGHT_MESH
+    if (kind == LIGHT_MESH && light->objCount > 0 && light->area > 0.0f) Lanes_MeshLightSample(light, lightData, p, u1, u2, wi, dist, e);
+#endif
+#ifdef CLRT_HAS_LIGHT_SPHERE
+    if (kind == LIGHT_SPHERE && light->objCount == 0)
+        Lanes_SphereLightSample(light, lightData + light->objFirst, p, u1, u2, wi, dist, e);
+    if (kind == LIGHT_SPHERE && light->objCount != 0)
+        Lanes_EllipsoidLightSample(light, lightData + light->objFirst, p, u1, u2, wi, dist, e);
+#endif
+#ifdef CLRT_HAS_AREA_LIGHT
+    if (kind == LIGHT_AREA) Lanes_AreaLightSample(light, p, u1, u2, wi, dist, e);
+#endif
+#ifdef CLRT_HAS_DIRECTIONAL_LIGHT
+    if (kind == LIGHT_DIRECTIONAL) { /* DirectionalLight_Sample */
+        *wi = LaneV3_Splat(-light->direction.xyz);
+        *dist = (LaneF)(INFINITY);
+        *e = LaneV3_Splat(light->radiance.xyz);
+    }
+#endif
+    if (kind == LIGHT_POINT || kind == LIGHT_SPOT) { /* PointLight_Sample, SpotLight_Sample */
+        const LaneV3 d = LaneV3_Sub(LaneV3_Splat(light->position.xyz), p);
+        const LaneF d2 = LaneV3_Dot(d, d);
+        *dist = sqrt(d2);
+        *wi = LaneV3_Scale(d, 1.0f / *dist);
+        LaneF scale = select((LaneF)(0.0f), 1.0f / d2, d2 > 0.0f);
+#ifdef CLRT_HAS_SPOT_LIGHT
+        if (kind == LIGHT_SPOT) scale *= Lanes_SpotFalloff(light, -LaneV3_Dot(*wi, LaneV3_Splat(light->direction.xyz)));
+#endif
+        *e = LaneV3_Scale(LaneV3_Splat(light->radiance.xyz), scale);
+    }
+}
+
+/* The lanes' light samples of light `light` (any kind Lanes_HasLaneForm names) at their hits (those in hit->nee):
  * as Light_ShadowRays and Fused_Shadow, the unoccluded contributions (MIS-weighted, times the throughput). brdf: the
  * vertex's LaneBrdf_Load for hit->glossy (read only where that is non-zero). */
 inline LaneV3 Lanes_LightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) const __global Light* light, const LanesHit* hit,
@@ -532,34 +597,8 @@ inline LaneV3 Lanes_LightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) const
     const LaneV3 zero = LaneV3_Splat((float3)(0.0f)), p = hit->p, ng = hit->ng, ns = hit->ns;
     LaneV3 wi, e;
     LaneF dist;
-    const int mesh = light->kind == LIGHT_MESH, shape = mesh || light->kind == LIGHT_SPHERE; /* an object light */
-    if (mesh) {
-#ifdef CLRT_HAS_LIGHT_MESH
-        if (light->objCount <= 0 || !(light->area > 0.0f)) return zero;
-        LaneF u1, u2;
-        Lanes_Sample2D(scene, strat, sample, path, pixel, dim, &u1, &u2); /* Sampler_Light2D: path tracing's is Sampler_2D */
-        Lanes_MeshLightSample(light, lightData, p, u1, u2, &wi, &dist, &e);
-#else
-        return zero;
-#endif
-    }
-#ifdef CLRT_HAS_LIGHT_SPHERE
-    else if (light->kind == LIGHT_SPHERE) {
-        LaneF u1, u2;
-        Lanes_Sample2D(scene, strat, sample, path, pixel, dim, &u1, &u2);
-        if (light->objCount == 0)
-            Lanes_SphereLightSample(light, lightData + light->objFirst, p, u1, u2, &wi, &dist, &e);
-        else
-            Lanes_EllipsoidLightSample(light, lightData + light->objFirst, p, u1, u2, &wi, &dist, &e);
-    }
-#endif
-    else { /* PointLight_Sample */
-        const LaneV3 d = LaneV3_Sub(LaneV3_Splat(light->position.xyz), p);
-        const LaneF d2 = LaneV3_Dot(d, d);
-        dist = sqrt(d2);
-        wi = LaneV3_Scale(d, 1.0f / dist);
-        e = LaneV3_Scale(LaneV3_Splat(light->radiance.xyz), select((LaneF)(0.0f), 1.0f / d2, d2 > 0.0f));
-    }
+    const int shape = light->kind == LIGHT_MESH || light->kind == LIGHT_SPHERE; /* an object light */
+    Lanes_LightDirection(light, lightData, scene, strat, sample, path, pixel, dim, p, &wi, &dist, &e);
     /* Shadow_Make */
     const int mode = scene.pathMode;
     const LaneF cosTheta = LaneV3_Dot(ns, wi);
@@ -582,7 +621,7 @@ inline LaneV3 Lanes_LightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) const
     const LaneV3 org = LaneV3_Add(p, LaneV3_Scale(ng, fmax(Lanes_OffsetDistance(p), scene.shadowEpsilon)));
     const LaneV3 toLight = LaneV3_Sub(LaneV3_Add(p, LaneV3_Scale(wi, dist)), org);
     const LaneF len = sqrt(LaneV3_Dot(toLight, toLight));
-    const LaneV3 dir = LaneV3_Scale(toLight, 1.0f / len);
+    const LaneV3 dir = LaneV3_Select(LaneV3_Scale(toLight, 1.0f / len), wi, isinf(dist)); /* a directional light's: wi */
     ok &= LaneV3_Max(contrib) > 0.0f; /* Fused_Shadow traces no ray of zero contribution */
     LaneF tMax = dist;
     if (shape) {
@@ -593,17 +632,16 @@ inline LaneV3 Lanes_LightSample(CLRT_GROUP_PARAMS(CLRT_PARAMS_FUSED_SCENE) const
     return LaneV3_Select(zero, contrib, Lane_FromBits(open));
 }
 
-/* Whether light l's samples have a lane form (Lanes_LightSample): LightMesh, LightSphere (an ellipsoid's too) and
- * point lights. */
+/* Whether light l's samples have a lane form (Lanes_LightDirection): every kind but an environment light (whose
+ * samples run per lane; so does a kind added without one). */
 inline int Lanes_HasLaneForm(const __global Light* light) {
-#ifdef CLRT_HAS_LIGHT_SPHERE
-    if (light->kind == LIGHT_SPHERE) return 1;
-#endif
-    return light->kind == LIGHT_MESH || light->kind == LIGHT_POINT;
+    const int kind = light->kind;
+    return kind == LIGHT_MESH || kind == LIGHT_SPHERE || kind == LIGHT_POINT || kind == LIGHT_SPOT || kind == LIGHT_AREA ||
+           kind == LIGHT_DIRECTIONAL;
 }
 
 /* Light l's samples at the lanes in hit->nee through clrt's scalar Light_ShadowRays and Fused_Shadow, per lane
- * (the light kinds without a lane form: area, spot and directional lights, environment maps, with
+ * (the light kinds without a lane form: environment maps, with
  * lightSlots shadow rays each: 2 for an environment light's MIS pair, made in steps across the lanes by
  * Lanes_EnvMisShadows), added to the lanes' sum in render_fused's order: each lane's path, ShadingPoint and
  * random stream as there. dim: the light's dimension (Light_ShadowRays'). */

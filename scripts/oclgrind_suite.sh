@@ -114,7 +114,7 @@ while read -r scene args; do
 done < scripts/kernel_variants.txt
 # The lanes kernel (cl_kernels/lanes.cl, render_lanes), four samples so that every lane works: the hw6 path
 # box (LightMesh and point light, eight cameras: NEE, importance, MIS, roulette), scenes/lanes_mix.xml
-# (a textured hit and an area light per lane, a glossy BRDF and a sphere light in lanes, a mirror, misses), and a classic
+# (a textured hit per lane; a glossy BRDF, sphere, area, point, spot and directional lights in lanes; a mirror, misses), and a classic
 # camera under an environment map with a mirror (Lanes_Direct: the MIS pair in steps across the lanes, then
 # the children: Lanes_DirectChildren).
 for pass in $PASSES; do

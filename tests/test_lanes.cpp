@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <set>
 #include <string>
 
 #include "flatten/device_scene.h"
@@ -253,11 +254,12 @@ TEST_CASE("lanes: glossy lobes (classic Phong and every BRDF kind) as render_fus
     CHECK(lambertian >= 3);
 }
 
-TEST_CASE("lanes: a LightSphere and an ellipsoidal one in lanes, lights without a lane form (area, directional, environment) per lane as render_fused", "[lanes][shared]") {
+TEST_CASE("lanes: LightSpheres (an ellipsoid too), area and directional lights in lanes, an environment light per lane as render_fused", "[lanes][shared]") {
     if (!haveShared()) { WARN("../shared is not present: skipped"); return; }
     // A LightSphere's samples in lanes (Lanes_SphereLightSample), an ellipsoidal one's too (the hw6 sphere
     // box's light scaled by 1.4 in y about its centre: Lanes_EllipsoidLightSample, its MIS density through
-    // Lanes_SphereLightDirectionScale); the other lights' through the scalar Light_ShadowRays per lane; a LightSphere's emission where a ray hits it through Path_HitEmission per lane; an
+    // Lanes_SphereLightDirectionScale); an area and a directional light's (Lanes_LightDirection); an environment
+    // light's through the scalar Light_ShadowRays per lane; a LightSphere's emission where a ray hits it through Path_HitEmission per lane; an
     // environment map's through Shade_Miss. The environment light with one light slot (importance
     // sampling) and with two (its default MIS between the light's and the cosine's samples).
     int compared = 0;
@@ -399,12 +401,15 @@ TEST_CASE("lanes: textures, bump and normal maps, device instances per lane as r
 }
 
 TEST_CASE("lanes: scenes/lanes_mix.xml (every per-lane branch at once) as render_fused", "[lanes]") {
-    // A plain floor, a Perlin-textured Lambertian block, a glossy and a mirror sphere, sphere, area and
-    // point lights, an open front: lanes whose hits take different branches side by side.
+    // A plain floor, a Perlin-textured Lambertian block, a glossy and a mirror sphere, sphere, area, point,
+    // spot and directional lights, an open front: lanes whose hits take different branches side by side.
     Scene scene = loadScene(std::string(CLRT_SOURCE_DIR) + "/scenes/lanes_mix.xml");
     DeviceScene ds = flattenScene(scene);
     REQUIRE(lanesFamily(ds).empty());
     CHECK(ds.features.textures);
+    std::set<int> kinds;
+    for (const dev::Light& l : ds.lights) kinds.insert(l.kind);
+    CHECK(kinds == std::set<int>{dev::LIGHT_POINT, dev::LIGHT_AREA, dev::LIGHT_SPOT, dev::LIGHT_DIRECTIONAL, dev::LIGHT_SPHERE});
     Renderer r(testContext(), ds);
     for (int mode : {CLRT_PATH_ON | CLRT_PATH_MIS, CLRT_PATH_ON | CLRT_PATH_NEE | CLRT_PATH_IMPORTANCE,
                      CLRT_PATH_ON | CLRT_PATH_IMPORTANCE}) {
