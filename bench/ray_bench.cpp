@@ -209,7 +209,7 @@ public:
         kClosest_ = KernelArgs(prog_, "intersect_closest");
         kShadow_ = KernelArgs(prog_, "intersect_shadow");
         // Kept as members: a kernel argument does not keep its buffer alive.
-        scene_ = {sceneUpload_.upload(ds.bvh4.nodes), sceneUpload_.upload(ds.bvh4.leaves),
+        scene_ = {sceneUpload_.upload(ds.bvh8.nodes), sceneUpload_.upload(ds.bvh8.leaves),
                   sceneUpload_.upload(ds.triangles), sceneUpload_.upload(ds.spheres)};
         scene_.push_back(sceneUpload_.upload(ds.planes));
         scene_.push_back(sceneUpload_.upload(ds.instances));
@@ -396,8 +396,8 @@ int main(int argc, char** argv) {
         std::printf("scene %s: %d triangles; clrt device: %s; Embree %d threads (BVH build %.3f s)%s\n",
                     opt.scenePath.c_str(), ds.params.numTriangles, clrt.device().name.c_str(), opt.threads,
                     embree.buildSeconds, opt.threadsGiven ? "; process pinned to that many CPUs" : "");
-        std::printf("clrt BVH: %zu 4-wide nodes, %zu leaf blocks (%.2f primitives per block)\n", ds.bvh4.nodes.size(),
-                    ds.bvh4.leaves.size(), double(ds.bvh.primitives) / double(std::max<size_t>(1, ds.bvh4.leaves.size())));
+        std::printf("clrt BVH: %zu 8-wide nodes, %zu leaf blocks (%.2f primitives per block)\n", ds.bvh8.nodes.size(),
+                    ds.bvh8.leaves.size(), double(ds.bvh.primitives) / double(std::max<size_t>(1, ds.bvh8.leaves.size())));
         std::printf("%-8s %10s %12s %12s %8s %10s %10s\n", "rays", "count", "clrt Mray/s", "embree Mray/s", "ratio",
                     "hit agree", "prim agree");
         for (const RaySet* set : {&camera, &shadow, &diffuse}) compareRaySet(*set, set == &shadow, opt.runs, clrt, embree);

@@ -30,8 +30,8 @@
 #endif
 
 /* A shadow ray's contribution as gather_shadows adds it: zero (untraced) or occluded: zero. */
-inline float4 Fused_Shadow(ShadowRay sr, SceneParams scene, const __global Bvh4Node* nodes,
-                           const __global Bvh4Leaf* leaves, const __global Triangle* tris,
+inline float4 Fused_Shadow(ShadowRay sr, SceneParams scene, const __global Bvh8Node* nodes,
+                           const __global LeafBlock* leaves, const __global Triangle* tris,
                            const __global Sphere* spheres, const __global Plane* planes,
                            const __global Instance* instances) {
     float4 c = sr.contribution;

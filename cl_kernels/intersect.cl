@@ -191,7 +191,7 @@ inline float3 safeInverse(float3 d) {
 }
 
 /* ---- Leaves: four triangles at a time -----------------------------------------------------------
- * A leaf block (Bvh4Leaf) holds its triangles' vertices as struct of arrays: the watertight test of
+ * A leaf block (LeafBlock) holds its triangles' vertices as struct of arrays: the watertight test of
  * Triangle_Intersect runs on all four lanes at once, each lane computing exactly what the scalar test
  * computes for that triangle (the same operations in the same order, FP_CONTRACT OFF, the double-
  * precision edge fallback per lane). Only the last comparison, T < tMax·det, depends on the hits found
@@ -238,7 +238,7 @@ __attribute__((always_inline)) inline int4 Triangle4_Intersect(const __global fl
 
 /* One leaf block in leaf order: its triangle lanes that passed Triangle4_Intersect (candidates) and its
  * sphere lanes, each against the tMax the lanes before it left. Returns 1 if some lane hit. */
-inline int Leaf_Block(const __global Bvh4Leaf* block, int4 prim, int4 candidates, float4 V4, float4 W4, float4 T4,
+inline int Leaf_Block(const __global LeafBlock* block, int4 prim, int4 candidates, float4 V4, float4 W4, float4 T4,
                       float4 det4, const __global Sphere* spheres, int numTriangles, float3 org, float3 dir,
                       float time, int flags, float* tMax, Hit* hit) {
     int cand[4], ref[4];
@@ -295,14 +295,14 @@ inline int Leaf_BlockMoving(const __global int* prim, const __global Triangle* t
 
 /* The leaf of stack entry ~(firstBlock << 4 | count): its blocks in order. Returns 1 if some
  * primitive hit (closer than *tMax, which it lowers; CLRT_RAY_ANY_HIT in flags: stops at the first). */
-__attribute__((always_inline)) inline int Leaf_Intersect(const __global Bvh4Leaf* leaves, int packed, const __global Triangle* tris,
+__attribute__((always_inline)) inline int Leaf_Intersect(const __global LeafBlock* leaves, int packed, const __global Triangle* tris,
                           const __global Sphere* spheres, int numTriangles, float3 org, float3 dir, float4 orgK,
                           RayShear shear, float time, int flags, float cullBefore, float* tMax,
                           Hit* hit) {
     const int firstBlock = packed >> 4, count = packed & 15;
     int found = 0;
     for (int b = firstBlock; b < firstBlock + ((count + 3) >> 2); ++b) {
-        const __global Bvh4Leaf* block = &leaves[b];
+        const __global LeafBlock* block = &leaves[b];
 #ifdef CLRT_HAS_MOTION_BLUR
         found |= Leaf_BlockMoving((const __global int*)&block->prim, tris, spheres, numTriangles, org, dir, shear, time, flags, cullBefore, tMax, hit);
 #else
@@ -321,81 +321,83 @@ __attribute__((always_inline)) inline int Leaf_Intersect(const __global Bvh4Leaf
     return found;
 }
 
-/* ---- 4-wide nodes ---------------------------------------------------------------------------- */
+/* ---- 8-wide nodes ---------------------------------------------------------------------------- */
 
-/* The slab tests of node n's four children: their entry distances (tEnter) and which are hit before
- * tEnd, the ray's tMax widened by CLRT_SLAB_WIDEN (*isHit); returns how many are. The near and far planes of each axis are picked by the per-ray
- * index near (minX 0 / maxX 1, minY 2 / maxY 3, minZ 4 / maxZ 5, by the sign of the direction): an
- * empty lane (min +inf, max -inf) is then never hit. */
-__attribute__((always_inline)) inline int Bvh4_SlabTest(const __global Bvh4Node* n, float3 org, float3 invDir, int nearX, int nearY, int nearZ,
-                         float tEnd, float4* tEnterOut, int4* isHit) {
-    /* The node's planes as an array (minX, maxX, minY, maxY, minZ, maxZ): one load each. */
-    const __global float4* planes4 = &n->minX;
-    const float4 tNx = (planes4[nearX] - org.x) * invDir.x;
-    const float4 tFx = (planes4[nearX ^ 1] - org.x) * invDir.x;
-    const float4 tNy = (planes4[nearY] - org.y) * invDir.y;
-    const float4 tFy = (planes4[nearY ^ 1] - org.y) * invDir.y;
-    const float4 tNz = (planes4[nearZ] - org.z) * invDir.z;
-    const float4 tFz = (planes4[nearZ ^ 1] - org.z) * invDir.z;
+/* The slab tests of node n's eight children: their entry distances (tEnter) and which are hit before
+ * tEnd, the ray's tMax widened by CLRT_SLAB_WIDEN (*isHit); returns how many are. The near and far planes
+ * of each axis are picked by the per-ray plane index near (minX 0 / maxX 1, minY 2 / maxY 3, minZ 4 / maxZ 5,
+ * by the sign of the direction): an empty lane (min +inf, max -inf) is then never hit. */
+__attribute__((always_inline)) inline int Bvh8_SlabTest(const __global Bvh8Node* n, float3 org, float3 invDir, int nearX,
+                                                         int nearY, int nearZ, float tEnd, float8* tEnterOut, int8* isHit) {
+    /* The node's planes as an array of eight-float rows (minX, maxX, minY, maxY, minZ, maxZ): one load each. */
+    const __global float* planes = (const __global float*)n->planes;
+    const float8 tNx = (vload8(nearX, planes) - org.x) * invDir.x;
+    const float8 tFx = (vload8(nearX ^ 1, planes) - org.x) * invDir.x;
+    const float8 tNy = (vload8(nearY, planes) - org.y) * invDir.y;
+    const float8 tFy = (vload8(nearY ^ 1, planes) - org.y) * invDir.y;
+    const float8 tNz = (vload8(nearZ, planes) - org.z) * invDir.z;
+    const float8 tFz = (vload8(nearZ ^ 1, planes) - org.z) * invDir.z;
     /* max(0, tNx, tNy, tNz) and min(tFx, tFy, tFz) that drop a NaN operand (0·inf: a ray lying in a
      * face's plane, whose slab is then unbounded), as fmax/fmin do, but written as compare-and-select
      * with the NaN candidate first, so that a CPU compiles each to one min/max instruction (x86
      * minps/maxps return their second operand when one is NaN). */
-    float4 tEnter = (float4)(0.0f);
+    float8 tEnter = (float8)(0.0f);
     tEnter = tNx > tEnter ? tNx : tEnter;
     tEnter = tNy > tEnter ? tNy : tEnter;
     tEnter = tNz > tEnter ? tNz : tEnter;
-    float4 tExit = (float4)(INFINITY);
+    float8 tExit = (float8)(INFINITY);
     tExit = tFx < tExit ? tFx : tExit;
     tExit = tFy < tExit ? tFy : tExit;
     tExit = tFz < tExit ? tFz : tExit;
     tExit = tExit * CLRT_SLAB_WIDEN; /* tEnd: the ray's tMax, widened the same (CLRT_SLAB_WIDEN) */
-    tExit = tExit < tEnd ? tExit : (float4)(tEnd);
+    tExit = tExit < tEnd ? tExit : (float8)(tEnd);
     *isHit = tEnter <= tExit;
     *tEnterOut = tEnter;
-    return -((*isHit).s0 + (*isHit).s1 + (*isHit).s2 + (*isHit).s3);
+    const int4 h = -((*isHit).lo + (*isHit).hi);
+    return h.x + h.y + h.z + h.w;
 }
 
-/* Orders two (key, entry) pairs so the smaller key comes first; branch-free. */
-#define CLRT_CSWAP(ka, ea, kb, eb)                      \
-    {                                                   \
-        int sw_ = (kb) < (ka);                          \
-        float tk_ = sw_ ? (kb) : (ka);                  \
-        int te_ = sw_ ? (eb) : (ea);                    \
-        (kb) = sw_ ? (ka) : (kb); (eb) = sw_ ? (ea) : (eb); \
-        (ka) = tk_; (ea) = te_;                         \
+/* The nh > 0 hit children of node n: returns the one to visit next and pushes the others (stack entries:
+ * Bvh8Node's lane entries). One hit child (most visits) is found by branches, which let the core start
+ * loading the predicted child before the slab test ends (branch-free selects lost 4–13%). Any hit
+ * (shadow rays, whose answer does not depend on the order): the first hit lane visited, the others pushed
+ * in lane order, no sort. Closest hit: the hit lanes sorted by entry distance (insertion, stable: ties in
+ * lane order), the nearest visited, the others pushed far first with their entry distance, so that pops
+ * skip those beyond the best hit so far. */
+__attribute__((always_inline)) inline int Bvh8_Children(const __global Bvh8Node* n, float8 tEnter, int8 isHit, int nh,
+                                                         int flags, int* stackEntry, float* stackT, int* sp) {
+    int e[8], h[8];
+    vstore8(vload8(0, (const __global int*)n->entry), 0, e);
+    vstore8(isHit, 0, h);
+    if (nh == 1) {
+        for (int i = 0; i < 7; ++i)
+            if (h[i]) return e[i];
+        return e[7];
     }
-
-/* The nh > 0 hit children of node n: returns the one to visit next and pushes the others. Closest hit:
- * sorted by entry distance (a 5-comparator network), the nearest visited, the others pushed far first
- * with their entry distance, so that pops skip those beyond the best hit so far. Any hit (shadow rays,
- * whose answer does not depend on the order): in lane order, no sort. Stack entries: node index (>= 0)
- * or a leaf, ~(firstBlock << 4 | count). */
-__attribute__((always_inline)) inline int Bvh4_Children(const __global Bvh4Node* n, float4 tEnter, int4 isHit, int nh, int flags,
-                         int* stackEntry, float* stackT, int* sp) {
-    const int4 cnt = n->count, child = n->child;
-    const int4 e = select(child, ~((child << 4) | cnt), cnt > (int4)(0));
-    if (nh == 1) return isHit.s0 ? e.s0 : (isHit.s1 ? e.s1 : (isHit.s2 ? e.s2 : e.s3));
-    if (*sp + nh - 1 > CLRT_BVH4_STACK_SIZE) return e.s0; /* never, by the host's bound */
-    if (flags & CLRT_RAY_ANY_HIT) { /* visit the first hit lane, push the others */
-        const int first = isHit.s0 ? 0 : (isHit.s1 ? 1 : (isHit.s2 ? 2 : 3));
-        if (isHit.s3 && first < 3) stackEntry[(*sp)++] = e.s3;
-        if (isHit.s2 && first < 2) stackEntry[(*sp)++] = e.s2;
-        if (isHit.s1 && first < 1) stackEntry[(*sp)++] = e.s1;
-        return first == 0 ? e.s0 : (first == 1 ? e.s1 : e.s2);
+    if (*sp + nh - 1 > CLRT_BVH8_STACK_SIZE) return e[0]; /* never, by the host's bound */
+    if (flags & CLRT_RAY_ANY_HIT) {
+        int first = -1;
+        for (int i = 7; i >= 0; --i)
+            if (h[i]) {
+                if (first >= 0) stackEntry[(*sp)++] = e[first];
+                first = i;
+            }
+        return e[first];
     }
-    const float4 key = select((float4)(INFINITY), tEnter < FLT_MAX ? tEnter : (float4)(FLT_MAX), isHit);
-    float k0 = key.s0, k1 = key.s1, k2 = key.s2, k3 = key.s3;
-    int e0 = e.s0, e1 = e.s1, e2 = e.s2, e3 = e.s3;
-    CLRT_CSWAP(k0, e0, k1, e1);
-    CLRT_CSWAP(k2, e2, k3, e3);
-    CLRT_CSWAP(k0, e0, k2, e2);
-    CLRT_CSWAP(k1, e1, k3, e3);
-    CLRT_CSWAP(k1, e1, k2, e2);
-    if (nh > 3) { stackEntry[*sp] = e3; stackT[*sp] = k3; ++*sp; }
-    if (nh > 2) { stackEntry[*sp] = e2; stackT[*sp] = k2; ++*sp; }
-    stackEntry[*sp] = e1; stackT[*sp] = k1; ++*sp;
-    return e0;
+    float k[8], keys[8];
+    int entries[8];
+    vstore8(tEnter, 0, k);
+    int m = 0;
+    for (int i = 0; i < 8; ++i) {
+        if (!h[i]) continue;
+        const float key = k[i] < FLT_MAX ? k[i] : FLT_MAX;
+        int j = m++;
+        for (; j > 0 && keys[j - 1] > key; --j) { keys[j] = keys[j - 1]; entries[j] = entries[j - 1]; }
+        keys[j] = key;
+        entries[j] = e[i];
+    }
+    for (int j = m - 1; j >= 1; --j) { stackEntry[*sp] = entries[j]; stackT[*sp] = keys[j]; ++*sp; }
+    return entries[0];
 }
 
 /* A ray as the traversal tests it: origin, direction and what the slab and triangle tests derive from
@@ -421,8 +423,8 @@ inline TraceRay TraceRay_Make(float3 org, float3 dir) {
 }
 
 #ifdef CLRT_HAS_INSTANCES
-/* Two-level BVH (Instance): the top-level tree's leaf lanes are instances, a node lane with count 0
- * and child ~((instance + 1) << 4): as a stack entry, a "leaf" whose count bits are 0. */
+/* Two-level BVH (Instance): the top-level tree's leaf lanes are instances, lane entry ~((instance + 1) << 4):
+ * as a stack entry, a "leaf" whose count bits are 0 (Bvh8Node). */
 inline int Entry_Instance(int entry) { return ((~entry) & 15) == 0 ? ((~entry) >> 4) - 1 : CLRT_INVALID; }
 
 /* Enters instance k: the ray in its object space (Instance), the stack height to leave it at. */
@@ -433,21 +435,21 @@ inline int Instance_Enter(const __global Instance* inst, float3 orgW, float3 dir
 }
 #endif
 
-/* Traverses the 4-wide BVH (Bvh4Node, leaves in Bvh4Leaf blocks) near-first from nodes[0], then, with
+/* Traverses the 8-wide BVH (Bvh8Node, leaves in LeafBlock blocks) near-first from nodes[0], then, with
  * instances, the top-level tree from scene.instanceRoot, descending into an instance's bottom-level
  * tree in its object space (the stack holds both levels: popping back to the height at which the
  * instance was entered returns to the world ray). flags: CLRT_RAY_ANY_HIT stops at the first hit (shadow
  * rays); triangles seen from behind closer than cullBefore are skipped (under CLRT_HAS_BACKFACE_CULLING).
  * Returns 1 on a hit. time: the ray's shutter time (used only under CLRT_HAS_MOTION_BLUR). The
  * stack's size is the exact worst case the host computed. */
-inline int Bvh_Traverse(const __global Bvh4Node* nodes, const __global Bvh4Leaf* leaves,
+inline int Bvh_Traverse(const __global Bvh8Node* nodes, const __global LeafBlock* leaves,
                         const __global Triangle* tris, const __global Sphere* spheres,
                         const __global Instance* instances, SceneParams scene, float3 org, float3 dir,
                         float tMax, float time, int flags, float cullBefore, Hit* hit, int* hitInstance) {
     const int numTriangles = scene.numTriangles;
     TraceRay r = TraceRay_Make(org, dir);
-    int stackEntry[CLRT_BVH4_STACK_SIZE];
-    float stackT[CLRT_BVH4_STACK_SIZE];
+    int stackEntry[CLRT_BVH8_STACK_SIZE];
+    float stackT[CLRT_BVH8_STACK_SIZE];
     int sp = 0;
     int entry = 0;
     int found = 0;
@@ -458,12 +460,12 @@ inline int Bvh_Traverse(const __global Bvh4Node* nodes, const __global Bvh4Leaf*
 #endif
     for (;;) {
         if (entry >= 0) {
-            const __global Bvh4Node* n = &nodes[entry];
-            float4 tEnter;
-            int4 isHit;
-            const int nh = Bvh4_SlabTest(n, r.org, r.invDir, r.nearX, r.nearY, r.nearZ, tEnd, &tEnter, &isHit);
+            const __global Bvh8Node* n = &nodes[entry];
+            float8 tEnter;
+            int8 isHit;
+            const int nh = Bvh8_SlabTest(n, r.org, r.invDir, r.nearX, r.nearY, r.nearZ, tEnd, &tEnter, &isHit);
             if (nh > 0) {
-                entry = Bvh4_Children(n, tEnter, isHit, nh, flags, stackEntry, stackT, &sp);
+                entry = Bvh8_Children(n, tEnter, isHit, nh, flags, stackEntry, stackT, &sp);
                 continue;
             }
 #ifdef CLRT_HAS_INSTANCES
@@ -515,7 +517,7 @@ inline int Planes_Intersect(const __global Plane* planes, int numPlanes, int fir
 
 /* The closest hit of ray r (planes, then the BVH); prim CLRT_INVALID when it hits nothing. *instance:
  * the Instance hit, or CLRT_INVALID (Hit). */
-inline Hit Ray_Closest(Ray r, SceneParams scene, const __global Bvh4Node* nodes, const __global Bvh4Leaf* leaves,
+inline Hit Ray_Closest(Ray r, SceneParams scene, const __global Bvh8Node* nodes, const __global LeafBlock* leaves,
                        const __global Triangle* tris, const __global Sphere* spheres, const __global Plane* planes,
                        const __global Instance* instances, int* instance) {
     const int numPlanes = scene.numPlanes;
@@ -540,7 +542,7 @@ inline Hit Ray_Closest(Ray r, SceneParams scene, const __global Bvh4Node* nodes,
 }
 
 /* Whether shadow ray s is blocked before its tMax (any hit). */
-inline int Shadow_Occluded(ShadowRay s, SceneParams scene, const __global Bvh4Node* nodes, const __global Bvh4Leaf* leaves,
+inline int Shadow_Occluded(ShadowRay s, SceneParams scene, const __global Bvh8Node* nodes, const __global LeafBlock* leaves,
                            const __global Triangle* tris, const __global Sphere* spheres, const __global Plane* planes,
                            const __global Instance* instances) {
     const int numPlanes = scene.numPlanes;

@@ -14,9 +14,8 @@
 #include "../src/shared/kernel_params.h"
 #ifndef CLRT_LAYOUT_TABLE
 #define CLRT_LAYOUT_TABLE(S, M)                                                                   \
-    S(Bvh4Node) M(Bvh4Node, minX) M(Bvh4Node, maxX) M(Bvh4Node, minY) M(Bvh4Node, maxY)          \
-        M(Bvh4Node, minZ) M(Bvh4Node, maxZ) M(Bvh4Node, child) M(Bvh4Node, count)                 \
-    S(Bvh4Leaf) M(Bvh4Leaf, vertex) M(Bvh4Leaf, prim)                                            \
+    S(Bvh8Node) M(Bvh8Node, planes) M(Bvh8Node, entry) M(Bvh8Node, pad)                          \
+    S(LeafBlock) M(LeafBlock, vertex) M(LeafBlock, prim)                                            \
     S(Triangle) M(Triangle, v0) M(Triangle, v1) M(Triangle, v2)                                   \
     S(TriangleShading) M(TriangleShading, material) M(TriangleShading, textureSet)                 \
         M(TriangleShading, light) M(TriangleShading, attributes)                                   \

@@ -406,7 +406,7 @@ TEST_CASE("device struct layout matches the host; second build hits the program 
 
     // layoutMismatches itself reports a difference with the struct and member name.
     std::vector<int> broken = dev1;
-    broken[1 + 2 * 1] += 4;  // host[1] is Bvh4Node.minX's offset
+    broken[1 + 2 * 1] += 4;  // host[1] is Bvh8Node.planes's offset
     auto diffs = layoutMismatches(broken);
     REQUIRE(diffs.size() == 1);
     CHECK(diffs[0].find(std::string(host[1].structName) + "." + host[1].member) != std::string::npos);

@@ -384,7 +384,7 @@ void deviceClosestTwoLevel(const DeviceScene& ds, const std::vector<dev::Ray>& r
     std::vector<dev::Plane> noPlanes(1);
     const int n = int(rays.size());
     std::vector<int> queueLength{n};
-    cl::Buffer nodes = ro(ds.bvh4.nodes), leaves = ro(ds.bvh4.leaves), tb = ro(ds.triangles),
+    cl::Buffer nodes = ro(ds.bvh8.nodes), leaves = ro(ds.bvh8.leaves), tb = ro(ds.triangles),
                sb = ro(ds.spheres.empty() ? noSpheres : ds.spheres), pb = ro(noPlanes), ib = ro(ds.instances),
                rb = ro(rays), cb = ro(queueLength);
     cl::Buffer hb = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(dev::Hit) * rays.size()));
@@ -468,7 +468,7 @@ TEST_CASE("instancing: the device's two-level traversal reports the instance and
 
 namespace {
 
-// Work per camera ray of the host walks (binary BVHs: the device's 4-wide trees visit fewer nodes, but
+// Work per camera ray of the host walks (binary BVHs: the device's 8-wide trees visit fewer nodes, but
 // enter the same instances): triangle tests of the flattened walk; instances entered and triangle
 // tests of the two-level walk (walkTwoLevel's order, counted).
 struct WalkWork {

@@ -10,7 +10,7 @@
 #include <random>
 
 #include "bvh/bvh.h"
-#include "bvh/bvh4.h"
+#include "bvh/bvh8.h"
 #include "bvh/host_intersect.h"
 #include "cl/check.h"
 #include "cl/kernel_args.h"
@@ -123,7 +123,7 @@ void compareWithHost(const cl::Program& program, const RandomScene& s, bool time
         using T = typename std::decay_t<decltype(v)>::value_type;
         return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), const_cast<T*>(v.data())));
     };
-    Bvh4 b4 = collapseBvh4(s.bvh);
+    Bvh8 b4 = collapseBvh8(s.bvh);
     setLeafTriangles(b4, s.tris, numTris);
     cl::Buffer nodes = ro(b4.nodes), leaves = ro(b4.leaves), tris = ro(s.tris), sph = ro(s.spheres);
     cl::Buffer rayBuf = ro(rays);

@@ -30,7 +30,7 @@ struct Actual {
 Actual actualBytes(const DeviceScene& ds) {
     Actual a{};
     a.geometry = bytesOf(ds.triangles) + bytesOf(ds.triangleShading) + bytesOf(ds.triangleAttributes) + bytesOf(ds.spheres) + bytesOf(ds.planes);
-    a.bvh = bytesOf(ds.bvh4.nodes) + bytesOf(ds.bvh4.leaves);
+    a.bvh = bytesOf(ds.bvh8.nodes) + bytesOf(ds.bvh8.leaves);
     a.textures = bytesOf(ds.texels);
     a.lights = bytesOf(ds.lights) + bytesOf(ds.lightData) + bytesOf(ds.envDistribution);
     return a;
@@ -106,7 +106,7 @@ void checkEstimate(const Scene& scene, const std::string& name, Instancing insta
 
 }  // namespace
 
-TEST_CASE("memory: flattening lends the BVH builder's freed scratch to the 4-wide nodes and leaf blocks", "[memory][huge_pages]") {
+TEST_CASE("memory: flattening lends the BVH builder's freed scratch to the 8-wide nodes and leaf blocks", "[memory][huge_pages]") {
     TempDir d;
     writeHeightField(d.file("field.ply"), 200);  // 80,000 triangles: every array below is >= 1 MiB
     writeFileBytes(d.file("one.xml"), instancedScene("field.ply", 1));
@@ -117,8 +117,8 @@ TEST_CASE("memory: flattening lends the BVH builder's freed scratch to the 4-wid
         FlattenOptions opts;
         opts.instancing = mode;
         DeviceScene ds = flattenScene(scene, opts);
-        // The builder's items (32 B per triangle) hold the 4-wide nodes, its binary nodes the leaf blocks.
-        const size_t nodes = ds.bvh4.nodes.size() * sizeof(dev::Bvh4Node), leaves = ds.bvh4.leaves.size() * sizeof(dev::Bvh4Leaf);
+        // The builder's items (32 B per triangle) hold the 8-wide nodes, its binary nodes the leaf blocks.
+        const size_t nodes = ds.bvh8.nodes.size() * sizeof(dev::Bvh8Node), leaves = ds.bvh8.leaves.size() * sizeof(dev::LeafBlock);
         REQUIRE(nodes >= kHugeMinBytes);
         REQUIRE(leaves >= kHugeMinBytes);
         CHECK(hugeRecycledBytes() - before >= nodes + leaves);

@@ -90,7 +90,7 @@ class Builder {
 public:
     Builder(const BvhBuildOptions& o, Item* items) : opts_(o), items_(items) {
         numBins_ = std::max(2, std::min(kMaxBins, o.bins));
-        maxLeaf_ = std::min(CLRT_BVH4_MAX_LEAF, std::max(1, o.maxLeafSize));  // the device packs leaves in 4 bits
+        maxLeaf_ = std::min(CLRT_BVH_MAX_LEAF, std::max(1, o.maxLeafSize));  // the device packs leaves in 4 bits
     }
 
     // Levels on the longest root-to-leaf path (root alone = 1); the builder keeps it <= kMaxLevels.

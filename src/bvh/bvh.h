@@ -1,7 +1,7 @@
-// src/bvh/: the bounding volume hierarchy (binned-SAH build, 4-wide collapse for the device, host reference traversal).
+// src/bvh/: the bounding volume hierarchy (binned-SAH build, 8-wide collapse for the device, host reference traversal).
 // Bounding volume hierarchy over world-space primitives: binned SAH build on the host into binary
 // nodes (BvhNode, depth-first, left child next to its parent). The device reads it collapsed to
-// 4-wide nodes (bvh4.h); the binary tree is also what the plain C++ reference traversal in tests walks.
+// 8-wide nodes (bvh8.h); the binary tree is also what the plain C++ reference traversal in tests walks.
 #pragma once
 #include <vector>
 
@@ -54,7 +54,7 @@ struct Bvh {
                                       // always <= CLRT_BVH_STACK_SIZE - 8
 };
 
-// What a caller keeps of a binary tree once it has been collapsed for the device (bvh4.h): its
+// What a caller keeps of a binary tree once it has been collapsed for the device (bvh8.h): its
 // figures for -v and benches, not its nodes (~30 B per primitive, freed; flatten_geometry.cpp).
 struct BvhSummary {
     Aabb bounds;             // the root's box (inverted when there are no primitives)

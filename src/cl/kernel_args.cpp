@@ -12,7 +12,7 @@
 namespace clrt {
 namespace dev {
 namespace {
-// Inside clrt::dev, so that the declared type names (Bvh4Node, float4, uint, ...) resolve.
+// Inside clrt::dev, so that the declared type names (Bvh8Node, float4, uint, ...) resolve.
 #define CLRT_HOST_PARAM_(KIND, T, name) ParamDecl{#name, ParamKind::KIND, sizeof(T)},
 #define CLRT_HOST_KERNEL_(K) KernelDecl{#K, {CLRT_KERNEL_##K(CLRT_HOST_PARAM_)}},
 const std::vector<KernelDecl> kTable = {

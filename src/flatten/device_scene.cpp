@@ -38,7 +38,7 @@ std::vector<std::string> FeatureSet::defines() const {
     add(backfaceCulling, "CLRT_HAS_BACKFACE_CULLING");
     add(lanes, "CLRT_HAS_LANES");
     // Rounded up to a multiple of 8 so that scenes of similar depth share a cached program.
-    if (bvhStack > 0) d.push_back("-DCLRT_BVH4_STACK_SIZE=" + std::to_string((bvhStack + 7) / 8 * 8));
+    if (bvhStack > 0) d.push_back("-DCLRT_BVH8_STACK_SIZE=" + std::to_string((bvhStack + 7) / 8 * 8));
     return d;
 }
 

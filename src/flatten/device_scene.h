@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "bvh/bvh.h"
-#include "bvh/bvh4.h"
+#include "bvh/bvh8.h"
 #include "scene/scene.h"
 #include "shared/device_types.h"
 
@@ -69,8 +69,8 @@ struct DeviceScene {
     std::vector<dev::Light> lights;
     HostArray<float> envDistribution;  // importance distributions of env lights (env_distribution.h)
     HostArray<dev::float4> lightData;  // object lights' triangles and spheres (layout: device_types.h, Light)
-    BvhSummary bvh;  // the binary tree's figures (the tree itself is freed once collapsed into bvh4)
-    Bvh4 bvh4;  // what the device traverses
+    BvhSummary bvh;  // the binary tree's figures (the tree itself is freed once collapsed into bvh8)
+    Bvh8 bvh8;  // what the device traverses
     dev::SceneParams params{};
     FeatureSet features;
     size_t skippedTriangles = 0;

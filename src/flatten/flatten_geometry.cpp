@@ -329,13 +329,13 @@ namespace {
 
 // The BVH over `boxes` (triangles, then spheres); with leafOrder the triangles are stored in leaf order
 // so a leaf's triangles are contiguous in memory (FlattenOptions::leafOrderTriangles), then the tree is
-// collapsed to 4-wide nodes with the leaves' triangles copied into their struct-of-arrays blocks. The
+// collapsed to 8-wide nodes with the leaves' triangles copied into their struct-of-arrays blocks. The
 // boxes are released once the tree is built, the triangles and their shading are put in leaf order in
-// place (no copies), and the binary tree is freed once its 4-wide nodes are made, before the leaf
+// place (no copies), and the binary tree is freed once its 8-wide nodes are made, before the leaf
 // blocks (only its figures stay: ds.bvh), so the binary tree and the leaf blocks are never held together.
 void buildDeviceBvh(BvhItems&& boxes, DeviceScene& ds, bool leafOrder) {
     auto tb = std::chrono::steady_clock::now();
-    // The device tests a leaf's triangles four at a time (Bvh4Leaf), so a leaf of up to four costs
+    // The device tests a leaf's triangles four at a time (LeafBlock), so a leaf of up to four costs
     // about what one triangle test did: a node is costed as two triangle tests, which gives fuller
     // leaves (Audi TT: 2.1 -> 3.0 primitives per block) and fewer nodes (86k -> 61k).
     BvhBuildOptions opts;
@@ -344,9 +344,9 @@ void buildDeviceBvh(BvhItems&& boxes, DeviceScene& ds, bool leafOrder) {
     const int numTris = int(ds.triangles.size());
     if (leafOrder) putInLeafOrder(bvh, ds.triangles.data(), ds.triangleShading.data(), numTris);
     ds.bvh = summarizeBvh(bvh);
-    ds.bvh4 = collapseBvh4(std::move(bvh));  // frees the binary tree before making the leaf blocks
-    setLeafTriangles(ds.bvh4, ds.triangles, numTris);
-    ds.features.bvhStack = std::max(1, ds.bvh4.maxStack);
+    ds.bvh8 = collapseBvh8(std::move(bvh));  // frees the binary tree before making the leaf blocks
+    setLeafTriangles(ds.bvh8, ds.triangles, numTris);
+    ds.features.bvhStack = std::max(1, ds.bvh8.maxStack);
     ds.bvhSeconds = secondsSince(tb);
 }
 

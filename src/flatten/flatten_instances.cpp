@@ -37,8 +37,8 @@ std::pair<int, bool> bottomKey(const Shape& s) { return {s.meshIndex, s.smooth};
 // belong to the instance) appended to ds: its triangles and their shading written in place after
 // ds's (room reserved by flattenGeometry) on all threads (flattenMeshes), its BVH built over their
 // boxes, with leafOrder the triangles put in leaf order in place, the binary tree freed before its
-// leaf blocks are appended to ds.bvh4 (as the world tree, flatten_geometry.cpp's buildDeviceBvh).
-// *maxStack: its traversal stack need; spareNodes: room kept for the top level's nodes (appendBvh4).
+// leaf blocks are appended to ds.bvh8 (as the world tree, flatten_geometry.cpp's buildDeviceBvh).
+// *maxStack: its traversal stack need; spareNodes: room kept for the top level's nodes (appendBvh8).
 // Its build and collapse count as BVH time (ds.bvhSeconds).
 BottomLevel appendBottomLevel(const Scene& scene, const Shape& s, DeviceScene& ds, bool leafOrder, size_t spareNodes,
                               int* maxStack) {
@@ -59,9 +59,9 @@ BottomLevel appendBottomLevel(const Scene& scene, const Shape& s, DeviceScene& d
     Bvh bvh = buildBvh(std::move(boxes), opts);  // consumes the boxes
     b.box = summarizeBvh(bvh).bounds;  // the root's box: the union of the triangles' (all finite)
     if (leafOrder) putInLeafOrder(bvh, ds.triangles.data() + base, ds.triangleShading.data() + base, int(b.triangles));
-    const size_t firstLeaf = ds.bvh4.leaves.size();
-    b.rootNode = appendBvh4(std::move(bvh), int(base), ds.bvh4, maxStack, spareNodes);
-    setLeafTriangles(ds.bvh4, ds.triangles, int(ds.triangles.size()), firstLeaf);
+    const size_t firstLeaf = ds.bvh8.leaves.size();
+    b.rootNode = appendBvh8(std::move(bvh), int(base), ds.bvh8, maxStack, spareNodes);
+    setLeafTriangles(ds.bvh8, ds.triangles, int(ds.triangles.size()), firstLeaf);
     ds.bvhSeconds += secondsSince(tb);
     return b;
 }
@@ -89,33 +89,31 @@ bool makeInstance(const Shape& s, int texSet, const BottomLevel& b, dev::Instanc
     return true;
 }
 
-// The top-level tree over the instances' world boxes, appended to ds.bvh4: each leaf lane becomes
-// the instance it holds (count 0, child ~((instance + 1) << 4), as intersect.cl's Entry_Instance
-// reads it). Returns its root's index; *maxStack its traversal stack need.
+// The top-level tree over the instances' world boxes, appended to ds.bvh8: each leaf lane becomes
+// the instance it holds (entry ~((instance + 1) << 4), as intersect.cl's Entry_Instance reads it).
+// Returns its root's index; *maxStack its traversal stack need.
 int appendTopLevel(const std::vector<Aabb>& boxes, DeviceScene& ds, int* maxStack) {
     BvhBuildOptions opts;
     opts.traversalCost = 2;
     opts.maxLeafSize = 1;  // one instance per leaf: entering it replaces the ray
     Bvh top = buildBvh(boxes, opts);
-    Bvh4 b4 = collapseBvh4(top);
-    const int nodeOffset = int(ds.bvh4.nodes.size());
-    ds.bvh4.nodes.reserve(ds.bvh4.nodes.size() + b4.nodes.size());  // room kept by the bottom levels
-    for (dev::Bvh4Node n : b4.nodes) {
-        int* child = &n.child.x;
-        int* count = &n.count.x;
-        for (int i = 0; i < 4; ++i) {
-            if (child[i] == CLRT_INVALID) continue;
-            if (count[i] > 0) {
-                const int instance = (&b4.leaves[size_t(child[i])].prim.x)[0];
-                child[i] = ~((instance + 1) << 4);
-                count[i] = 0;
+    Bvh8 b8 = collapseBvh8(top);
+    const int nodeOffset = int(ds.bvh8.nodes.size());
+    ds.bvh8.nodes.reserve(ds.bvh8.nodes.size() + b8.nodes.size());  // room kept by the bottom levels
+    for (dev::Bvh8Node n : b8.nodes) {
+        for (int i = 0; i < kBvhWidth; ++i) {
+            int& entry = laneEntry(n, i);
+            if (entry == CLRT_INVALID) continue;
+            if (isLeafEntry(entry)) {
+                const int instance = b8.leaves[size_t(leafFirstBlock(entry))].prim.x;
+                entry = ~((instance + 1) << 4);
             } else {
-                child[i] += nodeOffset;
+                entry += nodeOffset;
             }
         }
-        ds.bvh4.nodes.push_back(n);
+        ds.bvh8.nodes.push_back(n);
     }
-    *maxStack = b4.maxStack;
+    *maxStack = b8.maxStack;
     return nodeOffset;
 }
 
@@ -157,14 +155,14 @@ size_t bottomLevelTriangles(const Scene& scene, const std::vector<bool>& instanc
 
 void flattenInstances(const Scene& scene, const std::vector<std::pair<const Shape*, int>>& jobs, int numWorldTriangles,
                       DeviceScene& ds, bool leafOrder) {
-    const int numWorldLeaves = int(ds.bvh4.leaves.size());
-    const int worldStack = std::max(1, ds.bvh4.maxStack);
+    const int numWorldLeaves = int(ds.bvh8.leaves.size());
+    const int worldStack = std::max(1, ds.bvh8.maxStack);
     std::map<std::pair<int, bool>, BottomLevel> bottoms;
     int bottomStack = 0;
     for (const auto& job : jobs) {
         if (bottoms.count(bottomKey(*job.first))) continue;
         int stack = 0;
-        // The top level's 4-wide nodes: at most one per instance (each has two children or more).
+        // The top level's 8-wide nodes: at most one per instance (each has two children or more).
         bottoms[bottomKey(*job.first)] = appendBottomLevel(scene, *job.first, ds, leafOrder, jobs.size() + 1, &stack);
         bottomStack = std::max(bottomStack, stack);
     }
@@ -172,7 +170,7 @@ void flattenInstances(const Scene& scene, const std::vector<std::pair<const Shap
     const int added = int(ds.triangles.size()) - numWorldTriangles;
     for (int l = 0; l < numWorldLeaves; ++l)
         for (int i = 0; i < 4; ++i) {
-            int& prim = (&ds.bvh4.leaves[size_t(l)].prim.x)[i];
+            int& prim = (&ds.bvh8.leaves[size_t(l)].prim.x)[i];
             if (prim >= numWorldTriangles) prim += added;
         }
     std::vector<Aabb> boxes;

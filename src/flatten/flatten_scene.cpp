@@ -18,18 +18,16 @@ namespace {
 
 // Whether some primitive's box in the BVH (world triangles and spheres from nodes[0], instances from the top
 // level's root) overlaps `box`: a conservative test, its leaves' boxes standing for their primitives.
-bool bvhMeets(const Bvh4& bvh, int node, const Aabb& box) {
-    const dev::Bvh4Node& n = bvh.nodes[size_t(node)];
-    const float* mn[3] = {&n.minX.x, &n.minY.x, &n.minZ.x};
-    const float* mx[3] = {&n.maxX.x, &n.maxY.x, &n.maxZ.x};
-    for (int i = 0; i < 4; ++i) {
-        const int child = (&n.child.x)[i];
-        if (child == CLRT_INVALID) continue;
+bool bvhMeets(const Bvh8& bvh, int node, const Aabb& box) {
+    const dev::Bvh8Node& n = bvh.nodes[size_t(node)];
+    for (int i = 0; i < kBvhWidth; ++i) {
+        const int entry = laneEntry(n, i);
+        if (entry == CLRT_INVALID) continue;
         bool overlaps = true;
         for (int a = 0; a < 3; ++a)
-            overlaps = overlaps && mn[a][i] <= (&box.max.x)[a] && mx[a][i] >= (&box.min.x)[a];
-        // a leaf, or an instance (the top level's lanes with a negative child, Entry_Instance in intersect.cl)
-        if (overlaps && ((&n.count.x)[i] > 0 || child < 0 || bvhMeets(bvh, child, box))) return true;
+            overlaps = overlaps && lanePlane(n, 2 * a, i) <= (&box.max.x)[a] && lanePlane(n, 2 * a + 1, i) >= (&box.min.x)[a];
+        // a leaf, or an instance (the top level's lanes, Entry_Instance in intersect.cl): negative entries
+        if (overlaps && (entry < 0 || bvhMeets(bvh, entry, box))) return true;
     }
     return false;
 }
@@ -38,7 +36,7 @@ bool bvhMeets(const Bvh4& bvh, int node, const Aabb& box) {
 // default they skip back faces (Camera::nearMode, CLRT_NEAR_FRONT): the box around the eye and the image
 // plane's corners, widened by the aperture, against the BVH. Only then is the culling compiled in.
 bool nearSegmentMeetsGeometry(const Camera& c, const DeviceScene& ds) {
-    if (c.nearMode != CLRT_NEAR_FRONT || ds.bvh4.nodes.empty()) return false;
+    if (c.nearMode != CLRT_NEAR_FRONT || ds.bvh8.nodes.empty()) return false;
     Aabb box;
     box.grow(c.position);
     for (float x : {c.left, c.right})
@@ -48,7 +46,7 @@ bool nearSegmentMeetsGeometry(const Camera& c, const DeviceScene& ds) {
     if (!std::isfinite(widen)) return true;
     box.min = box.min - Vec3(widen);
     box.max = box.max + Vec3(widen);
-    return bvhMeets(ds.bvh4, 0, box) || (ds.params.numInstances > 0 && bvhMeets(ds.bvh4, ds.params.instanceRoot, box));
+    return bvhMeets(ds.bvh8, 0, box) || (ds.params.numInstances > 0 && bvhMeets(ds.bvh8, ds.params.instanceRoot, box));
 }
 
 }  // namespace

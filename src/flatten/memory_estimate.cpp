@@ -3,7 +3,7 @@
 // host peaks from the flattening's own temporaries, and the check against the limits.
 // The BVH's share per stored triangle is a bound measured on the shared scenes (tests/test_memory.cpp
 // checks every estimate against the arrays a real flattening makes): the builder's leaves hold at most
-// four triangles and fill a 4-wide leaf block 2.5 to 4 triangles deep.
+// four triangles and fill a four-triangle leaf block 2.5 to 4 triangles deep.
 #include "flatten/memory_estimate.h"
 
 #include "util/huge_pages.h"
@@ -24,17 +24,17 @@
 namespace clrt {
 namespace {
 
-// Per stored triangle (or sphere): 4-wide leaf blocks (2.2 primitives each, at least: small meshes
-// fill them least) and nodes (one
-// per 6 primitives, at most); the binary tree, held while the BVH is built and collapsed (then freed).
+// Per stored triangle (or sphere): leaf blocks of four (2.2 primitives each, at least: small meshes
+// fill them least) and 8-wide nodes (one per 8 primitives, at most: the Audi TT has one per 9.6); the
+// binary tree, held while the BVH is built and collapsed (then freed).
 constexpr double kLeafBlocksPerPrim = 1.0 / 2.2;
-constexpr double kNodesPerPrim = 1.0 / 6.0;
+constexpr double kNodesPerPrim = 1.0 / 8.0;
 constexpr double kBinaryNodesPerPrim = 0.8;  // ~2·leaves, leaves of >= 2.5 primitives
 constexpr uint64_t kTrianglePair = sizeof(dev::Triangle) + sizeof(dev::TriangleShading);
 
 // One placed instance of a two-level mesh: its record (two 3x4 rows, offsets, material...) and its
 // share of the top-level tree.
-constexpr uint64_t kInstanceBytes = 2 * 48 + 64 + sizeof(dev::Bvh4Node) / 2;
+constexpr uint64_t kInstanceBytes = 2 * 48 + 64 + sizeof(dev::Bvh8Node) / 2;
 // What the OpenCL runtime adds per device once it renders (program and kernel objects, queues, its
 // worker threads' stacks): measured on PoCL as the gap between the peak RSS of small scenes and the
 // rest of this estimate (16 MB at 80k triangles).
@@ -125,28 +125,28 @@ uint64_t addGeometry(const Scene& scene, const MemoryPlan& plan, MemoryEstimate&
 uint64_t leafBlocks(uint64_t prims) { return uint64_t(std::ceil(double(prims) * kLeafBlocksPerPrim) + 1); }
 
 void addBvh(uint64_t prims, MemoryEstimate& e) {
-    e.addHostArray(e.bvh, uint64_t(std::ceil(double(prims) * kNodesPerPrim) + 1) * sizeof(dev::Bvh4Node));
-    e.addHostArray(e.bvh, leafBlocks(prims) * sizeof(dev::Bvh4Leaf));
+    e.addHostArray(e.bvh, uint64_t(std::ceil(double(prims) * kNodesPerPrim) + 1) * sizeof(dev::Bvh8Node));
+    e.addHostArray(e.bvh, leafBlocks(prims) * sizeof(dev::LeafBlock));
 }
 
 // What the flattening holds at its peak beyond the DeviceScene arrays it returns (flatten_geometry.cpp,
 // flatten_instances.cpp): the meshes' phase (the builder's items, one per triangle, written with it;
 // every triangle, flattened or of a bottom level, is written straight into its slot), the build's (items,
-// primRefs and binary nodes, before any 4-wide array exists), the collapse's (the binary tree and the blocks' primitives beside the 4-wide
+// primRefs and binary nodes, before any 8-wide array exists), the collapse's (the binary tree and the blocks' primitives beside the 8-wide
 // nodes, before the leaf blocks) and the blocks' primitives beside the leaf blocks. The triangles are
 // put in leaf order in place (an int per triangle). A bottom level is built the same way after the world
 // tree, its phases bounded by the same terms (its triangles are among `prims`), and appended to the
 // world tree's arrays, which then move once (worldTree: their old copy, beside the new one).
 uint64_t flattenExcess(const MemoryEstimate& e, uint64_t prims) {
-    const uint64_t leaves = leafBlocks(prims) * sizeof(dev::Bvh4Leaf);
+    const uint64_t leaves = leafBlocks(prims) * sizeof(dev::LeafBlock);
     const uint64_t blockPrims = leafBlocks(prims) * sizeof(dev::int4);
     const uint64_t binaryTree = uint64_t(double(prims) * kBinaryNodesPerPrim) * sizeof(BvhNode) + prims * sizeof(int);
     const uint64_t items = prims * sizeof(BvhItem);
     const uint64_t worldPrims = prims - (e.trianglesStored - e.trianglesFlattened) - e.instances;
     uint64_t worldTree = 0;
     if (e.instances)
-        worldTree = leafBlocks(worldPrims) * sizeof(dev::Bvh4Leaf) +
-                    uint64_t(std::ceil(double(worldPrims) * kNodesPerPrim) + 1) * sizeof(dev::Bvh4Node);
+        worldTree = leafBlocks(worldPrims) * sizeof(dev::LeafBlock) +
+                    uint64_t(std::ceil(double(worldPrims) * kNodesPerPrim) + 1) * sizeof(dev::Bvh8Node);
     auto beyond = [](uint64_t held, uint64_t notYet) { return held > notYet ? held - notYet : 0; };
     return std::max({items, beyond(items + binaryTree, e.bvh.bytes),
                      beyond(binaryTree + blockPrims, leaves) + worldTree, blockPrims + worldTree});

@@ -48,7 +48,7 @@ struct MemoryEstimate {
     uint64_t texels = 0;           // texels of every image loaded (mip levels included)
     // Device arrays of the scene (on each device), by family.
     BufferFamily geometry{"geometry"};  // Triangle + TriangleShading, spheres, planes, instances
-    BufferFamily bvh{"bvh"};            // 4-wide nodes and leaf blocks
+    BufferFamily bvh{"bvh"};            // 8-wide nodes and leaf blocks
     BufferFamily textures{"textures"};  // the texel atlas (texture images, mip levels, environment maps)
     BufferFamily lights{"lights"};      // lights, object lights' sampling data, environment distributions
     BufferFamily render{"render"};      // per-render buffers: path queues, shadow rays, image, tone mapping

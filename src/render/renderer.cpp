@@ -81,8 +81,8 @@ struct Renderer::Impl {
         queueCount = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(int)));
         nextCount = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(int)));
         fused = FusedPath(ctx, program, localSize);
-        nodes = uploader.upload(ds.bvh4.nodes);
-        leaves = uploader.upload(ds.bvh4.leaves);
+        nodes = uploader.upload(ds.bvh8.nodes);
+        leaves = uploader.upload(ds.bvh8.leaves);
         tris = uploader.upload(ds.triangles);
         triShading = uploader.upload(ds.triangleShading);
         triAttributes = uploader.upload(ds.triangleAttributes);

@@ -91,11 +91,11 @@ enum TexelFormat { CLRT_TEXEL_FORMAT_TABLE(CLRT_ENUM_CONSTANT_) };
 #define CLRT_COMPACT_ITEMS 4
 
 /* The binary SAH tree (src/bvh/bvh.cpp) keeps its depth <= CLRT_BVH_STACK_SIZE - 8 levels; the device
- * traverses it collapsed to 4-wide nodes (src/bvh/bvh4.cpp), whose near-first traversal needs at most
- * 3 stack entries per level. The renderer passes the exact need of a scene with -D; this default holds
+ * traverses it collapsed to 8-wide nodes (src/bvh/bvh8.cpp), whose near-first traversal needs at most
+ * 7 stack entries per level. The renderer passes the exact need of a scene with -D; this default holds
  * for every tree the builder can make. */
-#ifndef CLRT_BVH4_STACK_SIZE
-#define CLRT_BVH4_STACK_SIZE (3 * (CLRT_BVH_STACK_SIZE - 8))
+#ifndef CLRT_BVH8_STACK_SIZE
+#define CLRT_BVH8_STACK_SIZE (7 * (CLRT_BVH_STACK_SIZE - 8))
 #endif
 
 /* The fused CPU path (cl_kernels/fused.cl): per-depth sums kept per work-item (a render with more
@@ -105,21 +105,24 @@ enum TexelFormat { CLRT_TEXEL_FORMAT_TABLE(CLRT_ENUM_CONSTANT_) };
 #define CLRT_FUSED_STACK_SIZE 24
 
 /* A leaf enters the traversal stack as one int, ~(firstLeafBlock << 4 | count). */
-#define CLRT_BVH4_MAX_LEAF 15
-#define CLRT_BVH4_MAX_PRIMS (1 << 27)
+#define CLRT_BVH_MAX_LEAF 15
+#define CLRT_BVH_MAX_PRIMS (1 << 27)
 
-/* A 4-wide BVH node, the device's BVH. Lane i of every vector belongs to child i (struct of arrays,
- * so the four slab tests of a node are four-wide vector operations):
- *   count[i] > 0                    leaf: its count[i] primitives are in the Bvh4Leaf blocks
- *                                   child[i] .. child[i] + (count[i] + 3) / 4 - 1, four to a block
- *   count[i] == 0, child[i] >= 0    interior: child[i] is the index of the child node
- *   child[i] == CLRT_INVALID        empty lane: bounds min = +inf, max = -inf, never hit
- * nodes[0] is the root. */
-typedef struct Bvh4Node {
-    float4 minX, maxX, minY, maxY, minZ, maxZ;
-    int4 child;
-    int4 count;
-} Bvh4Node;
+/* An 8-wide BVH node, the device's BVH. Its children's boxes are struct of arrays, eight floats per plane,
+ * so the eight slab tests of a node are eight-wide vector operations: plane p (0 minX, 1 maxX, 2 minY,
+ * 3 maxY, 4 minZ, 5 maxZ) of lane i is float 8p + i of planes (planes[2p + i / 4], component i % 4).
+ * Lane i (entry[i / 4], component i % 4) in the traversal stack's form:
+ *   >= 0                          interior: the index of the child node
+ *   ~(firstBlock << 4 | count)    leaf: its count (1..15) primitives, four to a LeafBlock, in blocks
+ *                                 firstBlock .. firstBlock + (count + 3) / 4 - 1
+ *   ~((instance + 1) << 4)        (the two-level BVH's top tree only) an Instance: a "leaf" of count 0
+ *   CLRT_INVALID                  empty lane: bounds min = +inf, max = -inf, never hit; after the others
+ * Lanes ordered by box area, largest first (the order shadow rays visit them in). nodes[0] is the root. */
+typedef struct Bvh8Node {
+    float4 planes[12];
+    int4 entry[2];
+    int4 pad[2]; /* 256 bytes: four cache lines */
+} Bvh8Node;
 
 /* Up to four primitives of one BVH leaf, with their triangles' world-space vertices as struct of
  * arrays, so the leaf's triangle tests are four-wide vector operations. vertex[3 * k + axis], lane i:
@@ -127,10 +130,10 @@ typedef struct Bvh4Node {
  * Triangle v0, v1, v2 at index prim[i]). prim[i]: the primitive reference (a triangle index into tris,
  * or numTriangles + a sphere index), CLRT_INVALID past the leaf's last primitive; a sphere's lane
  * and an empty lane have zero vertices. */
-typedef struct Bvh4Leaf {
+typedef struct LeafBlock {
     float4 vertex[9];
     int4 prim;
-} Bvh4Leaf;
+} LeafBlock;
 
 /* A world-space triangle. What shading needs beyond its vertices lives in TriangleShading at the same index.
  * v0.w, v1.w, v2.w: the x, y, z of its MotionBlur translation (0 when static; read only under

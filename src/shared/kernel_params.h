@@ -17,7 +17,7 @@
 
 /* What the intersection kernels traverse (instances: the two-level BVH's, see Instance). */
 #define CLRT_PARAMS_GEOMETRY(P)                                                                    \
-    P(IN, Bvh4Node, nodes) P(IN, Bvh4Leaf, leaves) P(IN, Triangle, tris) P(IN, Sphere, spheres)    \
+    P(IN, Bvh8Node, nodes) P(IN, LeafBlock, leaves) P(IN, Triangle, tris) P(IN, Sphere, spheres)    \
     P(IN, Plane, planes) P(IN, Instance, instances)
 
 /* The surfaces as shading sees them (a hit's position, normals, uv, material); triAttributes: the

@@ -39,7 +39,7 @@ bool hostBuffersInPlace();  // CLRT_HUGE_PAGES is not "0"
 
 // While one of these lives (flattenScene holds one), hugeFree keeps the blocks it is given and hugeAlloc
 // hands out the smallest kept block that holds a request (the pages past it given back to the kernel),
-// so an array made after another was freed (the 4-wide nodes in the builder's items, the leaf blocks in
+// so an array made after another was freed (the 8-wide nodes in the builder's items, the leaf blocks in
 // the binary tree's nodes) reuses pages already written instead of fresh ones, which the kernel must
 // zero (and a VM's host back) at first touch. A request no kept block holds frees them all first, so
 // the peak memory is never above what freeing at once gives. The last one to end frees what is kept.
@@ -69,7 +69,7 @@ struct HugePageAllocator {
         else std::allocator<T>().deallocate(p, n);
     }
     // resize(n) and emplace_back() default-initialise (a trivial element is left unwritten): every caller
-    // writes the elements it makes (flatten_geometry's slots, the texel atlas, bvh4's nodes), and a fresh
+    // writes the elements it makes (flatten_geometry's slots, the texel atlas, bvh8's nodes), and a fresh
     // page is zeroed by the kernel at its first touch, so value-initialising wrote it twice, on one thread.
     template <class U>
     void construct(U* p) noexcept(std::is_nothrow_default_constructible<U>::value) {

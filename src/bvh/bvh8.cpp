@@ -1,6 +1,6 @@
-// Binary -> 4-wide BVH collapse (see bvh4.h). Nodes are written depth-first, parent before children; a
+// Binary -> 8-wide BVH collapse (see bvh8.h). Nodes are written depth-first, parent before children; a
 // big tree's top first, then its subtrees, each depth-first (SplitCollapse).
-#include "bvh/bvh4.h"
+#include "bvh/bvh8.h"
 
 #include <algorithm>
 #include <cmath>
@@ -19,15 +19,17 @@ double halfArea(const BvhNode& n) {
     return dx * dy + dy * dz + dz * dx;
 }
 
+constexpr int kWidth = kBvhWidth;
+
 // The tree's leaf blocks' primitives: each binary leaf's primRefs, four to a block (the blocks are
 // made afterwards, makeLeaves).
 using BlockPrims = HostArray<dev::int4>;
 
-// Writes 4-wide nodes at fixed places: node i at out[i] (i counts in the whole nodes array), leaf block
+// Writes 8-wide nodes at fixed places: node i at out[i] (i counts in the whole nodes array), leaf block
 // j's primitives at blocks[j], from nextNode and nextBlock on. countOf tells how many of each emit uses.
 struct Collapser {
     const Bvh& bin;
-    dev::Bvh4Node* out;
+    dev::Bvh8Node* out;
     dev::int4* blocks;
     int nextNode = 0, nextBlock = 0;
     int depth = 0;
@@ -36,13 +38,13 @@ struct Collapser {
         size_t nodes = 0, blocks = 0;
     };
 
-    // The binary nodes that become the lanes of the 4-wide node made for binary node b: a leaf root
-    // alone, else b's children, opening the interior lane with the largest area until there are four;
+    // The binary nodes that become the lanes of the 8-wide node made for binary node b: a leaf root
+    // alone, else b's children, opening the interior lane with the largest area until there are eight;
     // then ordered by area, largest first. Returns how many. The order is what shadow rays (any hit)
     // visit in: a ray is likelier to meet an occluder in a bigger box, and finding one ends the ray
     // (veachAjar's shadow rays 1.48x faster, docs/studies/2026-12-06-classic-lanes-children.md); closest-hit
     // rays sort the lanes by entry distance, which only ties leave in lane order.
-    int lanesOf(int b, int lanes[4]) const {
+    int lanesOf(int b, int lanes[kWidth]) const {
         int k = 0;
         const BvhNode& nb = bin.nodes[size_t(b)];
         if (nb.count > 0) {
@@ -51,7 +53,7 @@ struct Collapser {
         }
         lanes[k++] = b + 1;
         lanes[k++] = nb.first;
-        while (k < 4) {
+        while (k < kWidth) {
             int best = -1;
             double bestArea = -1;
             for (int i = 0; i < k; ++i) {
@@ -65,7 +67,7 @@ struct Collapser {
             lanes[best] = c + 1;
             lanes[k++] = bin.nodes[size_t(c)].first;
         }
-        double area[4];
+        double area[kWidth];
         for (int i = 0; i < k; ++i) {
             const double a = halfArea(bin.nodes[size_t(lanes[i])]);
             area[i] = a >= 0 ? a : 0;  // NaN (inf * 0 on a huge flat box): last, and a strict weak order
@@ -78,9 +80,9 @@ struct Collapser {
         return k;
     }
 
-    // The 4-wide nodes and leaf blocks emit(b) writes (the same choices, nothing written).
+    // The 8-wide nodes and leaf blocks emit(b) writes (the same choices, nothing written).
     Counts countOf(int b) const {
-        int lanes[4];
+        int lanes[kWidth];
         const int k = lanesOf(b, lanes);
         Counts n;
         n.nodes = 1;
@@ -100,10 +102,10 @@ struct Collapser {
     // Writes the blocks of binary leaf c (its primRefs, four to a block); returns the first block.
     int emitLeaf(const BvhNode& c) {
         // The traversal packs a leaf into one stack entry: ~(first << 4 | count).
-        if (c.count > CLRT_BVH4_MAX_LEAF)
-            throw std::logic_error("collapseBvh4: leaf of " + std::to_string(c.count) + " primitives");
-        if (c.first > CLRT_BVH4_MAX_PRIMS - c.count)
-            throw std::runtime_error("scene has more than " + std::to_string(CLRT_BVH4_MAX_PRIMS) +
+        if (c.count > CLRT_BVH_MAX_LEAF)
+            throw std::logic_error("collapseBvh8: leaf of " + std::to_string(c.count) + " primitives");
+        if (c.first > CLRT_BVH_MAX_PRIMS - c.count)
+            throw std::runtime_error("scene has more than " + std::to_string(CLRT_BVH_MAX_PRIMS) +
                                      " primitives (the BVH's limit)");
         const int firstBlock = nextBlock;
         for (int k = 0; k < c.count; k += 4) {
@@ -114,37 +116,34 @@ struct Collapser {
         return firstBlock;
     }
 
-    // Lane i of node: the box of binary node c (empty: c null), its child and count.
-    static void setLane(dev::Bvh4Node& node, int i, const BvhNode* c, int child, int count) {
-        float* mn[3] = {&node.minX.x, &node.minY.x, &node.minZ.x};
-        float* mx[3] = {&node.maxX.x, &node.maxY.x, &node.maxZ.x};
+    // Lane i of node: the box of binary node c (empty: c null) and its stack entry.
+    static void setLane(dev::Bvh8Node& node, int i, const BvhNode* c, int entry) {
         for (int a = 0; a < 3; ++a) {
-            mn[a][i] = c ? (&c->boundsMin.x)[a] : INFINITY;
-            mx[a][i] = c ? (&c->boundsMax.x)[a] : -INFINITY;
+            lanePlane(node, 2 * a, i) = c ? (&c->boundsMin.x)[a] : INFINITY;
+            lanePlane(node, 2 * a + 1, i) = c ? (&c->boundsMax.x)[a] : -INFINITY;
         }
-        (&node.child.x)[i] = child;
-        (&node.count.x)[i] = count;
+        laneEntry(node, i) = entry;
     }
 
-    // Writes the 4-wide node for binary node b and its subtree, depth-first; returns {index, stack
+    // Writes the 8-wide node for binary node b and its subtree, depth-first; returns {index, stack
     // need}. Stack need of a subtree: the most entries its traversal pushes, from an empty stack (a
     // node with k hit children pushes k - 1 and goes on into one of them).
     std::pair<int, int> emit(int b, int level) {
         depth = std::max(depth, level);
         const int idx = nextNode++;
-        int lanes[4];
+        int lanes[kWidth];
         const int k = lanesOf(b, lanes);
-        dev::Bvh4Node node;
+        dev::Bvh8Node node{};
         int need = 0;
-        for (int i = 0; i < 4; ++i) {
+        for (int i = 0; i < kWidth; ++i) {
             const BvhNode* c = i < k ? &bin.nodes[size_t(lanes[i])] : nullptr;
             if (!c) {
-                setLane(node, i, nullptr, CLRT_INVALID, 0);
+                setLane(node, i, nullptr, CLRT_INVALID);
             } else if (c->count > 0) {
-                setLane(node, i, c, emitLeaf(*c), c->count);
+                setLane(node, i, c, leafEntry(emitLeaf(*c), c->count));
             } else {
                 const auto sub = emit(lanes[i], level + 1);
-                setLane(node, i, c, sub.first, 0);
+                setLane(node, i, c, sub.first);
                 need = std::max(need, sub.second);
             }
         }
@@ -162,18 +161,18 @@ void reserveMore(HostArray<T>& a, size_t more) {
     if (need > a.capacity()) a.reserve(a.empty() ? need : std::max(need, a.capacity() + a.capacity() / 2));
 }
 
-// The collapse of a big tree on all threads. Its top (4-wide nodes over binary subtrees of more than
+// The collapse of a big tree on all threads. Its top (8-wide nodes over binary subtrees of more than
 // taskSpan binary nodes) is planned on this thread; the subtrees under it are counted, then written, in
 // parallel, each at the place its counts give: the top's nodes first (in pre-order), then each subtree's
 // (in pre-order), subtrees in the order the top meets them; leaf blocks alike (the top's own leaves
-// first). The same 4-wide nodes as one depth-first pass, laid out by the tree alone (never by the
+// first). The same 8-wide nodes as one depth-first pass, laid out by the tree alone (never by the
 // thread count), parents before children.
 class SplitCollapse {
 public:
     SplitCollapse(const Bvh& bin, size_t taskSpan) : bin_(bin), taskSpan_(taskSpan), c_{bin, nullptr, nullptr} {}
 
     // Appends the tree's nodes to `nodes` (spareNodes more reserved) and fills `blocks`; *maxStack, *depth.
-    void run(HostArray<dev::Bvh4Node>& nodes, BlockPrims& blocks, size_t spareNodes, int* maxStack, int* depth) {
+    void run(HostArray<dev::Bvh8Node>& nodes, BlockPrims& blocks, size_t spareNodes, int* maxStack, int* depth) {
         plan(0, 1);
         std::vector<Collapser::Counts> counts(tasks_.size());
         parallelFor(tasks_.size(), [&](size_t t) { counts[t] = c_.countOf(tasks_[t].binary); });
@@ -203,9 +202,9 @@ private:
     enum Kind { kLeaf, kTop, kTask };
     struct Top {
         int binary, level, k;
-        int lanes[4];
-        Kind kind[4];
-        int ref[4];  // kTop: index in tops_; kTask: index in tasks_
+        int lanes[kWidth];
+        Kind kind[kWidth];
+        int ref[kWidth];  // kTop: index in tops_; kTask: index in tasks_
     };
     struct Task {
         int binary, level;
@@ -223,7 +222,7 @@ private:
     int plan(int b, int level) {
         const int t = int(tops_.size());
         tops_.push_back(Top{b, level, 0, {}, {}, {}});
-        int lanes[4];
+        int lanes[kWidth];
         const int k = c_.lanesOf(b, lanes);
         tops_[size_t(t)].k = k;
         for (int i = 0; i < k; ++i) {
@@ -249,25 +248,28 @@ private:
 
     // Writes the top's nodes (at base on) and its own leaves' blocks (from 0); returns the root's
     // stack need. Children come after their parents in tops_, so a backward pass has their needs.
-    int writeTop(HostArray<dev::Bvh4Node>& nodes, BlockPrims& blocks, size_t base) {
+    int writeTop(HostArray<dev::Bvh8Node>& nodes, BlockPrims& blocks, size_t base) {
         Collapser c{bin_, nodes.data(), blocks.data(), 0, 0};
         std::vector<int> need(tops_.size(), 0);
-        std::vector<int> leafBlock(4 * tops_.size(), 0);
+        std::vector<int> leafBlock(kWidth * tops_.size(), 0);
         for (size_t t = 0; t < tops_.size(); ++t)  // blocks in pre-order
             for (int i = 0; i < tops_[t].k; ++i)
-                if (tops_[t].kind[i] == kLeaf) leafBlock[4 * t + size_t(i)] = c.emitLeaf(bin_.nodes[size_t(tops_[t].lanes[i])]);
+                if (tops_[t].kind[i] == kLeaf) leafBlock[kWidth * t + size_t(i)] = c.emitLeaf(bin_.nodes[size_t(tops_[t].lanes[i])]);
         for (size_t t = tops_.size(); t-- > 0;) {
             const Top& top = tops_[t];
-            dev::Bvh4Node node;
+            dev::Bvh8Node node{};
             int lanesNeed = 0;
-            for (int i = 0; i < 4; ++i) {
+            for (int i = 0; i < kWidth; ++i) {
                 const BvhNode* b = i < top.k ? &bin_.nodes[size_t(top.lanes[i])] : nullptr;
-                if (!b) { Collapser::setLane(node, i, nullptr, CLRT_INVALID, 0); continue; }
-                if (top.kind[i] == kLeaf) { Collapser::setLane(node, i, b, leafBlock[4 * t + size_t(i)], b->count); continue; }
+                if (!b) { Collapser::setLane(node, i, nullptr, CLRT_INVALID); continue; }
+                if (top.kind[i] == kLeaf) {
+                    Collapser::setLane(node, i, b, leafEntry(leafBlock[kWidth * t + size_t(i)], b->count));
+                    continue;
+                }
                 const bool isTop = top.kind[i] == kTop;
                 const int child = isTop ? int(base) + top.ref[i] : tasks_[size_t(top.ref[i])].node;
                 lanesNeed = std::max(lanesNeed, isTop ? need[size_t(top.ref[i])] : tasks_[size_t(top.ref[i])].need);
-                Collapser::setLane(node, i, b, child, 0);
+                Collapser::setLane(node, i, b, child);
             }
             need[t] = lanesNeed + (top.k - 1);
             nodes[base + t] = node;
@@ -283,15 +285,15 @@ private:
     size_t topBlocks_ = 0;
 };
 
-// The 4-wide nodes of `bvh` appended to `nodes` (child indices of interior lanes are indices of
+// The 8-wide nodes of `bvh` appended to `nodes` (child indices of interior lanes are indices of
 // `nodes`, leaf lanes index blocks), and its leaf blocks' primitives into blocks; *maxStack and
 // *depth its figures. A tree of splitNodes binary nodes or more is collapsed by SplitCollapse.
 // False for an empty tree (then one empty node is appended).
-bool collapseNodes(const Bvh& bvh, HostArray<dev::Bvh4Node>& nodes, BlockPrims& blocks, int* maxStack, int* depth,
+bool collapseNodes(const Bvh& bvh, HostArray<dev::Bvh8Node>& nodes, BlockPrims& blocks, int* maxStack, int* depth,
                    size_t spareNodes, size_t splitNodes) {
     if (bvh.primRefs.empty() || bvh.nodes.empty()) {
-        dev::Bvh4Node empty;
-        for (int i = 0; i < 4; ++i) Collapser::setLane(empty, i, nullptr, CLRT_INVALID, 0);
+        dev::Bvh8Node empty{};
+        for (int i = 0; i < kWidth; ++i) Collapser::setLane(empty, i, nullptr, CLRT_INVALID);
         nodes.push_back(empty);
         *maxStack = 0;
         *depth = 1;
@@ -312,9 +314,9 @@ bool collapseNodes(const Bvh& bvh, HostArray<dev::Bvh4Node>& nodes, BlockPrims& 
         *maxStack = c.emit(0, 1).second;
         *depth = c.depth;
     }
-    if (*maxStack > CLRT_BVH4_STACK_SIZE)
-        throw std::logic_error("collapseBvh4: traversal stack need " + std::to_string(*maxStack) +
-                               " exceeds CLRT_BVH4_STACK_SIZE");
+    if (*maxStack > CLRT_BVH8_STACK_SIZE)
+        throw std::logic_error("collapseBvh8: traversal stack need " + std::to_string(*maxStack) +
+                               " exceeds CLRT_BVH8_STACK_SIZE");
     return true;
 }
 
@@ -323,14 +325,14 @@ constexpr size_t kBlocksPerTask = 16384;  // leaf blocks per parallelFor item (2
 // The leaf blocks from their primitives, moved by primOffset, appended to `leaves` (vertices zero
 // until setLeafTriangles). Written on all threads: most of the time is the kernel zeroing the fresh
 // pages each thread touches first (resize leaves them unwritten, util/huge_pages.h).
-void makeLeaves(const BlockPrims& blockPrims, int primOffset, HostArray<dev::Bvh4Leaf>& leaves) {
+void makeLeaves(const BlockPrims& blockPrims, int primOffset, HostArray<dev::LeafBlock>& leaves) {
     reserveMore(leaves, blockPrims.size());
     const size_t first = leaves.size(), count = blockPrims.size();
     leaves.resize(first + count);
     parallelFor((count + kBlocksPerTask - 1) / kBlocksPerTask, [&](size_t task) {
         const size_t end = std::min(count, (task + 1) * kBlocksPerTask);
         for (size_t b = task * kBlocksPerTask; b < end; ++b) {
-            dev::Bvh4Leaf block{};
+            dev::LeafBlock block{};
             block.prim = blockPrims[b];
             int* prim = &block.prim.x;
             for (int i = 0; i < 4; ++i)
@@ -342,15 +344,15 @@ void makeLeaves(const BlockPrims& blockPrims, int primOffset, HostArray<dev::Bvh
 
 }  // namespace
 
-Bvh4 collapseBvh4(const Bvh& bvh, size_t splitNodes) {
-    Bvh4 r;
+Bvh8 collapseBvh8(const Bvh& bvh, size_t splitNodes) {
+    Bvh8 r;
     BlockPrims blockPrims;
     if (collapseNodes(bvh, r.nodes, blockPrims, &r.maxStack, &r.depth, 0, splitNodes)) makeLeaves(blockPrims, 0, r.leaves);
     return r;
 }
 
-Bvh4 collapseBvh4(Bvh&& bvh) {
-    Bvh4 r;
+Bvh8 collapseBvh8(Bvh&& bvh) {
+    Bvh8 r;
     BlockPrims blockPrims;
     const bool any = collapseNodes(bvh, r.nodes, blockPrims, &r.maxStack, &r.depth, 0, kCollapseSplitNodes);
     bvh = Bvh{};  // freed before the leaf blocks are allocated
@@ -358,30 +360,34 @@ Bvh4 collapseBvh4(Bvh&& bvh) {
     return r;
 }
 
-int appendBvh4(Bvh&& bvh, int primOffset, Bvh4& into, int* maxStack, size_t spareNodes) {
+int appendBvh8(Bvh&& bvh, int primOffset, Bvh8& into, int* maxStack, size_t spareNodes) {
     const size_t root = into.nodes.size(), leafOffset = into.leaves.size();
     BlockPrims blockPrims;
     int stack = 0, depth = 0;
     const bool any = collapseNodes(bvh, into.nodes, blockPrims, &stack, &depth, spareNodes, kCollapseSplitNodes);
     bvh = Bvh{};  // freed before the leaf blocks are allocated
+    if (leafOffset + blockPrims.size() > size_t(CLRT_BVH_MAX_PRIMS))
+        throw std::runtime_error("scene has more than " + std::to_string(CLRT_BVH_MAX_PRIMS) +
+                                 " leaf blocks (the BVH's limit)");
     for (size_t n = root; n < into.nodes.size(); ++n) {
-        dev::Bvh4Node& node = into.nodes[n];
-        int* child = &node.child.x;
-        const int* count = &node.count.x;
-        for (int i = 0; i < 4; ++i)
-            if (child[i] != CLRT_INVALID && count[i] > 0) child[i] += int(leafOffset);
+        int* entry = &into.nodes[n].entry[0].x;
+        for (int i = 0; i < kWidth; ++i)
+            if (entry[i] < 0 && entry[i] != CLRT_INVALID) {  // a leaf: ~(firstBlock << 4 | count)
+                const int packed = ~entry[i];
+                entry[i] = leafEntry((packed >> 4) + int(leafOffset), packed & 15);
+            }
     }
     if (any) makeLeaves(blockPrims, primOffset, into.leaves);
     if (maxStack) *maxStack = stack;
     return int(root);
 }
 
-void setLeafTriangles(Bvh4& b4, const dev::Triangle* tris, int numTriangles, size_t firstLeaf) {
+void setLeafTriangles(Bvh8& b4, const dev::Triangle* tris, int numTriangles, size_t firstLeaf) {
     const size_t count = b4.leaves.size() - std::min(firstLeaf, b4.leaves.size());
     parallelFor((count + kBlocksPerTask - 1) / kBlocksPerTask, [&](size_t task) {
         const size_t end = firstLeaf + std::min(count, (task + 1) * kBlocksPerTask);
         for (size_t l = firstLeaf + task * kBlocksPerTask; l < end; ++l) {
-            dev::Bvh4Leaf& block = b4.leaves[l];
+            dev::LeafBlock& block = b4.leaves[l];
             const int* prim = &block.prim.x;
             for (int i = 0; i < 4; ++i) {
                 if (prim[i] < 0 || prim[i] >= numTriangles) continue;

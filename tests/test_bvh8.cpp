@@ -1,4 +1,4 @@
-// Tests for the binary -> 4-wide BVH collapse (src/bvh/bvh4.cpp) and the device's 4-wide traversal
+// Tests for the binary -> 8-wide BVH collapse (src/bvh/bvh8.cpp) and the device's 8-wide traversal
 // (Bvh_Traverse in cl_kernels/intersect.cl): structure of the collapsed tree (every primitive in
 // exactly one leaf lane, lanes inside their parent, empty lanes never hit), the traversal stack bound
 // the host computes (a host replica of the kernel's traversal never exceeds it; the kernel compiled
@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "bvh/bvh.h"
-#include "bvh/bvh4.h"
+#include "bvh/bvh8.h"
 #include "bvh/host_intersect.h"
 #include "cl/check.h"
 #include "cl/kernel_args.h"
@@ -39,15 +39,22 @@ std::vector<Aabb> triBoxes(const std::vector<Tri>& tris) {
     return boxes;
 }
 
-float lane(const dev::float4& v, int i) { return (&v.x)[i]; }
 int lane(const dev::int4& v, int i) { return (&v.x)[i]; }
 
-// Walks the 4-wide tree from the root: every node reached once, every leaf block owned by one leaf
+// Lane i's box in node nd (bvh8.h's lanePlane).
+Aabb laneBox(const dev::Bvh8Node& nd, int i) {
+    Aabb box;
+    box.min = Vec3(lanePlane(nd, 0, i), lanePlane(nd, 2, i), lanePlane(nd, 4, i));
+    box.max = Vec3(lanePlane(nd, 1, i), lanePlane(nd, 3, i), lanePlane(nd, 5, i));
+    return box;
+}
+
+// Walks the 8-wide tree from the root: every node reached once, every leaf block owned by one leaf
 // lane, every primitive in exactly one leaf lane's blocks (and lanes past a leaf's end empty), every lane's box inside the box its parent lane gave, empty lanes marked
 // and last, the other lanes ordered by area, largest first (the order shadow rays visit them in).
-void checkStructure4(const Bvh& bin, const Bvh4& b4, const std::vector<Aabb>& boxes) {
+void checkStructure8(const Bvh& bin, const Bvh8& b8, const std::vector<Aabb>& boxes) {
     const int n = int(bin.primRefs.size());
-    std::vector<int> covered(size_t(n), 0), reached(b4.nodes.size(), 0), blockUse(b4.leaves.size(), 0);
+    std::vector<int> covered(size_t(n), 0), reached(b8.nodes.size(), 0), blockUse(b8.leaves.size(), 0);
     int badBox = 0, badEmpty = 0, badChild = 0, badOrder = 0, maxLevel = 0;
     struct Item { int node, level; Aabb box; };
     Aabb all;
@@ -57,18 +64,18 @@ void checkStructure4(const Bvh& bin, const Bvh4& b4, const std::vector<Aabb>& bo
         Item it = stack.back();
         stack.pop_back();
         REQUIRE(it.node >= 0);
-        REQUIRE(it.node < int(b4.nodes.size()));
+        REQUIRE(it.node < int(b8.nodes.size()));
         reached[size_t(it.node)]++;
         maxLevel = std::max(maxLevel, it.level);
-        const dev::Bvh4Node& nd = b4.nodes[size_t(it.node)];
+        const dev::Bvh8Node& nd = b8.nodes[size_t(it.node)];
         double lastArea = INFINITY;
         bool seenEmpty = false;
-        for (int i = 0; i < 4; ++i) {
-            const int child = lane(nd.child, i), count = lane(nd.count, i);
-            Aabb box;
-            box.min = Vec3(lane(nd.minX, i), lane(nd.minY, i), lane(nd.minZ, i));
-            box.max = Vec3(lane(nd.maxX, i), lane(nd.maxY, i), lane(nd.maxZ, i));
-            if (child != CLRT_INVALID) {
+        for (int i = 0; i < kBvhWidth; ++i) {
+            const int entry = laneEntry(nd, i);
+            const bool leaf = isLeafEntry(entry);
+            const int child = leaf ? leafFirstBlock(entry) : entry, count = leaf ? leafCount(entry) : 0;
+            const Aabb box = laneBox(nd, i);
+            if (entry != CLRT_INVALID) {
                 const double dx = double(box.max.x) - box.min.x, dy = double(box.max.y) - box.min.y,
                              dz = double(box.max.z) - box.min.z;
                 double area = dx >= 0 && dy >= 0 && dz >= 0 ? dx * dy + dy * dz + dz * dx : 0;
@@ -76,12 +83,13 @@ void checkStructure4(const Bvh& bin, const Bvh4& b4, const std::vector<Aabb>& bo
                 badOrder += seenEmpty || area > lastArea;
                 lastArea = area;
             }
-            seenEmpty = seenEmpty || child == CLRT_INVALID;
-            if (child == CLRT_INVALID) {
-                badEmpty += !(count == 0 && box.min.x == INFINITY && box.max.x == -INFINITY &&
-                              box.min.z == INFINITY && box.max.z == -INFINITY);
+            seenEmpty = seenEmpty || entry == CLRT_INVALID;
+            if (entry == CLRT_INVALID) {
+                badEmpty += !(box.min.x == INFINITY && box.max.x == -INFINITY && box.min.y == INFINITY &&
+                              box.max.y == -INFINITY && box.min.z == INFINITY && box.max.z == -INFINITY);
                 continue;
             }
+            if (entry < 0 && !leaf) { ++badChild; continue; }  // an instance's form, in a tree without them
             const bool valid = box.valid();
             if (valid && it.box.valid() &&
                 !(it.box.min.x <= box.min.x && it.box.min.y <= box.min.y && it.box.min.z <= box.min.z &&
@@ -89,9 +97,9 @@ void checkStructure4(const Bvh& bin, const Bvh4& b4, const std::vector<Aabb>& bo
                 ++badBox;
             if (count > 0) {
                 const int blocks = (count + 3) / 4;
-                if (child < 0 || child + blocks > int(b4.leaves.size())) { ++badChild; continue; }
+                if (child < 0 || child + blocks > int(b8.leaves.size())) { ++badChild; continue; }
                 for (int k = 0; k < 4 * blocks; ++k) {
-                    const int ref = lane(b4.leaves[size_t(child + k / 4)].prim, k % 4);
+                    const int ref = lane(b8.leaves[size_t(child + k / 4)].prim, k % 4);
                     if (k % 4 == 0) blockUse[size_t(child + k / 4)]++;
                     if (k >= count) { badEmpty += ref != CLRT_INVALID; continue; }
                     if (ref < 0 || ref >= n) { ++badChild; continue; }
@@ -118,28 +126,28 @@ void checkStructure4(const Bvh& bin, const Bvh4& b4, const std::vector<Aabb>& bo
     CHECK(badEmpty == 0);
     CHECK(badChild == 0);
     CHECK(badOrder == 0);
-    CHECK(maxLevel == b4.depth);
-    CHECK(b4.depth <= bin.depth);
-    CHECK(b4.maxStack <= CLRT_BVH4_STACK_SIZE);
+    CHECK(maxLevel == b8.depth);
+    CHECK(b8.depth <= bin.depth);
+    CHECK(b8.maxStack <= CLRT_BVH8_STACK_SIZE);
     // Collapsing opens about one binary level in two.
-    if (n > 1000) CHECK(b4.nodes.size() < bin.nodes.size() / 2);
+    if (n > 1000) CHECK(b8.nodes.size() < bin.nodes.size() / 2);
 }
 
 // Host replica of the kernel's traversal (same near/far plane choice, fmin/fmax NaN handling, sorted
 // pushes, culling on pop). Returns the closest primitive (-1: none) and the deepest stack it used.
-struct Trace4 { int prim = -1; float t = INFINITY; int maxSp = 0; };
-Trace4 traverse4(const Bvh& bin, const Bvh4& b4, const std::vector<Tri>& tris, Vec3 o, Vec3 d, float tMax) {
-    Trace4 r;
+struct Trace8 { int prim = -1; float t = INFINITY; int maxSp = 0; };
+Trace8 traverse8(const Bvh& bin, const Bvh8& b8, const std::vector<Tri>& tris, Vec3 o, Vec3 d, float tMax) {
+    Trace8 r;
     Vec3 inv(1 / d.x, 1 / d.y, 1 / d.z);
     std::vector<std::pair<float, int>> stack;
     int entry = 0;
     for (;;) {
         if (entry >= 0) {
-            const dev::Bvh4Node& nd = b4.nodes[size_t(entry)];
+            const dev::Bvh8Node& nd = b8.nodes[size_t(entry)];
             std::vector<std::pair<float, int>> hits;
-            for (int i = 0; i < 4; ++i) {
-                float lo[3] = {lane(nd.minX, i), lane(nd.minY, i), lane(nd.minZ, i)};
-                float hi[3] = {lane(nd.maxX, i), lane(nd.maxY, i), lane(nd.maxZ, i)};
+            for (int i = 0; i < kBvhWidth; ++i) {
+                const float lo[3] = {lanePlane(nd, 0, i), lanePlane(nd, 2, i), lanePlane(nd, 4, i)};
+                const float hi[3] = {lanePlane(nd, 1, i), lanePlane(nd, 3, i), lanePlane(nd, 5, i)};
                 float tEnter = 0, tExit = INFINITY;
                 for (int a = 0; a < 3; ++a) {
                     const bool neg = std::signbit(inv[a]);
@@ -150,8 +158,7 @@ Trace4 traverse4(const Bvh& bin, const Bvh4& b4, const std::vector<Tri>& tris, V
                 }
                 tExit = std::fmin(tExit * 1.0000004f, tMax * 1.0000004f);  // CLRT_SLAB_WIDEN, both
                 if (!(tEnter <= tExit)) continue;
-                const int child = lane(nd.child, i), count = lane(nd.count, i);
-                hits.push_back({std::fmin(tEnter, FLT_MAX), count > 0 ? ~((child << 4) | count) : child});
+                hits.push_back({std::fmin(tEnter, FLT_MAX), laneEntry(nd, i)});
             }
             if (!hits.empty()) {
                 std::stable_sort(hits.begin(), hits.end(),
@@ -164,7 +171,7 @@ Trace4 traverse4(const Bvh& bin, const Bvh4& b4, const std::vector<Tri>& tris, V
         } else {
             const int first = (~entry) >> 4, count = (~entry) & 15;
             for (int k = 0; k < count; ++k) {
-                const int p = lane(b4.leaves[size_t(first + k / 4)].prim, k % 4);
+                const int p = lane(b8.leaves[size_t(first + k / 4)].prim, k % 4);
                 float t, b1, b2;
                 if (intersectTriangleWatertight(o, d, tris[size_t(p)][0], tris[size_t(p)][1], tris[size_t(p)][2],
                                                 tMax, t, b1, b2)) {
@@ -212,29 +219,30 @@ std::vector<Tri> towerScene(int levels) {
 
 }  // namespace
 
-TEST_CASE("BVH4 of an empty and of a one-primitive input", "[bvh4]") {
-    Bvh4 empty = collapseBvh4(buildBvh(std::vector<Aabb>{}));
+TEST_CASE("BVH8 of an empty and of a one-primitive input", "[bvh8]") {
+    Bvh8 empty = collapseBvh8(buildBvh(std::vector<Aabb>{}));
     REQUIRE(empty.nodes.size() == 1);
-    CHECK(empty.nodes[0].child.x == CLRT_INVALID);
-    CHECK(empty.nodes[0].minX.x == INFINITY);
-    CHECK(empty.nodes[0].maxX.w == -INFINITY);
+    for (int i = 0; i < kBvhWidth; ++i) {
+        CHECK(laneEntry(empty.nodes[0], i) == CLRT_INVALID);
+        CHECK(lanePlane(empty.nodes[0], 0, i) == INFINITY);
+        CHECK(lanePlane(empty.nodes[0], 5, i) == -INFINITY);
+    }
     CHECK(empty.maxStack == 0);
 
     Aabb a;
     a.grow(Vec3(1, 2, 3));
     a.grow(Vec3(2, 3, 4));
     Bvh one = buildBvh({a});
-    Bvh4 one4 = collapseBvh4(one);
-    REQUIRE(one4.nodes.size() == 1);
-    CHECK(one4.nodes[0].count.x == 1);
-    CHECK(one4.nodes[0].child.x == 0);
-    CHECK(one4.nodes[0].minY.x == 2.f);
-    CHECK(one4.nodes[0].maxZ.x == 4.f);
-    CHECK(one4.nodes[0].child.y == CLRT_INVALID);
-    CHECK(one4.maxStack == 0);
+    Bvh8 one8 = collapseBvh8(one);
+    REQUIRE(one8.nodes.size() == 1);
+    CHECK(laneEntry(one8.nodes[0], 0) == leafEntry(0, 1));
+    CHECK(lanePlane(one8.nodes[0], 2, 0) == 2.f);  // minY
+    CHECK(lanePlane(one8.nodes[0], 5, 0) == 4.f);  // maxZ
+    for (int i = 1; i < kBvhWidth; ++i) CHECK(laneEntry(one8.nodes[0], i) == CLRT_INVALID);
+    CHECK(one8.maxStack == 0);
 }
 
-TEST_CASE("BVH4 structure on random, degenerate and deep trees", "[bvh4]") {
+TEST_CASE("BVH8 structure on random, degenerate and deep trees", "[bvh8]") {
     std::mt19937 rng(5);
     std::uniform_real_distribution<float> pos(-10, 10), unit(-1, 1);
     SECTION("random triangles, leaves of 1, 4 and 15") {
@@ -249,9 +257,9 @@ TEST_CASE("BVH4 structure on random, degenerate and deep trees", "[bvh4]") {
             o.maxLeafSize = leaf;
             auto boxes = triBoxes(tris);
             Bvh bin = buildBvh(boxes, o);
-            Bvh4 b4 = collapseBvh4(bin);
+            Bvh8 b8 = collapseBvh8(bin);
             INFO("maxLeafSize " << leaf);
-            checkStructure4(bin, b4, boxes);
+            checkStructure8(bin, b8, boxes);
         }
     }
     SECTION("identical and non-finite boxes") {
@@ -262,7 +270,7 @@ TEST_CASE("BVH4 structure on random, degenerate and deep trees", "[bvh4]") {
             if (i % 7 == 0) boxes[i].min.x = NAN;
         }
         Bvh bin = buildBvh(boxes);
-        checkStructure4(bin, collapseBvh4(bin), boxes);
+        checkStructure8(bin, collapseBvh8(bin), boxes);
     }
     SECTION("the builder's deepest trees stay within the default stack") {
         // Exponentially spaced primitives: the binary builder's depth cap is what keeps this chain
@@ -278,35 +286,37 @@ TEST_CASE("BVH4 structure on random, degenerate and deep trees", "[bvh4]") {
         BvhBuildOptions o;
         o.maxLeafSize = 1;
         Bvh bin = buildBvh(boxes, o);
-        Bvh4 b4 = collapseBvh4(bin);
-        checkStructure4(bin, b4, boxes);
-        std::printf("exponential input: binary depth %d, 4-wide depth %d, stack need %d (default %d)\n", bin.depth,
-                    b4.depth, b4.maxStack, CLRT_BVH4_STACK_SIZE);
+        Bvh8 b8 = collapseBvh8(bin);
+        checkStructure8(bin, b8, boxes);
+        std::printf("exponential input: binary depth %d, 8-wide depth %d, stack need %d (default %d)\n", bin.depth,
+                    b8.depth, b8.maxStack, CLRT_BVH8_STACK_SIZE);
     }
 }
 
-// Walks two 4-wide trees from their roots in lane order: the same boxes (bit for bit), counts and leaf
+// Walks two 8-wide trees from their roots in lane order: the same boxes (bit for bit), counts and leaf
 // primitives at every node, wherever each tree keeps its nodes and blocks. Returns the nodes compared.
-size_t sameTree4(const Bvh4& a, int na, const Bvh4& b, int nb) {
-    const dev::Bvh4Node &x = a.nodes[size_t(na)], &y = b.nodes[size_t(nb)];
-    REQUIRE(std::memcmp(&x.minX, &y.minX, 6 * sizeof(dev::float4)) == 0);
+size_t sameTree8(const Bvh8& a, int na, const Bvh8& b, int nb) {
+    const dev::Bvh8Node &x = a.nodes[size_t(na)], &y = b.nodes[size_t(nb)];
+    REQUIRE(std::memcmp(&x.planes, &y.planes, sizeof x.planes) == 0);
     size_t compared = 1;
-    for (int i = 0; i < 4; ++i) {
-        const int cx = lane(x.child, i), cy = lane(y.child, i), count = lane(x.count, i);
-        REQUIRE(count == lane(y.count, i));
-        REQUIRE((cx == CLRT_INVALID) == (cy == CLRT_INVALID));
-        if (cx == CLRT_INVALID) continue;
-        if (count == 0) {
-            compared += sameTree4(a, cx, b, cy);
+    for (int i = 0; i < kBvhWidth; ++i) {
+        const int ex = laneEntry(x, i), ey = laneEntry(y, i);
+        REQUIRE((ex == CLRT_INVALID) == (ey == CLRT_INVALID));
+        if (ex == CLRT_INVALID) continue;
+        REQUIRE(isLeafEntry(ex) == isLeafEntry(ey));
+        if (!isLeafEntry(ex)) {
+            compared += sameTree8(a, ex, b, ey);
             continue;
         }
+        const int count = leafCount(ex), cx = leafFirstBlock(ex), cy = leafFirstBlock(ey);
+        REQUIRE(count == leafCount(ey));
         for (int k = 0; k < (count + 3) / 4; ++k)
             REQUIRE(std::memcmp(&a.leaves[size_t(cx + k)].prim, &b.leaves[size_t(cy + k)].prim, sizeof(dev::int4)) == 0);
     }
     return compared;
 }
 
-TEST_CASE("BVH4 of a big tree, split over threads or in one pass: the same tree", "[bvh4]") {
+TEST_CASE("BVH8 of a big tree, split over threads or in one pass: the same tree", "[bvh8]") {
     std::mt19937 rng(11);
     std::uniform_real_distribution<float> pos(-10, 10), unit(-1, 1);
     std::vector<Tri> tris;
@@ -316,26 +326,26 @@ TEST_CASE("BVH4 of a big tree, split over threads or in one pass: the same tree"
     }
     const auto boxes = triBoxes(tris);
     const Bvh bin = buildBvh(boxes);
-    const Bvh4 onePass = collapseBvh4(bin, SIZE_MAX);
+    const Bvh8 onePass = collapseBvh8(bin, SIZE_MAX);
     for (size_t split : {size_t(1), size_t(1000), kCollapseSplitNodes}) {
         INFO("splitNodes " << split);
-        const Bvh4 b4 = collapseBvh4(bin, split);
-        checkStructure4(bin, b4, boxes);
-        REQUIRE(b4.nodes.size() == onePass.nodes.size());
-        REQUIRE(b4.leaves.size() == onePass.leaves.size());
-        CHECK(sameTree4(b4, 0, onePass, 0) == onePass.nodes.size());
-        CHECK(b4.maxStack == onePass.maxStack);
-        CHECK(b4.depth == onePass.depth);
+        const Bvh8 b8 = collapseBvh8(bin, split);
+        checkStructure8(bin, b8, boxes);
+        REQUIRE(b8.nodes.size() == onePass.nodes.size());
+        REQUIRE(b8.leaves.size() == onePass.leaves.size());
+        CHECK(sameTree8(b8, 0, onePass, 0) == onePass.nodes.size());
+        CHECK(b8.maxStack == onePass.maxStack);
+        CHECK(b8.depth == onePass.depth);
         if (split < bin.nodes.size())  // split: laid out otherwise (top first), else byte for byte the same
-            CHECK(std::memcmp(b4.nodes.data(), onePass.nodes.data(), b4.nodes.size() * sizeof(dev::Bvh4Node)) != 0);
+            CHECK(std::memcmp(b8.nodes.data(), onePass.nodes.data(), b8.nodes.size() * sizeof(dev::Bvh8Node)) != 0);
         else
-            CHECK(std::memcmp(b4.nodes.data(), onePass.nodes.data(), b4.nodes.size() * sizeof(dev::Bvh4Node)) == 0);
+            CHECK(std::memcmp(b8.nodes.data(), onePass.nodes.data(), b8.nodes.size() * sizeof(dev::Bvh8Node)) == 0);
     }
 }
 
-TEST_CASE("BVH4 appended after another tree equals its own collapse moved by the arrays before it", "[bvh4]") {
-    // appendBvh4 (the two-level BVH's bottom levels, flatten_instances.cpp) writes a tree into arrays
-    // that already hold one: node for node it must be collapseBvh4's, interior children moved by the
+TEST_CASE("BVH8 appended after another tree equals its own collapse moved by the arrays before it", "[bvh8]") {
+    // appendBvh8 (the two-level BVH's bottom levels, flatten_instances.cpp) writes a tree into arrays
+    // that already hold one: node for node it must be collapseBvh8's, interior children moved by the
     // nodes before it, leaf children by the blocks before it, primitives by primOffset.
     std::mt19937 rng(11);
     std::uniform_real_distribution<float> pos(-10, 10), unit(-1, 1);
@@ -348,30 +358,31 @@ TEST_CASE("BVH4 appended after another tree equals its own collapse moved by the
         return triBoxes(tris);
     };
     const std::vector<Aabb> first = soup(3000), second = soup(5000);
-    Bvh4 into = collapseBvh4(buildBvh(first));
-    const Bvh4 before = into;
-    const Bvh4 alone = collapseBvh4(buildBvh(second));
+    Bvh8 into = collapseBvh8(buildBvh(first));
+    const Bvh8 before = into;
+    const Bvh8 alone = collapseBvh8(buildBvh(second));
     const int primOffset = 3000;
     int stack = -1;
-    const int root = appendBvh4(buildBvh(second), primOffset, into, &stack);
+    const int root = appendBvh8(buildBvh(second), primOffset, into, &stack);
     REQUIRE(root == int(before.nodes.size()));
     CHECK(stack == alone.maxStack);
     CHECK((into.maxStack == before.maxStack && into.depth == before.depth));
     REQUIRE(into.nodes.size() == before.nodes.size() + alone.nodes.size());
     REQUIRE(into.leaves.size() == before.leaves.size() + alone.leaves.size());
-    for (size_t n = 0; n < before.nodes.size(); ++n) CHECK(std::memcmp(&into.nodes[n], &before.nodes[n], sizeof(dev::Bvh4Node)) == 0);
-    for (size_t l = 0; l < before.leaves.size(); ++l) CHECK(std::memcmp(&into.leaves[l], &before.leaves[l], sizeof(dev::Bvh4Leaf)) == 0);
+    for (size_t n = 0; n < before.nodes.size(); ++n) CHECK(std::memcmp(&into.nodes[n], &before.nodes[n], sizeof(dev::Bvh8Node)) == 0);
+    for (size_t l = 0; l < before.leaves.size(); ++l) CHECK(std::memcmp(&into.leaves[l], &before.leaves[l], sizeof(dev::LeafBlock)) == 0);
     int mismatches = 0;
     for (size_t n = 0; n < alone.nodes.size(); ++n) {
-        dev::Bvh4Node want = alone.nodes[n];
-        int* child = &want.child.x;
-        const int* count = &want.count.x;
-        for (int i = 0; i < 4; ++i)
-            if (child[i] != CLRT_INVALID) child[i] += count[i] > 0 ? int(before.leaves.size()) : root;
+        dev::Bvh8Node want = alone.nodes[n];
+        for (int i = 0; i < kBvhWidth; ++i) {
+            int& e = laneEntry(want, i);
+            if (isLeafEntry(e)) e = leafEntry(leafFirstBlock(e) + int(before.leaves.size()), leafCount(e));
+            else if (e != CLRT_INVALID) e += root;
+        }
         mismatches += std::memcmp(&into.nodes[size_t(root) + n], &want, sizeof want) != 0;
     }
     for (size_t l = 0; l < alone.leaves.size(); ++l) {
-        dev::Bvh4Leaf want = alone.leaves[l];
+        dev::LeafBlock want = alone.leaves[l];
         int* prim = &want.prim.x;
         for (int i = 0; i < 4; ++i)
             if (prim[i] >= 0) prim[i] += primOffset;
@@ -380,38 +391,38 @@ TEST_CASE("BVH4 appended after another tree equals its own collapse moved by the
     CHECK(mismatches == 0);
     // An empty tree appends one empty node and no block.
     const size_t nodes = into.nodes.size(), leaves = into.leaves.size();
-    CHECK(appendBvh4(buildBvh(std::vector<Aabb>{}), 0, into) == int(nodes));
+    CHECK(appendBvh8(buildBvh(std::vector<Aabb>{}), 0, into) == int(nodes));
     CHECK(into.nodes.size() == nodes + 1);
     CHECK(into.leaves.size() == leaves);
-    CHECK(into.nodes.back().child.x == CLRT_INVALID);
+    CHECK(laneEntry(into.nodes.back(), 0) == CLRT_INVALID);
 }
 
-TEST_CASE("BVH4 leaf packing limits are enforced", "[bvh4]") {
+TEST_CASE("BVH8 leaf packing limits are enforced", "[bvh8]") {
     Bvh bin;
     BvhNode leaf{};
     leaf.boundsMin = {0, 0, 0, 0};
     leaf.boundsMax = {1, 1, 1, 0};
     leaf.first = 0;
-    leaf.count = CLRT_BVH4_MAX_LEAF + 1;
+    leaf.count = CLRT_BVH_MAX_LEAF + 1;
     bin.nodes.push_back(leaf);
     bin.primRefs.assign(size_t(leaf.count), 0);
-    CHECK_THROWS_AS(collapseBvh4(bin), std::logic_error);
+    CHECK_THROWS_AS(collapseBvh8(bin), std::logic_error);
     // The builder never makes such a leaf, whatever it is asked for.
     std::vector<Aabb> boxes(100);
     for (Aabb& b : boxes) { b.grow(Vec3(0)); b.grow(Vec3(1)); }
     BvhBuildOptions o;
     o.maxLeafSize = 64;
-    CHECK_NOTHROW(collapseBvh4(buildBvh(boxes, o)));
+    CHECK_NOTHROW(collapseBvh8(buildBvh(boxes, o)));
 }
 
-TEST_CASE("BVH4 traversal stack: the host bound holds, and the kernel with exactly that stack is exact",
-          "[bvh4][cl]") {
+TEST_CASE("BVH8 traversal stack: the host bound holds, and the kernel with exactly that stack is exact",
+          "[bvh8][cl]") {
     std::vector<Tri> tris = towerScene(60);
     BvhBuildOptions o;
     o.maxLeafSize = 1;
     Bvh bin = buildBvh(triBoxes(tris), o);
-    Bvh4 b4 = collapseBvh4(bin);
-    checkStructure4(bin, b4, triBoxes(tris));
+    Bvh8 b8 = collapseBvh8(bin);
+    checkStructure8(bin, b8, triBoxes(tris));
 
     std::mt19937 rng(3);
     std::uniform_real_distribution<float> unit(-1, 1);
@@ -424,23 +435,23 @@ TEST_CASE("BVH4 traversal stack: the host bound holds, and the kernel with exact
         org[i] = i % 4 ? Vec3(unit(rng), unit(rng), unit(rng)) * 1e-6f : Vec3(unit(rng), unit(rng), unit(rng)) * 1e6f;
         dir[i] = i % 4 ? normalize(Vec3(unit(rng) * 0.3f, unit(rng) * 0.3f, 1)) : normalize(-org[i]);
         rays[size_t(i)] = {{org[i].x, org[i].y, org[i].z, 0}, {dir[i].x, dir[i].y, dir[i].z, INFINITY}};
-        Trace4 t = traverse4(bin, b4, tris, org[i], dir[i], INFINITY);
+        Trace8 t = traverse8(bin, b8, tris, org[i], dir[i], INFINITY);
         maxSp = std::max(maxSp, t.maxSp);
         float tBest;
         const int best = bruteClosest(tris, org[i], dir[i], &tBest);
         // Compared by distance: from 1e6 away, tiny triangles of the tower tie at one float t.
         hostMismatch += ((t.prim < 0) != (best < 0)) || (best >= 0 && t.t != tBest);
     }
-    std::printf("tower: 4-wide depth %d, stack need %d, deepest stack used by the host replica %d\n", b4.depth,
-                b4.maxStack, maxSp);
+    std::printf("tower: 8-wide depth %d, stack need %d, deepest stack used by the host replica %d\n", b8.depth,
+                b8.maxStack, maxSp);
     CHECK(hostMismatch == 0);
-    CHECK(maxSp <= b4.maxStack);
-    CHECK(maxSp >= b4.maxStack / 2);  // the scene does exercise the stack
+    CHECK(maxSp <= b8.maxStack);
+    CHECK(maxSp >= b8.maxStack / 2);  // the scene does exercise the stack
 
     DeviceContext& dc = testContext();
     auto sources = loadKernelSources(KernelProgram::Intersect);
     cl::Program program = buildProgramFromSources(
-        dc, sources, {"-DCLRT_BVH4_STACK_SIZE=" + std::to_string(b4.maxStack)});
+        dc, sources, {"-DCLRT_BVH8_STACK_SIZE=" + std::to_string(b8.maxStack)});
     KernelArgs closest(program, "intersect_closest");
     std::vector<dev::Triangle> devTris;
     for (const Tri& t : tris) {
@@ -454,8 +465,8 @@ TEST_CASE("BVH4 traversal stack: the host bound holds, and the kernel with exact
         return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), v.data()));
     };
     // Leaf prim values index devTris directly (the renderer reorders triangles; here there is no need).
-    setLeafTriangles(b4, devTris, int(devTris.size()));
-    cl::Buffer nodes = ro(b4.nodes), leaves = ro(b4.leaves), tb = ro(devTris), sb = ro(noSpheres),
+    setLeafTriangles(b8, devTris, int(devTris.size()));
+    cl::Buffer nodes = ro(b8.nodes), leaves = ro(b8.leaves), tb = ro(devTris), sb = ro(noSpheres),
                pb = ro(noPlanes), rb = ro(rays);
     cl::Buffer hb = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(dev::Hit) * numRays));
     dev::SceneParams sp{};
@@ -476,7 +487,7 @@ TEST_CASE("BVH4 traversal stack: the host bound holds, and the kernel with exact
         // Only the rays up the tower: those fired from 1e6 away at 0.01-wide triangles are decided by
         // rounding, and the device's and host's triangle tests round differently (about 1% differ).
         if (i % 4 == 0) continue;
-        Trace4 t = traverse4(bin, b4, tris, org[i], dir[i], INFINITY);
+        Trace8 t = traverse8(bin, b8, tris, org[i], dir[i], INFINITY);
         const dev::Hit& h = hits[size_t(i)];
         devMismatch += ((h.prim < 0) != (t.prim < 0)) || (t.prim >= 0 && std::fabs(h.t - t.t) > 1e-6f * t.t);
         hitRays += t.prim >= 0;
@@ -488,18 +499,18 @@ TEST_CASE("BVH4 traversal stack: the host bound holds, and the kernel with exact
 namespace {
 
 // The device kernels' (intersect.cl) closest hits and shadow results (occluded: 1) for rays (org, dir)
-// on the tree b4 over tris (its leaf blocks filled here).
+// on the tree b8 over tris (its leaf blocks filled here).
 struct DeviceTrace {
     std::vector<dev::Hit> hits;
     std::vector<int> occluded;
 };
-DeviceTrace traceOnDevice(Bvh4 b4, const std::vector<Tri>& tris, const std::vector<Vec3>& org, const std::vector<Vec3>& dir) {
+DeviceTrace traceOnDevice(Bvh8 b8, const std::vector<Tri>& tris, const std::vector<Vec3>& org, const std::vector<Vec3>& dir) {
     std::vector<dev::Triangle> devTris;
     for (const Tri& t : tris)
         devTris.push_back({{t[0].x, t[0].y, t[0].z, 0}, {t[1].x, t[1].y, t[1].z, 0}, {t[2].x, t[2].y, t[2].z, 0}});
-    setLeafTriangles(b4, devTris, int(devTris.size()));
+    setLeafTriangles(b8, devTris, int(devTris.size()));
     if (devTris.empty()) devTris.push_back(dev::Triangle{});  // no zero-size buffers
-    if (b4.leaves.empty()) b4.leaves.push_back(dev::Bvh4Leaf{});
+    if (b8.leaves.empty()) b8.leaves.push_back(dev::LeafBlock{});
     const int n = int(org.size());
     std::vector<dev::Ray> rays(static_cast<size_t>(n));
     std::vector<dev::ShadowRay> shadows(static_cast<size_t>(n));
@@ -518,7 +529,7 @@ DeviceTrace traceOnDevice(Bvh4 b4, const std::vector<Tri>& tris, const std::vect
     std::vector<dev::Sphere> noSpheres(1);
     std::vector<dev::Plane> noPlanes(1);
     std::vector<int> queueLength{n};
-    cl::Buffer nodes = ro(b4.nodes), leaves = ro(b4.leaves), tb = ro(devTris), sb = ro(noSpheres), pb = ro(noPlanes),
+    cl::Buffer nodes = ro(b8.nodes), leaves = ro(b8.leaves), tb = ro(devTris), sb = ro(noSpheres), pb = ro(noPlanes),
                rb = ro(rays), cb = ro(queueLength);
     cl::Buffer hb = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(dev::Hit) * size_t(n)));
     cl::Buffer shb = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, sizeof(dev::ShadowRay) * size_t(n),
@@ -544,7 +555,7 @@ DeviceTrace traceOnDevice(Bvh4 b4, const std::vector<Tri>& tris, const std::vect
 }
 
 // Closest hits and shadow results of the device kernels (intersect.cl) on a BVH over tris built with
-// leaves of at most maxLeaf primitives (so leaves of several Bvh4Leaf blocks when maxLeaf > 4), compared
+// leaves of at most maxLeaf primitives (so leaves of several LeafBlock blocks when maxLeaf > 4), compared
 // with brute force over the host's watertight test. Returns the number of mismatches; *hitsOut: rays hit.
 int deviceVsBruteForce(const std::vector<Tri>& tris, const std::vector<Vec3>& org, const std::vector<Vec3>& dir,
                        int maxLeaf, int* hitsOut) {
@@ -552,10 +563,10 @@ int deviceVsBruteForce(const std::vector<Tri>& tris, const std::vector<Vec3>& or
     o.maxLeafSize = maxLeaf;
     o.traversalCost = 8;  // leaves as full as maxLeaf allows: every lane of a block, several blocks
     Bvh bin = buildBvh(triBoxes(tris), o);
-    Bvh4 b4 = collapseBvh4(bin);
+    Bvh8 b8 = collapseBvh8(bin);
     // Nearly full blocks (all four lanes used in most) in every non-trivial case with leaves of 4 or more.
-    if (maxLeaf >= 4 && tris.size() > 64) CHECK(double(tris.size()) / double(b4.leaves.size()) > 2.9);
-    const DeviceTrace dt = traceOnDevice(b4, tris, org, dir);
+    if (maxLeaf >= 4 && tris.size() > 64) CHECK(double(tris.size()) / double(b8.leaves.size()) > 2.9);
+    const DeviceTrace dt = traceOnDevice(b8, tris, org, dir);
     const int n = int(org.size());
     int mismatch = 0, hitRays = 0;
     for (int i = 0; i < n; ++i) {
@@ -573,8 +584,8 @@ int deviceVsBruteForce(const std::vector<Tri>& tris, const std::vector<Vec3>& or
 
 }  // namespace
 
-TEST_CASE("BVH4 leaf blocks on the device: empty, one triangle, coplanar grid, huge coordinates",
-          "[bvh4][cl]") {
+TEST_CASE("BVH8 leaf blocks on the device: empty, one triangle, coplanar grid, huge coordinates",
+          "[bvh8][cl]") {
     std::mt19937 rng(17);
     std::uniform_real_distribution<float> unit(-1, 1);
     std::vector<Vec3> org, dir;
@@ -641,7 +652,7 @@ TEST_CASE("BVH4 leaf blocks on the device: empty, one triangle, coplanar grid, h
 // hit (sorted pushes for closest hits, lane-order pushes for any hit; leaves of 1 make deep trees of
 // full nodes), and rays lying exactly in the planes of box faces (0 * inf = NaN in the slab test, which
 // must leave the slab unbounded, so no box in whose face a ray lies is culled).
-TEST_CASE("BVH4 traversal on the device: a triangle soup with full nodes, rays in box faces", "[bvh4][cl]") {
+TEST_CASE("BVH8 traversal on the device: a triangle soup with full nodes, rays in box faces", "[bvh8][cl]") {
     std::mt19937 rng(29);
     std::uniform_real_distribution<float> unit(-1, 1);
     int hits = 0;
@@ -705,15 +716,14 @@ TEST_CASE("BVH4 traversal on the device: a triangle soup with full nodes, rays i
             INFO("maxLeafSize " << leaf);
             BvhBuildOptions o;
             o.maxLeafSize = leaf;
-            Bvh4 b4 = collapseBvh4(buildBvh(triBoxes(cubes), o));
-            Bvh4 open = b4;
-            for (dev::Bvh4Node& nd : open.nodes)
-                for (int i = 0; i < 4; ++i) {
-                    if ((&nd.child.x)[i] == CLRT_INVALID) continue;
-                    for (dev::float4* lo : {&nd.minX, &nd.minY, &nd.minZ}) (&lo->x)[i] = -INFINITY;
-                    for (dev::float4* hi : {&nd.maxX, &nd.maxY, &nd.maxZ}) (&hi->x)[i] = INFINITY;
+            Bvh8 b8 = collapseBvh8(buildBvh(triBoxes(cubes), o));
+            Bvh8 open = b8;
+            for (dev::Bvh8Node& nd : open.nodes)
+                for (int i = 0; i < kBvhWidth; ++i) {
+                    if (laneEntry(nd, i) == CLRT_INVALID) continue;
+                    for (int p = 0; p < 6; ++p) lanePlane(nd, p, i) = p % 2 ? INFINITY : -INFINITY;
                 }
-            const DeviceTrace culled = traceOnDevice(b4, cubes, org, dir), all = traceOnDevice(open, cubes, org, dir);
+            const DeviceTrace culled = traceOnDevice(b8, cubes, org, dir), all = traceOnDevice(open, cubes, org, dir);
             int differ = 0, hit = 0, inFace = 0;
             for (size_t i = 0; i < org.size(); ++i) {
                 const dev::Hit &h = culled.hits[i], &g = all.hits[i];
