@@ -19,8 +19,6 @@ double halfArea(const BvhNode& n) {
     return dx * dy + dy * dz + dz * dx;
 }
 
-constexpr int kWidth = kBvhWidth;
-
 // The tree's leaf blocks' primitives: each binary leaf's primRefs, four to a block (the blocks are
 // made afterwards, makeLeaves).
 using BlockPrims = HostArray<dev::int4>;
@@ -44,7 +42,7 @@ struct Collapser {
     // visit in: a ray is likelier to meet an occluder in a bigger box, and finding one ends the ray
     // (veachAjar's shadow rays 1.48x faster, docs/studies/2026-12-06-classic-lanes-children.md); closest-hit
     // rays sort the lanes by entry distance, which only ties leave in lane order.
-    int lanesOf(int b, int lanes[kWidth]) const {
+    int lanesOf(int b, int lanes[kBvhWidth]) const {
         int k = 0;
         const BvhNode& nb = bin.nodes[size_t(b)];
         if (nb.count > 0) {
@@ -53,7 +51,7 @@ struct Collapser {
         }
         lanes[k++] = b + 1;
         lanes[k++] = nb.first;
-        while (k < kWidth) {
+        while (k < kBvhWidth) {
             int best = -1;
             double bestArea = -1;
             for (int i = 0; i < k; ++i) {
@@ -67,7 +65,7 @@ struct Collapser {
             lanes[best] = c + 1;
             lanes[k++] = bin.nodes[size_t(c)].first;
         }
-        double area[kWidth];
+        double area[kBvhWidth];
         for (int i = 0; i < k; ++i) {
             const double a = halfArea(bin.nodes[size_t(lanes[i])]);
             area[i] = a >= 0 ? a : 0;  // NaN (inf * 0 on a huge flat box): last, and a strict weak order
@@ -82,7 +80,7 @@ struct Collapser {
 
     // The 8-wide nodes and leaf blocks emit(b) writes (the same choices, nothing written).
     Counts countOf(int b) const {
-        int lanes[kWidth];
+        int lanes[kBvhWidth];
         const int k = lanesOf(b, lanes);
         Counts n;
         n.nodes = 1;
@@ -131,11 +129,11 @@ struct Collapser {
     std::pair<int, int> emit(int b, int level) {
         depth = std::max(depth, level);
         const int idx = nextNode++;
-        int lanes[kWidth];
+        int lanes[kBvhWidth];
         const int k = lanesOf(b, lanes);
         dev::Bvh8Node node{};
         int need = 0;
-        for (int i = 0; i < kWidth; ++i) {
+        for (int i = 0; i < kBvhWidth; ++i) {
             const BvhNode* c = i < k ? &bin.nodes[size_t(lanes[i])] : nullptr;
             if (!c) {
                 setLane(node, i, nullptr, CLRT_INVALID);
@@ -202,9 +200,9 @@ private:
     enum Kind { kLeaf, kTop, kTask };
     struct Top {
         int binary, level, k;
-        int lanes[kWidth];
-        Kind kind[kWidth];
-        int ref[kWidth];  // kTop: index in tops_; kTask: index in tasks_
+        int lanes[kBvhWidth];
+        Kind kind[kBvhWidth];
+        int ref[kBvhWidth];  // kTop: index in tops_; kTask: index in tasks_
     };
     struct Task {
         int binary, level;
@@ -222,7 +220,7 @@ private:
     int plan(int b, int level) {
         const int t = int(tops_.size());
         tops_.push_back(Top{b, level, 0, {}, {}, {}});
-        int lanes[kWidth];
+        int lanes[kBvhWidth];
         const int k = c_.lanesOf(b, lanes);
         tops_[size_t(t)].k = k;
         for (int i = 0; i < k; ++i) {
@@ -251,19 +249,19 @@ private:
     int writeTop(HostArray<dev::Bvh8Node>& nodes, BlockPrims& blocks, size_t base) {
         Collapser c{bin_, nodes.data(), blocks.data(), 0, 0};
         std::vector<int> need(tops_.size(), 0);
-        std::vector<int> leafBlock(kWidth * tops_.size(), 0);
+        std::vector<int> leafBlock(kBvhWidth * tops_.size(), 0);
         for (size_t t = 0; t < tops_.size(); ++t)  // blocks in pre-order
             for (int i = 0; i < tops_[t].k; ++i)
-                if (tops_[t].kind[i] == kLeaf) leafBlock[kWidth * t + size_t(i)] = c.emitLeaf(bin_.nodes[size_t(tops_[t].lanes[i])]);
+                if (tops_[t].kind[i] == kLeaf) leafBlock[kBvhWidth * t + size_t(i)] = c.emitLeaf(bin_.nodes[size_t(tops_[t].lanes[i])]);
         for (size_t t = tops_.size(); t-- > 0;) {
             const Top& top = tops_[t];
             dev::Bvh8Node node{};
             int lanesNeed = 0;
-            for (int i = 0; i < kWidth; ++i) {
+            for (int i = 0; i < kBvhWidth; ++i) {
                 const BvhNode* b = i < top.k ? &bin_.nodes[size_t(top.lanes[i])] : nullptr;
                 if (!b) { Collapser::setLane(node, i, nullptr, CLRT_INVALID); continue; }
                 if (top.kind[i] == kLeaf) {
-                    Collapser::setLane(node, i, b, leafEntry(leafBlock[kWidth * t + size_t(i)], b->count));
+                    Collapser::setLane(node, i, b, leafEntry(leafBlock[kBvhWidth * t + size_t(i)], b->count));
                     continue;
                 }
                 const bool isTop = top.kind[i] == kTop;
@@ -293,7 +291,7 @@ bool collapseNodes(const Bvh& bvh, HostArray<dev::Bvh8Node>& nodes, BlockPrims& 
                    size_t spareNodes, size_t splitNodes) {
     if (bvh.primRefs.empty() || bvh.nodes.empty()) {
         dev::Bvh8Node empty{};
-        for (int i = 0; i < kWidth; ++i) Collapser::setLane(empty, i, nullptr, CLRT_INVALID);
+        for (int i = 0; i < kBvhWidth; ++i) Collapser::setLane(empty, i, nullptr, CLRT_INVALID);
         nodes.push_back(empty);
         *maxStack = 0;
         *depth = 1;
@@ -371,7 +369,7 @@ int appendBvh8(Bvh&& bvh, int primOffset, Bvh8& into, int* maxStack, size_t spar
                                  " leaf blocks (the BVH's limit)");
     for (size_t n = root; n < into.nodes.size(); ++n) {
         int* entry = &into.nodes[n].entry[0].x;
-        for (int i = 0; i < kWidth; ++i)
+        for (int i = 0; i < kBvhWidth; ++i)
             if (entry[i] < 0 && entry[i] != CLRT_INVALID) {  // a leaf: ~(firstBlock << 4 | count)
                 const int packed = ~entry[i];
                 entry[i] = leafEntry((packed >> 4) + int(leafOffset), packed & 15);
