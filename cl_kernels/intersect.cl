@@ -360,7 +360,7 @@ __attribute__((always_inline)) inline int Bvh8_SlabTest(const __global Bvh8Node*
 
 /* The nh > 0 hit children of node n: returns the one to visit next and pushes the others (stack entries:
  * Bvh8Node's lane entries). One hit child (most visits) is found by branches, which let the core start
- * loading the predicted child before the slab test ends (branch-free selects lost 4–13%). Any hit
+ * loading the predicted child before the slab test ends (branch-free picks lost 4–20%). Any hit
  * (shadow rays, whose answer does not depend on the order): the first hit lane visited, the others pushed
  * in lane order, no sort. Closest hit: the hit lanes sorted by entry distance (insertion, stable: ties in
  * lane order), the nearest visited, the others pushed far first with their entry distance, so that pops
