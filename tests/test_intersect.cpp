@@ -123,9 +123,9 @@ void compareWithHost(const cl::Program& program, const RandomScene& s, bool time
         using T = typename std::decay_t<decltype(v)>::value_type;
         return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), const_cast<T*>(v.data())));
     };
-    Bvh8 b4 = collapseBvh8(s.bvh);
-    setLeafTriangles(b4, s.tris, numTris);
-    cl::Buffer nodes = ro(b4.nodes), leaves = ro(b4.leaves), tris = ro(s.tris), sph = ro(s.spheres);
+    Bvh8 b8 = collapseBvh8(s.bvh);
+    setLeafTriangles(b8, s.tris, numTris);
+    cl::Buffer nodes = ro(b8.nodes), leaves = ro(b8.leaves), tris = ro(s.tris), sph = ro(s.spheres);
     cl::Buffer rayBuf = ro(rays);
     cl::Buffer hitBuf = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(dev::Hit) * numRays));
     cl::Buffer shadowBuf = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR,

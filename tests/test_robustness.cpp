@@ -112,10 +112,10 @@ std::vector<dev::Hit> deviceClosest(const std::vector<dev::Triangle>& trisIn, co
         using T = typename std::decay_t<decltype(v)>::value_type;
         return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), (void*)v.data()));
     };
-    Bvh8 b4 = collapseBvh8(bvh);
-    setLeafTriangles(b4, trisIn, int(trisIn.size()));
-    if (b4.leaves.empty()) b4.leaves.push_back(dev::LeafBlock{});  // no zero-size buffers
-    cl::Buffer nodes = ro(b4.nodes), leaves = ro(b4.leaves), tb = ro(tris), sb = ro(sph), rb = ro(rays);
+    Bvh8 b8 = collapseBvh8(bvh);
+    setLeafTriangles(b8, trisIn, int(trisIn.size()));
+    if (b8.leaves.empty()) b8.leaves.push_back(dev::LeafBlock{});  // no zero-size buffers
+    cl::Buffer nodes = ro(b8.nodes), leaves = ro(b8.leaves), tb = ro(tris), sb = ro(sph), rb = ro(rays);
     const int n = int(rays.size());
     cl::Buffer hb = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(dev::Hit) * rays.size()));
     KernelArgs& k = intersectProgram().closest;

@@ -380,12 +380,12 @@ int appendBvh8(Bvh&& bvh, int primOffset, Bvh8& into, int* maxStack, size_t spar
     return int(root);
 }
 
-void setLeafTriangles(Bvh8& b4, const dev::Triangle* tris, int numTriangles, size_t firstLeaf) {
-    const size_t count = b4.leaves.size() - std::min(firstLeaf, b4.leaves.size());
+void setLeafTriangles(Bvh8& b8, const dev::Triangle* tris, int numTriangles, size_t firstLeaf) {
+    const size_t count = b8.leaves.size() - std::min(firstLeaf, b8.leaves.size());
     parallelFor((count + kBlocksPerTask - 1) / kBlocksPerTask, [&](size_t task) {
         const size_t end = firstLeaf + std::min(count, (task + 1) * kBlocksPerTask);
         for (size_t l = firstLeaf + task * kBlocksPerTask; l < end; ++l) {
-            dev::LeafBlock& block = b4.leaves[l];
+            dev::LeafBlock& block = b8.leaves[l];
             const int* prim = &block.prim.x;
             for (int i = 0; i < 4; ++i) {
                 if (prim[i] < 0 || prim[i] >= numTriangles) continue;

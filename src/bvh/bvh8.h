@@ -62,10 +62,10 @@ int appendBvh8(Bvh&& bvh, int primOffset, Bvh8& into, int* maxStack = nullptr, s
 
 // Copies each triangle lane's world-space vertices (prim < numTriangles) from tris into its block, for
 // the blocks from firstLeaf on.
-void setLeafTriangles(Bvh8& b4, const dev::Triangle* tris, int numTriangles, size_t firstLeaf = 0);
+void setLeafTriangles(Bvh8& b8, const dev::Triangle* tris, int numTriangles, size_t firstLeaf = 0);
 template <class Triangles>  // std::vector or HostArray
-void setLeafTriangles(Bvh8& b4, const Triangles& tris, int numTriangles, size_t firstLeaf = 0) {
-    setLeafTriangles(b4, tris.data(), numTriangles, firstLeaf);
+void setLeafTriangles(Bvh8& b8, const Triangles& tris, int numTriangles, size_t firstLeaf = 0) {
+    setLeafTriangles(b8, tris.data(), numTriangles, firstLeaf);
 }
 
 }  // namespace clrt
