@@ -18,6 +18,7 @@
 
 #include "bvh/bvh.h"
 #include "bvh/host_intersect.h"
+#include "bvh_test_inputs.h"
 
 using namespace clrt;
 
@@ -449,16 +450,8 @@ TEST_CASE("BVH structure on degenerate inputs", "[bvh]") {
         }
     }
     SECTION("exponentially spaced primitives keep the depth bounded") {
-        // Each primitive twice as far as the previous one: binned SAH peels them off one or two at
-        // a time, a chain far deeper than the device stack unless the depth cap steps in.
-        std::vector<Aabb> boxes;
-        for (int i = -120; i <= 120; ++i) {
-            float x = std::ldexp(1.f, i);
-            Aabb a;
-            a.grow(Vec3(x, 0, 0));
-            a.grow(Vec3(x, 0, 0) + Vec3(x * 1e-3f));
-            boxes.push_back(a);
-        }
+        // Each primitive twice as far as the previous one (bvh_test_inputs.h).
+        const std::vector<Aabb> boxes = test::exponentialBoxes();
         BvhBuildOptions o;
         o.maxLeafSize = 1;
         Bvh bvh = buildBvh(boxes, o);

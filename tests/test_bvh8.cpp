@@ -18,6 +18,7 @@
 #include "bvh/bvh.h"
 #include "bvh/bvh8.h"
 #include "bvh/host_intersect.h"
+#include "bvh_test_inputs.h"
 #include "cl/check.h"
 #include "cl/kernel_args.h"
 #include "test_helpers.h"
@@ -273,16 +274,9 @@ TEST_CASE("BVH8 structure on random, degenerate and deep trees", "[bvh8]") {
         checkStructure8(bin, collapseBvh8(bin), boxes);
     }
     SECTION("the builder's deepest trees stay within the default stack") {
-        // Exponentially spaced primitives: the binary builder's depth cap is what keeps this chain
-        // finite (see test_bvh.cpp); the collapsed tree's stack need must still fit.
-        std::vector<Aabb> boxes;
-        for (int i = -120; i <= 120; ++i) {
-            float x = std::ldexp(1.f, i);
-            Aabb b;
-            b.grow(Vec3(x, 0, 0));
-            b.grow(Vec3(x, 0, 0) + Vec3(x * 1e-3f));
-            boxes.push_back(b);
-        }
+        // Exponentially spaced primitives (bvh_test_inputs.h): the binary builder's depth cap is what keeps
+        // this chain finite (see test_bvh.cpp); the collapsed tree's stack need must still fit.
+        const std::vector<Aabb> boxes = exponentialBoxes();
         BvhBuildOptions o;
         o.maxLeafSize = 1;
         Bvh bin = buildBvh(boxes, o);
