@@ -17,7 +17,8 @@
 //   shadow results, as raw bytes, so that two kernel versions can be compared hit by hit (cmp).
 //   --embree-config STR: appended to Embree's device configuration, e.g. "verbose=2": Embree then prints
 //   the BVH and intersector it picked (on this machine BVH8<triangle4>, BVH8Triangle4Intersector1Moeller)
-//   and its tree's statistics (nodes, fill, SAH cost).
+//   and its tree's statistics (nodes, fill, SAH cost); the "clrt BVH" line gives clrt's tree's SAH cost counted
+//   the same way (sahEmbreeTerms).
 //   --embree-robust: Embree's scene with RTC_SCENE_FLAG_ROBUST ("robust traversal, no optimizations that
 //   reduce arithmetic accuracy ... rays shooting through edges of neighboring primitives"): Embree's mode
 //   for what clrt always does (watertight triangles). Its default mode tests triangles by Moeller-Trumbore.
@@ -35,6 +36,7 @@
 #include <thread>
 #include <vector>
 
+#include "bvh/bvh8.h"
 #include "cl/check.h"
 #include "cl/devices.h"
 #include "cl/kernel_args.h"
@@ -340,6 +342,35 @@ void secondaryRays(const DeviceScene& ds, const RaySet& camera, const std::vecto
     }
 }
 
+// The tree's SAH cost as Embree's statistics (--embree-config verbose=2) report its own: each node's box
+// area and each leaf's box area times its blocks of four, over the root's area (traversal and block test
+// costing 1 each). Returns {nodes' part, leaves' part}; a root box dominated by one huge primitive (the
+// Audi TT's ground) makes both trees' figures that primitive's.
+std::pair<double, double> sahEmbreeTerms(const Bvh8& t) {
+    auto halfArea = [](double dx, double dy, double dz) { return dx < 0 || dy < 0 || dz < 0 ? 0.0 : dx * dy + dy * dz + dz * dx; };
+    auto laneArea = [&](const dev::Bvh8Node& n, int i) {
+        return halfArea(double(lanePlane(n, 1, i)) - lanePlane(n, 0, i), double(lanePlane(n, 3, i)) - lanePlane(n, 2, i),
+                        double(lanePlane(n, 5, i)) - lanePlane(n, 4, i));
+    };
+    if (t.nodes.size() == 0) return {0, 0};
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int i = 0; i < kBvhWidth; ++i)
+        if (laneEntry(t.nodes[0], i) != CLRT_INVALID)
+            for (int a = 0; a < 3; ++a) {
+                lo[a] = std::min(lo[a], double(lanePlane(t.nodes[0], 2 * a, i)));
+                hi[a] = std::max(hi[a], double(lanePlane(t.nodes[0], 2 * a + 1, i)));
+            }
+    const double root = halfArea(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+    double nodes = 1, leaves = 0;  // the root node: area 1
+    for (const dev::Bvh8Node& n : t.nodes)
+        for (int i = 0; i < kBvhWidth; ++i) {
+            const int e = laneEntry(n, i);
+            if (e >= 0) nodes += laneArea(n, i) / root;
+            else if (isLeafEntry(e)) leaves += laneArea(n, i) / root * double((leafCount(e) + 3) / 4);
+        }
+    return {nodes, leaves};
+}
+
 // Traces `set` `runs` times on both sides and prints one table row: median Mrays/s, their ratio,
 // and how often the two agree on hit/miss and on the primitive hit.
 void compareRaySet(const RaySet& set, bool isShadow, int runs, ClrtTracer& clrt, const EmbreeTracer& embree) {
@@ -396,8 +427,11 @@ int main(int argc, char** argv) {
         std::printf("scene %s: %d triangles; clrt device: %s; Embree %d threads (BVH build %.3f s)%s\n",
                     opt.scenePath.c_str(), ds.params.numTriangles, clrt.device().name.c_str(), opt.threads,
                     embree.buildSeconds, opt.threadsGiven ? "; process pinned to that many CPUs" : "");
-        std::printf("clrt BVH: %zu 8-wide nodes, %zu leaf blocks (%.2f primitives per block)\n", ds.bvh8.nodes.size(),
-                    ds.bvh8.leaves.size(), double(ds.bvh.primitives) / double(std::max<size_t>(1, ds.bvh8.leaves.size())));
+        const auto sah = sahEmbreeTerms(ds.bvh8);
+        std::printf("clrt BVH: %zu 8-wide nodes, %zu leaf blocks (%.2f primitives per block); SAH as Embree counts it "
+                    "%.3f (nodes %.3f, leaves %.3f)\n", ds.bvh8.nodes.size(), ds.bvh8.leaves.size(),
+                    double(ds.bvh.primitives) / double(std::max<size_t>(1, ds.bvh8.leaves.size())), sah.first + sah.second,
+                    sah.first, sah.second);
         std::printf("%-8s %10s %12s %12s %8s %10s %10s\n", "rays", "count", "clrt Mray/s", "embree Mray/s", "ratio",
                     "hit agree", "prim agree");
         for (const RaySet* set : {&camera, &shadow, &diffuse}) compareRaySet(*set, set == &shadow, opt.runs, clrt, embree);
