@@ -451,27 +451,15 @@ TEST_CASE("BVH8 traversal stack: the host bound holds, and the kernel with exact
     for (const Tri& t : tris) {
         devTris.push_back({{t[0].x, t[0].y, t[0].z, 0}, {t[1].x, t[1].y, t[1].z, 0}, {t[2].x, t[2].y, t[2].z, 0}});
     }
-    std::vector<dev::Sphere> noSpheres(1);
-    std::vector<dev::Plane> noPlanes(1);
-    cl::Context& ctx = dc.context();
-    auto ro = [&](auto& v) {
-        using T = typename std::decay_t<decltype(v)>::value_type;
-        return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), v.data()));
-    };
     // Leaf prim values index devTris directly (the renderer reorders triangles; here there is no need).
     setLeafTriangles(b8, devTris, int(devTris.size()));
-    cl::Buffer nodes = ro(b8.nodes), leaves = ro(b8.leaves), tb = ro(devTris), sb = ro(noSpheres),
-               pb = ro(noPlanes), rb = ro(rays);
-    cl::Buffer hb = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(dev::Hit) * numRays));
     dev::SceneParams sp{};
     sp.numTriangles = int(tris.size());  // no spheres, no planes
-    std::vector<int> queueLength{numRays};  // the kernel reads the queue length on the device
-    cl::Buffer cb = ro(queueLength);
-    closest.set("queueCount", cb).set("scene", sp).set("nodes", nodes).set("leaves", leaves).set("tris", tb);
-    std::vector<dev::Instance> noInstances(1);
-    cl::Buffer ib = ro(noInstances);
-    closest.set("spheres", sb).set("planes", pb).set("instances", ib).set("rays", rb).set("hits", hb);
-    closest.set("hitInstances", cb);  // unused without instances
+    const IntersectScene scene = intersectScene(sp, numRays, b8.nodes, b8.leaves, devTris, std::vector<dev::Sphere>{},
+                                                std::vector<dev::Plane>{}, std::vector<dev::Instance>{});
+    cl::Buffer rb = readOnlyBuffer(rays);
+    cl::Buffer hb = CL_CPP(cl::Buffer(dc.context(), CL_MEM_READ_WRITE, sizeof(dev::Hit) * numRays));
+    scene.bind(closest).set("rays", rb).set("hits", hb).set("hitInstances", scene.queueCount);  // unused without instances
     CL_CPP(dc.queue().enqueueNDRangeKernel(closest.ready(), cl::NullRange, cl::NDRange(roundUp(size_t(numRays), 64)),
                                            cl::NDRange(64)));
     std::vector<dev::Hit> hits(numRays);
@@ -503,8 +491,6 @@ DeviceTrace traceOnDevice(Bvh8 b8, const std::vector<Tri>& tris, const std::vect
     for (const Tri& t : tris)
         devTris.push_back({{t[0].x, t[0].y, t[0].z, 0}, {t[1].x, t[1].y, t[1].z, 0}, {t[2].x, t[2].y, t[2].z, 0}});
     setLeafTriangles(b8, devTris, int(devTris.size()));
-    if (devTris.empty()) devTris.push_back(dev::Triangle{});  // no zero-size buffers
-    if (b8.leaves.empty()) b8.leaves.push_back(dev::LeafBlock{});
     const int n = int(org.size());
     std::vector<dev::Ray> rays(static_cast<size_t>(n));
     std::vector<dev::ShadowRay> shadows(static_cast<size_t>(n));
@@ -516,27 +502,17 @@ DeviceTrace traceOnDevice(Bvh8 b8, const std::vector<Tri>& tris, const std::vect
     static cl::Program program = buildProgramFromSources(dc, loadKernelSources(KernelProgram::Intersect), {});
     KernelArgs closest(program, "intersect_closest"), shadow(program, "intersect_shadow");
     cl::Context& ctx = dc.context();
-    auto ro = [&](auto& v) {
-        using T = typename std::decay_t<decltype(v)>::value_type;
-        return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), v.data()));
-    };
-    std::vector<dev::Sphere> noSpheres(1);
-    std::vector<dev::Plane> noPlanes(1);
-    std::vector<int> queueLength{n};
-    cl::Buffer nodes = ro(b8.nodes), leaves = ro(b8.leaves), tb = ro(devTris), sb = ro(noSpheres), pb = ro(noPlanes),
-               rb = ro(rays), cb = ro(queueLength);
+    dev::SceneParams sp{};
+    sp.numTriangles = int(tris.size());
+    const IntersectScene scene = intersectScene(sp, n, b8.nodes, b8.leaves, devTris, std::vector<dev::Sphere>{},
+                                                std::vector<dev::Plane>{}, std::vector<dev::Instance>{});
+    cl::Buffer rb = readOnlyBuffer(rays);
     cl::Buffer hb = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(dev::Hit) * size_t(n)));
     cl::Buffer shb = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, sizeof(dev::ShadowRay) * size_t(n),
                                        shadows.data()));
-    dev::SceneParams sp{};
-    sp.numTriangles = int(tris.size());
-    std::vector<dev::Instance> noInstances(1);
-    cl::Buffer ib = ro(noInstances);
-    for (KernelArgs* k : {&closest, &shadow})
-        k->set("queueCount", cb).set("scene", sp).set("nodes", nodes).set("leaves", leaves).set("tris", tb)
-            .set("spheres", sb).set("planes", pb).set("instances", ib);
-    closest.set("rays", rb).set("hits", hb).set("hitInstances", cb);  // hitInstances: unused without instances
-    shadow.set("raysPerPath", 1).set("shadows", shb);
+    // hitInstances: unused without instances
+    scene.bind(closest).set("rays", rb).set("hits", hb).set("hitInstances", scene.queueCount);
+    scene.bind(shadow).set("raysPerPath", 1).set("shadows", shb);
     const cl::NDRange global(roundUp(size_t(n), 64)), local(64);
     CL_CPP(dc.queue().enqueueNDRangeKernel(closest.ready(), cl::NullRange, global, local));
     CL_CPP(dc.queue().enqueueNDRangeKernel(shadow.ready(), cl::NullRange, global, local));

@@ -1,8 +1,9 @@
 // Shared helpers for tests: the OpenCL device to test on ($CLRT_TEST_DEVICE, default "cpu" = PoCL),
-// temporary directories, image metrics, and running the clrt binary.
+// the intersection kernels' scene arguments, temporary directories, image metrics, and running the clrt binary.
 #pragma once
 #include <catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -15,6 +16,7 @@
 
 #include "cl/check.h"
 #include "cl/devices.h"
+#include "cl/kernel_args.h"
 #include "cl/program.h"
 #include "flatten/device_scene.h"
 #include "image/image.h"
@@ -36,6 +38,44 @@ inline DeviceContext& testContext() {
     // freed per-thread call stack: valgrind, and "corrupted double-linked list" aborts at exit).
     static DeviceContext* dc = new DeviceContext(testDevice());
     return *dc;
+}
+
+// A read-only copy of a host array (std::vector, HostArray) on the test context; an empty array becomes one
+// zero element (OpenCL has no empty buffers).
+template <class V> cl::Buffer readOnlyBuffer(const V& v) {
+    using T = typename V::value_type;
+    static const T zero{};
+    const void* data = v.size() > 0 ? static_cast<const void*>(v.data()) : static_cast<const void*>(&zero);
+    return CL_CPP(cl::Buffer(testContext().context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
+                             sizeof(T) * std::max<size_t>(1, v.size()), const_cast<void*>(data)));
+}
+
+// The scene arguments of intersect.cl's kernels (intersect_closest, intersect_shadow) as read-only buffers:
+// the 8-wide tree, its leaf blocks, the primitives, planes, instances, and the queue length the kernels read.
+struct IntersectScene {
+    dev::SceneParams params{};
+    cl::Buffer nodes, leaves, tris, spheres, planes, instances, queueCount;
+
+    // Sets them on k (intersect_closest or intersect_shadow); its rays and outputs are the caller's.
+    KernelArgs& bind(KernelArgs& k) const {
+        return k.set("queueCount", queueCount).set("scene", params).set("nodes", nodes).set("leaves", leaves)
+            .set("tris", tris).set("spheres", spheres).set("planes", planes).set("instances", instances);
+    }
+};
+
+template <class Nodes, class Leaves, class Tris, class Spheres, class Planes, class Instances>
+IntersectScene intersectScene(const dev::SceneParams& params, int queueLength, const Nodes& nodes, const Leaves& leaves,
+                              const Tris& tris, const Spheres& spheres, const Planes& planes, const Instances& instances) {
+    IntersectScene s;
+    s.params = params;
+    s.nodes = readOnlyBuffer(nodes);
+    s.leaves = readOnlyBuffer(leaves);
+    s.tris = readOnlyBuffer(tris);
+    s.spheres = readOnlyBuffer(spheres);
+    s.planes = readOnlyBuffer(planes);
+    s.instances = readOnlyBuffer(instances);
+    s.queueCount = readOnlyBuffer(std::vector<int>{queueLength});
+    return s;
 }
 
 // Runs an element-wise test kernel on the test device: kernelSource defines

@@ -376,23 +376,15 @@ void deviceClosestTwoLevel(const DeviceScene& ds, const std::vector<dev::Ray>& r
     cl::Context& ctx = dc.context();
     cl::Program program = buildProgram(dc, KernelProgram::Intersect, ds.features.defines());
     KernelArgs k(program, "intersect_closest");
-    auto ro = [&](const auto& v) {
-        using T = typename std::decay_t<decltype(v)>::value_type;
-        return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), (void*)v.data()));
-    };
-    std::vector<dev::Sphere> noSpheres(1);
-    std::vector<dev::Plane> noPlanes(1);
     const int n = int(rays.size());
-    std::vector<int> queueLength{n};
-    cl::Buffer nodes = ro(ds.bvh8.nodes), leaves = ro(ds.bvh8.leaves), tb = ro(ds.triangles),
-               sb = ro(ds.spheres.empty() ? noSpheres : ds.spheres), pb = ro(noPlanes), ib = ro(ds.instances),
-               rb = ro(rays), cb = ro(queueLength);
-    cl::Buffer hb = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(dev::Hit) * rays.size()));
-    cl::Buffer hib = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(int) * rays.size()));
     dev::SceneParams sp = ds.params;
     sp.numPlanes = 0;
-    k.set("queueCount", cb).set("scene", sp).set("nodes", nodes).set("leaves", leaves).set("tris", tb).set("spheres", sb);
-    k.set("planes", pb).set("instances", ib).set("rays", rb).set("hits", hb).set("hitInstances", hib);
+    const IntersectScene scene = intersectScene(sp, n, ds.bvh8.nodes, ds.bvh8.leaves, ds.triangles, ds.spheres,
+                                                std::vector<dev::Plane>{}, ds.instances);
+    cl::Buffer rb = readOnlyBuffer(rays);
+    cl::Buffer hb = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(dev::Hit) * rays.size()));
+    cl::Buffer hib = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(int) * rays.size()));
+    scene.bind(k).set("rays", rb).set("hits", hb).set("hitInstances", hib);
     CL_CPP(dc.queue().enqueueNDRangeKernel(k.ready(), cl::NullRange, cl::NDRange(roundUp(size_t(n), 64)), cl::NDRange(64)));
     hits.resize(rays.size());
     instances.resize(rays.size());

@@ -119,14 +119,9 @@ void compareWithHost(const cl::Program& program, const RandomScene& s, bool time
         shadows[i] = {{o.x, o.y, o.z, tMax}, {d.x, d.y, d.z, time}, {1, 1, 1, 0}};
     }
     cl::Context& ctx = dc.context();
-    auto ro = [&](auto& v) {
-        using T = typename std::decay_t<decltype(v)>::value_type;
-        return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), const_cast<T*>(v.data())));
-    };
     Bvh8 b8 = collapseBvh8(s.bvh);
     setLeafTriangles(b8, s.tris, numTris);
-    cl::Buffer nodes = ro(b8.nodes), leaves = ro(b8.leaves), tris = ro(s.tris), sph = ro(s.spheres);
-    cl::Buffer rayBuf = ro(rays);
+    cl::Buffer rayBuf = readOnlyBuffer(rays);
     cl::Buffer hitBuf = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(dev::Hit) * numRays));
     cl::Buffer shadowBuf = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR,
                                              sizeof(dev::ShadowRay) * numRays, shadows.data()));
@@ -136,21 +131,15 @@ void compareWithHost(const cl::Program& program, const RandomScene& s, bool time
     Vec3 n1 = normalize(Vec3(1, 0.5f, -0.25f));
     planes[1].point = {14, 0, 0, 0}; planes[1].normal = {n1.x, n1.y, n1.z, 0};
     const int firstPlaneRef = numTris + int(s.spheres.size());
-    cl::Buffer planeBuf = ro(planes);
     dev::SceneParams sp{};
     sp.numTriangles = numTris;
     sp.numSpheres = int(s.spheres.size());
     sp.numPlanes = 2;
-    std::vector<int> queueLength{numRays};  // the kernels read the queue length on the device
-    cl::Buffer countBuf = ro(queueLength);
-    shadow.set("raysPerPath", 1);
-    std::vector<dev::Instance> noInstances(1);
-    cl::Buffer instBuf = ro(noInstances);
-    for (KernelArgs* k : {&closest, &shadow})
-        k->set("queueCount", countBuf).set("scene", sp).set("nodes", nodes).set("leaves", leaves).set("tris", tris)
-            .set("spheres", sph).set("planes", planeBuf).set("instances", instBuf);
-    closest.set("rays", rayBuf).set("hits", hitBuf).set("hitInstances", countBuf);  // hitInstances: unused without instances
-    shadow.set("shadows", shadowBuf);
+    const IntersectScene scene =
+        intersectScene(sp, numRays, b8.nodes, b8.leaves, s.tris, s.spheres, planes, std::vector<dev::Instance>{});
+    // hitInstances: unused without instances
+    scene.bind(closest).set("rays", rayBuf).set("hits", hitBuf).set("hitInstances", scene.queueCount);
+    scene.bind(shadow).set("raysPerPath", 1).set("shadows", shadowBuf);
     cl::CommandQueue& q = dc.queue();
     CL_CPP(q.enqueueNDRangeKernel(closest.ready(), cl::NullRange, cl::NDRange(roundUp(numRays, 64)), cl::NDRange(64)));
     CL_CPP(q.enqueueNDRangeKernel(shadow.ready(), cl::NullRange, cl::NDRange(roundUp(numRays, 64)), cl::NDRange(64)));

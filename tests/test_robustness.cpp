@@ -102,35 +102,20 @@ std::vector<dev::Hit> deviceClosest(const std::vector<dev::Triangle>& trisIn, co
         boxes.push_back(b);
     }
     Bvh bvh = buildBvh(boxes);
-    std::vector<dev::Triangle> tris = trisIn;
-    std::vector<dev::Sphere> sph = sphIn;
-    if (tris.empty()) tris.push_back(dev::Triangle{});
-    if (sph.empty()) sph.push_back(dev::Sphere{});
     DeviceContext& dc = testContext();
-    cl::Context& ctx = dc.context();
-    auto ro = [&](auto& v) {
-        using T = typename std::decay_t<decltype(v)>::value_type;
-        return CL_CPP(cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(), (void*)v.data()));
-    };
     Bvh8 b8 = collapseBvh8(bvh);
     setLeafTriangles(b8, trisIn, int(trisIn.size()));
-    if (b8.leaves.empty()) b8.leaves.push_back(dev::LeafBlock{});  // no zero-size buffers
-    cl::Buffer nodes = ro(b8.nodes), leaves = ro(b8.leaves), tb = ro(tris), sb = ro(sph), rb = ro(rays);
     const int n = int(rays.size());
-    cl::Buffer hb = CL_CPP(cl::Buffer(ctx, CL_MEM_READ_WRITE, sizeof(dev::Hit) * rays.size()));
-    KernelArgs& k = intersectProgram().closest;
-    std::vector<dev::Plane> noPlanes(1);
-    cl::Buffer pb = ro(noPlanes);
     dev::SceneParams sp{};
     sp.numTriangles = int(trisIn.size());
     sp.numSpheres = int(sphIn.size());  // no planes
-    std::vector<int> queueLength{n};  // the kernel reads the queue length on the device
-    cl::Buffer cb = ro(queueLength);
-    k.set("queueCount", cb).set("scene", sp).set("nodes", nodes).set("leaves", leaves).set("tris", tb).set("spheres", sb);
-    std::vector<dev::Instance> noInstances(1);
-    cl::Buffer ib = ro(noInstances);
-    cl::Buffer hib = ro(queueLength);  // hitInstances: unused without instances
-    k.set("planes", pb).set("instances", ib).set("rays", rb).set("hits", hb).set("hitInstances", hib);
+    const IntersectScene scene =
+        intersectScene(sp, n, b8.nodes, b8.leaves, trisIn, sphIn, std::vector<dev::Plane>{}, std::vector<dev::Instance>{});
+    cl::Buffer rb = readOnlyBuffer(rays);
+    cl::Buffer hb = CL_CPP(cl::Buffer(dc.context(), CL_MEM_READ_WRITE, sizeof(dev::Hit) * rays.size()));
+    KernelArgs& k = intersectProgram().closest;
+    // hitInstances: unused without instances
+    scene.bind(k).set("rays", rb).set("hits", hb).set("hitInstances", scene.queueCount);
     CL_CPP(dc.queue().enqueueNDRangeKernel(k.ready(), cl::NullRange, cl::NDRange(roundUp(size_t(n), 64)), cl::NDRange(64)));
     std::vector<dev::Hit> hits(rays.size());
     CL_CPP(dc.queue().enqueueReadBuffer(hb, CL_TRUE, 0, sizeof(dev::Hit) * hits.size(), hits.data()));
