@@ -287,6 +287,28 @@ TEST_CASE("BVH8 structure on random, degenerate and deep trees", "[bvh8]") {
     }
 }
 
+TEST_CASE("BVH8 near the leaves: the nodes of least area, not the largest box opened first", "[bvh8]") {
+    // Unit boxes in a row, one per leaf: the binary tree is balanced (SAH splits in the middle). Opening the
+    // largest box first gives 16 boxes a root over 8 pairs and 8 nodes of two lanes (9 nodes); the least area
+    // takes one half as a node of 8 leaves, and the other in 7 lanes (4 leaves, 2 leaves, a pair's node): 3.
+    for (int n : {16, 32, 64}) {
+        std::vector<Aabb> boxes(static_cast<size_t>(n));
+        for (int i = 0; i < n; ++i) {
+            boxes[size_t(i)].grow(Vec3(2.0f * float(i), 0, 0));
+            boxes[size_t(i)].grow(Vec3(2.0f * float(i) + 1, 1, 1));
+        }
+        BvhBuildOptions o;
+        o.maxLeafSize = 1;
+        Bvh bin = buildBvh(boxes, o);
+        Bvh8 b8 = collapseBvh8(bin);
+        INFO(n << " boxes");
+        checkStructure8(bin, b8, boxes);
+        const size_t fewest = size_t(n - 1 + 6) / 7;  // each node adds at most 7 lanes to the root's one
+        std::printf("%d boxes in a row: %zu 8-wide nodes (fewest possible %zu)\n", n, b8.nodes.size(), fewest);
+        CHECK(b8.nodes.size() == fewest);  // the greedy opening: 9, 9 and 9
+    }
+}
+
 // Walks two 8-wide trees from their roots in lane order: the same boxes (bit for bit), counts and leaf
 // primitives at every node, wherever each tree keeps its nodes and blocks. Returns the nodes compared.
 size_t sameTree8(const Bvh8& a, int na, const Bvh8& b, int nb) {

@@ -1,11 +1,15 @@
-// Binary -> 8-wide BVH collapse (see bvh8.h). Nodes are written depth-first, parent before children; a
-// big tree's top first, then its subtrees, each depth-first (SplitCollapse).
+// Binary -> 8-wide BVH collapse (see bvh8.h). The top of the tree opens the largest box first; subtrees of
+// at most kCollapseOptimalSpan binary nodes take the lanes that give their 8-wide nodes the least total area
+// (Region). Nodes are written depth-first, parent before children; a big tree's top first, then its
+// subtrees, each depth-first (SplitCollapse).
 #include "bvh/bvh8.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "util/parallel.h"
 
@@ -23,6 +27,17 @@ double halfArea(const BvhNode& n) {
 // made afterwards, makeLeaves).
 using BlockPrims = HostArray<dev::int4>;
 
+// A subtree collapsed by least area: its root's binary index and, for each of its binary nodes x,
+// cost[x - root][i - 1], the least total box area of the 8-wide nodes that x's subtree makes when it
+// takes at most i lanes of its parent (i = 1: x's own node and those below it). The leaves do not
+// count: each binary leaf is one lane however the tree is cut. cost null: the top, largest box first.
+using LaneCosts = std::array<float, kBvhWidth>;
+struct Region {
+    int root = -1;
+    const LaneCosts* cost = nullptr;
+    const LaneCosts& at(int x) const { return cost[x - root]; }
+};
+
 // Writes 8-wide nodes at fixed places: node i at out[i] (i counts in the whole nodes array), leaf block
 // j's primitives at blocks[j], from nextNode and nextBlock on. countOf tells how many of each emit uses.
 struct Collapser {
@@ -36,17 +51,74 @@ struct Collapser {
         size_t nodes = 0, blocks = 0;
     };
 
+    // Binary nodes in b's subtree (depth-first layout: it ends at its rightmost leaf).
+    size_t span(int b) const {
+        int e = b;
+        while (bin.nodes[size_t(e)].count == 0) e = bin.nodes[size_t(e)].first;
+        return size_t(e) + 1 - size_t(b);
+    }
+
+    // Region's cost table of b's subtree (span n), children before parents (dynamic programming, Ylitie, Karras
+    // & Laine 2017, "Efficient incoherent ray traversal on GPUs through compressed wide BVHs", section 3.1).
+    void regionCosts(int b, size_t n, std::vector<LaneCosts>& cost) const {
+        cost.resize(n);
+        for (size_t x = n; x-- > 0;) {
+            const BvhNode& nx = bin.nodes[size_t(b) + x];
+            if (nx.count > 0) {
+                cost[x].fill(0.0f);
+                continue;
+            }
+            const LaneCosts& l = cost[x + 1];
+            const LaneCosts& r = cost[size_t(nx.first - b)];
+            float split[kBvhWidth + 1];  // split[j]: the two children's subtrees in at most j lanes
+            for (int j = 2; j <= kBvhWidth; ++j) {
+                split[j] = INFINITY;
+                for (int q = 1; q < j; ++q) split[j] = std::min(split[j], l[size_t(q - 1)] + r[size_t(j - q - 1)]);
+            }
+            const double a = halfArea(nx);
+            cost[x][0] = float(a >= 0 ? a : 0) + split[kBvhWidth];
+            for (int i = 2; i <= kBvhWidth; ++i) cost[x][size_t(i - 1)] = std::min(cost[x][size_t(i - 2)], split[i]);
+        }
+    }
+
+    // The lanes region.cost chose for b's subtree in at most i lanes (ties: fewer lanes, then more on the left).
+    void regionLanes(const Region& region, int b, int i, int lanes[kBvhWidth], int& k) const {
+        const LaneCosts& c = region.at(b);
+        while (i > 1 && c[size_t(i - 1)] == c[size_t(i - 2)]) --i;  // a leaf's costs are all equal: i = 1
+        if (i == 1) lanes[k++] = b;
+        else regionSplit(region, b, i, lanes, k);
+    }
+    void regionSplit(const Region& region, int b, int j, int lanes[kBvhWidth], int& k) const {
+        const int left = b + 1, right = bin.nodes[size_t(b)].first;
+        const LaneCosts &l = region.at(left), &r = region.at(right);
+        int bestQ = 1;
+        float best = INFINITY;
+        for (int q = 1; q < j; ++q)
+            if (l[size_t(q - 1)] + r[size_t(j - q - 1)] < best) {
+                best = l[size_t(q - 1)] + r[size_t(j - q - 1)];
+                bestQ = q;
+            }
+        regionLanes(region, left, bestQ, lanes, k);
+        regionLanes(region, right, j - bestQ, lanes, k);
+    }
+
     // The binary nodes that become the lanes of the 8-wide node made for binary node b: a leaf root
-    // alone, else b's children, opening the interior lane with the largest area until there are eight;
-    // then ordered by area, largest first. Returns how many. The order is what shadow rays (any hit)
+    // alone; in a region, the lanes of least area (regionSplit); above, b's children, opening the interior
+    // lane with the largest area until there are eight, which brings big occluders up. Then ordered by
+    // area, largest first. Returns how many. The order is what shadow rays (any hit)
     // visit in: a ray is likelier to meet an occluder in a bigger box, and finding one ends the ray
     // (veachAjar's shadow rays 1.48x faster, docs/studies/2026-12-06-classic-lanes-children.md); closest-hit
     // rays sort the lanes by entry distance, which only ties leave in lane order.
-    int lanesOf(int b, int lanes[kBvhWidth]) const {
+    int lanesOf(int b, int lanes[kBvhWidth], const Region& region = {}) const {
         int k = 0;
         const BvhNode& nb = bin.nodes[size_t(b)];
         if (nb.count > 0) {
             lanes[k++] = b;  // a leaf root: one lane
+            return k;
+        }
+        if (region.cost) {
+            regionSplit(region, b, kBvhWidth, lanes, k);
+            sortByArea(lanes, k);
             return k;
         }
         lanes[k++] = b + 1;
@@ -65,23 +137,40 @@ struct Collapser {
             lanes[best] = c + 1;
             lanes[k++] = bin.nodes[size_t(c)].first;
         }
+        sortByArea(lanes, k);
+        return k;
+    }
+
+    // Orders lanes by their boxes' area, largest first (stable: equal areas keep their order).
+    void sortByArea(int lanes[kBvhWidth], int k) const {
         double area[kBvhWidth];
         for (int i = 0; i < k; ++i) {
             const double a = halfArea(bin.nodes[size_t(lanes[i])]);
             area[i] = a >= 0 ? a : 0;  // NaN (inf * 0 on a huge flat box): last, and a strict weak order
         }
-        for (int i = 1; i < k; ++i)  // insertion sort, stable: equal areas keep the opening order
+        for (int i = 1; i < k; ++i)  // insertion sort
             for (int j = i; j > 0 && area[j] > area[j - 1]; --j) {
                 std::swap(area[j], area[j - 1]);
                 std::swap(lanes[j], lanes[j - 1]);
             }
-        return k;
+    }
+
+    // The region b's node is collapsed in: `outer` if there is one, else b's own if its subtree is small
+    // enough (its cost table then in `table`), else none (the top).
+    Region regionFor(int b, const Region& outer, std::vector<LaneCosts>& table) const {
+        if (outer.cost || bin.nodes[size_t(b)].count > 0) return outer;
+        const size_t n = span(b);
+        if (n > kCollapseOptimalSpan) return outer;
+        regionCosts(b, n, table);
+        return Region{b, table.data()};
     }
 
     // The 8-wide nodes and leaf blocks emit(b) writes (the same choices, nothing written).
-    Counts countOf(int b) const {
+    Counts countOf(int b, const Region& outer = {}) const {
+        std::vector<LaneCosts> table;
+        const Region region = regionFor(b, outer, table);
         int lanes[kBvhWidth];
-        const int k = lanesOf(b, lanes);
+        const int k = lanesOf(b, lanes, region);
         Counts n;
         n.nodes = 1;
         for (int i = 0; i < k; ++i) {
@@ -89,7 +178,7 @@ struct Collapser {
             if (c.count > 0) {
                 n.blocks += size_t(c.count + 3) / 4;
             } else {
-                const Counts sub = countOf(lanes[i]);
+                const Counts sub = countOf(lanes[i], region);
                 n.nodes += sub.nodes;
                 n.blocks += sub.blocks;
             }
@@ -126,11 +215,13 @@ struct Collapser {
     // Writes the 8-wide node for binary node b and its subtree, depth-first; returns {index, stack
     // need}. Stack need of a subtree: the most entries its traversal pushes, from an empty stack (a
     // node with k hit children pushes k - 1 and goes on into one of them).
-    std::pair<int, int> emit(int b, int level) {
+    std::pair<int, int> emit(int b, int level, const Region& outer = {}) {
         depth = std::max(depth, level);
         const int idx = nextNode++;
+        std::vector<LaneCosts> table;
+        const Region region = regionFor(b, outer, table);
         int lanes[kBvhWidth];
-        const int k = lanesOf(b, lanes);
+        const int k = lanesOf(b, lanes, region);
         dev::Bvh8Node node{};
         int need = 0;
         for (int i = 0; i < kBvhWidth; ++i) {
@@ -140,7 +231,7 @@ struct Collapser {
             } else if (c->count > 0) {
                 setLane(node, i, c, leafEntry(emitLeaf(*c), c->count));
             } else {
-                const auto sub = emit(lanes[i], level + 1);
+                const auto sub = emit(lanes[i], level + 1, region);
                 setLane(node, i, c, sub.first);
                 need = std::max(need, sub.second);
             }
@@ -209,13 +300,6 @@ private:
         int node = 0, block = 0, need = 0, depth = 0;
     };
 
-    // Binary nodes in b's subtree (depth-first layout: it ends at its rightmost leaf).
-    size_t span(int b) const {
-        int e = b;
-        while (bin_.nodes[size_t(e)].count == 0) e = bin_.nodes[size_t(e)].first;
-        return size_t(e) + 1 - size_t(b);
-    }
-
     // Plans the top node made for binary node b (in pre-order); returns its index in tops_.
     int plan(int b, int level) {
         const int t = int(tops_.size());
@@ -230,7 +314,7 @@ private:
             int ref = -1;
             if (c.count > 0) {
                 topBlocks_ += size_t(c.count + 3) / 4;
-            } else if (span(lanes[i]) > taskSpan_) {
+            } else if (c_.span(lanes[i]) > taskSpan_) {
                 kind = kTop;
                 ref = plan(lanes[i], level + 1);
             } else {

@@ -35,6 +35,12 @@ struct Bvh8 {
     int depth = 0;     // node levels on the longest root-to-leaf path
 };
 
+// A subtree of at most this many binary nodes is collapsed into the 8-wide nodes of least total box area
+// (each node's lanes chosen by dynamic programming over the subtree), which fills the nodes near the
+// leaves; above, each node opens its largest box first, which brings big occluders near the root (shadow
+// rays stop at the first). Both: docs/studies/2026-12-07-diffuse-rays.md.
+constexpr size_t kCollapseOptimalSpan = 512;
+
 // A tree of this many binary nodes or more is collapsed on all threads: its top (nodes over subtrees of
 // more than 1/64 of the tree) on one, the subtrees below in parallel, each written where counting it
 // says. Nodes are then laid out top first, subtree after subtree (each depth-first), which depends on the
