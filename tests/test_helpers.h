@@ -63,6 +63,8 @@ struct IntersectScene {
     }
 };
 
+// The IntersectScene of these arrays (std::vector or HostArray each; empty ones as one zero element) for a queue
+// of queueLength rays.
 template <class Nodes, class Leaves, class Tris, class Spheres, class Planes, class Instances>
 IntersectScene intersectScene(const dev::SceneParams& params, int queueLength, const Nodes& nodes, const Leaves& leaves,
                               const Tris& tris, const Spheres& spheres, const Planes& planes, const Instances& instances) {
