@@ -25,8 +25,8 @@ namespace clrt {
 namespace {
 
 // Per stored triangle (or sphere): leaf blocks of four (2.2 primitives each, at least: small meshes
-// fill them least) and 8-wide nodes (one per 8 primitives, at most: the Audi TT has one per 9.6); the
-// binary tree, held while the BVH is built and collapsed (then freed).
+// fill them least) and 8-wide nodes (one per 8 primitives, at most: the Audi TT has one per 14.6,
+// veachAjar 15.0); the binary tree, held while the BVH is built and collapsed (then freed).
 constexpr double kLeafBlocksPerPrim = 1.0 / 2.2;
 constexpr double kNodesPerPrim = 1.0 / 8.0;
 constexpr double kBinaryNodesPerPrim = 0.8;  // ~2·leaves, leaves of >= 2.5 primitives
